@@ -1,0 +1,28 @@
+# pftrack developer entry points.  `make demo` and `make test` set everything up on a fresh machine.
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.pftrack-installed
+
+.PHONY: setup demo test test-all bench clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	touch $(STAMP)
+
+# Track the bundled real clip; writes demo_out/track.csv and demo_out/track.mp4.
+demo: setup
+	$(BIN)/pftrack demo --out demo_out
+
+# The default test suite (fast, deterministic). pytest's exit code 5 (no tests collected) is a failure.
+test: setup
+	@$(BIN)/python -m pytest -q; rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; fi; \
+	exit $$rc
+
+clean:
+	rm -rf $(VENV) demo_out build *.egg-info .pytest_cache

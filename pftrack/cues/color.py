@@ -1,0 +1,361 @@
+"""Kernel-weighted colour histograms over ellipses (Nummiaro et al., §3).
+
+The colour distribution of the upright elliptic region with centre ``y`` and
+half-axes ``Hx, Hy`` is (Eq. 3–4)::
+
+    p^(u)_y = f * sum_i k(||y - x_i|| / a) * delta[h(x_i) - u],   f = 1 / sum_i k(||y - x_i|| / a)
+
+over the pixels ``x_i`` of the region, with ``k(r) = 1 - r^2`` for ``r < 1`` (Eq. 2)
+and ``a = sqrt(Hx^2 + Hy^2)``.  ``h`` maps a colour to its bin: RGB with 8x8x8
+bins, or HSV with 8x8x4 (less sensitive to V).
+
+Speed (GUIDE §3): the region that the particles can reach is quantised to bin
+indices **once per frame** (:meth:`ColorCue.prepare`); the histograms of all ``N``
+ellipses are then accumulated in one pass (:func:`ellipse_histograms`), compiled
+with Numba or, without it, as one vectorised ``bincount`` over
+``(particle, bin)`` pairs.  Both paths visit the same pixels in the same order
+and give the same numbers.
+
+Pixel convention: pixel ``(i, j)`` has its centre at ``(i + 0.5, j + 0.5)``; it
+belongs to the ellipse when ``(dx/Hx)^2 + (dy/Hy)^2 <= 1`` for ``(dx, dy)`` the
+offset of its centre from the ellipse centre.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import cv2
+import numpy as np
+
+from .._numba import njit, numba_enabled
+
+KERNELS = {"nummiaro": 0, "epanechnikov": 1}
+KernelName = Literal["nummiaro", "epanechnikov"]
+ColorSpace = Literal["rgb", "hsv"]
+DEFAULT_BINS = {"rgb": (8, 8, 8), "hsv": (8, 8, 4)}
+
+
+# --------------------------------------------------------------------------- quantisation
+
+def make_lut(color_space: str, bins: tuple[int, int, int]) -> np.ndarray:
+    """Per-channel lookup tables ``(3, 256)``: bin index = ``lut[0][c0] + lut[1][c1] + lut[2][c2]``.
+
+    For RGB the channels arrive in OpenCV's BGR order and the bin index is
+    ``r_idx * (nG * nB) + g_idx * nB + b_idx``.  For HSV (OpenCV's ``H`` in
+    ``[0, 180)``) it is ``h_idx * (nS * nV) + s_idx * nV + v_idx``.
+    """
+    n0, n1, n2 = (int(b) for b in bins)
+    v = np.arange(256, dtype=np.int64)
+    lut = np.zeros((3, 256), dtype=np.int32)
+    if color_space == "rgb":
+        nr, ng, nb = n0, n1, n2
+        lut[0] = (v * nb) >> 8  # B
+        lut[1] = ((v * ng) >> 8) * nb  # G
+        lut[2] = ((v * nr) >> 8) * (ng * nb)  # R
+    elif color_space == "hsv":
+        nh, ns, nv = n0, n1, n2
+        lut[0] = (np.minimum(v, 179) * nh // 180) * (ns * nv)
+        lut[1] = ((v * ns) >> 8) * nv
+        lut[2] = (v * nv) >> 8
+    else:
+        raise ValueError(f"unknown colour space {color_space!r}")
+    return lut
+
+
+@njit
+def _quantize_numba(img, lut, out):
+    h, w = img.shape[0], img.shape[1]
+    for j in range(h):
+        for i in range(w):
+            out[j, i] = lut[0, img[j, i, 0]] + lut[1, img[j, i, 1]] + lut[2, img[j, i, 2]]
+    return out
+
+
+def quantize(img: np.ndarray, lut: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """Map an ``(h, w, 3)`` uint8 image to ``(h, w)`` int32 bin indices."""
+    if out is None:
+        out = np.empty(img.shape[:2], dtype=np.int32)
+    if numba_enabled():
+        return _quantize_numba(img, lut, out)
+    np.add(lut[0][img[..., 0]], lut[1][img[..., 1]], out=out)
+    out += lut[2][img[..., 2]]
+    return out
+
+
+# --------------------------------------------------------------------------- histograms
+
+def _pixel_span(c, h, n_pixels):
+    """First and last pixel index whose centre can lie within ``c ± h`` (clipped)."""
+    lo = max(0, int(math.ceil(c - h - 0.5)))
+    hi = min(n_pixels - 1, int(math.floor(c + h - 0.5)))
+    return lo, hi
+
+
+@njit
+def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals):
+    n_part = ell.shape[0]
+    hgt, wid = bins.shape
+    n_bins = out.shape[1]
+    for n in range(n_part):
+        for u in range(n_bins):
+            out[n, u] = 0.0
+        cx = ell[n, 0] - x0
+        cy = ell[n, 1] - y0
+        hx = ell[n, 2]
+        hy = ell[n, 3]
+        total = 0.0
+        if hx > 0.0 and hy > 0.0:
+            ihx2 = 1.0 / (hx * hx)
+            ihy2 = 1.0 / (hy * hy)
+            ia2 = 1.0 / (hx * hx + hy * hy)
+            i_lo = max(0, int(math.ceil(cx - hx - 0.5)))
+            i_hi = min(wid - 1, int(math.floor(cx + hx - 0.5)))
+            j_lo = max(0, int(math.ceil(cy - hy - 0.5)))
+            j_hi = min(hgt - 1, int(math.floor(cy + hy - 0.5)))
+            for j in range(j_lo, j_hi + 1):
+                dy = j + 0.5 - cy
+                dy2 = dy * dy
+                ry = dy2 * ihy2
+                if ry > 1.0:
+                    continue
+                for i in range(i_lo, i_hi + 1):
+                    dx = i + 0.5 - cx
+                    r2e = dx * dx * ihx2 + ry
+                    if r2e <= 1.0:
+                        if kernel == 0:
+                            wgt = 1.0 - (dx * dx + dy2) * ia2
+                        else:
+                            wgt = 1.0 - r2e
+                        if wgt > 0.0:
+                            out[n, bins[j, i]] += wgt
+                            total += wgt
+        totals[n] = total
+        if total > 0.0:
+            inv = 1.0 / total
+            for u in range(n_bins):
+                out[n, u] *= inv
+    return out
+
+
+def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals):
+    """Reference path: one ``bincount`` over (particle, bin) pairs, no Python loop over particles."""
+    n_part = ell.shape[0]
+    hgt, wid = bins.shape
+    n_bins = out.shape[1]
+    cx = ell[:, 0] - x0
+    cy = ell[:, 1] - y0
+    hx = ell[:, 2]
+    hy = ell[:, 3]
+    ok = (hx > 0) & (hy > 0)
+    hx_s = np.where(ok, hx, 1.0)
+    hy_s = np.where(ok, hy, 1.0)
+    i_lo = np.maximum(0, np.ceil(cx - hx - 0.5)).astype(np.int64)
+    i_hi = np.minimum(wid - 1, np.floor(cx + hx - 0.5)).astype(np.int64)
+    j_lo = np.maximum(0, np.ceil(cy - hy - 0.5)).astype(np.int64)
+    j_hi = np.minimum(hgt - 1, np.floor(cy + hy - 0.5)).astype(np.int64)
+    span_i = np.where(ok, i_hi - i_lo + 1, 0)
+    span_j = np.where(ok, j_hi - j_lo + 1, 0)
+    wmax = int(max(span_i.max(initial=0), 0))
+    hmax = int(max(span_j.max(initial=0), 0))
+    out[:] = 0.0
+    totals[:] = 0.0
+    if wmax == 0 or hmax == 0:
+        return out
+    ii = i_lo[:, None] + np.arange(wmax)[None, :]  # (N, wmax)
+    jj = j_lo[:, None] + np.arange(hmax)[None, :]  # (N, hmax)
+    vi = np.arange(wmax)[None, :] < span_i[:, None]
+    vj = np.arange(hmax)[None, :] < span_j[:, None]
+    dx = ii + 0.5 - cx[:, None]
+    dy = jj + 0.5 - cy[:, None]
+    ihx2 = 1.0 / (hx_s * hx_s)
+    ihy2 = 1.0 / (hy_s * hy_s)
+    ia2 = 1.0 / (hx_s * hx_s + hy_s * hy_s)
+    dy2 = dy * dy
+    ry = dy2 * ihy2[:, None]  # (N, hmax)
+    dxx = dx * dx
+    r2e = dxx[:, None, :] * ihx2[:, None, None] + ry[:, :, None]  # (N, hmax, wmax)
+    inside = (r2e <= 1.0) & vi[:, None, :] & vj[:, :, None] & (ry <= 1.0)[:, :, None]
+    if kernel == 0:
+        wgt = 1.0 - (dxx[:, None, :] + dy2[:, :, None]) * ia2[:, None, None]
+    else:
+        wgt = 1.0 - r2e
+    inside &= wgt > 0.0
+    wgt = np.where(inside, wgt, 0.0)
+    jc = np.clip(jj, 0, hgt - 1)
+    ic = np.clip(ii, 0, wid - 1)
+    b = bins[jc[:, :, None], ic[:, None, :]]  # (N, hmax, wmax)
+    sel = inside.ravel()
+    flat_w = wgt.ravel()[sel]
+    pidx = np.broadcast_to(np.arange(n_part)[:, None, None], inside.shape).ravel()[sel]
+    flat = pidx * n_bins + b.ravel()[sel]
+    hist = np.bincount(flat, weights=flat_w, minlength=n_part * n_bins).reshape(n_part, n_bins)
+    tot = np.bincount(pidx, weights=flat_w, minlength=n_part)
+    totals[:] = tot
+    pos = tot > 0
+    out[pos] = hist[pos] * (1.0 / tot[pos])[:, None]
+    return out
+
+
+def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, n_bins: int, *,
+                       kernel: KernelName = "nummiaro", out: np.ndarray | None = None,
+                       totals: np.ndarray | None = None, backend: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Normalised kernel-weighted histograms of ``N`` ellipses over quantised pixels.
+
+    Parameters
+    ----------
+    bins : (h, w) int array of bin indices of a region whose top-left pixel is ``(x0, y0)``.
+    ellipses : (N, 4) ``(cx, cy, hx, hy)`` in image coordinates.
+    kernel : ``"nummiaro"`` — ``k(||d|| / a)``, ``a = sqrt(Hx^2 + Hy^2)`` (Eq. 2–3), or
+        ``"epanechnikov"`` — ``1 - r^2`` with ``r`` the ellipse-normalised radius.
+    backend : ``"numba"``, ``"numpy"`` or None (Numba when enabled).
+
+    Returns
+    -------
+    hist : (N, n_bins) float64, each row sums to 1 (rows of ellipses with no
+        pixel inside the region are all zero).
+    totals : (N,) the kernel mass ``1 / f`` of each ellipse (0 when empty).
+    """
+    ell = np.ascontiguousarray(ellipses, dtype=np.float64).reshape(-1, 4)
+    n = ell.shape[0]
+    if out is None:
+        out = np.empty((n, n_bins), dtype=np.float64)
+    if totals is None:
+        totals = np.empty(n, dtype=np.float64)
+    k = KERNELS[kernel]
+    use_numba = numba_enabled() if backend is None else backend == "numba"
+    if use_numba:
+        _ellipse_hist_numba(bins, int(x0), int(y0), ell, k, out, totals)
+    else:
+        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, k, out, totals)
+    return out, totals
+
+
+def kernel_weights(offsets: np.ndarray, hx: float, hy: float, *, kernel: KernelName = "nummiaro") -> np.ndarray:
+    """Kernel weight ``k`` of pixel offsets ``(dx, dy)`` from an ellipse centre (Eq. 2).
+
+    Zero outside the ellipse.  With ``kernel="nummiaro"``, ``k = 1 - (||d|| / a)^2``,
+    ``a = sqrt(hx^2 + hy^2)``.
+    """
+    d = np.asarray(offsets, dtype=np.float64)
+    dx, dy = d[..., 0], d[..., 1]
+    r2e = dx * dx / (hx * hx) + dy * dy / (hy * hy)
+    if kernel == "nummiaro":
+        w = 1.0 - (dx * dx + dy * dy) / (hx * hx + hy * hy)
+    else:
+        w = 1.0 - r2e
+    return np.where((r2e <= 1.0) & (w > 0), w, 0.0)
+
+
+# --------------------------------------------------------------------------- similarity
+
+def bhattacharyya_coefficient(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``rho[p, q] = sum_u sqrt(p_u q_u)`` (Eq. 6), batched over leading axes of ``p``."""
+    p = np.asarray(p, dtype=np.float64)
+    q = np.asarray(q, dtype=np.float64)
+    rho = np.sqrt(np.clip(p, 0, None)) @ np.sqrt(np.clip(q, 0, None)) if q.ndim == 1 else \
+        np.sum(np.sqrt(np.clip(p, 0, None) * np.clip(q, 0, None)), axis=-1)
+    return np.clip(rho, 0.0, 1.0)
+
+
+def bhattacharyya_distance(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``d = sqrt(1 - rho[p, q])`` (Eq. 7)."""
+    return np.sqrt(1.0 - bhattacharyya_coefficient(p, q))
+
+
+# --------------------------------------------------------------------------- regions
+
+def reachable_roi(ellipses: np.ndarray, width: int, height: int, margin: int = 1) -> tuple[int, int, int, int]:
+    """Integer region ``(x0, y0, x1, y1)`` (exclusive end) that covers every ellipse, clipped to the image."""
+    e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
+    x0 = int(math.floor(float(np.min(e[:, 0] - e[:, 2])))) - margin
+    y0 = int(math.floor(float(np.min(e[:, 1] - e[:, 3])))) - margin
+    x1 = int(math.ceil(float(np.max(e[:, 0] + e[:, 2])))) + margin
+    y1 = int(math.ceil(float(np.max(e[:, 1] + e[:, 3])))) + margin
+    x0 = min(max(x0, 0), width)
+    y0 = min(max(y0, 0), height)
+    x1 = min(max(x1, x0), width)
+    y1 = min(max(y1, y0), height)
+    return x0, y0, x1, y1
+
+
+@dataclass
+class ColorFeatures:
+    """A frame region quantised to colour bins (the output of :meth:`ColorCue.prepare`)."""
+
+    bins: np.ndarray  # (h, w) int32 view
+    x0: int
+    y0: int
+
+
+class ColorCue:
+    """Colour-histogram observation model.
+
+    Parameters
+    ----------
+    color_space : ``"rgb"`` (default, 8x8x8 bins) or ``"hsv"`` (8x8x4 bins).
+    bins : bins per channel; ``None`` for the default of the colour space.
+    kernel : see :func:`ellipse_histograms`.
+    """
+
+    def __init__(self, color_space: ColorSpace = "rgb", bins: tuple[int, int, int] | None = None,
+                 kernel: KernelName = "nummiaro"):
+        if color_space not in DEFAULT_BINS:
+            raise ValueError(f"unknown colour space {color_space!r}")
+        self.color_space = color_space
+        self.bins = tuple(int(b) for b in (bins or DEFAULT_BINS[color_space]))
+        if len(self.bins) != 3 or min(self.bins) < 1 or max(self.bins) > 256:
+            raise ValueError(f"bins must be 3 integers in [1, 256], got {bins!r}")
+        if kernel not in KERNELS:
+            raise ValueError(f"unknown kernel {kernel!r}")
+        self.kernel = kernel
+        self.n_bins = int(np.prod(self.bins))
+        self.lut = make_lut(color_space, self.bins)
+        self._qbuf = np.empty((0, 0), dtype=np.int32)
+        self._hbuf = np.empty((0, self.n_bins))
+        self._tbuf = np.empty(0)
+
+    # -- features -----------------------------------------------------------------
+    def prepare(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> ColorFeatures:
+        """Quantise the region ``roi = (x0, y0, x1, y1)`` of a BGR frame once."""
+        x0, y0, x1, y1 = roi
+        region = frame[y0:y1, x0:x1]
+        if self.color_space == "hsv" and region.size:
+            region = cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2HSV)
+        h, w = region.shape[:2]
+        if self._qbuf.shape[0] < h or self._qbuf.shape[1] < w:
+            self._qbuf = np.empty((max(h, self._qbuf.shape[0]), max(w, self._qbuf.shape[1])), dtype=np.int32)
+        out = self._qbuf[:h, :w]
+        if h and w:
+            quantize(region, self.lut, out)
+        return ColorFeatures(out, x0, y0)
+
+    def prepare_frame(self, frame: np.ndarray) -> ColorFeatures:
+        return self.prepare(frame, (0, 0, frame.shape[1], frame.shape[0]))
+
+    # -- histograms ---------------------------------------------------------------
+    def histograms(self, features: ColorFeatures, ellipses: np.ndarray, *, reuse: bool = True
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Histograms of a batch of ellipses; with ``reuse`` the returned arrays are
+        internal buffers valid until the next call."""
+        e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
+        n = e.shape[0]
+        if reuse:
+            if self._hbuf.shape[0] < n:
+                self._hbuf = np.empty((n, self.n_bins))
+                self._tbuf = np.empty(n)
+            out, tot = self._hbuf[:n], self._tbuf[:n]
+        else:
+            out, tot = np.empty((n, self.n_bins)), np.empty(n)
+        return ellipse_histograms(features.bins, features.x0, features.y0, e, self.n_bins,
+                                  kernel=self.kernel, out=out, totals=tot)
+
+    def histogram(self, frame: np.ndarray, ellipse) -> np.ndarray:
+        """Histogram of one ellipse in a frame (a new array)."""
+        e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
+        roi = reachable_roi(e, frame.shape[1], frame.shape[0])
+        feats = self.prepare(frame, roi)
+        hist, _ = self.histograms(feats, e, reuse=False)
+        return hist[0]

@@ -1,0 +1,137 @@
+"""Dynamic (state-transition) models ``p(s_t | s_{t-1})``.
+
+Every model here works in place on an ``(N, D)`` float64 state array and draws
+its noise from an injected :class:`numpy.random.Generator`.  They contain no
+image code.
+
+State layouts
+-------------
+:class:`ConstantVelocityScale` (Nummiaro et al., Eq. 8)::
+
+    s = {x, y, vx, vy, Hx, Hy, adot}
+
+:class:`NCVRandomWalk` (Kristan et al., Eq. 10) uses the first six components
+of the same layout, ``{x, y, vx, vy, Hx, Hy}``.  ``(x, y)`` is the ellipse
+centre and ``(Hx, Hy)`` its half-axes, in pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+X, Y, VX, VY, HX, HY, AD = range(7)
+STATE_NAMES_7 = ("x", "y", "vx", "vy", "hx", "hy", "adot")
+STATE_NAMES_6 = STATE_NAMES_7[:6]
+
+
+class ConstantVelocityScale:
+    """First-order model ``s_t = A s_{t-1} + w_{t-1}`` (Nummiaro et al., Eq. 9).
+
+    ``A`` moves the region with constant velocity ``(vx, vy)`` and changes its
+    size with the constant relative scale rate ``adot``::
+
+        x += vx;  y += vy;  Hx *= (1 + adot);  Hy *= (1 + adot)
+
+    (applying the scale change multiplicatively keeps the aspect ratio in the
+    deterministic part).  ``w`` is zero-mean Gaussian with per-component standard
+    deviations ``noise_std`` (shape ``(7,)`` or ``(N, 7)``), in pixels for
+    position, pixels/frame for velocity, pixels for half-axes and 1/frame for
+    ``adot``.
+
+    The paper leaves the bounds open; we clip half-axes to
+    ``[min_half_axis, max_half_axis]`` and ``|adot| <= max_scale_rate`` so that a
+    scale random walk can never collapse a region to nothing or explode.
+    """
+
+    dim = 7
+    state_names = STATE_NAMES_7
+
+    def __init__(self, *, min_half_axis: float = 2.0, max_half_axis: float = 1e5, max_scale_rate: float = 0.1,
+                 scale_damping: float = 1.0):
+        self.scale_damping = float(scale_damping)
+        self.min_half_axis = float(min_half_axis)
+        self.max_half_axis = float(max_half_axis)
+        self.max_scale_rate = float(max_scale_rate)
+        self._noise: np.ndarray | None = None
+
+    def transition(self, states: np.ndarray) -> np.ndarray:
+        """Apply the deterministic part ``A s`` in place and return ``states``."""
+        states[:, X] += states[:, VX]
+        states[:, Y] += states[:, VY]
+        f = 1.0 + states[:, AD]
+        states[:, HX] *= f
+        states[:, HY] *= f
+        if self.scale_damping != 1.0:
+            states[:, AD] *= self.scale_damping
+        return states
+
+    def propagate(self, states: np.ndarray, noise_std: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """``s <- A s + w`` in place; returns ``states``."""
+        self.transition(states)
+        if self._noise is None or self._noise.shape != states.shape:
+            self._noise = np.empty_like(states)
+        rng.standard_normal(out=self._noise)
+        self._noise *= noise_std
+        states += self._noise
+        self.clip(states)
+        return states
+
+    def clip(self, states: np.ndarray) -> None:
+        np.clip(states[:, HX], self.min_half_axis, self.max_half_axis, out=states[:, HX])
+        np.clip(states[:, HY], self.min_half_axis, self.max_half_axis, out=states[:, HY])
+        np.clip(states[:, AD], -self.max_scale_rate, self.max_scale_rate, out=states[:, AD])
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """``A`` for the position/velocity block (the scale part is ``diag(1 + adot)``)."""
+        a = np.eye(7)
+        a[X, VX] = a[Y, VY] = 1.0
+        return a
+
+
+class NCVRandomWalk:
+    """Nearly-constant-velocity position + random-walk size (Kristan et al., Eq. 10).
+
+    ``x_t = F x_{t-1} + G w_t`` with, per axis, ``F~ = [[1, 1], [0, 1]]`` and
+    ``G~ = [0.5, 1]^T``: the same white acceleration ``w ~ N(0, sigma_xy^2)`` moves the
+    velocity by ``w`` and the position by ``w / 2``.  The half-axes follow a random
+    walk.  Kristan et al. set its noise "such that the size of the target does not
+    change between two time-steps by more than 15 %": we use a relative random walk
+    ``H_t = H_{t-1} (1 + e)``, ``e ~ N(0, (max_size_change / 3)^2)`` clipped to
+    ``±max_size_change``, so that the 15 % bound holds exactly (3 sigma before clipping).
+    """
+
+    dim = 6
+    state_names = STATE_NAMES_6
+
+    def __init__(self, *, sigma_xy: float = 1.0, max_size_change: float = 0.15, min_half_axis: float = 2.0,
+                 max_half_axis: float = 1e5, keep_aspect: bool = False):
+        self.sigma_xy = float(sigma_xy)
+        self.max_size_change = float(max_size_change)
+        self.min_half_axis = float(min_half_axis)
+        self.max_half_axis = float(max_half_axis)
+        self.keep_aspect = bool(keep_aspect)
+        self._noise: np.ndarray | None = None
+
+    def propagate(self, states: np.ndarray, rng: np.random.Generator, sigma_xy: float | np.ndarray | None = None) -> np.ndarray:
+        n = states.shape[0]
+        if self._noise is None or self._noise.shape != (n, 4):
+            self._noise = np.empty((n, 4))
+        noise = self._noise
+        rng.standard_normal(out=noise)
+        s = self.sigma_xy if sigma_xy is None else sigma_xy
+        acc = noise[:, :2] * (np.asarray(s)[..., None] if np.ndim(s) else s)
+        states[:, X] += states[:, VX] + 0.5 * acc[:, 0]
+        states[:, Y] += states[:, VY] + 0.5 * acc[:, 1]
+        states[:, VX] += acc[:, 0]
+        states[:, VY] += acc[:, 1]
+        sd = self.max_size_change / 3.0
+        e = noise[:, 2:] * sd
+        np.clip(e, -self.max_size_change, self.max_size_change, out=e)
+        if self.keep_aspect:
+            e[:, 1] = e[:, 0]
+        states[:, HX] *= 1.0 + e[:, 0]
+        states[:, HY] *= 1.0 + e[:, 1]
+        np.clip(states[:, HX], self.min_half_axis, self.max_half_axis, out=states[:, HX])
+        np.clip(states[:, HY], self.min_half_axis, self.max_half_axis, out=states[:, HY])
+        return states

@@ -1,0 +1,125 @@
+"""Weighted particle sets kept in the log domain.
+
+A particle set approximates a posterior by ``N`` states ``s^(n)`` (rows of an
+``(N, D)`` float array) with weights ``pi^(n)`` (Nummiaro et al., §2).  The
+weights are stored as log-weights so that likelihoods far in the tail never
+underflow to zero and never produce NaN: normalisation uses log-sum-exp.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def log_normalize(log_w: np.ndarray, out: np.ndarray | None = None) -> tuple[np.ndarray, bool]:
+    """Normalise log-weights so that ``sum(exp(out)) == 1``.
+
+    Returns ``(out, ok)``.  ``ok`` is False when no weight is finite (every
+    particle had zero likelihood); the weights are then reset to uniform, so the
+    result is always finite and sums to one.
+    """
+    log_w = np.asarray(log_w, dtype=np.float64)
+    if out is None:
+        out = np.empty_like(log_w)
+    finite = np.isfinite(log_w)
+    if not finite.any():
+        out.fill(-np.log(log_w.size) if log_w.size else 0.0)
+        return out, False
+    m = log_w[finite].max()
+    # -inf stays -inf (weight 0); +inf/NaN are treated as invalid (weight 0).
+    np.subtract(log_w, m, out=out)
+    out[~finite] = -np.inf
+    lse = np.log(np.exp(out).sum())
+    out -= lse
+    return out, True
+
+
+def weights_from_log(log_w: np.ndarray) -> np.ndarray:
+    """Normalised linear weights from (unnormalised) log-weights."""
+    lw, _ = log_normalize(log_w)
+    w = np.exp(lw)
+    w /= w.sum()
+    return w
+
+
+def effective_sample_size(weights: np.ndarray) -> float:
+    """``N_eff = 1 / sum(w^2)`` for normalised weights."""
+    w = np.asarray(weights, dtype=np.float64)
+    s = float(np.dot(w, w))
+    return 1.0 / s if s > 0 else 0.0
+
+
+class ParticleSet:
+    """``N`` states of dimension ``D`` with log-weights.
+
+    Attributes
+    ----------
+    states : (N, D) float64
+    log_weights : (N,) float64, normalised (log-sum-exp = 0)
+    """
+
+    __slots__ = ("states", "log_weights", "_scratch")
+
+    def __init__(self, states: np.ndarray, log_weights: np.ndarray | None = None):
+        states = np.array(states, dtype=np.float64, copy=True)
+        if states.ndim != 2 or states.shape[0] == 0:
+            raise ValueError(f"states must be a non-empty (N, D) array, got shape {states.shape}")
+        self.states = states
+        n = states.shape[0]
+        if log_weights is None:
+            self.log_weights = np.full(n, -np.log(n))
+        else:
+            self.log_weights, _ = log_normalize(np.asarray(log_weights, dtype=np.float64).copy())
+        self._scratch = np.empty_like(self.states)
+
+    def __len__(self) -> int:
+        return self.states.shape[0]
+
+    @property
+    def n(self) -> int:
+        return self.states.shape[0]
+
+    @property
+    def dim(self) -> int:
+        return self.states.shape[1]
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Normalised linear weights (a new array)."""
+        w = np.exp(self.log_weights)
+        w /= w.sum()
+        return w
+
+    def set_log_likelihood(self, log_lik: np.ndarray, *, accumulate: bool = False) -> bool:
+        """Set (or multiply in, with ``accumulate``) likelihoods and normalise.
+
+        Returns False when every likelihood was zero; weights are then uniform.
+        """
+        if accumulate:
+            np.add(self.log_weights, log_lik, out=self.log_weights)
+            _, ok = log_normalize(self.log_weights, out=self.log_weights)
+        else:
+            _, ok = log_normalize(log_lik, out=self.log_weights)
+        return ok
+
+    def mean(self) -> np.ndarray:
+        """Weighted mean state ``E[S] = sum_n pi^(n) s^(n)`` (Nummiaro Eq. 1)."""
+        return self.weights @ self.states
+
+    def covariance(self) -> np.ndarray:
+        w = self.weights
+        d = self.states - w @ self.states
+        return (d * w[:, None]).T @ d
+
+    def ess(self) -> float:
+        """Effective sample size ``1 / sum(w^2)``."""
+        return effective_sample_size(self.weights)
+
+    def resample(self, indices: np.ndarray) -> None:
+        """Replace the set by the selected particles with uniform weights (in place)."""
+        np.take(self.states, indices, axis=0, out=self._scratch)
+        self.states, self._scratch = self._scratch, self.states
+        self.log_weights.fill(-np.log(self.n))
+
+    def copy(self) -> "ParticleSet":
+        return ParticleSet(self.states, self.log_weights)

@@ -1,0 +1,97 @@
+"""Resampling schemes.
+
+Every resampler maps normalised weights ``w`` (length ``N``) to ``N`` indices of
+the particles to keep, using only the injected :class:`numpy.random.Generator`.
+All four are unbiased: the expected number of copies of particle ``n`` is
+``N * w[n]``.  They differ in variance (multinomial > residual > stratified >=
+systematic) and in cost.
+
+* :func:`multinomial` — Nummiaro et al., Fig. 2, step 1: normalised cumulative
+  sums and, for each of ``N`` uniform numbers ``r``, a binary search for the
+  smallest ``j`` with ``c'(j) >= r``.
+* :func:`stratified` — one uniform number in each of ``N`` equal strata.
+* :func:`systematic` — one uniform offset shared by all strata.
+* :func:`residual` — ``floor(N w)`` deterministic copies, the rest multinomial.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+Resampler = Callable[[np.ndarray, np.random.Generator], np.ndarray]
+
+
+def _cumulative(weights: np.ndarray) -> np.ndarray:
+    w = np.asarray(weights, dtype=np.float64)
+    if w.ndim != 1 or w.size == 0:
+        raise ValueError("weights must be a non-empty 1-D array")
+    c = np.cumsum(w)
+    total = c[-1]
+    if not np.isfinite(total) or total <= 0:
+        raise ValueError("weights must be finite with a positive sum")
+    c /= total  # c'(n) = c(n) / c(N)
+    c[-1] = 1.0  # guard against round-off so every r in [0, 1) finds an index
+    return c
+
+
+def _search(c: np.ndarray, r: np.ndarray) -> np.ndarray:
+    # smallest j with c'(j) >= r  (binary search, Fig. 2 step 1c)
+    idx = np.searchsorted(c, r, side="left")
+    np.minimum(idx, c.size - 1, out=idx)
+    return idx
+
+
+def multinomial(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    c = _cumulative(weights)
+    return _search(c, rng.random(c.size))
+
+
+def stratified(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    c = _cumulative(weights)
+    n = c.size
+    r = (np.arange(n) + rng.random(n)) / n
+    return _search(c, r)
+
+
+def systematic(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    c = _cumulative(weights)
+    n = c.size
+    r = (np.arange(n) + rng.random()) / n
+    return _search(c, r)
+
+
+def residual(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    w = np.asarray(weights, dtype=np.float64)
+    w = w / w.sum()
+    n = w.size
+    scaled = n * w
+    copies = np.floor(scaled).astype(np.int64)
+    det = np.repeat(np.arange(n), copies)
+    rest = n - det.size
+    if rest == 0:
+        return det
+    res = scaled - copies
+    c = _cumulative(res)
+    extra = _search(c, rng.random(rest))
+    out = np.concatenate([det, extra])
+    return out
+
+
+RESAMPLERS: dict[str, Resampler] = {
+    "multinomial": multinomial,
+    "systematic": systematic,
+    "stratified": stratified,
+    "residual": residual,
+}
+
+
+def get_resampler(name_or_fn: str | Resampler) -> Resampler:
+    """A resampler by registry name, or a callable passed through."""
+    if callable(name_or_fn):
+        return name_or_fn
+    try:
+        return RESAMPLERS[name_or_fn]
+    except KeyError:
+        raise ValueError(f"unknown resampler {name_or_fn!r}; choose from {', '.join(RESAMPLERS)}") from None

@@ -1,0 +1,174 @@
+"""Boxes, ellipses, overlap and conversions.
+
+Conventions (used everywhere in pftrack):
+
+* A **box** is ``(x, y, w, h)``: the top-left corner and the size, in pixels,
+  as floats.  The pixel with integer index ``(i, j)`` covers ``[i, i+1) x [j, j+1)``,
+  so its centre is at ``(i + 0.5, j + 0.5)`` and a box ``(0, 0, W, H)`` covers a whole
+  ``W x H`` image.
+* An **ellipse** is ``(cx, cy, hx, hy)``: the centre and the half-axes, upright
+  (Nummiaro et al., §3).  The ellipse inscribed in a box has
+  ``cx = x + w/2, cy = y + h/2, hx = w/2, hy = h/2``.
+
+All functions accept a single box (shape ``(4,)``) or a batch (shape ``(N, 4)``)
+and return arrays of matching shape.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from .errors import BoxError
+
+Box = tuple[float, float, float, float]
+
+
+def as_boxes(boxes: Sequence[float] | np.ndarray) -> np.ndarray:
+    """Return ``boxes`` as a float64 array of shape ``(..., 4)``."""
+    arr = np.asarray(boxes, dtype=np.float64)
+    if arr.shape[-1:] != (4,):
+        raise BoxError(f"a box has 4 numbers (x, y, w, h), got shape {arr.shape}")
+    return arr
+
+
+def box_to_ellipse(boxes) -> np.ndarray:
+    """``(x, y, w, h)`` → ``(cx, cy, hx, hy)`` of the inscribed upright ellipse."""
+    b = as_boxes(boxes)
+    out = np.empty_like(b)
+    out[..., 2] = b[..., 2] * 0.5
+    out[..., 3] = b[..., 3] * 0.5
+    out[..., 0] = b[..., 0] + out[..., 2]
+    out[..., 1] = b[..., 1] + out[..., 3]
+    return out
+
+
+def ellipse_to_box(ellipses) -> np.ndarray:
+    """``(cx, cy, hx, hy)`` → the bounding box ``(x, y, w, h)``."""
+    e = as_boxes(ellipses)
+    out = np.empty_like(e)
+    out[..., 0] = e[..., 0] - e[..., 2]
+    out[..., 1] = e[..., 1] - e[..., 3]
+    out[..., 2] = 2.0 * e[..., 2]
+    out[..., 3] = 2.0 * e[..., 3]
+    return out
+
+
+def box_center(boxes) -> np.ndarray:
+    """Centres ``(cx, cy)`` of boxes."""
+    b = as_boxes(boxes)
+    return b[..., :2] + 0.5 * b[..., 2:]
+
+
+def box_area(boxes) -> np.ndarray:
+    b = as_boxes(boxes)
+    return np.clip(b[..., 2], 0, None) * np.clip(b[..., 3], 0, None)
+
+
+def iou(a, b) -> np.ndarray:
+    """Intersection over union of boxes ``a`` and ``b`` (broadcast).
+
+    Boxes with non-positive area or non-finite values give IoU 0 (never NaN).
+    """
+    a = as_boxes(a)
+    b = as_boxes(b)
+    ax2 = a[..., 0] + a[..., 2]
+    ay2 = a[..., 1] + a[..., 3]
+    bx2 = b[..., 0] + b[..., 2]
+    by2 = b[..., 1] + b[..., 3]
+    iw = np.minimum(ax2, bx2) - np.maximum(a[..., 0], b[..., 0])
+    ih = np.minimum(ay2, by2) - np.maximum(a[..., 1], b[..., 1])
+    inter = np.clip(iw, 0, None) * np.clip(ih, 0, None)
+    union = box_area(a) + box_area(b) - inter
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
+    out = np.where(np.isfinite(out), out, 0.0)
+    return out
+
+
+def iou_matrix(a, b) -> np.ndarray:
+    """Pairwise IoU between ``(N, 4)`` and ``(M, 4)`` boxes → ``(N, M)``."""
+    a = as_boxes(a).reshape(-1, 4)
+    b = as_boxes(b).reshape(-1, 4)
+    return iou(a[:, None, :], b[None, :, :])
+
+
+def center_error(a, b) -> np.ndarray:
+    """Euclidean distance between box centres."""
+    d = box_center(a) - box_center(b)
+    return np.hypot(d[..., 0], d[..., 1])
+
+
+def clip_box(boxes, width: float, height: float) -> np.ndarray:
+    """Clip boxes to the image ``[0, width) x [0, height)``; empty results get zero size."""
+    b = as_boxes(boxes)
+    x1 = np.clip(b[..., 0], 0, width)
+    y1 = np.clip(b[..., 1], 0, height)
+    x2 = np.clip(b[..., 0] + b[..., 2], 0, width)
+    y2 = np.clip(b[..., 1] + b[..., 3], 0, height)
+    return np.stack([x1, y1, np.maximum(x2 - x1, 0), np.maximum(y2 - y1, 0)], axis=-1)
+
+
+def polygon_to_box(polygons) -> np.ndarray:
+    """VOT polygon ``(x1, y1, ..., xk, yk)`` → its axis-aligned bounding box.
+
+    A 4-number row is already a box and is returned unchanged, so a VOT ground
+    truth file with either form can be converted row by row.
+    """
+    p = np.asarray(polygons, dtype=np.float64)
+    if p.shape[-1] == 4:
+        return p.copy()
+    if p.shape[-1] < 6 or p.shape[-1] % 2:
+        raise BoxError(f"a polygon has an even number (>= 6) of coordinates, got {p.shape[-1]}")
+    xs = p[..., 0::2]
+    ys = p[..., 1::2]
+    x1, x2 = xs.min(axis=-1), xs.max(axis=-1)
+    y1, y2 = ys.min(axis=-1), ys.max(axis=-1)
+    return np.stack([x1, y1, x2 - x1, y2 - y1], axis=-1)
+
+
+def parse_box(text: str) -> Box:
+    """Parse ``"x,y,w,h"`` (commas, spaces or tabs) into a box; raise :class:`BoxError`."""
+    parts = [p for p in text.replace("\t", ",").replace(" ", ",").split(",") if p]
+    if len(parts) != 4:
+        raise BoxError(f"box must be X,Y,W,H (4 numbers), got {text!r}")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        raise BoxError(f"box must be X,Y,W,H (4 numbers), got {text!r}") from None
+    return values  # type: ignore[return-value]
+
+
+def validate_box(box: Iterable[float], width: int, height: int, *, min_size: float = 1.0) -> Box:
+    """Check that ``box`` is finite, of positive size and overlaps the image.
+
+    Returns the box as a tuple of floats.  Raises :class:`BoxError` with a one-line
+    message otherwise.
+    """
+    try:
+        values = tuple(float(v) for v in box)
+    except (TypeError, ValueError):
+        raise BoxError(f"box must be 4 numbers (x, y, w, h), got {box!r}") from None
+    if len(values) != 4:
+        raise BoxError(f"box must be 4 numbers (x, y, w, h), got {len(values)}")
+    if not all(math.isfinite(v) for v in values):
+        raise BoxError(f"box {values} has non-finite values")
+    x, y, w, h = values
+    if w <= 0 or h <= 0:
+        raise BoxError(f"box {values} has zero or negative size")
+    if w < min_size or h < min_size:
+        raise BoxError(f"box {values} is smaller than {min_size} pixel(s)")
+    if x >= width or y >= height or x + w <= 0 or y + h <= 0:
+        raise BoxError(f"box {values} lies outside the {width}x{height} image")
+    return values  # type: ignore[return-value]
+
+
+def ellipse_mask(shape: tuple[int, int], ellipse) -> np.ndarray:
+    """Boolean mask of the pixels whose centres lie inside an ellipse (closed)."""
+    cx, cy, hx, hy = (float(v) for v in ellipse)
+    h, w = shape
+    ys = np.arange(h) + 0.5 - cy
+    xs = np.arange(w) + 0.5 - cx
+    return (xs[None, :] ** 2) / (hx * hx) + (ys[:, None] ** 2) / (hy * hy) <= 1.0

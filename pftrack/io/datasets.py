@@ -1,0 +1,313 @@
+"""Readers for the standard sequence layouts: OTB, VOT, MOTChallenge and plain frame folders.
+
+Every reader returns a :class:`Sequence`: the ordered frame files plus whatever
+ground truth the layout provides.  Files are read as data (numbers, INI, JSON),
+never executed.  Malformed files raise :class:`~pftrack.errors.FormatError`
+with a one-line message naming the file and line.
+
+Layouts
+-------
+* **OTB**: ``img/`` + ``groundtruth_rect.txt`` (``x,y,w,h`` per row; commas, tabs or
+  spaces; ``NaN`` rows = target not visible; may have fewer rows than images),
+  optional ``cfg.json`` (``startFrame``/``endFrame``/``imgFormat``) and ``attrs.txt``.
+* **VOT**: frames (in the folder itself or in ``color/``) + ``groundtruth.txt`` with
+  4-value boxes or 8-value polygons (converted to their axis-aligned boxes).
+* **MOTChallenge**: ``img1/``, ``seqinfo.ini`` and, when present, ``gt/gt.txt``
+  (``frame,id,x,y,w,h,conf,class,visibility``).
+* **frames**: any folder of images, sorted by name.
+"""
+
+from __future__ import annotations
+
+import configparser
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import FormatError, SourceError
+from ..geometry import polygon_to_box
+
+IMAGE_EXTENSIONS = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".ppm", ".pgm", ".pbm", ".jp2"}
+VIDEO_EXTENSIONS = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".mpg", ".mpeg", ".wmv", ".webm", ".flv", ".3gp", ".ts"}
+
+
+@dataclass
+class Sequence:
+    """One sequence on disk with its ground truth."""
+
+    name: str
+    kind: str  # "otb" | "vot" | "mot" | "frames"
+    path: Path
+    frames: list[Path]
+    groundtruth: np.ndarray | None = None  # (n_frames, 4) boxes, NaN = not visible (single object)
+    polygons: np.ndarray | None = None  # VOT: (n_frames, k) raw rows when they were polygons
+    mot_gt: np.ndarray | None = None  # MOT: (rows, >=6) frame,id,x,y,w,h,conf,...
+    fps: float | None = None
+    size: tuple[int, int] | None = None  # (width, height) when the layout states it
+    attributes: list[str] = field(default_factory=list)
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    @property
+    def init_box(self) -> tuple[float, float, float, float] | None:
+        """The first valid ground-truth box (the standard initialisation)."""
+        if self.groundtruth is None:
+            return None
+        gt = self.groundtruth
+        ok = np.all(np.isfinite(gt), axis=1) & (gt[:, 2] > 0) & (gt[:, 3] > 0)
+        if not ok.any():
+            return None
+        return tuple(float(v) for v in gt[int(np.argmax(ok))])
+
+    @property
+    def init_index(self) -> int:
+        """Index of the frame whose ground truth gives :attr:`init_box` (0 normally)."""
+        if self.groundtruth is None:
+            return 0
+        gt = self.groundtruth
+        ok = np.all(np.isfinite(gt), axis=1) & (gt[:, 2] > 0) & (gt[:, 3] > 0)
+        return int(np.argmax(ok)) if ok.any() else 0
+
+
+# ------------------------------------------------------------------------------ helpers
+
+def _natural_key(p: Path):
+    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", p.name)]
+
+
+def list_images(folder: Path) -> list[Path]:
+    """Image files of a folder, sorted by name (numbers in natural order)."""
+    try:
+        entries = list(folder.iterdir())
+    except OSError as exc:
+        raise SourceError(f"{folder}: cannot list folder ({exc.strerror or exc})") from None
+    files = [p for p in entries if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS]
+    files.sort(key=_natural_key)
+    return files
+
+
+_SPLIT = re.compile(r"[,\t; ]+")
+
+
+def read_number_rows(path: Path, *, widths: tuple[int, ...], allow_nan: bool = True) -> list[list[float]]:
+    """Read rows of numbers separated by commas, tabs, semicolons or spaces.
+
+    Each non-empty row must have one of ``widths`` values.  Raises FormatError
+    with the file and line number otherwise.
+    """
+    try:
+        text = path.read_text(encoding="utf-8", errors="strict")
+    except UnicodeDecodeError:
+        raise FormatError(f"{path}: not a text file") from None
+    except OSError as exc:
+        raise FormatError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    rows = []
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        line = line.strip()
+        if not line:
+            continue
+        parts = [p for p in _SPLIT.split(line) if p]
+        try:
+            vals = [float(p) for p in parts]
+        except ValueError:
+            raise FormatError(f"{path}:{lineno}: expected numbers, got {line[:60]!r}") from None
+        if len(vals) not in widths:
+            want = " or ".join(str(w) for w in widths)
+            raise FormatError(f"{path}:{lineno}: expected {want} values, got {len(vals)}")
+        if not allow_nan and not all(math.isfinite(v) for v in vals):
+            raise FormatError(f"{path}:{lineno}: non-finite value")
+        if any(math.isinf(v) for v in vals):
+            raise FormatError(f"{path}:{lineno}: infinite value")
+        rows.append(vals)
+    return rows
+
+
+def _pad_gt(boxes: np.ndarray, n: int) -> np.ndarray:
+    out = np.full((n, 4), np.nan)
+    m = min(n, boxes.shape[0])
+    out[:m] = boxes[:m]
+    return out
+
+
+# ------------------------------------------------------------------------------ detection
+
+def detect_layout(path: Path) -> str | None:
+    """``"otb"``, ``"vot"``, ``"mot"``, ``"frames"`` or None for a folder."""
+    if not path.is_dir():
+        return None
+    if (path / "img1").is_dir() and ((path / "seqinfo.ini").is_file() or (path / "gt").is_dir()):
+        return "mot"
+    if (path / "img").is_dir() and any(path.glob("groundtruth_rect*.txt")):
+        return "otb"
+    if (path / "groundtruth.txt").is_file():
+        return "vot"
+    if (path / "img").is_dir() and list_images(path / "img"):
+        return "frames"
+    if list_images(path):
+        return "frames"
+    return None
+
+
+def read_sequence(path: str | Path) -> Sequence:
+    """Read one sequence folder of any supported layout."""
+    path = Path(path)
+    if not path.exists():
+        raise SourceError(f"{path}: no such file or folder")
+    layout = detect_layout(path)
+    if layout == "otb":
+        return read_otb(path)
+    if layout == "vot":
+        return read_vot(path)
+    if layout == "mot":
+        return read_mot(path)
+    if layout == "frames":
+        folder = path / "img" if (path / "img").is_dir() and list_images(path / "img") else path
+        return Sequence(path.name, "frames", path, list_images(folder))
+    raise SourceError(f"{path}: not a sequence folder (no images, OTB, VOT or MOTChallenge layout)")
+
+
+def discover_sequences(path: str | Path) -> list[Sequence]:
+    """A sequence folder gives itself; a dataset folder gives its sequence subfolders (sorted)."""
+    path = Path(path)
+    if not path.exists():
+        raise SourceError(f"{path}: no such file or folder")
+    if not path.is_dir():
+        raise SourceError(f"{path}: not a folder")
+    if detect_layout(path) in ("otb", "vot", "mot"):
+        return [read_sequence(path)]
+    subs = sorted((p for p in path.iterdir() if p.is_dir()), key=_natural_key)
+    seqs = [read_sequence(p) for p in subs if detect_layout(p) in ("otb", "vot", "mot")]
+    if not seqs:
+        raise SourceError(f"{path}: no OTB, VOT or MOTChallenge sequences found")
+    return seqs
+
+
+# ------------------------------------------------------------------------------ OTB
+
+def read_otb(path: str | Path) -> Sequence:
+    path = Path(path)
+    img_dir = path / "img"
+    files = list_images(img_dir) if img_dir.is_dir() else []
+    if not files:
+        raise SourceError(f"{img_dir}: no images")
+    gt_files = sorted(path.glob("groundtruth_rect*.txt"))
+    if not gt_files:
+        raise FormatError(f"{path}: missing groundtruth_rect.txt")
+    rows = read_number_rows(gt_files[0], widths=(4,))
+    boxes = np.array(rows, dtype=np.float64).reshape(-1, 4)
+    attributes: list[str] = []
+    cfg_path = path / "cfg.json"
+    if cfg_path.is_file():
+        try:
+            cfg = json.loads(cfg_path.read_text(encoding="utf-8"))
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise FormatError(f"{cfg_path}: invalid JSON ({exc})") from None
+        if not isinstance(cfg, dict):
+            raise FormatError(f"{cfg_path}: expected a JSON object")
+        start, end, fmt = cfg.get("startFrame"), cfg.get("endFrame"), cfg.get("imgFormat")
+        if isinstance(start, int) and isinstance(end, int) and isinstance(fmt, str) and end >= start:
+            try:
+                chosen = [img_dir / fmt.format(i) for i in range(start, end + 1)]
+            except (IndexError, KeyError, ValueError):
+                chosen = []
+            if chosen and all(p.is_file() for p in chosen):
+                files = chosen
+        attrs = cfg.get("attributes")
+        if isinstance(attrs, list):
+            attributes = [str(a) for a in attrs]
+    attrs_txt = path / "attrs.txt"
+    if not attributes and attrs_txt.is_file():
+        attributes = [a.strip() for a in attrs_txt.read_text(encoding="utf-8", errors="replace").split(",") if a.strip()]
+    return Sequence(path.name, "otb", path, files, groundtruth=_pad_gt(boxes, len(files)), attributes=attributes)
+
+
+# ------------------------------------------------------------------------------ VOT
+
+def read_vot(path: str | Path) -> Sequence:
+    path = Path(path)
+    folder = path / "color" if (path / "color").is_dir() else path
+    files = list_images(folder)
+    if not files:
+        raise SourceError(f"{folder}: no images")
+    gt_path = path / "groundtruth.txt"
+    rows = read_number_rows(gt_path, widths=(1, 4, 6, 8, 10, 12, 14, 16))
+    width = max((len(r) for r in rows), default=4)
+    boxes = np.full((len(rows), 4), np.nan)
+    polys = None
+    if width > 4:
+        polys = np.full((len(rows), width), np.nan)
+    for i, r in enumerate(rows):
+        if len(r) == 1:  # VOT marks a missing annotation with a single 0/NaN
+            continue
+        if polys is not None:
+            polys[i, : len(r)] = r
+        boxes[i] = polygon_to_box(np.asarray(r, dtype=np.float64))
+    return Sequence(path.name, "vot", path, files, groundtruth=_pad_gt(boxes, len(files)), polygons=polys)
+
+
+# ------------------------------------------------------------------------------ MOTChallenge
+
+def read_seqinfo(path: Path) -> dict[str, str]:
+    cp = configparser.ConfigParser(interpolation=None)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            cp.read_file(fh)
+    except (configparser.Error, UnicodeDecodeError) as exc:
+        raise FormatError(f"{path}: malformed seqinfo.ini ({str(exc).splitlines()[0]})") from None
+    if not cp.has_section("Sequence"):
+        raise FormatError(f"{path}: missing [Sequence] section")
+    return {k: v for k, v in cp.items("Sequence")}
+
+
+def read_mot_txt(path: Path) -> np.ndarray:
+    """MOTChallenge rows ``frame,id,x,y,w,h,conf[,class,visibility[,z]]`` as a float array."""
+    rows = read_number_rows(path, widths=(6, 7, 8, 9, 10))
+    if not rows:
+        return np.zeros((0, 10))
+    out = np.full((len(rows), 10), -1.0)
+    for i, r in enumerate(rows):
+        out[i, : len(r)] = r
+        if len(r) == 6:
+            out[i, 6] = 1.0
+    bad = (out[:, 0] < 1) | (out[:, 4] <= 0) | (out[:, 5] <= 0) | ~np.isfinite(out[:, :6]).all(axis=1)
+    if bad.any():
+        line = int(np.argmax(bad)) + 1
+        raise FormatError(f"{path}: row {line}: frame must be >= 1 and the box size positive")
+    return out
+
+
+def read_mot(path: str | Path) -> Sequence:
+    path = Path(path)
+    info: dict[str, str] = {}
+    ini = path / "seqinfo.ini"
+    if ini.is_file():
+        info = read_seqinfo(ini)
+    img_dir = path / info.get("imdir", "img1")
+    files = list_images(img_dir) if img_dir.is_dir() else []
+    if not files:
+        raise SourceError(f"{img_dir}: no images")
+    seq_len = info.get("seqlength")
+    if seq_len is not None:
+        try:
+            n = int(seq_len)
+        except ValueError:
+            raise FormatError(f"{ini}: seqLength must be an integer, got {seq_len!r}") from None
+        files = files[:n]
+    fps = size = None
+    try:
+        if "framerate" in info:
+            fps = float(info["framerate"])
+        if "imwidth" in info and "imheight" in info:
+            size = (int(info["imwidth"]), int(info["imheight"]))
+    except ValueError:
+        raise FormatError(f"{ini}: frameRate, imWidth and imHeight must be numbers") from None
+    gt = None
+    gt_path = path / "gt" / "gt.txt"
+    if gt_path.is_file():
+        gt = read_mot_txt(gt_path)
+    return Sequence(info.get("name", path.name), "mot", path, files, mot_gt=gt, fps=fps, size=size)

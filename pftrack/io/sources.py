@@ -1,0 +1,205 @@
+"""Frame sources: video files, image folders, OTB/VOT/MOTChallenge sequences and cameras.
+
+>>> for frame in pftrack.open_source("clip.mp4"):     # doctest: +SKIP
+...     state = tracker.update(frame)
+
+Every source yields validated BGR ``uint8`` frames (GUIDE §7): grayscale and
+BGRA frames are converted, 16-bit frames are scaled to 8 bits, a frame whose
+size differs from the first raises :class:`~pftrack.errors.FrameError`, and an
+unreadable frame raises it too unless ``skip_bad_frames=True`` (the frame is
+then skipped and counted in :attr:`FrameSource.skipped`).  Frame numbers start at 1.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import Iterator
+
+import cv2
+import numpy as np
+
+from ..errors import FrameError, SourceError
+from ..frames import as_bgr_uint8
+from .datasets import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, read_sequence
+
+
+def read_image(path: Path) -> np.ndarray | None:
+    """Decode an image file (any bit depth, alpha kept); None when it cannot be decoded."""
+    try:
+        data = np.fromfile(str(path), dtype=np.uint8)
+    except OSError:
+        return None
+    if data.size == 0:
+        return None
+    return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+
+
+class FrameSource:
+    """Base class of all sources; iterate it for frames or call :meth:`numbered`."""
+
+    kind = "source"
+
+    def __init__(self, name: str, *, skip_bad_frames: bool = False):
+        self.name = name
+        self.skip_bad_frames = skip_bad_frames
+        self.fps: float | None = None
+        self.size: tuple[int, int] | None = None  # (width, height) once known
+        self.sequence: Sequence | None = None
+        self.skipped: list[int] = []
+
+    # -- overridden by subclasses -------------------------------------------------------
+    def _raw(self) -> Iterator[tuple[int, np.ndarray | None, str]]:
+        """Yield ``(number, image or None, description)``."""
+        raise NotImplementedError
+
+    def __len__(self) -> int:
+        raise TypeError(f"{self.kind} source has no known length")
+
+    @property
+    def length(self) -> int | None:
+        try:
+            return len(self)
+        except TypeError:
+            return None
+
+    # -- common ---------------------------------------------------------------------
+    @property
+    def groundtruth(self) -> np.ndarray | None:
+        return None if self.sequence is None else self.sequence.groundtruth
+
+    @property
+    def init_box(self):
+        return None if self.sequence is None else self.sequence.init_box
+
+    def numbered(self) -> Iterator[tuple[int, np.ndarray]]:
+        """Yield ``(frame_number, frame)`` with numbers from 1, skipped frames left out."""
+        for number, img, desc in self._raw():
+            if img is None:
+                if self.skip_bad_frames:
+                    self.skipped.append(number)
+                    warnings.warn(f"skipping unreadable frame {number} ({desc})", stacklevel=2)
+                    continue
+                raise FrameError(f"frame {number} ({desc}): cannot be decoded", index=number)
+            try:
+                frame = as_bgr_uint8(img, where=f"frame {number} ({desc})")
+            except FrameError:
+                if self.skip_bad_frames:
+                    self.skipped.append(number)
+                    continue
+                raise
+            h, w = frame.shape[:2]
+            if self.size is None:
+                self.size = (w, h)
+            elif self.size != (w, h):
+                raise FrameError(f"frame {number} ({desc}): size {w}x{h} differs from the first frame's "
+                                 f"{self.size[0]}x{self.size[1]}", index=number)
+            yield number, frame
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        for _, frame in self.numbered():
+            yield frame
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class ImageFolderSource(FrameSource):
+    """Frames from a list of image files (a folder, or an OTB/VOT/MOT sequence)."""
+
+    kind = "images"
+
+    def __init__(self, files: list[Path], name: str, *, sequence: Sequence | None = None,
+                 skip_bad_frames: bool = False):
+        super().__init__(name, skip_bad_frames=skip_bad_frames)
+        if not files:
+            raise SourceError(f"{name}: folder has no images")
+        self.files = list(files)
+        self.sequence = sequence
+        if sequence is not None:
+            self.fps = sequence.fps
+
+    def __len__(self) -> int:
+        return len(self.files)
+
+    def _raw(self):
+        for i, path in enumerate(self.files, start=1):
+            yield i, read_image(path), path.name
+
+
+class VideoSource(FrameSource):
+    """Frames decoded from a video file or a camera by OpenCV."""
+
+    kind = "video"
+
+    def __init__(self, target: str | int, name: str, *, skip_bad_frames: bool = False):
+        super().__init__(name, skip_bad_frames=skip_bad_frames)
+        self.target = target
+        self.cap = cv2.VideoCapture(target)
+        if not self.cap.isOpened():
+            self.cap.release()
+            what = "camera" if isinstance(target, int) else "video"
+            raise SourceError(f"{name}: cannot open as a {what} (not a video, unsupported codec or device missing)")
+        ok, first = self.cap.read()
+        if not ok or first is None:
+            self.cap.release()
+            raise SourceError(f"{name}: contains no readable frames")
+        self._first: np.ndarray | None = first
+        fps = self.cap.get(cv2.CAP_PROP_FPS)
+        self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else None
+        count = int(self.cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+        self._count = count if count > 0 and not isinstance(target, int) else None
+
+    def __len__(self) -> int:
+        if self._count is None:
+            raise TypeError("camera source has no known length")
+        return self._count
+
+    def _raw(self):
+        number = 0
+        if self._first is not None:
+            number += 1
+            first, self._first = self._first, None
+            yield number, first, "video frame"
+        while True:
+            ok, img = self.cap.read()
+            if not ok:
+                return
+            number += 1
+            yield number, img, "video frame"
+
+    def close(self) -> None:
+        self.cap.release()
+
+
+def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False) -> FrameSource:
+    """Open a video file, image folder, OTB/VOT/MOTChallenge folder or camera index.
+
+    Raises :class:`~pftrack.errors.SourceError` with one line naming the problem:
+    missing path, empty folder, unreadable video, unknown format.
+    """
+    if isinstance(spec, int) or (isinstance(spec, str) and spec.strip().isdigit()):
+        index = int(spec)
+        return VideoSource(index, f"camera {index}", skip_bad_frames=skip_bad_frames)
+    path = Path(spec)
+    if not path.exists():
+        raise SourceError(f"{path}: no such file or folder")
+    if path.is_dir():
+        layout = detect_layout(path)
+        if layout is None:
+            raise SourceError(f"{path}: folder has no images")
+        seq = read_sequence(path)
+        return ImageFolderSource(seq.frames, str(path), sequence=seq if layout != "frames" else None,
+                                 skip_bad_frames=skip_bad_frames)
+    suffix = path.suffix.lower()
+    if suffix in IMAGE_EXTENSIONS:
+        return ImageFolderSource([path], str(path), skip_bad_frames=skip_bad_frames)
+    if suffix not in VIDEO_EXTENSIONS:
+        warnings.warn(f"{path}: unknown extension {suffix!r}, trying to open it as a video", stacklevel=2)
+    return VideoSource(str(path), str(path), skip_bad_frames=skip_bad_frames)

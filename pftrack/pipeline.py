@@ -1,0 +1,88 @@
+"""Running a single-object tracker over a source: the loop shared by the CLI, the demo and the API.
+
+>>> from pftrack.pipeline import track_source
+>>> for number, frame, state in track_source(source, tracker, box):   # doctest: +SKIP
+...     print(number, state.box)
+
+Data flows one way: source → tracker → the caller, which writes sinks.  The
+frame's decode time is excluded from :attr:`TrackRun.update_seconds`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import time
+from dataclasses import dataclass, field
+from typing import Iterator
+
+import numpy as np
+
+from .errors import BoxError
+from .io.sources import FrameSource
+from .trackers.base import Tracker, TrackState
+
+
+@dataclass
+class TrackRun:
+    """Timing of a run, filled in while :func:`track_source` iterates."""
+
+    frames: int = 0
+    update_seconds: float = 0.0
+    total_seconds: float = 0.0
+    update_times: list[float] = field(default_factory=list)
+
+    @property
+    def update_fps(self) -> float:
+        n = max(self.frames - 1, 0)
+        return n / self.update_seconds if self.update_seconds > 0 and n else float("nan")
+
+    @property
+    def end_to_end_fps(self) -> float:
+        return self.frames / self.total_seconds if self.total_seconds > 0 else float("nan")
+
+
+def track_source(source: FrameSource, tracker: Tracker, box=None, *, run: TrackRun | None = None,
+                 keep_times: bool = False) -> Iterator[tuple[int, np.ndarray, TrackState]]:
+    """Initialise ``tracker`` on the first frame with ``box`` and track through the rest.
+
+    ``box`` defaults to the source's first ground-truth box (OTB/VOT folders).
+    Yields ``(frame_number, frame, state)`` for every frame, the first included.
+    """
+    run = run if run is not None else TrackRun()
+    if box is None:
+        box = source.init_box
+        if box is None:
+            raise BoxError(f"{source.name}: give an initial box (--box X,Y,W,H); the source has no ground truth")
+    t_start = time.perf_counter()
+    first = True
+    for number, frame in source.numbered():
+        t0 = time.perf_counter()
+        state = tracker.init(frame, box) if first else tracker.update(frame)
+        dt = time.perf_counter() - t0
+        if not first:
+            run.update_seconds += dt
+            if keep_times:
+                run.update_times.append(dt)
+        first = False
+        run.frames += 1
+        run.total_seconds = time.perf_counter() - t_start
+        yield number, frame, state
+    run.total_seconds = time.perf_counter() - t_start
+
+
+@contextlib.contextmanager
+def interrupt_on_sigterm():
+    """Turn SIGTERM into KeyboardInterrupt inside the block, so both stop cleanly the same way."""
+    def _handler(signum, frame):  # noqa: ARG001
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    try:
+        previous = signal.signal(signal.SIGTERM, _handler)
+    except ValueError:  # not in the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)

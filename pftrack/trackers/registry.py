@@ -1,0 +1,98 @@
+"""Tracker registry: ``create_tracker(name, seed=..., **params)``.
+
+Each entry maps a name to a tracker class with a typed :class:`~pftrack.params.Params`
+dataclass.  Keyword arguments that name a parameter are validated by that
+dataclass; a few non-parameter keywords (``detector``) go to the constructor.
+Unknown names raise :class:`~pftrack.errors.ParameterError` with suggestions.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..params import Params
+from .base import Tracker
+
+
+@dataclass(frozen=True)
+class TrackerSpec:
+    name: str
+    cls: type[Tracker]
+    summary: str
+    family: str = "pftrack"  # "pftrack" | "baseline" | "opencv"
+    extra_kwargs: tuple[str, ...] = ()
+    available: Callable[[], bool] = lambda: True
+
+    @property
+    def params_cls(self) -> type[Params]:
+        return self.cls.Params
+
+
+_REGISTRY: dict[str, TrackerSpec] = {}
+
+
+def register(name: str, cls: type[Tracker], summary: str, *, family: str = "pftrack",
+             extra_kwargs: tuple[str, ...] = (), available: Callable[[], bool] | None = None) -> None:
+    if name in _REGISTRY:
+        raise ValueError(f"tracker {name!r} is already registered")
+    _REGISTRY[name] = TrackerSpec(name, cls, summary, family, tuple(extra_kwargs), available or (lambda: True))
+
+
+def get_spec(name: str) -> TrackerSpec:
+    _ensure_loaded()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        close = difflib.get_close_matches(name, sorted(_REGISTRY), n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise ParameterError(f"unknown tracker '{name}'{hint} (see 'pftrack list')") from None
+
+
+def list_trackers(family: str | None = None) -> list[TrackerSpec]:
+    _ensure_loaded()
+    return [s for s in _REGISTRY.values() if family is None or s.family == family]
+
+
+def tracker_names(family: str | None = None) -> list[str]:
+    return [s.name for s in list_trackers(family)]
+
+
+def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generator | None = None,
+                   params: Params | Mapping[str, Any] | None = None, **kwargs: Any) -> Tracker:
+    """Create a registered tracker.
+
+    Parameters
+    ----------
+    name : registry name (``pftrack list`` shows them all).
+    seed, rng : the randomness source; the same seed gives bit-identical results.
+    params : a Params instance or a mapping of parameter values.
+    **kwargs : parameter values (validated), or constructor extras such as ``detector``.
+    """
+    spec = get_spec(name)
+    if not spec.available():
+        raise ParameterError(f"tracker '{name}' is not available in this installation")
+    extras = {k: kwargs.pop(k) for k in list(kwargs) if k in spec.extra_kwargs}
+    if isinstance(params, Params):
+        if kwargs:
+            params = params.replace(**kwargs)
+    else:
+        params = spec.params_cls.from_mapping(dict(params or {}), **kwargs)
+    if not isinstance(params, spec.params_cls):
+        raise ParameterError(f"tracker '{name}' takes {spec.params_cls.__name__}, got {type(params).__name__}")
+    return spec.cls(params, seed=seed, rng=rng, **extras)
+
+
+_loaded = False
+
+
+def _ensure_loaded() -> None:
+    global _loaded
+    if _loaded:
+        return
+    _loaded = True
+    from . import builtin  # noqa: F401  (registers the built-in trackers)

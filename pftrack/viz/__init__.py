@@ -1,0 +1,1 @@
+"""Drawing and plotting (headless: frames and images are written to files)."""

@@ -1,0 +1,115 @@
+"""The command line: the happy path and every bad-input case exits with code 2 and one line."""
+
+import cv2
+import numpy as np
+import pytest
+
+from pftrack.cli import main
+from pftrack.io import read_track_csv
+from pftrack.synth import Scene, simple_scene
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory):
+    d = tmp_path_factory.mktemp("clip")
+    scene = Scene(simple_scene(0, n_frames=20))
+    path = d / "clip.avi"
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 20, (320, 240))
+    for f in scene.frames():
+        vw.write(f)
+    vw.release()
+    box = ",".join(f"{v:.2f}" for v in scene.groundtruth(0)[0])
+    return path, box
+
+
+def one_line_error(capsys):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("pftrack: error:"), err
+    assert "Traceback" not in err[0]
+    return err[0]
+
+
+def test_track_writes_one_row_per_frame(clip, tmp_path, capsys):
+    path, box = clip
+    out = tmp_path / "t.csv"
+    video = tmp_path / "v.mp4"
+    rc = main(["track", str(path), "--box", box, "--out", str(out), "--video-out", str(video), "--quiet",
+               "--param", "n_particles=50"])
+    assert rc == 0
+    rows = read_track_csv(out)
+    assert rows.shape == (20, 7) and rows[:, 0].tolist() == list(range(1, 21))
+    assert video.stat().st_size > 0
+    assert "20 frames tracked" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["track", "MISSING.mp4", "--box", "1,1,5,5"], "no such file"),
+    (["track", "{clip}", "--box", "1,1,0,5"], "zero or negative size"),
+    (["track", "{clip}", "--box", "900,900,5,5"], "outside"),
+    (["track", "{clip}", "--box", "1,2,three,4"], "X,Y,W,H"),
+    (["track", "{clip}"], "initial box"),
+    (["track", "{clip}", "--box", "1,1,5,5", "--tracker", "nope"], "unknown tracker"),
+    (["track", "{clip}", "--box", "1,1,5,5", "--param", "bogus=1"], "unknown parameter"),
+    (["track", "{clip}", "--box", "1,1,5,5", "--param", "n_particles=0"], "n_particles"),
+    (["track", "{clip}", "--box", "1,1,5,5", "--param", "sigma=abc"], "sigma"),
+    (["track", "{clip}", "--box", "1,1,5,5", "--param", "novalue"], "KEY=VALUE"),
+    (["track", "{fake}", "--box", "1,1,5,5"], "cannot open"),
+    (["track", "{empty}", "--box", "1,1,5,5"], "no images"),
+    (["track", "{clip}", "--box", "1,1,5,5", "--out", "{blocked}"], "cannot"),
+    (["list", "nope"], "unknown tracker"),
+])
+def test_bad_input_exits_2(args, needle, clip, tmp_path, capsys):
+    fake = tmp_path / "fake.mp4"
+    fake.write_text("not a video")
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "blocker").write_text("x")
+    subs = {"clip": str(clip[0]), "fake": str(fake), "empty": str(tmp_path / "empty"),
+            "blocked": str(tmp_path / "blocker" / "x.csv")}
+    args = [a.format(**subs) for a in args]
+    if args[0] == "track" and "--out" not in args:
+        args += ["--out", str(tmp_path / "o.csv")]
+    assert main(args + (["--quiet"] if args[0] == "track" else [])) == 2
+    assert needle in one_line_error(capsys)
+
+
+def test_corrupt_frame_keeps_earlier_rows(tmp_path, capsys):
+    d = tmp_path / "frames"
+    d.mkdir()
+    scene = Scene(simple_scene(1, n_frames=6))
+    for t, f in enumerate(scene.frames()):
+        cv2.imwrite(str(d / f"{t:03d}.png"), f)
+    (d / "004.png").write_bytes(b"broken")
+    box = ",".join(str(v) for v in scene.groundtruth(0)[0])
+    out = tmp_path / "t.csv"
+    assert main(["track", str(d), "--box", box, "--out", str(out), "--quiet"]) == 2
+    assert "frame 5" in one_line_error(capsys)
+    assert read_track_csv(out)[:, 0].tolist() == [1, 2, 3, 4]
+    assert main(["track", str(d), "--box", box, "--out", str(out), "--quiet", "--skip-bad-frames"]) == 0
+    assert read_track_csv(out)[:, 0].tolist() == [1, 2, 3, 4, 6]
+
+
+def test_usage_errors_exit_2(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["track"])
+    assert exc.value.code == 2
+    with pytest.raises(SystemExit) as exc:
+        main(["frobnicate"])
+    assert exc.value.code == 2
+
+
+def test_list(capsys):
+    assert main(["list"]) == 0
+    assert "color-pf" in capsys.readouterr().out
+    assert main(["list", "color-pf"]) == 0
+    assert "kickoff_fraction" in capsys.readouterr().out
+
+
+def test_demo_runs_on_bundled_clip(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path / "demo"), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "OTB success AUC" in out
+    rows = read_track_csv(tmp_path / "demo" / "track.csv")
+    assert rows.shape == (120, 7)
+    assert (tmp_path / "demo" / "track.mp4").stat().st_size > 10_000
+    auc = float(out.split("AUC")[1].split()[0])
+    assert auc > 0.4  # the bundled clip is tracked, not just processed

@@ -1,0 +1,114 @@
+import numpy as np
+import pytest
+
+from pftrack._numba import NUMBA_INSTALLED
+from pftrack.cues.color import (ColorCue, bhattacharyya_coefficient, bhattacharyya_distance, ellipse_histograms,
+                                kernel_weights, make_lut, quantize, reachable_roi)
+
+
+def reference_histogram(frame_bins, ellipse, n_bins, kernel="nummiaro"):
+    """One-ellipse reference written straight from Eqs. 2-4 (loops over pixels)."""
+    cx, cy, hx, hy = ellipse
+    a2 = hx * hx + hy * hy
+    h = np.zeros(n_bins)
+    H, W = frame_bins.shape
+    for j in range(H):
+        for i in range(W):
+            dx, dy = i + 0.5 - cx, j + 0.5 - cy
+            if (dx / hx) ** 2 + (dy / hy) ** 2 <= 1.0:
+                k = 1 - (dx * dx + dy * dy) / a2 if kernel == "nummiaro" else 1 - ((dx / hx) ** 2 + (dy / hy) ** 2)
+                if k > 0:
+                    h[frame_bins[j, i]] += k
+    return h / h.sum()
+
+
+@pytest.fixture
+def image(rng):
+    return rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+
+
+def test_histogram_sums_to_one(image):
+    cue = ColorCue()
+    feats = cue.prepare_frame(image)
+    ell = np.array([[40.0, 30.0, 10.0, 15.0], [5.0, 5.0, 8.0, 8.0], [79.0, 59.0, 20.0, 6.0]])
+    hist, tot = cue.histograms(feats, ell)
+    assert hist.shape == (3, 512)
+    assert np.allclose(hist.sum(axis=1), 1.0)
+    assert np.all(tot > 0)
+
+
+def test_bhattacharyya_identity_and_symmetry(rng):
+    p = rng.random(512)
+    p /= p.sum()
+    q = rng.random(512)
+    q /= q.sum()
+    assert bhattacharyya_coefficient(p, p) == pytest.approx(1.0)
+    assert bhattacharyya_coefficient(p, q) == pytest.approx(bhattacharyya_coefficient(q, p))
+    assert bhattacharyya_distance(p, p) == pytest.approx(0.0, abs=1e-7)
+    disjoint = np.zeros(512)
+    disjoint[0] = 1
+    other = np.zeros(512)
+    other[1] = 1
+    assert bhattacharyya_coefficient(disjoint, other) == 0.0
+    assert bhattacharyya_distance(disjoint, other) == pytest.approx(1.0)
+
+
+def test_kernel_weights_match_eq2():
+    """k(r) = 1 - r^2 with r = ||d|| / a, a = sqrt(Hx^2 + Hy^2); zero outside the ellipse."""
+    hx, hy = 6.0, 8.0
+    a = np.hypot(hx, hy)
+    d = np.array([[0.0, 0.0], [3.0, 4.0], [6.0, 0.0], [0.0, 8.0], [6.0, 8.0]])
+    w = kernel_weights(d, hx, hy)
+    expected = [1.0, 1 - 25 / a ** 2, 1 - 36 / a ** 2, 1 - 64 / a ** 2, 0.0]
+    assert w == pytest.approx(expected)
+
+
+@pytest.mark.parametrize("kernel", ["nummiaro", "epanechnikov"])
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_batch_equals_single_reference(image, kernel, backend, rng):
+    if backend == "numba" and not NUMBA_INSTALLED:
+        pytest.skip("numba not installed")
+    lut = make_lut("rgb", (8, 8, 8))
+    bins = quantize(image, lut)
+    ell = np.column_stack([rng.uniform(0, 80, 25), rng.uniform(0, 60, 25), rng.uniform(2, 20, 25),
+                           rng.uniform(2, 20, 25)])
+    hist, _ = ellipse_histograms(bins, 0, 0, ell, 512, kernel=kernel, backend=backend)
+    for n in range(len(ell)):
+        assert hist[n] == pytest.approx(reference_histogram(bins, ell[n], 512, kernel), abs=1e-12)
+
+
+@pytest.mark.skipif(not NUMBA_INSTALLED, reason="numba not installed")
+def test_numba_and_numpy_paths_identical(rng):
+    img = rng.integers(0, 256, (120, 160, 3), dtype=np.uint8)
+    cue = ColorCue()
+    feats = cue.prepare(img, (20, 10, 150, 110))
+    ell = np.column_stack([rng.uniform(10, 160, 200), rng.uniform(0, 120, 200), rng.uniform(1, 40, 200),
+                           rng.uniform(1, 40, 200)])
+    a, ta = ellipse_histograms(feats.bins, feats.x0, feats.y0, ell, 512, backend="numba")
+    b, tb = ellipse_histograms(feats.bins, feats.x0, feats.y0, ell, 512, backend="numpy")
+    assert np.array_equal(a, b) and np.array_equal(ta, tb)
+
+
+def test_roi_offset_gives_same_histogram(image):
+    cue = ColorCue()
+    ell = np.array([[40.0, 30.0, 10.0, 12.0]])
+    full, _ = cue.histograms(cue.prepare_frame(image), ell, reuse=False)
+    roi = reachable_roi(ell, 80, 60)
+    part, _ = cue.histograms(cue.prepare(image, roi), ell, reuse=False)
+    assert np.allclose(full, part)
+
+
+def test_ellipse_outside_image_is_empty(image):
+    cue = ColorCue()
+    hist, tot = cue.histograms(cue.prepare_frame(image), np.array([[500.0, 500.0, 5.0, 5.0]]))
+    assert tot[0] == 0 and hist.sum() == 0
+
+
+def test_rgb_and_hsv_bin_layout():
+    px = np.array([[[255, 0, 0], [0, 0, 255], [0, 255, 0]]], dtype=np.uint8)  # BGR: blue, red, green
+    b = quantize(px, make_lut("rgb", (8, 8, 8)))
+    assert b.tolist() == [[7, 7 * 64, 7 * 8]]
+    cue = ColorCue("hsv")
+    assert cue.n_bins == 8 * 8 * 4
+    f = cue.prepare(px, (0, 0, 3, 1))
+    assert f.bins.max() < cue.n_bins

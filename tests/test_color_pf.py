@@ -1,0 +1,192 @@
+"""Behaviour of color-pf on synthetic scenes with exact ground truth."""
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.errors import BoxError, FrameError, ParameterError
+from pftrack.geometry import box_to_ellipse, center_error, iou
+from pftrack.synth import entering_scene, illumination_scene, occlusion_scene, simple_scene
+
+from .conftest import render_scene
+
+
+def run(spec, seed=0, box=None, **params):
+    scene, frames, truths = render_scene(spec)
+    gt = scene.groundtruth(0)
+    tr = pftrack.create_tracker("color-pf", seed=seed, **params)
+    states = [tr.init(frames[0], gt[0] if box is None else box)]
+    states += [tr.update(f) for f in frames[1:]]
+    return gt, truths, states, tr
+
+
+def boxes(states):
+    return np.array([s.box for s in states])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_tracks_a_simple_scene(seed):
+    gt, _, states, _ = run(simple_scene(seed), seed)
+    err = center_error(boxes(states), gt)
+    assert err.mean() < 2.0
+    assert not any(s.lost for s in states)
+    assert iou(boxes(states), gt).mean() > 0.75
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_partial_occlusion_keeps_centre_error_small(seed):
+    gt, truths, states, _ = run(occlusion_scene(seed), seed)
+    err = center_error(boxes(states), gt)
+    vis = np.array([t.visible[0] for t in truths])
+    assert vis.min() < 0.7  # the scene really occludes the target
+    assert err.mean() < 4.0  # a few pixels for a 28x56 target whose lower half is hidden
+    assert err.max() < 15.0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_full_occlusion_is_flagged_lost_and_target_reacquired(seed):
+    gt, truths, states, _ = run(occlusion_scene(seed, full=True), seed)
+    vis = np.array([t.visible[0] for t in truths])
+    lost = np.array([s.lost for s in states])
+    hidden = vis < 0.05
+    assert hidden.sum() >= 10
+    assert (lost & hidden).sum() >= 0.6 * hidden.sum()  # flagged lost for most hidden frames
+    assert not (lost & (vis > 0.9))[: int(np.argmax(hidden))].any()  # no false alarm before the occlusion
+    # re-acquired within a few frames of reappearing, and on the right spot
+    back = int(np.nonzero(hidden)[0][-1]) + 1
+    visible_again = back + int(np.argmax(vis[back:] > 0.6))
+    reacq = visible_again + int(np.argmax(~lost[visible_again:]))
+    assert reacq - visible_again <= 4
+    tail = slice(reacq + 2, len(states))
+    assert center_error(boxes(states)[tail], gt[tail]).mean() < 5.0
+
+
+def test_model_update_beats_no_update_under_illumination_drift():
+    errs = {}
+    for gate in ("threshold", "never"):
+        e = []
+        for seed in range(3):
+            gt, _, states, _ = run(illumination_scene(seed), seed, update_gate=gate)
+            e.append(center_error(boxes(states), gt).mean())
+        errs[gate] = float(np.mean(e))
+    assert errs["threshold"] < 0.5 * errs["never"], errs
+
+
+def test_automatic_initialisation_finds_entering_target():
+    spec = entering_scene(0, enter_at=15)
+    scene, frames, truths = render_scene(spec)
+    gt = scene.groundtruth(0)
+    tr = pftrack.create_tracker("color-pf", seed=0)
+    # the known target histogram, measured once on a frame where the target is visible
+    q = tr.cue.histogram(frames[40], box_to_ellipse(gt[40]))
+    st = tr.init_auto(frames[0], q, size=gt[40][2:])
+    states = [st] + [tr.update(f) for f in frames[1:]]
+    lost = np.array([s.lost for s in states])
+    assert lost[:15].all()  # nothing to find before the target enters
+    fully_in = int(np.argmax([t.visible[0] > 0.99 and t.boxes[0][0] > 0 for t in truths]))
+    found = int(np.argmax(~lost))
+    assert 15 <= found <= fully_in + 5
+    tail = slice(found + 3, len(states))
+    assert center_error(boxes(states)[tail], gt[tail]).mean() < 6.0
+    assert not lost[found:].any()
+
+
+def test_automatic_initialisation_with_entry_regions_and_variance_test():
+    spec = entering_scene(1, enter_at=10)
+    scene, frames, _ = render_scene(spec)
+    gt = scene.groundtruth(0)
+    tr = pftrack.create_tracker("color-pf", seed=3, search_method="variance", variance_threshold=30.0)
+    q = tr.cue.histogram(frames[40], box_to_ellipse(gt[40]))
+    tr.init_auto(frames[0], q, size=gt[40][2:], regions=[(0, 0, 80, 240)])
+    states = [tr.update(f) for f in frames[1:]]
+    found = int(np.argmax([not s.lost for s in states])) + 1
+    assert not states[-1].lost
+    assert 10 <= found <= 40
+    assert center_error(np.array(states[-1].box), gt[-1]) < 6.0
+
+
+def test_detector_initialisation():
+    spec = entering_scene(2, enter_at=10)
+    scene, frames, _ = render_scene(spec)
+    gt = scene.groundtruth(0)
+
+    def detector(frame):
+        t = next(i for i, f in enumerate(frames) if f is frame)
+        return [] if t < 25 else [tuple(gt[t]) + (0.9,)]
+
+    tr = pftrack.create_tracker("color-pf", seed=0, detector=detector)
+    first = tr.init_detect(frames[0])
+    assert first.lost
+    states = [tr.update(f) for f in frames[1:]]
+    assert all(s.lost for s in states[:23])
+    assert not states[24].lost
+    assert center_error(np.array(states[-1].box), gt[-1]) < 6.0
+
+
+@pytest.mark.parametrize("variant", [{"adaptive_sigma": True}, {"update_gate": "lambda"},
+                                     {"resampler": "systematic"}, {"color_space": "hsv"},
+                                     {"kernel": "epanechnikov"}, {"resample_ess": 0.5}])
+def test_variants_track(variant):
+    gt, _, states, _ = run(simple_scene(4), 0, **variant)
+    assert center_error(boxes(states), gt).mean() < 3.0
+
+
+def test_same_seed_same_output_and_reinit():
+    spec = occlusion_scene(0)
+    _, _, a, tr = run(spec, seed=7)
+    _, _, b, _ = run(spec, seed=7)
+    assert boxes(a).tobytes() == boxes(b).tobytes()
+    assert [s.score for s in a] == [s.score for s in b]
+    _, _, c, _ = run(spec, seed=8)
+    assert boxes(a).tobytes() != boxes(c).tobytes()
+    # re-initialising the same instance starts afresh
+    scene, frames, _ = render_scene(spec)
+    gt = scene.groundtruth(0)
+    st = tr.init(frames[0], gt[0])
+    assert st.box == pytest.approx(tuple(gt[0])) and not st.lost
+
+
+def test_state_contents():
+    gt, _, states, tr = run(simple_scene(0, n_frames=5), 0, n_particles=37)
+    s = states[-1]
+    assert s.particles.shape == (37, 7) and s.weights.shape == (37,)
+    assert s.state_names == ("x", "y", "vx", "vy", "hx", "hy", "adot")
+    assert np.isclose(s.weights.sum(), 1.0)
+    assert 0.0 <= s.score <= 1.0
+
+
+def test_target_leaving_image_is_lost_without_nan():
+    # the target walks out of the right edge and never comes back
+    from pftrack.synth import SceneSpec, Target
+
+    spec = SceneSpec(n_frames=60, seed=3, targets=(Target(path=((0, 200.0, 120.0), (40, 380.0, 120.0))),))
+    gt, _, states, _ = run(spec, 0)
+    assert all(np.all(np.isfinite(s.box)) and np.isfinite(s.score) for s in states)
+    assert all(s.lost for s in states[-10:])
+
+
+def test_bad_inputs_raise_specific_errors():
+    tr = pftrack.create_tracker("color-pf", seed=0)
+    frame = np.zeros((50, 60, 3), np.uint8)
+    with pytest.raises(BoxError):
+        tr.init(frame, (100, 100, 5, 5))
+    with pytest.raises(BoxError):
+        tr.init(frame, (1, 1, 0, 5))
+    with pytest.raises(RuntimeError):
+        pftrack.create_tracker("color-pf").update(frame)
+    tr.init(frame, (10, 10, 10, 10))
+    with pytest.raises(FrameError):
+        tr.update(np.zeros((40, 60, 3), np.uint8))
+    with pytest.raises(FrameError):
+        tr.update(np.zeros((50, 60, 3), np.float32))
+    # grayscale and 16-bit frames are converted
+    tr.update(np.zeros((50, 60), np.uint8))
+    tr.update(np.zeros((50, 60, 3), np.uint16))
+    with pytest.raises(ParameterError):
+        pftrack.create_tracker("color-pf", sigma=0)
+    with pytest.raises(ParameterError):
+        pftrack.create_tracker("color-pf", bins=(8, 8))
+    with pytest.raises(ParameterError):
+        pftrack.create_tracker("color-pf", colour_space="rgb")
+    with pytest.raises(ParameterError):
+        pftrack.create_tracker("no-such-tracker")

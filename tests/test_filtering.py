@@ -1,0 +1,101 @@
+import numpy as np
+import pytest
+
+from pftrack.filtering import (RESAMPLERS, ConstantVelocityScale, KalmanFilter, NCVRandomWalk, ParticleSet,
+                               effective_sample_size, log_normalize)
+
+
+@pytest.mark.parametrize("name", sorted(RESAMPLERS))
+def test_resampler_is_unbiased(name):
+    """The mean number of copies of each particle is proportional to its weight."""
+    rng = np.random.default_rng(7)
+    w = rng.random(20) ** 3
+    w /= w.sum()
+    n = w.size
+    draws = 4000
+    counts = np.zeros(n)
+    for _ in range(draws):
+        idx = RESAMPLERS[name](w, rng)
+        assert idx.shape == (n,)
+        assert idx.min() >= 0 and idx.max() < n
+        counts += np.bincount(idx, minlength=n)
+    mean_copies = counts / draws
+    # standard error of a multinomial count is sqrt(N w (1-w) / draws) <= 0.04
+    assert np.allclose(mean_copies, n * w, atol=0.12)
+
+
+@pytest.mark.parametrize("name", sorted(RESAMPLERS))
+def test_resampler_degenerate_weights(name):
+    rng = np.random.default_rng(0)
+    w = np.zeros(10)
+    w[3] = 1.0
+    assert (RESAMPLERS[name](w, rng) == 3).all()
+
+
+@pytest.mark.parametrize("name", sorted(RESAMPLERS))
+def test_resampler_uses_injected_rng(name):
+    w = np.random.default_rng(1).random(50)
+    w /= w.sum()
+    a = RESAMPLERS[name](w, np.random.default_rng(5))
+    b = RESAMPLERS[name](w, np.random.default_rng(5))
+    assert (a == b).all()
+
+
+def test_multinomial_binary_search_matches_paper():
+    """Fig. 2 step 1: smallest j with c'(j) >= r."""
+    from pftrack.filtering.resampling import _cumulative, _search
+
+    c = _cumulative(np.array([0.1, 0.2, 0.3, 0.4]))
+    assert _search(c, np.array([0.0, 0.1, 0.1000001, 0.3, 0.6, 0.99, 1.0])).tolist() == [0, 0, 1, 1, 2, 3, 3]
+
+
+def test_log_normalize_extremes():
+    lw, ok = log_normalize(np.array([-1e300, -1e300 + 1, -np.inf]))
+    assert ok and np.isclose(np.exp(lw).sum(), 1.0) and np.all(np.isfinite(lw[:2]))
+    lw, ok = log_normalize(np.array([-np.inf, -np.inf]))
+    assert not ok and np.allclose(np.exp(lw), 0.5)
+    lw, ok = log_normalize(np.array([np.nan, 0.0]))
+    assert ok and np.allclose(np.exp(lw), [0.0, 1.0])
+
+
+def test_particle_set_mean_and_ess():
+    s = np.array([[0.0, 0.0], [10.0, 2.0]])
+    ps = ParticleSet(s, np.log([0.25, 0.75]))
+    assert ps.mean() == pytest.approx([7.5, 1.5])
+    assert ps.ess() == pytest.approx(1 / (0.25 ** 2 + 0.75 ** 2))
+    assert effective_sample_size(np.full(4, 0.25)) == pytest.approx(4.0)
+    ps.resample(np.array([1, 1]))
+    assert ps.states.tolist() == [[10.0, 2.0], [10.0, 2.0]]
+    assert np.allclose(ps.weights, 0.5)
+
+
+def test_constant_velocity_scale_transition():
+    dyn = ConstantVelocityScale(max_scale_rate=0.5)
+    s = np.array([[10.0, 20.0, 1.0, -2.0, 5.0, 8.0, 0.1]])
+    dyn.transition(s)
+    assert s[0].tolist() == pytest.approx([11.0, 18.0, 1.0, -2.0, 5.5, 8.8, 0.1])
+    rng = np.random.default_rng(0)
+    many = np.tile([0.0, 0, 0, 0, 10, 10, 0], (20000, 1))
+    dyn.propagate(many, np.array([2.0, 2, 0.5, 0.5, 0, 0, 0]), rng)
+    assert many[:, 0].std() == pytest.approx(2.0, rel=0.05)
+    assert many[:, 2].std() == pytest.approx(0.5, rel=0.05)
+
+
+def test_ncv_random_walk_size_bound():
+    dyn = NCVRandomWalk(sigma_xy=1.0, max_size_change=0.15)
+    rng = np.random.default_rng(0)
+    s = np.tile([0.0, 0, 0, 0, 10, 20], (10000, 1))
+    dyn.propagate(s, rng)
+    assert np.all(np.abs(s[:, 4] / 10 - 1) <= 0.15 + 1e-12)
+    assert np.all(np.abs(s[:, 5] / 20 - 1) <= 0.15 + 1e-12)
+    # position moves by w/2 and velocity by w (same acceleration sample)
+    assert np.allclose(s[:, 0], 0.5 * s[:, 2])
+
+
+def test_kalman_tracks_constant_velocity():
+    kf = KalmanFilter.constant_velocity_2d((0, 0), process_std=0.1, measurement_std=1.0)
+    rng = np.random.default_rng(0)
+    for t in range(1, 60):
+        kf.predict()
+        kf.update(np.array([2.0 * t, -1.0 * t]) + rng.normal(0, 1.0, 2))
+    assert kf.x[2:] == pytest.approx([2.0, -1.0], abs=0.2)

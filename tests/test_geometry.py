@@ -1,0 +1,64 @@
+import numpy as np
+import pytest
+
+from pftrack.errors import BoxError
+from pftrack.geometry import (box_to_ellipse, center_error, clip_box, ellipse_mask, ellipse_to_box, iou, iou_matrix,
+                              parse_box, polygon_to_box, validate_box)
+
+
+def test_box_ellipse_roundtrip():
+    b = np.array([10.0, 20.0, 30.0, 40.0])
+    e = box_to_ellipse(b)
+    assert e.tolist() == [25.0, 40.0, 15.0, 20.0]
+    assert ellipse_to_box(e).tolist() == b.tolist()
+
+
+def test_iou_known_values():
+    a = (0, 0, 10, 10)
+    assert iou(a, a) == pytest.approx(1.0)
+    # shifted by half its width: intersection 50, union 150
+    assert iou(a, (5, 0, 10, 10)) == pytest.approx(50 / 150)
+    assert iou(a, (20, 20, 5, 5)) == 0.0
+    # degenerate and non-finite boxes give 0, never NaN
+    assert iou(a, (0, 0, 0, 0)) == 0.0
+    assert iou(a, (np.nan, 0, 1, 1)) == 0.0
+
+
+def test_iou_matrix_shape_and_symmetry():
+    a = np.array([[0, 0, 10, 10], [5, 5, 10, 10]], float)
+    m = iou_matrix(a, a)
+    assert m.shape == (2, 2)
+    assert np.allclose(m, m.T)
+    assert np.allclose(np.diag(m), 1.0)
+
+
+def test_polygon_to_box():
+    poly = [334.02, 128.36, 438.19, 188.78, 396.39, 260.83, 292.23, 200.41]
+    b = polygon_to_box(poly)
+    assert b == pytest.approx([292.23, 128.36, 438.19 - 292.23, 260.83 - 128.36])
+    assert polygon_to_box([1, 2, 3, 4]).tolist() == [1, 2, 3, 4]
+    with pytest.raises(BoxError):
+        polygon_to_box([1, 2, 3, 4, 5])
+
+
+def test_clip_and_center_error():
+    assert clip_box((-5, -5, 20, 20), 10, 10).tolist() == [0, 0, 10, 10]
+    assert clip_box((20, 20, 5, 5), 10, 10)[2:].tolist() == [0, 0]
+    assert center_error((0, 0, 10, 10), (3, 4, 10, 10)) == pytest.approx(5.0)
+
+
+def test_parse_and_validate_box():
+    assert parse_box("1,2,3,4") == (1.0, 2.0, 3.0, 4.0)
+    assert parse_box("1 2\t3 4") == (1.0, 2.0, 3.0, 4.0)
+    for bad in ["1,2,3", "a,b,c,d", ""]:
+        with pytest.raises(BoxError):
+            parse_box(bad)
+    assert validate_box((1, 2, 3, 4), 100, 100) == (1.0, 2.0, 3.0, 4.0)
+    for bad in [(0, 0, 0, 5), (0, 0, -1, 5), (200, 0, 5, 5), (-10, -10, 5, 5), (np.nan, 0, 5, 5), (0, 0, 5)]:
+        with pytest.raises(BoxError):
+            validate_box(bad, 100, 100)
+
+
+def test_ellipse_mask_area():
+    m = ellipse_mask((200, 200), (100, 100, 40, 20))
+    assert abs(m.sum() - np.pi * 40 * 20) / (np.pi * 40 * 20) < 0.01

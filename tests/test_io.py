@@ -1,0 +1,193 @@
+"""Sources, dataset readers and sinks."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from pftrack.errors import FormatError, FrameError, OutputError, SourceError
+from pftrack.io import (CsvTrackSink, JsonLinesSink, MotSink, VideoSink, discover_sequences, open_source,
+                        prepare_output, read_sequence, read_track_csv)
+
+
+def write_frames(folder, n=5, size=(40, 30), start=1, ext=".png"):
+    folder.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(0)
+    frames = []
+    for i in range(n):
+        f = rng.integers(0, 256, (size[1], size[0], 3), dtype=np.uint8)
+        cv2.imwrite(str(folder / f"{i + start:04d}{ext}"), f)
+        frames.append(f)
+    return frames
+
+
+def test_image_folder_in_natural_order(tmp_path):
+    d = tmp_path / "frames"
+    d.mkdir()
+    for i in (1, 2, 10):
+        cv2.imwrite(str(d / f"f{i}.png"), np.full((8, 8, 3), i, np.uint8))
+    src = open_source(d)
+    assert len(src) == 3
+    assert [int(f[0, 0, 0]) for f in src] == [1, 2, 10]
+
+
+def test_video_file_roundtrip(tmp_path):
+    path = tmp_path / "clip.avi"
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10, (64, 48))
+    for i in range(6):
+        vw.write(np.full((48, 64, 3), 40 * i, np.uint8))
+    vw.release()
+    with open_source(str(path)) as src:
+        frames = list(src)
+    assert len(frames) == 6 and frames[0].shape == (48, 64, 3) and frames[0].dtype == np.uint8
+    assert abs(int(frames[3].mean()) - 120) < 6
+
+
+def test_missing_empty_and_fake_sources(tmp_path):
+    with pytest.raises(SourceError, match="no such file"):
+        open_source(tmp_path / "nope.mp4")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(SourceError, match="no images"):
+        open_source(tmp_path / "empty")
+    fake = tmp_path / "fake.mp4"
+    fake.write_text("not a video")
+    with pytest.raises(SourceError, match="cannot open|no readable"):
+        open_source(fake)
+
+
+def test_grayscale_16bit_and_alpha_frames_are_converted(tmp_path):
+    d = tmp_path / "mixed"
+    d.mkdir()
+    cv2.imwrite(str(d / "1.png"), np.full((10, 12), 200, np.uint8))
+    cv2.imwrite(str(d / "2.png"), np.full((10, 12, 3), 256 * 100, np.uint16))
+    cv2.imwrite(str(d / "3.png"), np.full((10, 12, 4), 50, np.uint8))
+    frames = list(open_source(d))
+    assert all(f.shape == (10, 12, 3) and f.dtype == np.uint8 for f in frames)
+    assert frames[0][0, 0].tolist() == [200, 200, 200]
+    assert frames[1][0, 0].tolist() == [100, 100, 100]
+    assert frames[2][0, 0].tolist() == [50, 50, 50]
+
+
+def test_corrupt_frame_stops_or_is_skipped(tmp_path):
+    d = tmp_path / "seq"
+    write_frames(d, 4)
+    (d / "0003.png").write_bytes(b"garbage")
+    src = open_source(d)
+    seen = []
+    with pytest.raises(FrameError, match="frame 3"):
+        for n, _ in src.numbered():
+            seen.append(n)
+    assert seen == [1, 2]
+    src = open_source(d, skip_bad_frames=True)
+    with pytest.warns(UserWarning, match="skipping"):
+        numbers = [n for n, _ in src.numbered()]
+    assert numbers == [1, 2, 4] and src.skipped == [3]
+
+
+def test_frame_size_change_is_an_error(tmp_path):
+    d = tmp_path / "seq"
+    write_frames(d, 2, size=(40, 30))
+    cv2.imwrite(str(d / "0003.png"), np.zeros((31, 40, 3), np.uint8))
+    with pytest.raises(FrameError, match="frame 3.*differs"):
+        list(open_source(d))
+
+
+def test_otb_reader(tmp_path):
+    seq = tmp_path / "Seq"
+    write_frames(seq / "img", 5)
+    (seq / "groundtruth_rect.txt").write_text("1,2,3,4\n5\t6\t7\t8\nNaN,NaN,NaN,NaN\n")
+    s = read_sequence(seq)
+    assert s.kind == "otb" and len(s) == 5
+    assert s.groundtruth.shape == (5, 4)
+    assert s.groundtruth[1].tolist() == [5, 6, 7, 8]
+    assert np.isnan(s.groundtruth[2:]).all()  # NaN row and missing rows
+    assert s.init_box == (1, 2, 3, 4)
+    src = open_source(seq)
+    assert src.init_box == (1, 2, 3, 4) and len(src) == 5
+
+
+def test_otb_malformed_groundtruth(tmp_path):
+    seq = tmp_path / "Seq"
+    write_frames(seq / "img", 2)
+    (seq / "groundtruth_rect.txt").write_text("1,2,3\n")
+    with pytest.raises(FormatError, match="groundtruth_rect.txt:1"):
+        read_sequence(seq)
+    (seq / "groundtruth_rect.txt").write_text("1,2,x,4\n")
+    with pytest.raises(FormatError, match="expected numbers"):
+        read_sequence(seq)
+
+
+def test_vot_reader_polygons_and_boxes(tmp_path):
+    seq = tmp_path / "bag"
+    write_frames(seq, 3, start=1, ext=".jpg")
+    (seq / "groundtruth.txt").write_text("0,0,10,0,10,10,0,10\n1,1,4,4\n3,1,5,3,3,5,1,3\n")
+    s = read_sequence(seq)
+    assert s.kind == "vot"
+    assert s.groundtruth.tolist() == [[0, 0, 10, 10], [1, 1, 4, 4], [1, 1, 4, 4]]
+
+
+def test_mot_reader(tmp_path):
+    seq = tmp_path / "MOT"
+    write_frames(seq / "img1", 4, start=1, ext=".jpg")
+    (seq / "seqinfo.ini").write_text("[Sequence]\nname=MOT\nimDir=img1\nframeRate=7\nseqLength=3\nimWidth=40\nimHeight=30\n")
+    (seq / "gt").mkdir()
+    (seq / "gt" / "gt.txt").write_text("1,1,5,5,10,20,1,-1,-1,-1\n2,1,6,5,10,20,1,-1,-1,-1\n")
+    s = read_sequence(seq)
+    assert s.kind == "mot" and len(s) == 3 and s.fps == 7 and s.size == (40, 30)
+    assert s.mot_gt.shape == (2, 10)
+    (seq / "seqinfo.ini").write_text("name=MOT\n")
+    with pytest.raises(FormatError, match="seqinfo"):
+        read_sequence(seq)
+
+
+def test_discover_sequences(tmp_path):
+    for name in ("b", "a"):
+        write_frames(tmp_path / name / "img", 2)
+        (tmp_path / name / "groundtruth_rect.txt").write_text("1,1,5,5\n1,1,5,5\n")
+    assert [s.name for s in discover_sequences(tmp_path)] == ["a", "b"]
+    with pytest.raises(SourceError):
+        discover_sequences(tmp_path / "a" / "img")
+
+
+def test_csv_sink_streams_whole_rows(tmp_path):
+    path = tmp_path / "out" / "t.csv"
+    sink = CsvTrackSink(path)
+    sink.write(1, (1.5, 2.25, 3, 4), 0.987654, False)
+    # flushed: readable before close
+    assert path.read_text().splitlines() == ["frame,x,y,w,h,score,lost", "1,1.5,2.25,3,4,0.98765,0"]
+    sink.write(2, (-0.0001, 2, 3, 4), 0.5, True)
+    sink.close()
+    rows = read_track_csv(path)
+    assert rows.shape == (2, 7) and rows[1, 6] == 1
+
+
+def test_mot_and_jsonl_sinks(tmp_path):
+    with MotSink(tmp_path / "m.txt") as m:
+        m.write(3, 7, (1, 2, 3, 4), 0.9)
+    assert (tmp_path / "m.txt").read_text() == "3,7,1,2,3,4,0.9,-1,-1,-1\n"
+    with JsonLinesSink(tmp_path / "r.jsonl") as j:
+        j.write({"frame": 1, "box": np.array([1.0, 2.0, 3.0, 4.0])})
+    assert json.loads((tmp_path / "r.jsonl").read_text()) == {"frame": 1, "box": [1.0, 2.0, 3.0, 4.0]}
+
+
+def test_video_sink(tmp_path):
+    path = tmp_path / "v.mp4"
+    with VideoSink(path, fps=10) as v:
+        for i in range(5):
+            v.write(np.full((32, 48, 3), 50 * i, np.uint8))
+    cap = cv2.VideoCapture(str(path))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 5
+    cap.release()
+
+
+def test_unwritable_outputs(tmp_path):
+    (tmp_path / "adir").mkdir()
+    with pytest.raises(OutputError, match="is a folder"):
+        prepare_output(tmp_path / "adir")
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(OutputError):
+        prepare_output(blocker / "sub" / "out.csv")
+    with pytest.raises(OutputError, match="outside"):
+        prepare_output(tmp_path / ".." / "escape.csv", within=tmp_path)
