@@ -3,8 +3,27 @@
 from __future__ import annotations
 
 from .color_pf import ColorPF
+from .meanshift import KalmanMeanShift, MeanShift
+from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
 from .registry import register
 
 register("color-pf", ColorPF,
          "Adaptive colour-based particle filter (Nummiaro, Koller-Meier & Van Gool 2003)",
          extra_kwargs=("detector",))
+register("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
+         family="baseline")
+register("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",
+         family="baseline")
+register("camshift", CamShift, "OpenCV CamShift on the hue back-projection (Bradski)", family="baseline")
+_SUMMARIES = {
+    "csrt": "OpenCV CSRT (discriminative correlation filter with channel and spatial reliability)",
+    "kcf": "OpenCV KCF (kernelized correlation filter)",
+    "mil": "OpenCV MIL (multiple-instance learning)",
+    "mosse": "OpenCV legacy MOSSE (minimum output sum of squared error filter)",
+    "medianflow": "OpenCV legacy MedianFlow (forward-backward Lucas-Kanade)",
+    "tld": "OpenCV legacy TLD (tracking-learning-detection)",
+}
+for _name, _cls in OPENCV_TRACKERS.items():
+    _kind = _name.split("-", 1)[1]
+    register(_name, _cls, _SUMMARIES[_kind], family="opencv",
+             available=(lambda k=_kind: opencv_available(k)))

@@ -39,7 +39,7 @@ from typing import Callable, Literal, Sequence
 
 import numpy as np
 
-from ..cues.color import ColorCue, reachable_roi
+from ..cues.color import ColorCue, reachable_roi, warmup
 from ..errors import ParameterError
 from ..filtering.dynamics import AD, HX, HY, VX, VY, X, Y, ConstantVelocityScale
 from ..filtering.particles import ParticleSet, effective_sample_size
@@ -163,6 +163,7 @@ class ColorPF(Tracker):
         if detector is not None and not callable(detector):
             raise ParameterError("detector must be a callable frame -> boxes")
         self.detector = detector
+        warmup()
         self._reset()
 
     # ------------------------------------------------------------------ state

@@ -1,0 +1,298 @@
+"""Evaluation reports: results table, Markdown summary, plots and a static HTML page.
+
+Everything is written inside the report folder the user named:
+
+* ``results.csv`` — one row per run: ``tracker,sequence,seed,protocol,auc,precision,
+  mean_iou,failures,accuracy,fps,frames,lost_frames``;
+* ``summary.md`` — per-tracker means and per-sequence tables (Markdown);
+* ``success.png``, ``precision.png`` (OPE) and ``auc_per_sequence.png`` /
+  ``failures_per_sequence.png`` (Matplotlib, Agg backend);
+* ``frames/*.jpg`` — a few frames per sequence with the ground truth (green) and
+  every tracker's box (seed 0);
+* ``index.html`` — one self-contained static page (no external resources) that
+  links and shows all of the above.
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import math
+from collections import defaultdict
+from pathlib import Path
+from typing import Iterable
+
+import numpy as np
+
+from ..io.sinks import prepare_output
+
+CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "mean_iou", "failures", "accuracy",
+               "fps", "frames", "lost_frames"]
+
+
+def _num(v) -> float:
+    return float("nan") if v is None else float(v)
+
+
+def _mean(vals) -> float:
+    vals = [v for v in vals if v is not None and math.isfinite(v)]
+    return float(np.mean(vals)) if vals else float("nan")
+
+
+def _median(vals) -> float:
+    vals = [v for v in vals if v is not None and math.isfinite(v)]
+    return float(np.median(vals)) if vals else float("nan")
+
+
+def _fmt(v, nd=3) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "–"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return f"{v:.{nd}f}"
+
+
+def aggregate(records: list[dict]) -> dict:
+    """Per (tracker, sequence): means over seeds; per tracker: means over sequences."""
+    per: dict[tuple[str, str], list[dict]] = defaultdict(list)
+    for r in records:
+        per[(r["tracker"], r["sequence"])].append(r)
+    trackers = list(dict.fromkeys(r["tracker"] for r in records))
+    sequences = list(dict.fromkeys(r["sequence"] for r in records))
+    cell = {}
+    for (t, s), rs in per.items():
+        cell[(t, s)] = {
+            "auc": _mean(_num(r.get("auc")) for r in rs),
+            "precision": _mean(_num(r.get("precision")) for r in rs),
+            "mean_iou": _mean(_num(r.get("mean_iou")) for r in rs),
+            "failures": _mean(_num(r.get("failures")) for r in rs),
+            "accuracy": _mean(_num(r.get("accuracy")) for r in rs),
+            "fps": _median(_num(r.get("fps")) for r in rs),
+            "seeds": sorted(r["seed"] for r in rs),
+        }
+    overall = {}
+    for t in trackers:
+        cells = [cell[(t, s)] for s in sequences if (t, s) in cell]
+        overall[t] = {
+            "auc": _mean(c["auc"] for c in cells),
+            "precision": _mean(c["precision"] for c in cells),
+            "mean_iou": _mean(c["mean_iou"] for c in cells),
+            "failures": float(np.nansum([c["failures"] for c in cells])) if any(
+                math.isfinite(c["failures"]) for c in cells) else float("nan"),
+            "accuracy": _mean(c["accuracy"] for c in cells),
+            "fps": _median(c["fps"] for c in cells),
+            "seeds": sorted({s for c in cells for s in c["seeds"]}),
+        }
+    return {"trackers": trackers, "sequences": sequences, "cell": cell, "overall": overall}
+
+
+def write_results_csv(records: list[dict], path: Path) -> None:
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(CSV_COLUMNS)
+        for r in records:
+            w.writerow(["" if r.get(c) is None else (f"{r[c]:.6g}" if isinstance(r.get(c), float) else r[c])
+                        for c in CSV_COLUMNS])
+
+
+def summary_markdown(records: list[dict], *, command: str | None = None, title: str = "Evaluation") -> str:
+    agg = aggregate(records)
+    protocols = sorted({r["protocol"] for r in records})
+    lines = [f"# {title}", ""]
+    if command:
+        lines += ["Reproduce with:", "", "```", command, "```", ""]
+    seeds = sorted({r["seed"] for r in records})
+    lines += [f"Protocol: {', '.join(protocols)}. Seeds: {', '.join(map(str, seeds))} "
+              "(deterministic trackers run once). fps = update calls per second on one core, decode excluded; "
+              "per sequence the median over seeds, overall the median over sequences.", ""]
+    ope = "ope" in protocols
+    vot = "vot" in protocols
+    head = ["tracker"]
+    if ope:
+        head += ["mean AUC", "precision@20"]
+    if vot:
+        head += ["failures (sum)", "accuracy"]
+    head += ["median fps"]
+    lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    order = sorted(agg["trackers"], key=lambda t: -np.nan_to_num(agg["overall"][t]["auc"], nan=-1)) if ope else agg["trackers"]
+    for t in order:
+        o = agg["overall"][t]
+        row = [f"`{t}`"]
+        if ope:
+            row += [_fmt(o["auc"]), _fmt(o["precision"])]
+        if vot:
+            row += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
+        row += [_fmt(o["fps"], 0)]
+        lines.append("| " + " | ".join(row) + " |")
+    lines.append("")
+    metric = "auc" if ope else "failures"
+    label = "AUC" if ope else "failures"
+    lines += [f"## {label} per sequence (mean over seeds)", ""]
+    seqs = agg["sequences"]
+    lines += ["| tracker | " + " | ".join(seqs) + " |", "|" + "---|" * (len(seqs) + 1)]
+    for t in order:
+        lines.append(f"| `{t}` | " + " | ".join(_fmt(agg["cell"].get((t, s), {}).get(metric), 3 if ope else 1)
+                                                for s in seqs) + " |")
+    lines += ["", "## fps per sequence (median over seeds)", ""]
+    lines += ["| tracker | " + " | ".join(seqs) + " |", "|" + "---|" * (len(seqs) + 1)]
+    for t in order:
+        lines.append(f"| `{t}` | " + " | ".join(_fmt(agg["cell"].get((t, s), {}).get("fps"), 0) for s in seqs) + " |")
+    lines.append("")
+    return "\n".join(lines)
+
+
+def _plots(records: list[dict], out: Path) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    from .metrics import PRECISION_THRESHOLDS, THRESHOLDS
+
+    made = []
+    agg = aggregate(records)
+    trackers, seqs = agg["trackers"], agg["sequences"]
+    ope = [r for r in records if r["protocol"] == "ope" and r.get("success")]
+    if ope:
+        for kind, xs, key, xl in (("success", THRESHOLDS, "success", "overlap threshold"),
+                                  ("precision", PRECISION_THRESHOLDS, "precision_curve", "location error threshold (px)")):
+            fig, ax = plt.subplots(figsize=(6, 4.5), dpi=100)
+            for t in trackers:
+                curves = [np.array([_num(v) for v in r[key]]) for r in ope if r["tracker"] == t]
+                if not curves:
+                    continue
+                m = np.nanmean(np.vstack(curves), axis=0)
+                score = np.mean(m) if kind == "success" else m[20]
+                ax.plot(xs, m, label=f"{t} [{score:.3f}]")
+            ax.set_xlabel(xl)
+            ax.set_ylabel("success rate" if kind == "success" else "precision")
+            ax.set_title(f"{'Success' if kind == 'success' else 'Precision'} plot of OPE")
+            ax.set_ylim(0, 1)
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7, loc="upper right" if kind == "success" else "lower right")
+            fig.tight_layout()
+            fig.savefig(out / f"{kind}.png")
+            plt.close(fig)
+            made.append(f"{kind}.png")
+    metric, fname = ("auc", "auc_per_sequence.png") if ope else ("failures", "failures_per_sequence.png")
+    fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(seqs) + 2), 4.5), dpi=100)
+    width = 0.8 / max(1, len(trackers))
+    for k, t in enumerate(trackers):
+        vals = [agg["cell"].get((t, s), {}).get(metric, float("nan")) for s in seqs]
+        ax.bar(np.arange(len(seqs)) + k * width, np.nan_to_num(vals), width, label=t)
+    ax.set_xticks(np.arange(len(seqs)) + 0.4 - width / 2)
+    ax.set_xticklabels(seqs, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel("OPE AUC" if ope else "VOT failures")
+    ax.legend(fontsize=7)
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / fname)
+    plt.close(fig)
+    made.append(fname)
+    return made
+
+
+def _frames(records: list[dict], sequences: dict[str, str], out: Path, per_sequence: int = 3) -> dict[str, list[str]]:
+    import cv2
+
+    from ..io.datasets import read_sequence
+    from ..io.sources import read_image
+    from ..viz.draw import color_for, draw_box
+
+    (out / "frames").mkdir(exist_ok=True)
+    trackers = list(dict.fromkeys(r["tracker"] for r in records))
+    made: dict[str, list[str]] = {}
+    for name, path in sequences.items():
+        seq = read_sequence(path)
+        if seq.groundtruth is None:
+            continue
+        n = len(seq.frames)
+        picks = sorted({int(round(f * (n - 1))) for f in np.linspace(0.25, 0.9, per_sequence)})
+        files = []
+        for t_idx in picks:
+            img = read_image(seq.frames[t_idx])
+            if img is None:
+                continue
+            from ..frames import as_bgr_uint8
+
+            img = as_bgr_uint8(img)
+            draw_box(img, seq.groundtruth[t_idx], (0, 255, 0), 2)
+            for k, t in enumerate(trackers):
+                recs = [r for r in records if r["tracker"] == t and r["sequence"] == name]
+                if not recs:
+                    continue
+                rec = min(recs, key=lambda r: r["seed"])
+                b = rec.get("boxes")
+                if not b:
+                    continue
+                box = [_num(v) for v in b[4 * t_idx: 4 * t_idx + 4]]
+                draw_box(img, box, color_for(k + 1), 1)
+            cv2.putText(img, f"#{t_idx + 1}", (5, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1)
+            fn = f"frames/{name}_{t_idx + 1:05d}.jpg"
+            cv2.imwrite(str(out / fn), img)
+            files.append(fn)
+        made[name] = files
+    return made
+
+
+def write_report(records: list[dict], report_dir: str | Path, *, sequences: dict[str, str] | None = None,
+                 command: str | None = None, title: str = "pftrack evaluation") -> dict[str, Path]:
+    """Write the full report into ``report_dir``; returns the paths written."""
+    out = Path(report_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    for name in ("results.csv", "summary.md", "index.html"):
+        prepare_output(out / name, within=out)
+    write_results_csv(records, out / "results.csv")
+    md = summary_markdown(records, command=command, title=title)
+    (out / "summary.md").write_text(md, encoding="utf-8")
+    plots = _plots(records, out)
+    frames = _frames(records, sequences or {}, out) if sequences else {}
+    _html(records, out, plots, frames, command, title)
+    return {"results": out / "results.csv", "summary": out / "summary.md", "index": out / "index.html"}
+
+
+def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]], command, title) -> None:
+    from ..viz.draw import color_for
+
+    agg = aggregate(records)
+    e = html.escape
+    protocols = sorted({r["protocol"] for r in records})
+    ope = "ope" in protocols
+    rows = []
+    for t in agg["trackers"]:
+        o = agg["overall"][t]
+        cells = [e(t)]
+        if ope:
+            cells += [_fmt(o["auc"]), _fmt(o["precision"])]
+        if "vot" in protocols:
+            cells += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
+        cells += [_fmt(o["fps"], 0)]
+        rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    head = ["tracker"] + (["mean AUC", "precision@20"] if ope else []) + \
+        (["failures", "accuracy"] if "vot" in protocols else []) + ["median fps"]
+    legend = " ".join(
+        f'<span style="color:rgb({c[2]},{c[1]},{c[0]})">&#9632; {e(t)}</span>'
+        for t, c in ((t, color_for(k + 1)) for k, t in enumerate(agg["trackers"])))
+    parts = [
+        "<!DOCTYPE html>", "<html><head><meta charset='utf-8'>", f"<title>{e(title)}</title>",
+        "<style>body{font-family:sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse}"
+        "td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}td:first-child{text-align:left}"
+        "img{max-width:100%;margin:4px}.frames img{max-width:32%}</style></head><body>",
+        f"<h1>{e(title)}</h1>",
+    ]
+    if command:
+        parts.append(f"<p>Command: <code>{e(command)}</code></p>")
+    parts += [
+        f"<p>Protocols: {e(', '.join(protocols))}. Files: <a href='results.csv'>results.csv</a>, "
+        "<a href='summary.md'>summary.md</a>.</p>",
+        "<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in head) + "</tr>" + "".join(rows) + "</table>",
+    ]
+    for p in plots:
+        parts.append(f"<div><a href='{e(p)}'><img src='{e(p)}' alt='{e(p)}'></a></div>")
+    if frames:
+        parts.append(f"<h2>Frames</h2><p>Ground truth in green; {legend}</p>")
+        for seq, files in frames.items():
+            parts.append(f"<h3>{e(seq)}</h3><div class='frames'>" +
+                         "".join(f"<img src='{e(f)}' alt='{e(f)}'>" for f in files) + "</div>")
+    parts.append("</body></html>")
+    (out / "index.html").write_text("\n".join(parts), encoding="utf-8")

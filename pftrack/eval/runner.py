@@ -1,0 +1,337 @@
+"""The evaluation runner: trackers × sequences × seeds, in parallel, resumable.
+
+Each (tracker, sequence, seed, protocol) run is a :class:`Job`.  A job opens its
+sequence, decodes frames, times only ``update`` (decode excluded), scores the
+trajectory and returns a plain dict (JSON-serialisable).  With a report folder
+every finished run is written atomically to ``DIR/runs/<key>.json``; a later
+call finds it and skips the run, so an interrupted evaluation resumes where it
+stopped.
+
+Executors: in-process (``workers=1``), local processes (``workers>1``,
+``concurrent.futures``) or a Dask distributed cluster (``scheduler=ADDRESS`` or
+a ``dask.distributed.Client``).  Every worker pins OpenCV to ``threads`` threads
+(1 by default) so speeds are per core.  Results other than timings are identical
+whatever the executor (tested).
+
+Tracker specs: ``NAME`` or ``NAME[key=value;key=value]`` (also ``,`` inside the
+brackets), e.g. ``local-motion-pf[motion=false]``; the whole spec is the label.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import re
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+import numpy as np
+
+from ..errors import FormatError, ParameterError
+from .metrics import ope_scores
+
+RESULT_VERSION = 1
+
+
+# ---------------------------------------------------------------------------------------------- specs
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    label: str
+    name: str
+    params: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def param_dict(self) -> dict[str, str]:
+        return dict(self.params)
+
+
+def _split_top(text: str) -> list[str]:
+    out, depth, cur = [], 0, []
+    for ch in text:
+        if ch == "[":
+            depth += 1
+        elif ch == "]":
+            depth -= 1
+        if ch == "," and depth == 0:
+            out.append("".join(cur))
+            cur = []
+        else:
+            cur.append(ch)
+    out.append("".join(cur))
+    return [s.strip() for s in out if s.strip()]
+
+
+_SPEC = re.compile(r"^([A-Za-z0-9_.\-]+)(?:\[(.*)\])?$")
+
+
+def parse_tracker_list(text: str, *, available: Callable[[str], list[str]] | None = None) -> list[TrackerConfig]:
+    """Parse ``"color-pf,opencv-csrt,local-motion-pf[motion=false]"``.
+
+    The keywords ``all``, ``ours``, ``baselines`` and ``opencv`` expand to the
+    available registered trackers of those families.
+    """
+    from ..trackers.registry import get_spec, list_trackers
+
+    configs: list[TrackerConfig] = []
+    for item in _split_top(text):
+        families = {"all": None, "ours": "pftrack", "baselines": "baseline", "opencv": "opencv"}
+        if item in families:
+            for spec in list_trackers(families[item]):
+                if spec.available():
+                    configs.append(TrackerConfig(spec.name, spec.name))
+            continue
+        m = _SPEC.match(item)
+        if not m:
+            raise ParameterError(f"malformed tracker spec {item!r} (expected NAME or NAME[key=value;...])")
+        name, inner = m.group(1), m.group(2)
+        spec = get_spec(name)
+        params: list[tuple[str, str]] = []
+        if inner:
+            for kv in re.split(r"[;,]", inner):
+                if not kv.strip():
+                    continue
+                if "=" not in kv:
+                    raise ParameterError(f"tracker spec {item!r}: expected key=value, got {kv!r}")
+                k, v = kv.split("=", 1)
+                params.append((k.strip(), v.strip()))
+        spec.params_cls.from_mapping(dict(params))  # validate now, not in a worker
+        if not spec.available():
+            raise ParameterError(f"tracker '{name}' is not available in this installation")
+        configs.append(TrackerConfig(item, name, tuple(params)))
+    if not configs:
+        raise ParameterError("no trackers given")
+    labels = [c.label for c in configs]
+    if len(set(labels)) != len(labels):
+        raise ParameterError("a tracker is listed twice")
+    return configs
+
+
+@dataclass(frozen=True)
+class Job:
+    tracker: TrackerConfig
+    sequence: str  # path
+    sequence_name: str
+    seed: int
+    protocol: str  # "ope" | "vot"
+    threads: int = 1
+    extra: tuple[tuple[str, Any], ...] = ()
+
+    @property
+    def key(self) -> str:
+        slug = re.sub(r"[^A-Za-z0-9_.=-]+", "_", self.tracker.label)[:80]
+        h = hashlib.sha1(json.dumps([self.tracker.label, list(self.tracker.params), self.sequence_name,
+                                     self.seed, self.protocol]).encode()).hexdigest()[:8]
+        return f"{self.protocol}__{self.sequence_name}__{slug}__s{self.seed}__{h}"
+
+
+def build_jobs(sequences: Iterable, trackers: list[TrackerConfig], *, seeds: int, protocol: str,
+               threads: int = 1) -> list[Job]:
+    from ..trackers.registry import get_spec
+
+    jobs = []
+    for seq in sequences:
+        for cfg in trackers:
+            stochastic = get_spec(cfg.name).cls.stochastic
+            for seed in range(seeds if stochastic else 1):
+                jobs.append(Job(cfg, str(seq.path), seq.name, seed, protocol, threads))
+    return jobs
+
+
+# ---------------------------------------------------------------------------------------------- one run
+
+def _pin_threads(n: int) -> None:
+    import cv2
+
+    cv2.setNumThreads(int(n))
+
+
+def _finite_list(a) -> list:
+    return [None if (isinstance(v, float) and not math.isfinite(v)) else v for v in np.asarray(a, dtype=np.float64).ravel().tolist()]
+
+
+def run_job(job: Job) -> dict:
+    """Run one job and return its result record (no side effects on disk)."""
+    from ..io.datasets import read_sequence
+    from ..io.sources import read_image
+    from ..trackers.registry import create_tracker
+    from .vot import run_vot
+
+    _pin_threads(job.threads)
+    seq = read_sequence(job.sequence)
+    if seq.groundtruth is None:
+        raise FormatError(f"{job.sequence}: no single-object ground truth for protocol {job.protocol}")
+    tracker = create_tracker(job.tracker.name, seed=job.seed, params=job.tracker.param_dict)
+
+    def frames():
+        from ..frames import as_bgr_uint8
+
+        for i, path in enumerate(seq.frames):
+            img = read_image(path)
+            if img is None:
+                raise FormatError(f"{path}: frame {i + 1} cannot be decoded")
+            yield as_bgr_uint8(img, where=str(path))
+
+    gt = seq.groundtruth
+    rec: dict[str, Any] = {"version": RESULT_VERSION, "tracker": job.tracker.label, "name": job.tracker.name,
+                           "params": dict(job.tracker.params), "sequence": job.sequence_name, "seed": job.seed,
+                           "protocol": job.protocol, "frames": len(seq.frames)}
+    if job.protocol == "ope":
+        start = seq.init_index
+        boxes = np.full((len(seq.frames), 4), np.nan)
+        lost = 0
+        upd_s = 0.0
+        times = []
+        for t, frame in enumerate(frames()):
+            if t < start:
+                continue
+            if t == start:
+                st = tracker.init(frame, seq.init_box)
+            else:
+                t0 = time.perf_counter()
+                st = tracker.update(frame)
+                dt = time.perf_counter() - t0
+                upd_s += dt
+                times.append(dt)
+            boxes[t] = st.box
+            lost += int(st.lost)
+        scores = ope_scores(boxes[start:], gt[start:])
+        rec.update(auc=scores.auc, precision=scores.precision, mean_iou=scores.mean_iou, failures=None,
+                   accuracy=None, lost_frames=lost, success=_finite_list(scores.success),
+                   precision_curve=_finite_list(scores.precision_curve), boxes=_finite_list(boxes),
+                   update_seconds=upd_s, updates=len(times),
+                   fps=(len(times) / upd_s) if upd_s > 0 else None,
+                   median_frame_ms=float(np.median(times) * 1e3) if times else None)
+    elif job.protocol == "vot":
+        res = run_vot(tracker, frames(), gt)
+        ok = np.isfinite(res.ious)
+        rec.update(auc=None, precision=None, mean_iou=float(res.ious[ok].mean()) if ok.any() else None,
+                   failures=res.failures, accuracy=res.accuracy, lost_frames=None,
+                   failure_frames=res.failure_frames, inits=res.inits, boxes=_finite_list(res.boxes),
+                   update_seconds=res.update_seconds, updates=res.updates,
+                   fps=(res.updates / res.update_seconds) if res.update_seconds > 0 else None)
+    else:
+        raise ParameterError(f"unknown protocol {job.protocol!r}")
+    for k, v in list(rec.items()):
+        if isinstance(v, float) and not math.isfinite(v):
+            rec[k] = None
+    return rec
+
+
+# ---------------------------------------------------------------------------------------------- runner
+
+TIMING_FIELDS = ("fps", "update_seconds", "median_frame_ms")
+
+
+def _atomic_write_json(path: Path, obj: dict) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    with open(tmp, "w", encoding="utf-8") as fh:
+        json.dump(obj, fh, allow_nan=False)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+
+
+def _load_cached(path: Path, job: Job) -> dict | None:
+    try:
+        with open(path, encoding="utf-8") as fh:
+            rec = json.load(fh)
+    except (OSError, json.JSONDecodeError):
+        return None
+    if (rec.get("version") != RESULT_VERSION or rec.get("tracker") != job.tracker.label
+            or rec.get("sequence") != job.sequence_name or rec.get("seed") != job.seed
+            or rec.get("protocol") != job.protocol or rec.get("params") != dict(job.tracker.params)):
+        return None
+    return rec
+
+
+@dataclass
+class Runner:
+    """Runs jobs with caching in ``report_dir/runs`` (when given)."""
+
+    report_dir: Path | None = None
+    workers: int = 1
+    scheduler: Any = None  # address string or a dask.distributed.Client
+    progress: bool = True
+    on_result: Callable[[dict], None] | None = None
+    ran: int = field(default=0, init=False)
+    reused: int = field(default=0, init=False)
+
+    def _cache_path(self, job: Job) -> Path | None:
+        if self.report_dir is None:
+            return None
+        d = Path(self.report_dir) / "runs"
+        d.mkdir(parents=True, exist_ok=True)
+        return d / f"{job.key}.json"
+
+    def run(self, jobs: list[Job]) -> list[dict]:
+        from tqdm import tqdm
+        import sys
+
+        results: dict[int, dict] = {}
+        todo: list[int] = []
+        for i, job in enumerate(jobs):
+            p = self._cache_path(job)
+            rec = _load_cached(p, job) if p is not None and p.exists() else None
+            if rec is not None:
+                results[i] = rec
+                self.reused += 1
+            else:
+                todo.append(i)
+        bar = tqdm(total=len(jobs), initial=len(results), desc="eval", unit="run", file=sys.stderr,
+                   disable=not self.progress or None, leave=False)
+
+        def done(i: int, rec: dict) -> None:
+            results[i] = rec
+            p = self._cache_path(jobs[i])
+            if p is not None:
+                _atomic_write_json(p, rec)
+            self.ran += 1
+            if self.on_result:
+                self.on_result(rec)
+            bar.update(1)
+
+        try:
+            if self.scheduler is not None:
+                self._run_dask(jobs, todo, done)
+            elif self.workers <= 1 or len(todo) <= 1:
+                for i in todo:
+                    done(i, run_job(jobs[i]))
+            else:
+                with ProcessPoolExecutor(max_workers=self.workers) as ex:
+                    futs = {ex.submit(run_job, jobs[i]): i for i in todo}
+                    try:
+                        for fut in as_completed(futs):
+                            done(futs[fut], fut.result())
+                    except BaseException:
+                        for f in futs:
+                            f.cancel()
+                        raise
+        finally:
+            bar.close()
+        return [results[i] for i in range(len(jobs))]
+
+    def _run_dask(self, jobs, todo, done) -> None:
+        from dask.distributed import Client, as_completed as dask_completed
+
+        client = self.scheduler if isinstance(self.scheduler, Client) else Client(self.scheduler)
+        try:
+            futs = {}
+            for i in todo:
+                fut = client.submit(run_job, jobs[i], pure=False, key=f"pftrack-{jobs[i].key}-{time.time_ns()}")
+                futs[fut] = i
+            for fut in dask_completed(list(futs)):
+                done(futs[fut], fut.result())
+        finally:
+            if client is not self.scheduler:
+                client.close()
+
+
+def strip_timings(rec: dict) -> dict:
+    """A record without its timing fields (for comparing runs across executors)."""
+    return {k: v for k, v in rec.items() if k not in TIMING_FIELDS}

@@ -1,0 +1,137 @@
+"""OpenCV's classical trackers behind the pftrack protocol, for comparison.
+
+``opencv-csrt``, ``opencv-kcf``, ``opencv-mil`` (``cv2.Tracker*``) and
+``opencv-mosse``, ``opencv-medianflow``, ``opencv-tld`` (``cv2.legacy``), from
+``opencv-contrib-python-headless``.  A peer's ``ok=False`` maps to ``lost=True``
+and its last box is kept.  They have no particles and no meaningful score (1
+while tracking, 0 when lost).
+
+``camshift`` is the classical hue back-projection baseline (Bradski 1998): a
+hue histogram of the initial box (pixels with enough saturation and value), its
+back-projection in every frame and ``cv2.CamShift`` from the previous window.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ..geometry import Box, clip_box
+from ..params import Params, param
+from .base import Tracker, TrackState
+
+_FACTORIES = {
+    "csrt": lambda: cv2.TrackerCSRT_create(),
+    "kcf": lambda: cv2.TrackerKCF_create(),
+    "mil": lambda: cv2.TrackerMIL_create(),
+    "mosse": lambda: cv2.legacy.TrackerMOSSE_create(),
+    "medianflow": lambda: cv2.legacy.TrackerMedianFlow_create(),
+    "tld": lambda: cv2.legacy.TrackerTLD_create(),
+}
+_LEGACY = {"mosse", "medianflow", "tld"}
+
+
+def opencv_available(kind: str) -> bool:
+    try:
+        _FACTORIES[kind]()
+        return True
+    except Exception:
+        return False
+
+
+@dataclass(frozen=True, kw_only=True)
+class OpenCVParams(Params):
+    """OpenCV's trackers run with their library defaults."""
+
+
+class OpenCVTracker(Tracker):
+    """Adapter around one ``cv2`` tracker."""
+
+    Params = OpenCVParams
+    stochastic = False
+    kind = "csrt"
+
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        self._cv = _FACTORIES[self.kind]()
+        h, w = frame.shape[:2]
+        bx = clip_box(np.asarray(box), w, h)
+        if self.kind in _LEGACY:
+            rect = tuple(float(v) for v in bx)
+        else:
+            x, y = int(round(bx[0])), int(round(bx[1]))
+            rect = (x, y, max(1, int(round(bx[0] + bx[2])) - x), max(1, int(round(bx[1] + bx[3])) - y))
+        res = self._cv.init(frame, rect)
+        if res is False:  # legacy API returns a bool
+            raise RuntimeError(f"{self.name}: OpenCV refused to initialise on box {box}")
+        self._last = tuple(float(v) for v in box)
+        return TrackState(box=self._last, score=1.0, lost=False)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        ok, rect = self._cv.update(frame)
+        rect = tuple(float(v) for v in rect)
+        if ok and rect[2] > 0 and rect[3] > 0 and all(np.isfinite(rect)):
+            self._last = rect
+            return TrackState(box=rect, score=1.0, lost=False)
+        return TrackState(box=self._last, score=0.0, lost=True)
+
+
+def _make(kind: str, label: str) -> type[OpenCVTracker]:
+    return type(f"OpenCV{kind.upper()}", (OpenCVTracker,), {"kind": kind, "name": label})
+
+
+OPENCV_TRACKERS = {f"opencv-{k}": _make(k, f"opencv-{k}") for k in _FACTORIES}
+
+
+@dataclass(frozen=True, kw_only=True)
+class CamShiftParams(Params):
+    """CamShift on the hue back-projection (OpenCV sample defaults)."""
+
+    hue_bins: int = param(16, ge=2, le=180, doc="Bins of the hue histogram.")
+    min_saturation: int = param(60, ge=0, le=255, doc="Pixels with lower saturation are ignored (hue unreliable).")
+    min_value: int = param(32, ge=0, le=255, doc="Pixels with lower value (brightness) are ignored.")
+    max_iterations: int = param(10, ge=1, le=1000, doc="Mean-shift iterations per frame.")
+    epsilon: float = param(1.0, gt=0, doc="Stop when the window moves less than this (pixels).")
+
+
+class CamShift(Tracker):
+    """Hue back-projection + ``cv2.CamShift`` (a classic colour baseline)."""
+
+    name = "camshift"
+    Params = CamShiftParams
+    stochastic = False
+
+    def _mask(self, hsv):
+        p = self.params
+        return cv2.inRange(hsv, (0, p.min_saturation, p.min_value), (180, 255, 255))
+
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        p = self.params
+        h, w = frame.shape[:2]
+        bx = clip_box(np.asarray(box), w, h)
+        x, y = int(bx[0]), int(bx[1])
+        x2, y2 = max(x + 1, int(round(bx[0] + bx[2]))), max(y + 1, int(round(bx[1] + bx[3])))
+        hsv = cv2.cvtColor(frame[y:y2, x:x2], cv2.COLOR_BGR2HSV)
+        hist = cv2.calcHist([hsv], [0], self._mask(hsv), [p.hue_bins], [0, 180])
+        cv2.normalize(hist, hist, 0, 255, cv2.NORM_MINMAX)
+        self._hist = hist
+        self._window = (x, y, x2 - x, y2 - y)
+        self._last = tuple(float(v) for v in box)
+        return TrackState(box=self._last, score=1.0, lost=False)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        p = self.params
+        hsv = cv2.cvtColor(frame, cv2.COLOR_BGR2HSV)
+        prob = cv2.calcBackProject([hsv], [0], self._hist, [0, 180], 1)
+        prob &= self._mask(hsv)
+        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, p.max_iterations, p.epsilon)
+        _, window = cv2.CamShift(prob, self._window, crit)
+        x, y, w, h = (int(v) for v in window)
+        if w <= 0 or h <= 0:
+            return TrackState(box=self._last, score=0.0, lost=True)
+        self._window = (x, y, w, h)
+        region = prob[y:y + h, x:x + w]
+        score = float(region.mean() / 255.0) if region.size else 0.0
+        self._last = (float(x), float(y), float(w), float(h))
+        return TrackState(box=self._last, score=score, lost=False)

@@ -1,0 +1,303 @@
+"""Evaluation: metrics, protocols, MOT parity, peers, baselines, runner and report."""
+
+import json
+import re
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.eval.metrics import THRESHOLDS, frame_ious, ope_scores, success_curve
+from pftrack.eval.mot import import_motmetrics, mot_scores
+from pftrack.eval.report import write_report
+from pftrack.eval.runner import Job, Runner, TrackerConfig, build_jobs, parse_tracker_list, run_job, strip_timings
+from pftrack.eval.vot import run_vot
+from pftrack.io import read_sequence
+from pftrack.io.datasets import read_mot_txt
+from pftrack.synth import Scene, simple_scene
+from pftrack.trackers.base import TrackState
+
+from .conftest import render_scene, shared_sequence
+
+
+# ------------------------------------------------------------------ metrics against hand-computed cases
+
+def test_perfect_tracker_auc_is_20_of_21():
+    gt = np.array([[10, 10, 20, 30], [12, 11, 20, 30], [14, 12, 21, 30]], float)
+    res = ope_scores(gt, gt)
+    assert res.auc == pytest.approx(20 / 21)  # IoU 1 is not > 1
+    assert res.precision == 1.0 and res.mean_iou == pytest.approx(1.0)
+
+
+def test_shifted_box_has_known_iou():
+    gt = np.array([[0, 0, 10, 10]] * 4, float)
+    pred = gt + [2.5, 0, 0, 0]  # overlap 7.5 x 10 = 75, union 125
+    assert frame_ious(pred, gt) == pytest.approx([0.6] * 4)
+    res = ope_scores(pred, gt)
+    assert res.auc == pytest.approx(np.mean(0.6 > THRESHOLDS))
+    assert res.precision == 1.0  # 2.5 px centre error
+
+
+def test_nan_and_zero_size_ground_truth_rows_are_skipped():
+    gt = np.array([[0, 0, 10, 10], [np.nan] * 4, [0, 0, 0, 0], [0, 0, 10, 10]], float)
+    pred = np.array([[0, 0, 10, 10], [50, 50, 5, 5], [50, 50, 5, 5], [0, 0, 10, 10]], float)
+    res = ope_scores(pred, gt)
+    assert res.n_frames == 2 and res.auc == pytest.approx(20 / 21)
+    # a missing prediction (NaN) counts as a miss, never as NaN
+    res = ope_scores(np.array([[np.nan] * 4, [0, 0, 10, 10]]), np.array([[0, 0, 10, 10]] * 2, float))
+    assert res.auc == pytest.approx(10 / 21)
+
+
+def independent_ope(pred, gt):
+    """pysot-style scorer written from the published definitions (continuous IoU, IoU > t, 21 thresholds)."""
+    ok = (gt[:, 2] > 0) & (gt[:, 3] > 0) & np.isfinite(gt).all(1)
+    g, p = gt[ok], pred[ok]
+    left = np.maximum(g[:, 0], p[:, 0])
+    right = np.minimum(g[:, 0] + g[:, 2], p[:, 0] + p[:, 2])
+    top = np.maximum(g[:, 1], p[:, 1])
+    bottom = np.minimum(g[:, 1] + g[:, 3], p[:, 1] + p[:, 3])
+    inter = np.maximum(0, right - left) * np.maximum(0, bottom - top)
+    ov = inter / (g[:, 2] * g[:, 3] + p[:, 2] * p[:, 3] - inter)
+    auc = np.mean([np.sum(ov > t) / len(ov) for t in np.arange(0, 1.05, 0.05)])
+    c = np.hypot(g[:, 0] + g[:, 2] / 2 - p[:, 0] - p[:, 2] / 2, g[:, 1] + g[:, 3] / 2 - p[:, 1] - p[:, 3] / 2)
+    return auc, np.mean(c <= 20)
+
+
+def test_ope_agrees_with_an_independent_scorer(rng):
+    gt = np.column_stack([rng.uniform(0, 300, 200), rng.uniform(0, 200, 200), rng.uniform(5, 80, 200),
+                          rng.uniform(5, 80, 200)])
+    pred = gt + rng.normal(0, 8, gt.shape)
+    pred[:, 2:] = np.abs(pred[:, 2:]) + 1
+    auc, prec = independent_ope(pred, gt)
+    res = ope_scores(pred, gt)
+    assert res.auc == pytest.approx(auc, abs=1e-12) and res.precision == pytest.approx(prec, abs=1e-12)
+
+
+# ------------------------------------------------------------------ VOT protocol
+
+class ScriptedTracker:
+    """Returns scripted boxes; records when it is (re)initialised."""
+
+    def __init__(self, script):
+        self.script = script
+        self.t = 0
+        self.inits = []
+
+    def init(self, frame, box):
+        self.inits.append(int(frame))
+        self.t = int(frame)
+        return TrackState(box=tuple(box), score=1, lost=False)
+
+    def update(self, frame):
+        self.t = int(frame)
+        return TrackState(box=self.script(self.t), score=1, lost=False)
+
+
+def test_vot_protocol_counts_failures_and_reinits_exactly():
+    n = 40
+    gt = np.tile([10.0, 10.0, 10.0, 10.0], (n, 1))
+    bad = {5, 20}  # the tracker misses completely on these frames
+
+    def script(t):
+        return (200.0, 200.0, 10.0, 10.0) if t in bad else (12.0, 10.0, 10.0, 10.0)  # IoU 0.8 otherwise
+
+    tr = ScriptedTracker(script)
+    res = run_vot(tr, range(n), gt)
+    assert res.failures == 2 and res.failure_frames == [5, 20]
+    assert tr.inits == [0, 10, 25] and res.inits == [0, 10, 25]
+    assert np.isnan(res.ious[6:10]).all() and np.isnan(res.ious[21:25]).all()
+    # accuracy excludes the 10 frames after each (re)init: only frames 35..39 count (IoU 80/120 each)
+    assert np.isfinite(res.ious[26:35]).all()
+    assert res.accuracy == pytest.approx(80 / 120)
+    res_short = run_vot(ScriptedTracker(script), range(n), gt, burn_in=0)
+    assert res_short.accuracy == pytest.approx(80 / 120)  # same IoU everywhere it succeeds
+
+
+def test_vot_waits_for_valid_ground_truth():
+    gt = np.array([[np.nan] * 4, [np.nan] * 4, [5, 5, 10, 10], [5, 5, 10, 10]], float)
+    tr = ScriptedTracker(lambda t: (5.0, 5.0, 10.0, 10.0))
+    res = run_vot(tr, range(4), gt)
+    assert tr.inits == [2] and res.failures == 0
+
+
+# ------------------------------------------------------------------ MOT metrics
+
+def test_motmetrics_parity_on_tud_campus():
+    mm = import_motmetrics()
+    d = Path(mm.__file__).parent / "data" / "TUD-Campus"
+    s = mot_scores(read_mot_txt(d / "gt.txt"), read_mot_txt(d / "test.txt"))
+    assert s.mota == pytest.approx(0.526462, abs=1e-6)
+    assert s.motp == pytest.approx(0.277201, abs=1e-6)
+    assert s.idf1 == pytest.approx(0.557659, abs=1e-6)
+    assert (s.num_switches, s.num_false_positives, s.num_misses) == (7, 13, 150)
+
+
+def test_mot_perfect_hypothesis():
+    gt = np.array([[1, 1, 0, 0, 10, 10, 1], [2, 1, 1, 0, 10, 10, 1], [1, 2, 50, 50, 10, 10, 1]], float)
+    s = mot_scores(gt, gt)
+    assert s.mota == 1.0 and s.idf1 == 1.0 and s.num_switches == 0
+
+
+# ------------------------------------------------------------------ peers and seed baselines
+
+def _synthetic_clip(seed=0, n=30):
+    scene, frames, _ = render_scene(simple_scene(seed, n_frames=n))
+    return frames, scene.groundtruth(0)
+
+
+@pytest.mark.parametrize("name", ["opencv-csrt", "opencv-kcf", "opencv-mil", "opencv-mosse", "opencv-medianflow",
+                                  "opencv-tld", "camshift", "meanshift", "kalman-meanshift"])
+def test_peers_and_baselines_follow_the_protocol(name):
+    frames, gt = _synthetic_clip()
+    tr = pftrack.create_tracker(name)
+    st = tr.init(frames[0], gt[0])
+    assert st.box == pytest.approx(tuple(gt[0]))
+    states = [tr.update(f) for f in frames[1:]]
+    assert all(len(s.box) == 4 and np.all(np.isfinite(s.box)) for s in states)
+    if name in ("meanshift", "kalman-meanshift", "opencv-csrt"):
+        err = np.hypot(*(np.array([s.box for s in states])[:, :2] + np.array([s.box for s in states])[:, 2:] / 2
+                         - gt[1:, :2] - gt[1:, 2:] / 2).T)
+        assert err.mean() < 4.0
+
+
+def test_peer_failure_maps_to_lost_and_keeps_last_box(monkeypatch):
+    from pftrack.trackers import opencv as ocv
+
+    class Fake:
+        def __init__(self):
+            self.n = 0
+
+        def init(self, frame, rect):
+            return None
+
+        def update(self, frame):
+            self.n += 1
+            return (self.n < 3), (self.n, 2.0, 3.0, 4.0)
+
+    monkeypatch.setitem(ocv._FACTORIES, "kcf", Fake)
+    tr = pftrack.create_tracker("opencv-kcf")
+    frame = np.zeros((50, 50, 3), np.uint8)
+    tr.init(frame, (1, 2, 3, 4))
+    s1, s2, s3 = (tr.update(frame) for _ in range(3))
+    assert not s1.lost and s2.box == (2.0, 2.0, 3.0, 4.0)
+    assert s3.lost and s3.box == s2.box
+
+
+# ------------------------------------------------------------------ runner and report
+
+def write_otb(folder: Path, seed: int, n: int = 15) -> Path:
+    scene = Scene(simple_scene(seed, n_frames=n))
+    (folder / "img").mkdir(parents=True)
+    for t, f in enumerate(scene.frames()):
+        cv2.imwrite(str(folder / "img" / f"{t + 1:04d}.png"), f)
+    np.savetxt(folder / "groundtruth_rect.txt", scene.groundtruth(0), delimiter=",", fmt="%.3f")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    root = tmp_path_factory.mktemp("ds")
+    write_otb(root / "seqA", 1)
+    write_otb(root / "seqB", 2)
+    return root
+
+
+def jobs_for(dataset, protocol="ope"):
+    from pftrack.io import discover_sequences
+
+    trackers = parse_tracker_list("color-pf[n_particles=30],meanshift")
+    return build_jobs(discover_sequences(dataset), trackers, seeds=2, protocol=protocol)
+
+
+def test_tracker_spec_parsing():
+    cfgs = parse_tracker_list("color-pf, color-pf[n_particles=50;sigma=0.2],opencv-csrt")
+    assert [c.label for c in cfgs] == ["color-pf", "color-pf[n_particles=50;sigma=0.2]", "opencv-csrt"]
+    assert cfgs[1].param_dict == {"n_particles": "50", "sigma": "0.2"}
+    with pytest.raises(pftrack.ParameterError):
+        parse_tracker_list("color-pf[bogus=1]")
+    with pytest.raises(pftrack.ParameterError):
+        parse_tracker_list("nope")
+    assert any(c.name == "opencv-csrt" for c in parse_tracker_list("opencv"))
+
+
+def test_runner_same_results_with_1_and_2_workers_and_dask(dataset):
+    jobs = jobs_for(dataset)
+    assert len(jobs) == 2 * (2 + 1)  # meanshift is deterministic: one seed
+    r1 = [strip_timings(r) for r in Runner(workers=1, progress=False).run(jobs)]
+    r2 = [strip_timings(r) for r in Runner(workers=2, progress=False).run(jobs)]
+    assert r1 == r2
+    from dask.distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        r3 = [strip_timings(r) for r in Runner(scheduler=client, progress=False).run(jobs)]
+    assert r1 == r3
+    assert all(r["auc"] > 0.5 for r in r1)
+
+
+def test_runner_resumes_after_interruption(dataset, tmp_path):
+    jobs = jobs_for(dataset, protocol="vot")
+    calls = []
+
+    class Stop(Exception):
+        pass
+
+    def interrupt(rec):
+        calls.append(rec["tracker"])
+        if len(calls) == 2:
+            raise Stop()
+
+    with pytest.raises(Stop):
+        Runner(report_dir=tmp_path, workers=1, progress=False, on_result=interrupt).run(jobs)
+    cached = sorted((tmp_path / "runs").glob("*.json"))
+    assert len(cached) == 2
+    runner = Runner(report_dir=tmp_path, workers=1, progress=False)
+    recs = runner.run(jobs)
+    assert runner.reused == 2 and runner.ran == len(jobs) - 2
+    fresh = Runner(workers=1, progress=False).run(jobs)
+    assert [strip_timings(r) for r in recs] == [strip_timings(r) for r in fresh]
+    # a corrupt cache file is recomputed, not trusted
+    cached[0].write_text("{not json")
+    runner = Runner(report_dir=tmp_path, workers=1, progress=False)
+    runner.run(jobs)
+    assert runner.ran == 1
+
+
+def test_report_html_references_existing_files(dataset, tmp_path):
+    jobs = jobs_for(dataset)
+    recs = Runner(workers=1, progress=False).run(jobs)
+    seqs = {"seqA": str(dataset / "seqA"), "seqB": str(dataset / "seqB")}
+    paths = write_report(recs, tmp_path / "rep", sequences=seqs, command="pftrack eval ...")
+    html = paths["index"].read_text()
+    refs = re.findall(r"(?:src|href)='([^']+)'", html)
+    assert "results.csv" in refs and "success.png" in refs and any(r.startswith("frames/") for r in refs)
+    for ref in refs:
+        assert (tmp_path / "rep" / ref).is_file(), ref
+    header = (tmp_path / "rep" / "results.csv").read_text().splitlines()[0]
+    for col in ["tracker", "sequence", "seed", "auc", "precision", "mean_iou", "failures", "fps"]:
+        assert col in header.split(",")
+    assert "| `color-pf[n_particles=30]` |" in (tmp_path / "rep" / "summary.md").read_text()
+
+
+def test_eval_cli_end_to_end(dataset, tmp_path, capsys):
+    from pftrack.cli import main
+
+    rc = main(["eval", str(dataset), "--trackers", "meanshift,camshift", "--report", str(tmp_path / "r"),
+               "--workers", "1", "--quiet", "--doc", str(tmp_path / "bench.md")])
+    assert rc == 0
+    assert "mean AUC" in capsys.readouterr().out
+    assert (tmp_path / "r" / "index.html").is_file() and (tmp_path / "bench.md").is_file()
+    assert main(["eval", str(tmp_path / "missing"), "--trackers", "meanshift", "--quiet"]) == 2
+    assert main(["eval", str(dataset), "--trackers", "meanshift[zzz=1]", "--quiet"]) == 2
+
+
+@pytest.mark.shared_data
+def test_csrt_auc_agrees_with_independent_scorer_on_dev_sequence():
+    seq_path = shared_sequence("otb_crossing")
+    rec = run_job(Job(TrackerConfig("opencv-csrt", "opencv-csrt"), str(seq_path), "otb_crossing", 0, "ope"))
+    gt = read_sequence(seq_path).groundtruth
+    pred = np.array(rec["boxes"], float).reshape(-1, 4)
+    auc, prec = independent_ope(pred, gt)
+    assert rec["auc"] == pytest.approx(auc, abs=5e-4) and rec["precision"] == pytest.approx(prec, abs=5e-4)
