@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.pftrack-installed
 
-.PHONY: setup demo test test-all bench clean
+.PHONY: setup demo test bench bench-kernels clean
 
 setup: $(STAMP)
 
@@ -26,3 +26,10 @@ test: setup
 
 clean:
 	rm -rf $(VENV) demo_out build *.egg-info .pytest_cache
+
+# Speed: pftrack bench (synthetic sweeps + dev sequences, OpenCV peers interleaved) and kernel micro-benchmarks.
+bench: setup
+	$(BIN)/pftrack bench --dev ../shared/data --out reports/bench
+
+bench-kernels: setup
+	$(BIN)/python -m pytest benchmarks -q --benchmark-columns=min,median,mean

@@ -20,10 +20,20 @@ except Exception:  # ImportError, or a broken llvmlite
     NUMBA_INSTALLED = False
 
 
+_ENABLED = NUMBA_INSTALLED and os.environ.get("PFTRACK_NO_NUMBA", "") in ("", "0")
+
+
 def numba_enabled() -> bool:
-    """True when compiled kernels should be used."""
-    flag = os.environ.get("PFTRACK_NO_NUMBA", "")
-    return NUMBA_INSTALLED and flag in ("", "0")
+    """True when compiled kernels should be used (read once; see :func:`set_numba_enabled`)."""
+    return _ENABLED
+
+
+def set_numba_enabled(flag: bool) -> bool:
+    """Switch between compiled kernels and the NumPy reference path; returns the previous setting."""
+    global _ENABLED
+    previous = _ENABLED
+    _ENABLED = bool(flag) and NUMBA_INSTALLED
+    return previous
 
 
 def njit(*args, **kwargs):

@@ -3,7 +3,7 @@ import pytest
 
 from pftrack._numba import NUMBA_INSTALLED
 from pftrack.cues.color import (ColorCue, bhattacharyya_coefficient, bhattacharyya_distance, ellipse_histograms,
-                                kernel_weights, make_lut, quantize, reachable_roi)
+                                ellipse_rho, kernel_weights, make_lut, quantize, reachable_roi)
 
 
 def reference_histogram(frame_bins, ellipse, n_bins, kernel="nummiaro"):
@@ -86,7 +86,28 @@ def test_numba_and_numpy_paths_identical(rng):
                            rng.uniform(1, 40, 200)])
     a, ta = ellipse_histograms(feats.bins, feats.x0, feats.y0, ell, 512, backend="numba")
     b, tb = ellipse_histograms(feats.bins, feats.x0, feats.y0, ell, 512, backend="numpy")
-    assert np.array_equal(a, b) and np.array_equal(ta, tb)
+    # same pixels and weights; only the order of the floating-point sums differs
+    assert np.array_equal(ta > 0, tb > 0) and np.array_equal(a > 0, b > 0)
+    assert np.allclose(a, b, rtol=0, atol=1e-12) and np.allclose(ta, tb, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("kernel", ["nummiaro", "epanechnikov"])
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_fused_rho_equals_histogram_then_bhattacharyya(rng, kernel, backend):
+    if backend == "numba" and not NUMBA_INSTALLED:
+        pytest.skip("numba not installed")
+    img = rng.integers(0, 256, (90, 120, 3), dtype=np.uint8)
+    cue = ColorCue(kernel=kernel)
+    feats = cue.prepare(img, (5, 5, 110, 85))
+    ell = np.column_stack([rng.uniform(0, 120, 300), rng.uniform(0, 90, 300), rng.uniform(0.5, 30, 300),
+                           rng.uniform(0.5, 30, 300)])
+    q = rng.random(512) ** 4
+    q /= q.sum()
+    hist, tot = ellipse_histograms(feats.bins, feats.x0, feats.y0, ell, 512, kernel=kernel, backend="numpy")
+    expected = np.where(tot > 0, bhattacharyya_coefficient(hist, q), 0.0)
+    rho, tot2 = ellipse_rho(feats.bins, feats.x0, feats.y0, ell, np.sqrt(q), kernel=kernel, backend=backend)
+    assert np.allclose(rho, expected, rtol=0, atol=1e-12)
+    assert np.allclose(tot2, tot, rtol=1e-12, atol=1e-12)
 
 
 def test_roi_offset_gives_same_histogram(image):
@@ -112,3 +133,40 @@ def test_rgb_and_hsv_bin_layout():
     assert cue.n_bins == 8 * 8 * 4
     f = cue.prepare(px, (0, 0, 3, 1))
     assert f.bins.max() < cue.n_bins
+
+
+@pytest.mark.parametrize("step", [2, 3])
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_lattice_sampling_matches_reference(rng, step, backend):
+    if backend == "numba" and not NUMBA_INSTALLED:
+        pytest.skip("numba not installed")
+    img = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+    lut = make_lut("rgb", (8, 8, 8))
+    x0, y0 = 3, 7
+    bins = quantize(np.ascontiguousarray(img[y0:, x0:]), lut)
+    ell = np.column_stack([rng.uniform(0, 80, 20), rng.uniform(0, 60, 20), rng.uniform(3, 25, 20),
+                           rng.uniform(3, 25, 20)])
+    hist, _ = ellipse_histograms(bins, x0, y0, ell, 512, backend=backend, step=step)
+    full = quantize(img, lut)
+    for n in range(len(ell)):
+        cx, cy, hx, hy = ell[n]
+        a2 = hx * hx + hy * hy
+        ref = np.zeros(512)
+        for j in range(60):
+            for i in range(80):
+                if i < x0 or j < y0 or i % step or j % step:
+                    continue
+                dx, dy = i + 0.5 - cx, j + 0.5 - cy
+                if (dx / hx) ** 2 + (dy / hy) ** 2 <= 1.0:
+                    ref[full[j, i]] += 1 - (dx * dx + dy * dy) / a2
+        if ref.sum() > 0:
+            assert hist[n] == pytest.approx(ref / ref.sum(), abs=1e-12)
+        else:
+            assert hist[n].sum() == 0
+
+
+def test_max_pixels_picks_a_lattice():
+    cue = ColorCue(max_pixels=1000)
+    assert cue.step_for(np.array([[0, 0, 10.0, 10.0]])) == 1
+    assert cue.step_for(np.array([[0, 0, 50.0, 50.0]])) == 3  # 7854 px -> pitch 3 (~873 samples)
+    assert ColorCue().step_for(np.array([[0, 0, 500.0, 500.0]])) == 1

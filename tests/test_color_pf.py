@@ -190,3 +190,23 @@ def test_bad_inputs_raise_specific_errors():
         pftrack.create_tracker("color-pf", colour_space="rgb")
     with pytest.raises(ParameterError):
         pftrack.create_tracker("no-such-tracker")
+
+
+def test_compiled_and_reference_paths_track_identically():
+    """The Numba kernels and the NumPy reference path give the same trajectory (to rounding)."""
+    from pftrack._numba import NUMBA_INSTALLED, set_numba_enabled
+
+    if not NUMBA_INSTALLED:
+        pytest.skip("numba not installed")
+    spec = occlusion_scene(3, n_frames=40)
+    res = {}
+    for flag in (True, False):
+        prev = set_numba_enabled(flag)
+        try:
+            _, _, states, _ = run(spec, seed=5)
+            res[flag] = states
+        finally:
+            set_numba_enabled(prev)
+    a, b = boxes(res[True]), boxes(res[False])
+    assert np.allclose(a, b, rtol=0, atol=1e-6)
+    assert np.allclose([s.score for s in res[True]], [s.score for s in res[False]], atol=1e-9)

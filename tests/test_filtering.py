@@ -99,3 +99,56 @@ def test_kalman_tracks_constant_velocity():
         kf.predict()
         kf.update(np.array([2.0 * t, -1.0 * t]) + rng.normal(0, 1.0, 2))
     assert kf.x[2:] == pytest.approx([2.0, -1.0], abs=0.2)
+
+
+@pytest.mark.parametrize("width", [0.0, 320.0])
+def test_propagate_kernel_matches_reference(width):
+    from pftrack._numba import NUMBA_INSTALLED, set_numba_enabled
+    from pftrack.filtering.kernels import propagate_cv_scale
+
+    if not NUMBA_INSTALLED:
+        pytest.skip("numba not installed")
+    rng = np.random.default_rng(3)
+    base = np.column_stack([rng.uniform(-50, 400, 200), rng.uniform(-50, 300, 200), rng.normal(0, 3, (200, 2)),
+                            rng.uniform(0.5, 60, (200, 2)), rng.normal(0, 0.2, 200)])
+    noise = rng.standard_normal(base.shape)
+    std = np.array([3.0, 3, 1, 1, 0.5, 0.5, 0.01])
+    out = {}
+    for flag in (True, False):
+        prev = set_numba_enabled(flag)
+        try:
+            s = base.copy()
+            roi = propagate_cv_scale(s, noise, std, damping=0.5, min_half_axis=2.0, max_half_axis=50.0,
+                                     max_scale_rate=0.05, width=width, height=240.0)
+            out[flag] = (s, roi)
+        finally:
+            set_numba_enabled(prev)
+    assert np.allclose(out[True][0], out[False][0], rtol=0, atol=1e-12)
+    assert np.allclose(out[True][1], out[False][1], rtol=0, atol=1e-12)
+    s = out[True][0]
+    assert s[:, 4:6].min() >= 2.0 and s[:, 4:6].max() <= 50.0 and np.abs(s[:, 6]).max() <= 0.05
+
+
+def test_normalize_kernel_matches_reference():
+    from pftrack._numba import NUMBA_INSTALLED, set_numba_enabled
+    from pftrack.filtering.kernels import normalize_and_estimate
+
+    if not NUMBA_INSTALLED:
+        pytest.skip("numba not installed")
+    rng = np.random.default_rng(4)
+    states = rng.normal(0, 10, (50, 7))
+    for ll in (rng.normal(-20, 5, 50), np.full(50, -np.inf), np.r_[np.full(49, -np.inf), -3.0],
+               np.r_[np.nan, rng.normal(0, 1, 49)]):
+        res = {}
+        for flag in (True, False):
+            prev = set_numba_enabled(flag)
+            try:
+                lw, w, m = np.empty(50), np.empty(50), np.empty(7)
+                ok, ess = normalize_and_estimate(ll, states, lw, w, m)
+                res[flag] = (ok, ess, lw, w, m)
+            finally:
+                set_numba_enabled(prev)
+        a, b = res[True], res[False]
+        assert a[0] == b[0] and a[1] == pytest.approx(b[1], rel=1e-12)
+        assert np.allclose(a[3], b[3], atol=1e-15) and np.allclose(a[4], b[4], atol=1e-12)
+        assert np.isclose(a[3].sum(), 1.0) and np.all(np.isfinite(a[3]))

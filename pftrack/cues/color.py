@@ -49,7 +49,9 @@ def make_lut(color_space: str, bins: tuple[int, int, int]) -> np.ndarray:
     """
     n0, n1, n2 = (int(b) for b in bins)
     v = np.arange(256, dtype=np.int64)
-    lut = np.zeros((3, 256), dtype=np.int32)
+    if n0 * n1 * n2 > 65536:
+        raise ValueError(f"at most 65536 colour bins, got {n0 * n1 * n2}")
+    lut = np.zeros((3, 256), dtype=np.uint16)
     if color_space == "rgb":
         nr, ng, nb = n0, n1, n2
         lut[0] = (v * nb) >> 8  # B
@@ -75,9 +77,9 @@ def _quantize_numba(img, lut, out):
 
 
 def quantize(img: np.ndarray, lut: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """Map an ``(h, w, 3)`` uint8 image to ``(h, w)`` int32 bin indices."""
+    """Map an ``(h, w, 3)`` uint8 image to ``(h, w)`` uint16 bin indices."""
     if out is None:
-        out = np.empty(img.shape[:2], dtype=np.int32)
+        out = np.empty(img.shape[:2], dtype=np.uint16)
     if numba_enabled():
         return _quantize_numba(img, lut, out)
     np.add(lut[0][img[..., 0]], lut[1][img[..., 1]], out=out)
@@ -95,43 +97,72 @@ def _pixel_span(c, h, n_pixels):
 
 
 @njit
-def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals):
-    n_part = ell.shape[0]
+def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, step, ox, oy):
+    """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)).
+
+    Even and odd pixels of a row go to two separate histograms so that runs of the
+    same bin do not serialise on one memory location, and the weight, a quadratic
+    in the pixel index, is advanced by finite differences along the row.  With
+    ``step > 1`` only the pixels on the lattice ``(i + ox) % step == 0``,
+    ``(j + oy) % step == 0`` (anchored to image coordinates) are sampled.
+    """
     hgt, wid = bins.shape
+    if not (hx > 0.0 and hy > 0.0):
+        return
+    ihx2 = 1.0 / (hx * hx)
+    ihy2 = 1.0 / (hy * hy)
+    ia2 = 1.0 / (hx * hx + hy * hy)
+    scale = ia2 if kernel == 0 else ihx2
+    fs = float(step)
+    dd = -2.0 * scale * fs * fs
+    j_lo = max(0, int(math.ceil(cy - hy - 0.5)))
+    j_hi = min(hgt - 1, int(math.floor(cy + hy - 0.5)))
+    if step > 1:
+        j_lo += (-(j_lo + oy)) % step
+    for j in range(j_lo, j_hi + 1, step):
+        dy = j + 0.5 - cy
+        dy2 = dy * dy
+        ry = dy2 * ihy2
+        if ry > 1.0:
+            continue
+        a, b = _row_span(cx, hx, ihx2, ry, 0, wid - 1)
+        if step > 1:
+            a += (-(a + ox)) % step
+        if a > b:
+            continue
+        row = bins[j]
+        base = 1.0 - dy2 * ia2 if kernel == 0 else 1.0 - ry
+        dx = a + 0.5 - cx
+        w0 = base - dx * dx * scale  # weight of pixel i
+        d0 = -(2.0 * dx * fs + fs * fs) * scale  # w(i + step) - w(i)
+        i = a
+        while i + step <= b:
+            acc0[row[i]] += w0
+            w1 = w0 + d0
+            acc1[row[i + step]] += w1
+            w0 = w1 + d0 + dd
+            d0 += 2.0 * dd
+            i += 2 * step
+        if i <= b:
+            acc0[row[i]] += w0
+
+
+@njit
+def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc, step):
+    n_part = ell.shape[0]
     n_bins = out.shape[1]
     for n in range(n_part):
-        for u in range(n_bins):
-            out[n, u] = 0.0
-        cx = ell[n, 0] - x0
-        cy = ell[n, 1] - y0
-        hx = ell[n, 2]
-        hy = ell[n, 3]
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1],
+                            step, x0, y0)
         total = 0.0
-        if hx > 0.0 and hy > 0.0:
-            ihx2 = 1.0 / (hx * hx)
-            ihy2 = 1.0 / (hy * hy)
-            ia2 = 1.0 / (hx * hx + hy * hy)
-            i_lo = max(0, int(math.ceil(cx - hx - 0.5)))
-            i_hi = min(wid - 1, int(math.floor(cx + hx - 0.5)))
-            j_lo = max(0, int(math.ceil(cy - hy - 0.5)))
-            j_hi = min(hgt - 1, int(math.floor(cy + hy - 0.5)))
-            for j in range(j_lo, j_hi + 1):
-                dy = j + 0.5 - cy
-                dy2 = dy * dy
-                ry = dy2 * ihy2
-                if ry > 1.0:
-                    continue
-                for i in range(i_lo, i_hi + 1):
-                    dx = i + 0.5 - cx
-                    r2e = dx * dx * ihx2 + ry
-                    if r2e <= 1.0:
-                        if kernel == 0:
-                            wgt = 1.0 - (dx * dx + dy2) * ia2
-                        else:
-                            wgt = 1.0 - r2e
-                        if wgt > 0.0:
-                            out[n, bins[j, i]] += wgt
-                            total += wgt
+        for u in range(n_bins):
+            h = acc[0, u] + acc[1, u]
+            if h < 0.0:
+                h = 0.0  # rounding at the epanechnikov boundary
+            out[n, u] = h
+            total += h
+            acc[0, u] = 0.0
+            acc[1, u] = 0.0
         totals[n] = total
         if total > 0.0:
             inv = 1.0 / total
@@ -140,7 +171,7 @@ def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals):
     return out
 
 
-def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals):
+def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals, step=1):
     """Reference path: one ``bincount`` over (particle, bin) pairs, no Python loop over particles."""
     n_part = ell.shape[0]
     hgt, wid = bins.shape
@@ -178,6 +209,8 @@ def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals):
     dxx = dx * dx
     r2e = dxx[:, None, :] * ihx2[:, None, None] + ry[:, :, None]  # (N, hmax, wmax)
     inside = (r2e <= 1.0) & vi[:, None, :] & vj[:, :, None] & (ry <= 1.0)[:, :, None]
+    if step > 1:
+        inside &= ((ii + x0) % step == 0)[:, None, :] & ((jj + y0) % step == 0)[:, :, None]
     if kernel == 0:
         wgt = 1.0 - (dxx[:, None, :] + dy2[:, :, None]) * ia2[:, None, None]
     else:
@@ -199,9 +232,94 @@ def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals):
     return out
 
 
+@njit
+def _row_span(cx, hx, ihx2, ry, lo, hi):
+    """Pixel indices [a, b] of one row inside the ellipse: exactly the i with dx^2/hx^2 + ry <= 1."""
+    half = hx * math.sqrt(max(1.0 - ry, 0.0))
+    a = int(math.ceil(cx - half - 0.5))
+    b = int(math.floor(cx + half - 0.5))
+    # the analytic span can be off by one pixel through rounding: fix it with the exact test
+    while a <= b and (a + 0.5 - cx) * (a + 0.5 - cx) * ihx2 + ry > 1.0:
+        a += 1
+    while (a - 1 + 0.5 - cx) * (a - 1 + 0.5 - cx) * ihx2 + ry <= 1.0:
+        a -= 1
+    while b >= a and (b + 0.5 - cx) * (b + 0.5 - cx) * ihx2 + ry > 1.0:
+        b -= 1
+    while (b + 1 + 0.5 - cx) * (b + 1 + 0.5 - cx) * ihx2 + ry <= 1.0:
+        b += 1
+    return max(a, lo), min(b, hi)
+
+
+@njit(fastmath={"reassoc", "nsz", "arcp", "contract"})
+def _rho_from_acc(acc0, acc1, sqrt_q):
+    """sum_u sqrt(h_u) sqrt(q_u) and sum_u h_u of h = acc0 + acc1, resetting both (vectorisable)."""
+    total = 0.0
+    s = 0.0
+    for u in range(sqrt_q.shape[0]):
+        h = max(acc0[u] + acc1[u], 0.0)
+        acc0[u] = 0.0
+        acc1[u] = 0.0
+        total += h
+        s += math.sqrt(h) * sqrt_q[u]
+    return s, total
+
+
+@njit
+def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc, step):
+    """Fused kernel: the Bhattacharyya coefficient of every ellipse's histogram with q.
+
+    ``acc`` (2, n_bins) must be zero on entry and is zero on exit.  Normalisation is
+    folded into the coefficient: rho = sum_u sqrt(h_u) sqrt(q_u) / sqrt(sum_u h_u).
+    """
+    acc0 = acc[0]
+    acc1 = acc[1]
+    for n in range(ell.shape[0]):
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1,
+                            step, x0, y0)
+        s, total = _rho_from_acc(acc0, acc1, sqrt_q)
+        totals[n] = total
+        if total > 0.0:
+            r = s / math.sqrt(total)
+            rho[n] = 1.0 if r > 1.0 else r
+        else:
+            rho[n] = 0.0
+    return rho
+
+
+def ellipse_rho(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, sqrt_q: np.ndarray, *,
+                kernel: KernelName = "nummiaro", out: np.ndarray | None = None, totals: np.ndarray | None = None,
+                backend: str | None = None, step: int = 1, _scratch: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Bhattacharyya coefficients ``rho[p_n, q]`` of ``N`` ellipses without storing their histograms.
+
+    Same result as ``bhattacharyya_coefficient(ellipse_histograms(...)[0], q)``
+    (to floating-point rounding, < 1e-12): the compiled path fuses accumulation and
+    comparison and visits only the bins an ellipse touches, which makes it several
+    times faster than materialising ``N x m`` histograms.
+    """
+    ell = np.ascontiguousarray(ellipses, dtype=np.float64).reshape(-1, 4)
+    n = ell.shape[0]
+    if out is None:
+        out = np.empty(n)
+    if totals is None:
+        totals = np.empty(n)
+    sq = np.ascontiguousarray(sqrt_q, dtype=np.float64)
+    use_numba = numba_enabled() if backend is None else backend == "numba"
+    if use_numba:
+        acc = _scratch if _scratch is not None else np.zeros((2, sq.size))
+        _ellipse_rho_numba(bins, int(x0), int(y0), ell, KERNELS[kernel], sq, out, totals, acc, int(step))
+    else:
+        h = np.empty((n, sq.size))
+        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, KERNELS[kernel], h, totals, int(step))
+        np.sqrt(h, out=h)
+        np.clip(h @ sq, 0.0, 1.0, out=out)
+    return out, totals
+
+
 def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, n_bins: int, *,
                        kernel: KernelName = "nummiaro", out: np.ndarray | None = None,
-                       totals: np.ndarray | None = None, backend: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+                       totals: np.ndarray | None = None, backend: str | None = None, step: int = 1
+                       ) -> tuple[np.ndarray, np.ndarray]:
     """Normalised kernel-weighted histograms of ``N`` ellipses over quantised pixels.
 
     Parameters
@@ -211,6 +329,8 @@ def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray,
     kernel : ``"nummiaro"`` — ``k(||d|| / a)``, ``a = sqrt(Hx^2 + Hy^2)`` (Eq. 2–3), or
         ``"epanechnikov"`` — ``1 - r^2`` with ``r`` the ellipse-normalised radius.
     backend : ``"numba"``, ``"numpy"`` or None (Numba when enabled).
+    step : sample only the pixels on the lattice of this pitch anchored to image
+        coordinates (``(x, y) % step == 0``); 1 uses every pixel.
 
     Returns
     -------
@@ -227,9 +347,9 @@ def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray,
     k = KERNELS[kernel]
     use_numba = numba_enabled() if backend is None else backend == "numba"
     if use_numba:
-        _ellipse_hist_numba(bins, int(x0), int(y0), ell, k, out, totals)
+        _ellipse_hist_numba(bins, int(x0), int(y0), ell, k, out, totals, np.zeros((2, n_bins)), int(step))
     else:
-        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, k, out, totals)
+        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, k, out, totals, int(step))
     return out, totals
 
 
@@ -263,6 +383,7 @@ def warmup() -> None:
     ell = np.array([[2.0, 2.0, 1.5, 1.5]])
     for k in KERNELS:
         ellipse_histograms(bins, 0, 0, ell, 512, kernel=k)
+        ellipse_rho(bins, 0, 0, ell, np.ones(512), kernel=k)
     _WARM = True
 
 
@@ -321,7 +442,7 @@ def reachable_roi(ellipses: np.ndarray, width: int, height: int, margin: int = 1
 class ColorFeatures:
     """A frame region quantised to colour bins (the output of :meth:`ColorCue.prepare`)."""
 
-    bins: np.ndarray  # (h, w) int32 view
+    bins: np.ndarray  # (h, w) uint16, C-contiguous
     x0: int
     y0: int
 
@@ -334,10 +455,12 @@ class ColorCue:
     color_space : ``"rgb"`` (default, 8x8x8 bins) or ``"hsv"`` (8x8x4 bins).
     bins : bins per channel; ``None`` for the default of the colour space.
     kernel : see :func:`ellipse_histograms`.
+    max_pixels : when an ellipse has more pixels than this, sample it on a regular
+        lattice of pitch ``ceil(sqrt(area / max_pixels))`` (0: always every pixel).
     """
 
     def __init__(self, color_space: ColorSpace = "rgb", bins: tuple[int, int, int] | None = None,
-                 kernel: KernelName = "nummiaro"):
+                 kernel: KernelName = "nummiaro", max_pixels: int = 0):
         if color_space not in DEFAULT_BINS:
             raise ValueError(f"unknown colour space {color_space!r}")
         self.color_space = color_space
@@ -347,11 +470,15 @@ class ColorCue:
         if kernel not in KERNELS:
             raise ValueError(f"unknown kernel {kernel!r}")
         self.kernel = kernel
+        self.max_pixels = int(max_pixels)
         self.n_bins = int(np.prod(self.bins))
         self.lut = make_lut(color_space, self.bins)
-        self._qbuf = np.empty((0, 0), dtype=np.int32)
+        self._qbuf = np.empty(0, dtype=np.uint16)
         self._hbuf = np.empty((0, self.n_bins))
         self._tbuf = np.empty(0)
+        self._rbuf = np.empty(0)
+        self._rtot = np.empty(0)
+        self._scratch = np.zeros((2, self.n_bins))
 
     # -- features -----------------------------------------------------------------
     def prepare(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> ColorFeatures:
@@ -361,9 +488,9 @@ class ColorCue:
         if self.color_space == "hsv" and region.size:
             region = cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2HSV)
         h, w = region.shape[:2]
-        if self._qbuf.shape[0] < h or self._qbuf.shape[1] < w:
-            self._qbuf = np.empty((max(h, self._qbuf.shape[0]), max(w, self._qbuf.shape[1])), dtype=np.int32)
-        out = self._qbuf[:h, :w]
+        if self._qbuf.size < h * w:
+            self._qbuf = np.empty(h * w, dtype=np.uint16)
+        out = self._qbuf[: h * w].reshape(h, w)  # contiguous: rows of the region are adjacent in memory
         if h and w:
             quantize(region, self.lut, out)
         return ColorFeatures(out, x0, y0)
@@ -372,6 +499,14 @@ class ColorCue:
         return self.prepare(frame, (0, 0, frame.shape[1], frame.shape[0]))
 
     # -- histograms ---------------------------------------------------------------
+    def step_for(self, ellipses: np.ndarray) -> int:
+        """Sampling pitch for a batch: one lattice for all ellipses, from their mean area."""
+        if self.max_pixels <= 0:
+            return 1
+        e = np.asarray(ellipses).reshape(-1, 4)
+        area = math.pi * float(np.mean(e[:, 2] * e[:, 3]))
+        return max(1, int(math.ceil(math.sqrt(area / self.max_pixels))))
+
     def histograms(self, features: ColorFeatures, ellipses: np.ndarray, *, reuse: bool = True
                    ) -> tuple[np.ndarray, np.ndarray]:
         """Histograms of a batch of ellipses; with ``reuse`` the returned arrays are
@@ -386,7 +521,22 @@ class ColorCue:
         else:
             out, tot = np.empty((n, self.n_bins)), np.empty(n)
         return ellipse_histograms(features.bins, features.x0, features.y0, e, self.n_bins,
-                                  kernel=self.kernel, out=out, totals=tot)
+                                  kernel=self.kernel, out=out, totals=tot, step=self.step_for(e))
+
+    def rho(self, features: ColorFeatures, ellipses: np.ndarray, sqrt_q: np.ndarray, *, reuse: bool = True
+            ) -> tuple[np.ndarray, np.ndarray]:
+        """Bhattacharyya coefficients with a model (given as ``sqrt(q)``) and kernel masses of a batch."""
+        e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
+        n = e.shape[0]
+        if reuse:
+            if self._rbuf.shape[0] < n:
+                self._rbuf = np.empty(n)
+                self._rtot = np.empty(n)
+            out, tot = self._rbuf[:n], self._rtot[:n]
+        else:
+            out, tot = np.empty(n), np.empty(n)
+        return ellipse_rho(features.bins, features.x0, features.y0, e, sqrt_q, kernel=self.kernel, out=out,
+                           totals=tot, step=self.step_for(e), _scratch=self._scratch)
 
     def histogram(self, frame: np.ndarray, ellipse) -> np.ndarray:
         """Histogram of one ellipse in a frame (a new array)."""

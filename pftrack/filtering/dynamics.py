@@ -65,16 +65,23 @@ class ConstantVelocityScale:
             states[:, AD] *= self.scale_damping
         return states
 
-    def propagate(self, states: np.ndarray, noise_std: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """``s <- A s + w`` in place; returns ``states``."""
-        self.transition(states)
+    def propagate(self, states: np.ndarray, noise_std: np.ndarray, rng: np.random.Generator, *,
+                  frame_size: tuple[int, int] | None = None) -> tuple[float, float, float, float]:
+        """``s <- A s + w`` in place (compiled, see :mod:`pftrack.filtering.kernels`).
+
+        With ``frame_size = (width, height)`` the centres are kept within one
+        half-axis of the frame.  Returns the region ``(x0, y0, x1, y1)`` that the
+        propagated ellipses cover.
+        """
+        from .kernels import propagate_cv_scale
+
         if self._noise is None or self._noise.shape != states.shape:
             self._noise = np.empty_like(states)
         rng.standard_normal(out=self._noise)
-        self._noise *= noise_std
-        states += self._noise
-        self.clip(states)
-        return states
+        w, h = frame_size if frame_size is not None else (0.0, 0.0)
+        return propagate_cv_scale(states, self._noise, noise_std, damping=self.scale_damping,
+                                  min_half_axis=self.min_half_axis, max_half_axis=self.max_half_axis,
+                                  max_scale_rate=self.max_scale_rate, width=w, height=h)
 
     def clip(self, states: np.ndarray) -> None:
         np.clip(states[:, HX], self.min_half_axis, self.max_half_axis, out=states[:, HX])

@@ -56,9 +56,10 @@ class ParticleSet:
     ----------
     states : (N, D) float64
     log_weights : (N,) float64, normalised (log-sum-exp = 0)
+    w : (N,) float64, the normalised linear weights (kept in step with ``log_weights``)
     """
 
-    __slots__ = ("states", "log_weights", "_scratch")
+    __slots__ = ("states", "log_weights", "w", "_scratch", "_mean", "_ess")
 
     def __init__(self, states: np.ndarray, log_weights: np.ndarray | None = None):
         states = np.array(states, dtype=np.float64, copy=True)
@@ -66,11 +67,11 @@ class ParticleSet:
             raise ValueError(f"states must be a non-empty (N, D) array, got shape {states.shape}")
         self.states = states
         n = states.shape[0]
-        if log_weights is None:
-            self.log_weights = np.full(n, -np.log(n))
-        else:
-            self.log_weights, _ = log_normalize(np.asarray(log_weights, dtype=np.float64).copy())
         self._scratch = np.empty_like(self.states)
+        self._mean = np.empty(states.shape[1])
+        self.log_weights = np.empty(n)
+        self.w = np.empty(n)
+        self.set_log_likelihood(np.zeros(n) if log_weights is None else np.asarray(log_weights, dtype=np.float64))
 
     def __len__(self) -> int:
         return self.states.shape[0]
@@ -85,41 +86,43 @@ class ParticleSet:
 
     @property
     def weights(self) -> np.ndarray:
-        """Normalised linear weights (a new array)."""
-        w = np.exp(self.log_weights)
-        w /= w.sum()
-        return w
+        """Normalised linear weights (a copy)."""
+        return self.w.copy()
 
     def set_log_likelihood(self, log_lik: np.ndarray, *, accumulate: bool = False) -> bool:
         """Set (or multiply in, with ``accumulate``) likelihoods and normalise.
 
-        Returns False when every likelihood was zero; weights are then uniform.
+        Also computes the weighted mean and the effective sample size.  Returns
+        False when every likelihood was zero; the weights are then uniform.
         """
+        from .kernels import normalize_and_estimate
+
+        ll = np.asarray(log_lik, dtype=np.float64)
         if accumulate:
-            np.add(self.log_weights, log_lik, out=self.log_weights)
-            _, ok = log_normalize(self.log_weights, out=self.log_weights)
-        else:
-            _, ok = log_normalize(log_lik, out=self.log_weights)
+            ll = ll + self.log_weights
+        ok, self._ess = normalize_and_estimate(ll, self.states, self.log_weights, self.w, self._mean)
         return ok
 
     def mean(self) -> np.ndarray:
         """Weighted mean state ``E[S] = sum_n pi^(n) s^(n)`` (Nummiaro Eq. 1)."""
-        return self.weights @ self.states
+        return self.w @ self.states
 
     def covariance(self) -> np.ndarray:
-        w = self.weights
+        w = self.w
         d = self.states - w @ self.states
         return (d * w[:, None]).T @ d
 
     def ess(self) -> float:
         """Effective sample size ``1 / sum(w^2)``."""
-        return effective_sample_size(self.weights)
+        return effective_sample_size(self.w)
 
     def resample(self, indices: np.ndarray) -> None:
         """Replace the set by the selected particles with uniform weights (in place)."""
         np.take(self.states, indices, axis=0, out=self._scratch)
         self.states, self._scratch = self._scratch, self.states
-        self.log_weights.fill(-np.log(self.n))
+        n = self.n
+        self.log_weights.fill(-np.log(n))
+        self.w.fill(1.0 / n)
 
     def copy(self) -> "ParticleSet":
         return ParticleSet(self.states, self.log_weights)

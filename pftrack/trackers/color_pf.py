@@ -42,7 +42,7 @@ import numpy as np
 from ..cues.color import ColorCue, reachable_roi, warmup
 from ..errors import ParameterError
 from ..filtering.dynamics import AD, HX, HY, VX, VY, X, Y, ConstantVelocityScale
-from ..filtering.particles import ParticleSet, effective_sample_size
+from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..frames import as_bgr_uint8
 from ..geometry import Box, box_to_ellipse, ellipse_to_box, validate_box
@@ -68,6 +68,10 @@ class ColorPFParams(Params):
     kernel: Literal["nummiaro", "epanechnikov"] = param("nummiaro", doc=(
         "Pixel weighting inside the ellipse: 'nummiaro' is k(||y-x||/a) = 1 - r^2 with "
         "a = sqrt(Hx^2 + Hy^2) (Eqs. 2-3); 'epanechnikov' normalises r by the ellipse itself."))
+    max_pixels: int = param(4000, ge=0, le=10_000_000, doc=(
+        "Speed bound for large targets: an ellipse with more pixels than this is sampled on a regular "
+        "lattice (pitch ceil(sqrt(area / max_pixels)), anchored to the image grid) instead of at every "
+        "pixel. 4000 leaves targets up to ~71x71 px exact; 0 always uses every pixel (Eq. 3 literally)."))
     sigma: float = param(0.1, gt=0, le=10, doc=(
         "sigma of the weighting pi ∝ exp(-(1 - rho)/(2 sigma^2)) (Eq. 10). Smaller: sharper weights, "
         "faster collapse onto the best sample; larger: flatter posterior."))
@@ -156,7 +160,7 @@ class ColorPF(Tracker):
                  detector: Detector | None = None):
         super().__init__(params, rng=rng, seed=seed)
         p = self.params
-        self.cue = ColorCue(p.color_space, tuple(p.bins) or None, p.kernel)
+        self.cue = ColorCue(p.color_space, tuple(p.bins) or None, p.kernel, p.max_pixels)
         self.dynamics = ConstantVelocityScale(min_half_axis=p.min_half_axis, max_scale_rate=p.max_scale_rate,
                                               scale_damping=p.scale_damping)
         self.resampler = get_resampler(p.resampler)
@@ -206,10 +210,7 @@ class ColorPF(Tracker):
         if roi is None:
             roi = reachable_roi(ellipses, w, h)
         feats = self.cue.prepare(frame, roi)
-        hist, tot = self.cue.histograms(feats, ellipses)
-        np.sqrt(hist, out=hist)
-        rho = hist @ self._sqrt_q
-        np.clip(rho, 0.0, 1.0, out=rho)
+        rho, tot = self.cue.rho(feats, ellipses, self._sqrt_q)
         return rho, tot, feats
 
     def _log_lik(self, rho: np.ndarray, tot: np.ndarray) -> np.ndarray:
@@ -249,6 +250,8 @@ class ColorPF(Tracker):
             ell = ell[far]
         if ell.shape[0] < 2:
             return  # nothing left that is background: keep the previous statistics
+        # The background histograms are computed exactly like the samples' (a subsampled frame would
+        # shift mu and sigma and with them the appearance threshold).
         rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h))
         rho = rho[tot > 0]
         if rho.size >= 2:
@@ -267,7 +270,7 @@ class ColorPF(Tracker):
         states = np.array(states, dtype=np.float64)
         states[:, VX] = states[:, VY] = states[:, AD] = 0.0
         self.ps = ParticleSet(states)
-        self.estimate = self.ps.mean()
+        self.estimate = self.ps._mean.copy()
         self.mode = "tracking"
         self.miss = 0
         self._search_states = None
@@ -384,22 +387,21 @@ class ColorPF(Tracker):
         n = ps.n
         fh, fw = self._shape
         # (1) select
-        w = ps.weights
-        if p.resample_ess >= 1.0 or effective_sample_size(w) < p.resample_ess * n:
-            ps.resample(self.resampler(w, self.rng))
+        if p.resample_ess >= 1.0 or ps._ess < p.resample_ess * n:
+            ps.resample(self.resampler(ps.w, self.rng))
         # (2) propagate
         est = self.estimate
-        self.dynamics.propagate(ps.states, self._noise_std(est[HX], est[HY]), self.rng)
-        # keep centres within one half-axis of the image so samples cannot wander off
-        np.clip(ps.states[:, X], -ps.states[:, HX], fw + ps.states[:, HX], out=ps.states[:, X])
-        np.clip(ps.states[:, Y], -ps.states[:, HY], fh + ps.states[:, HY], out=ps.states[:, Y])
-        # (3) observe
+        x0, y0, x1, y1 = self.dynamics.propagate(ps.states, self._noise_std(est[HX], est[HY]), self.rng,
+                                                 frame_size=(fw, fh))
+        # (3) observe (the region the particles can reach is quantised once)
         ell = self._ellipses(ps.states)
-        rho, tot, feats = self._rho(frame, ell)
+        roi = (min(max(int(math.floor(x0)) - 1, 0), fw), min(max(int(math.floor(y0)) - 1, 0), fh),
+               max(min(int(math.ceil(x1)) + 1, fw), 0), max(min(int(math.ceil(y1)) + 1, fh), 0))
+        rho, tot, feats = self._rho(frame, ell, roi)
         # (4) weight
-        ok = ps.set_log_likelihood(self._log_lik(rho, tot))
+        ok = ps.set_log_likelihood(self._log_lik(rho, tot), accumulate=p.resample_ess < 1.0)
         # (5) estimate
-        self.estimate = est = ps.mean()
+        self.estimate = est = ps._mean.copy()
         e_ell = est[_ELL_COLS].reshape(1, 4)
         hist_e, tot_e = self.cue.histograms(feats, e_ell)
         p_e = hist_e[0].copy()
@@ -557,10 +559,10 @@ class ColorPF(Tracker):
     def _state(self, *, box, score, lost, info=None, particles=None, weights=None) -> TrackState:
         if particles is None and self.ps is not None:
             particles = self.ps.states
-            weights = self.ps.weights
+            weights = self.ps.w
         elif weights is not None:
             weights = weights / weights.sum()
         return TrackState(box=tuple(float(v) for v in box), score=float(score), lost=bool(lost),
                           particles=None if particles is None else particles.copy(),
-                          weights=None if weights is None else np.asarray(weights).copy(),
+                          weights=None if weights is None else np.array(weights, dtype=np.float64),
                           state_names=self.state_names, info=info or {})

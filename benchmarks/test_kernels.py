@@ -1,0 +1,90 @@
+"""Micro-benchmarks of the compiled kernels against their NumPy reference paths."""
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack._numba import set_numba_enabled
+from pftrack.cues.color import ColorCue, ellipse_histograms, ellipse_rho, make_lut, quantize
+from pftrack.filtering.kernels import normalize_and_estimate, propagate_cv_scale
+from pftrack.synth import Scene, SceneSpec, Target
+
+BACKENDS = ["numba", "numpy"]
+
+
+@pytest.fixture(scope="module")
+def clip():
+    spec = SceneSpec(width=640, height=480, n_frames=60, seed=0,
+                     targets=(Target(path=((0, 200.0, 240.0), (59, 440.0, 240.0)), size=(50.0, 50.0)),))
+    scene = Scene(spec)
+    return scene.frames(), scene.groundtruth(0)
+
+
+@pytest.fixture(scope="module")
+def region(clip):
+    frames, gt = clip
+    cue = ColorCue()
+    cx, cy = gt[0][0] + 25, gt[0][1] + 25
+    feats = cue.prepare(frames[0], (int(cx) - 70, int(cy) - 70, int(cx) + 70, int(cy) + 70))
+    rng = np.random.default_rng(0)
+    ell = np.column_stack([rng.normal(cx, 5, 100), rng.normal(cy, 5, 100), np.full(100, 25.0), np.full(100, 25.0)])
+    q = cue.histogram(frames[0], [cx, cy, 25, 25])
+    return frames[0], feats, ell, np.sqrt(q)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_quantize_roi(benchmark, region, backend):
+    frame = region[0]
+    lut = make_lut("rgb", (8, 8, 8))
+    roi = frame[170:310, 250:390]
+    out = np.empty(roi.shape[:2], np.uint16)
+    prev = set_numba_enabled(backend == "numba")
+    try:
+        benchmark(quantize, roi, lut, out)
+    finally:
+        set_numba_enabled(prev)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_rho_100_particles_50x50(benchmark, region, backend):
+    _, feats, ell, sq = region
+    benchmark(ellipse_rho, feats.bins, feats.x0, feats.y0, ell, sq, backend=backend)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_histograms_100_particles_50x50(benchmark, region, backend):
+    _, feats, ell, _ = region
+    benchmark(ellipse_histograms, feats.bins, feats.x0, feats.y0, ell, 512, backend=backend)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_propagate_and_normalize(benchmark, backend):
+    rng = np.random.default_rng(0)
+    states = np.tile([320.0, 240, 1, 0, 25, 25, 0], (100, 1))
+    noise = rng.standard_normal(states.shape)
+    std = np.array([5.0, 5, 2.5, 2.5, 0, 0, 0.005])
+    ll = -rng.random(100) * 10
+    lw, w, mean = np.empty(100), np.empty(100), np.empty(7)
+    prev = set_numba_enabled(backend == "numba")
+
+    def step():
+        propagate_cv_scale(states, noise, std, width=640, height=480)
+        normalize_and_estimate(ll, states, lw, w, mean)
+
+    try:
+        benchmark(step)
+    finally:
+        set_numba_enabled(prev)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_color_pf_update(benchmark, clip, backend):
+    frames, gt = clip
+    prev = set_numba_enabled(backend == "numba")
+    try:
+        tr = pftrack.create_tracker("color-pf", seed=0)
+        tr.init(frames[0], gt[0])
+        it = iter(frames[1:] * 1000)
+        benchmark(lambda: tr.update(next(it)))
+    finally:
+        set_numba_enabled(prev)
