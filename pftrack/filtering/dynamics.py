@@ -120,25 +120,19 @@ class NCVRandomWalk:
         self.keep_aspect = bool(keep_aspect)
         self._noise: np.ndarray | None = None
 
-    def propagate(self, states: np.ndarray, rng: np.random.Generator, sigma_xy: float | np.ndarray | None = None) -> np.ndarray:
+    def propagate(self, states: np.ndarray, rng: np.random.Generator, *,
+                  frame_size: tuple[int, int] | None = None) -> tuple[float, float, float, float]:
+        """Propagate in place; with ``frame_size`` keep centres within one half-axis of the frame.
+
+        Returns the region ``(x0, y0, x1, y1)`` covered by the new ellipses.
+        """
+        from .kernels import propagate_ncv_rw
+
         n = states.shape[0]
         if self._noise is None or self._noise.shape != (n, 4):
             self._noise = np.empty((n, 4))
-        noise = self._noise
-        rng.standard_normal(out=noise)
-        s = self.sigma_xy if sigma_xy is None else sigma_xy
-        acc = noise[:, :2] * (np.asarray(s)[..., None] if np.ndim(s) else s)
-        states[:, X] += states[:, VX] + 0.5 * acc[:, 0]
-        states[:, Y] += states[:, VY] + 0.5 * acc[:, 1]
-        states[:, VX] += acc[:, 0]
-        states[:, VY] += acc[:, 1]
-        sd = self.max_size_change / 3.0
-        e = noise[:, 2:] * sd
-        np.clip(e, -self.max_size_change, self.max_size_change, out=e)
-        if self.keep_aspect:
-            e[:, 1] = e[:, 0]
-        states[:, HX] *= 1.0 + e[:, 0]
-        states[:, HY] *= 1.0 + e[:, 1]
-        np.clip(states[:, HX], self.min_half_axis, self.max_half_axis, out=states[:, HX])
-        np.clip(states[:, HY], self.min_half_axis, self.max_half_axis, out=states[:, HY])
-        return states
+        rng.standard_normal(out=self._noise)
+        w, h = frame_size if frame_size is not None else (0.0, 0.0)
+        return propagate_ncv_rw(states, self._noise, sigma_xy=self.sigma_xy, max_size_change=self.max_size_change,
+                                min_half_axis=self.min_half_axis, max_half_axis=self.max_half_axis,
+                                keep_aspect=self.keep_aspect, width=w, height=h)

@@ -98,6 +98,74 @@ def propagate_cv_scale(states: np.ndarray, noise: np.ndarray, std: np.ndarray, *
 
 
 @njit
+def _propagate_ncv_numba(states, noise, sigma_xy, max_change, min_h, max_h, keep_aspect, width, height):
+    n = states.shape[0]
+    sd = max_change / 3.0
+    x0 = 1e300
+    y0 = 1e300
+    x1 = -1e300
+    y1 = -1e300
+    for i in range(n):
+        s = states[i]
+        ax = noise[i, 0] * sigma_xy
+        ay = noise[i, 1] * sigma_xy
+        x = s[0] + s[2] + 0.5 * ax
+        y = s[1] + s[3] + 0.5 * ay
+        s[2] += ax
+        s[3] += ay
+        ex = min(max(noise[i, 2] * sd, -max_change), max_change)
+        ey = ex if keep_aspect else min(max(noise[i, 3] * sd, -max_change), max_change)
+        hx = min(max(s[4] * (1.0 + ex), min_h), max_h)
+        hy = min(max(s[5] * (1.0 + ey), min_h), max_h)
+        if width > 0:
+            x = min(max(x, -hx), width + hx)
+            y = min(max(y, -hy), height + hy)
+        s[0] = x
+        s[1] = y
+        s[4] = hx
+        s[5] = hy
+        x0 = min(x0, x - hx)
+        y0 = min(y0, y - hy)
+        x1 = max(x1, x + hx)
+        y1 = max(y1, y + hy)
+    return x0, y0, x1, y1
+
+
+def _propagate_ncv_numpy(states, noise, sigma_xy, max_change, min_h, max_h, keep_aspect, width, height):
+    acc = noise[:, :2] * sigma_xy
+    states[:, 0] += states[:, 2] + 0.5 * acc[:, 0]
+    states[:, 1] += states[:, 3] + 0.5 * acc[:, 1]
+    states[:, 2] += acc[:, 0]
+    states[:, 3] += acc[:, 1]
+    e = np.clip(noise[:, 2:4] * (max_change / 3.0), -max_change, max_change)
+    if keep_aspect:
+        e[:, 1] = e[:, 0]
+    states[:, 4] = np.clip(states[:, 4] * (1.0 + e[:, 0]), min_h, max_h)
+    states[:, 5] = np.clip(states[:, 5] * (1.0 + e[:, 1]), min_h, max_h)
+    if width > 0:
+        states[:, 0] = np.minimum(np.maximum(states[:, 0], -states[:, 4]), width + states[:, 4])
+        states[:, 1] = np.minimum(np.maximum(states[:, 1], -states[:, 5]), height + states[:, 5])
+    return (float(np.min(states[:, 0] - states[:, 4])), float(np.min(states[:, 1] - states[:, 5])),
+            float(np.max(states[:, 0] + states[:, 4])), float(np.max(states[:, 1] + states[:, 5])))
+
+
+def propagate_ncv_rw(states: np.ndarray, noise: np.ndarray, *, sigma_xy: float, max_size_change: float,
+                     min_half_axis: float = 2.0, max_half_axis: float = 1e5, keep_aspect: bool = False,
+                     width: float = 0.0, height: float = 0.0) -> tuple[float, float, float, float]:
+    """Nearly-constant velocity + size random walk (Kristan et al., Eq. 10) in place on ``{x, y, vx, vy, Hx, Hy}``.
+
+    ``noise`` is ``(N, 4)`` standard normal: two accelerations (scaled by
+    ``sigma_xy``) and two relative size changes (std ``max_size_change / 3``, clipped
+    to ``±max_size_change``).  Returns the region covered by the new ellipses.
+    """
+    args = (states, noise, float(sigma_xy), float(max_size_change), float(min_half_axis), float(max_half_axis),
+            bool(keep_aspect), float(width), float(height))
+    if numba_enabled():
+        return _propagate_ncv_numba(*args)
+    return _propagate_ncv_numpy(*args)
+
+
+@njit
 def _normalize_numba(log_lik, states, log_w, w, mean):
     n, d = states.shape
     m = -np.inf

@@ -1,7 +1,7 @@
 """Synthetic scenes with exact ground truth (seeded)."""
 
-from .scenes import (Occluder, Scene, SceneSpec, Target, Truth, crossing_scene, entering_scene, illumination_scene,
-                     occlusion_scene, simple_scene)
+from .scenes import (SCENES, Occluder, Scene, SceneSpec, Target, Truth, crossing_scene, entering_scene, export_otb,
+                     illumination_scene, occlusion_scene, simple_scene, waving_scene)
 
-__all__ = ["Occluder", "Scene", "SceneSpec", "Target", "Truth", "crossing_scene", "entering_scene",
-           "illumination_scene", "occlusion_scene", "simple_scene"]
+__all__ = ["SCENES", "Occluder", "Scene", "SceneSpec", "Target", "Truth", "crossing_scene", "entering_scene",
+           "export_otb", "illumination_scene", "occlusion_scene", "simple_scene", "waving_scene"]

@@ -329,10 +329,73 @@ def entering_scene(seed: int = 0, n_frames: int = 80, enter_at: int = 15) -> Sce
 
 
 def crossing_scene(seed: int = 0, n_frames: int = 80, *, same_colors: bool = True) -> SceneSpec:
-    """The target and a visually identical distractor cross; the distractor passes in front."""
+    """The target and a visually identical distractor cross; the distractor passes in front.
+
+    Speeds (2-4 px/frame each), heights and slopes are drawn from the seed, so the
+    crossings differ in duration and geometry.
+    """
     rng = np.random.default_rng(seed)
-    y0 = float(rng.uniform(100, 140))
-    tgt = Target(path=((0, 40.0, y0), (n_frames - 1, 280.0, y0 + rng.uniform(-10, 10))), size=(28, 56))
+    y0 = float(rng.uniform(90, 150))
+    ya, yb = y0 + rng.uniform(-8, 8), y0 + rng.uniform(-8, 8)
+    va, vb = rng.uniform(2.0, 4.0), rng.uniform(2.0, 4.0)
+    t_cross = (n_frames - 1) * rng.uniform(0.4, 0.6)
+    xc = 160.0 + rng.uniform(-20, 20)
+    t_end = n_frames - 1
+    # keep both inside the frame for the whole clip
+    vmax = min((xc - 16.0) / t_cross, (304.0 - xc) / (t_end - t_cross))
+    va, vb = min(va, vmax), min(vb, vmax)
+    tgt = Target(path=((0, xc - va * t_cross, ya - rng.uniform(-10, 10)), (t_end, xc + va * (t_end - t_cross), ya)),
+                 size=(28, 56))
     colors = tgt.colors if same_colors else ((60, 180, 60), (180, 60, 160))
-    dis = Target(path=((0, 280.0, y0 + 4), (n_frames - 1, 40.0, y0 - 4)), size=(28, 56), colors=colors)
+    dis = Target(path=((0, xc + vb * t_cross, yb), (t_end, xc - vb * (t_end - t_cross), yb + rng.uniform(-10, 10))),
+                 size=(28, 56), colors=colors)
     return SceneSpec(n_frames=n_frames, seed=seed, targets=(tgt, dis))
+
+
+def waving_scene(seed: int = 0, n_frames: int = 200, *, crossings: int = 6, amplitude: float = 70.0) -> SceneSpec:
+    """Two visually identical targets swinging past each other like waving hands.
+
+    They move in opposite phase along a horizontal sinusoid and cross ``crossings``
+    times; the distractor (target 1) passes in front of the target (target 0) at
+    every crossing, hiding it completely for a few frames.  This is the situation
+    where colour alone is ambiguous (Kristan et al., hands experiment).
+    """
+    rng = np.random.default_rng(seed)
+    cx, cy = 160.0 + rng.uniform(-15, 15), 120.0 + rng.uniform(-20, 20)
+    omega = math.pi * crossings / (n_frames - 1)
+    phase = rng.uniform(0.2, 0.5)
+    dy = rng.uniform(-6, 6)
+    ts = np.arange(n_frames, dtype=np.float64)
+    xa = cx + amplitude * np.cos(omega * ts + phase)
+    xb = cx - amplitude * np.cos(omega * ts + phase)
+    ya = cy + 8.0 * np.sin(2.3 * omega * ts)
+    tgt = Target(path=tuple(zip(ts, xa, ya)), size=(26, 52))
+    dis = Target(path=tuple(zip(ts, xb, ya + dy)), size=(26, 52))
+    return SceneSpec(n_frames=n_frames, seed=seed, targets=(tgt, dis))
+
+
+SCENES = {
+    "simple": simple_scene,
+    "occlusion": occlusion_scene,
+    "full-occlusion": lambda seed=0, **kw: occlusion_scene(seed, full=True, **kw),
+    "illumination": illumination_scene,
+    "entering": entering_scene,
+    "crossing": crossing_scene,
+    "waving": waving_scene,
+}
+
+
+def export_otb(spec: SceneSpec, folder, *, target: int = 0, ext: str = ".png") -> None:
+    """Write a scene as an OTB sequence folder (``img/``, ``groundtruth_rect.txt``, ``attrs.txt``)."""
+    from pathlib import Path
+
+    folder = Path(folder)
+    (folder / "img").mkdir(parents=True, exist_ok=True)
+    scene = Scene(spec)
+    for t in range(spec.n_frames):
+        frame, _ = scene.render(t)
+        cv2.imwrite(str(folder / "img" / f"{t + 1:04d}{ext}"), frame)
+    gt = scene.groundtruth(target)
+    lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.3f}" for v in b) for b in gt]
+    (folder / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    (folder / "attrs.txt").write_text(f"synthetic, seed {spec.seed}\n", encoding="utf-8")

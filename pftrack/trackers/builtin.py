@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 from .color_pf import ColorPF
+from .local_motion_pf import LocalMotionPF
 from .meanshift import KalmanMeanShift, MeanShift
 from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
 from .registry import register
 
 register("color-pf", ColorPF,
          "Adaptive colour-based particle filter (Nummiaro, Koller-Meier & Van Gool 2003)",
+         extra_kwargs=("detector",))
+register("local-motion-pf", LocalMotionPF,
+         "Colour particle filter fused with a local-motion (optical-flow) likelihood (Kristan et al. 2009)",
          extra_kwargs=("detector",))
 register("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
          family="baseline")

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..cues.color import ColorCue, reachable_roi, warmup
 from ..errors import ParameterError
-from ..filtering.dynamics import AD, HX, HY, VX, VY, X, Y, ConstantVelocityScale
+from ..filtering.dynamics import HX, HY, VX, VY, X, Y, ConstantVelocityScale
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..frames import as_bgr_uint8
@@ -54,8 +54,8 @@ _ELL_COLS = np.array([X, Y, HX, HY])
 
 
 @dataclass(frozen=True, kw_only=True)
-class ColorPFParams(Params):
-    """Parameters of ``color-pf``; defaults follow Nummiaro et al. where the paper gives them."""
+class ColorModelParams(Params):
+    """Colour model, weighting, model update and appearance-condition parameters shared by the colour PFs."""
 
     n_particles: int = param(100, ge=1, le=1_000_000, doc=(
         "N, the number of samples (§4, Fig. 2; the paper uses 100). More samples: a smoother, more "
@@ -78,25 +78,6 @@ class ColorPFParams(Params):
     adaptive_sigma: bool = param(False, doc=(
         "Book ch. 4 variant: set sigma^2 = d_min^2 / 2 each frame from the smallest Bhattacharyya "
         "distance among the samples, so the likelihood adapts to how well the best sample matches."))
-    position_noise: float = param(0.2, ge=0, le=10, doc=(
-        "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
-        "(scale-invariant). The paper leaves it open."))
-    velocity_noise: float = param(0.1, ge=0, le=10, doc=(
-        "Std of the noise on the velocity (vx, vy) per frame, as a fraction of the mean half-axis."))
-    size_noise: float = param(0.0, ge=0, le=1, doc=(
-        "Std of independent noise on the half-axes Hx, Hy, as a fraction of each half-axis. 0 (default) "
-        "changes the size only through adot, which keeps the aspect ratio."))
-    scale_rate_noise: float = param(0.005, ge=0, le=1, doc=(
-        "Std of the noise on the scale-change rate adot (1/frame): about 0.5 % size change per frame."))
-    scale_damping: float = param(0.0, ge=0, le=1, doc=(
-        "Factor kappa on the scale-change rate (adot_t = kappa adot_{t-1} + w). 1 is the paper's literal "
-        "constant scale change; colour histograms observe scale weakly, so a persistent rate drifts the "
-        "size away (measured on the dev set: docs/color-pf.md). The default 0 makes the size a random "
-        "walk, as in Perez et al. and Kristan et al."))
-    max_scale_rate: float = param(0.05, ge=0, le=1, doc=(
-        "Bound on |adot|: at most this relative size change per frame from the deterministic part."))
-    min_noise_px: float = param(1.0, ge=0, le=100, doc=(
-        "Floor (pixels) for the position noise, so that tiny targets still explore."))
     min_half_axis: float = param(2.0, ge=0.5, le=1000, doc="Smallest half-axis a sample may have (pixels).")
     resampler: Literal["multinomial", "systematic", "stratified", "residual"] = param("multinomial", doc=(
         "Selection step (Fig. 2, step 1): 'multinomial' is the paper's cumulative sums + binary search."))
@@ -149,20 +130,49 @@ class ColorPFParams(Params):
             raise ParameterError(f"parameter 'bins' must have 3 values (one per channel), got {self.bins}")
 
 
-class ColorPF(Tracker):
-    """The adaptive colour-based particle filter (see the module docstring)."""
+@dataclass(frozen=True, kw_only=True)
+class ColorPFParams(ColorModelParams):
+    """Parameters of ``color-pf``; defaults follow Nummiaro et al. where the paper gives them."""
 
-    name = "color-pf"
-    Params = ColorPFParams
-    state_names = ConstantVelocityScale.state_names
+    position_noise: float = param(0.2, ge=0, le=10, doc=(
+        "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
+        "(scale-invariant). The paper leaves it open."))
+    velocity_noise: float = param(0.1, ge=0, le=10, doc=(
+        "Std of the noise on the velocity (vx, vy) per frame, as a fraction of the mean half-axis."))
+    size_noise: float = param(0.0, ge=0, le=1, doc=(
+        "Std of independent noise on the half-axes Hx, Hy, as a fraction of each half-axis. 0 (default) "
+        "changes the size only through adot, which keeps the aspect ratio."))
+    scale_rate_noise: float = param(0.005, ge=0, le=1, doc=(
+        "Std of the noise on the scale-change rate adot (1/frame): about 0.5 % size change per frame."))
+    scale_damping: float = param(0.0, ge=0, le=1, doc=(
+        "Factor kappa on the scale-change rate (adot_t = kappa adot_{t-1} + w). 1 is the paper's literal "
+        "constant scale change; colour histograms observe scale weakly, so a persistent rate drifts the "
+        "size away (measured on the dev set: docs/color-pf.md). The default 0 makes the size a random "
+        "walk, as in Perez et al. and Kristan et al."))
+    max_scale_rate: float = param(0.05, ge=0, le=1, doc=(
+        "Bound on |adot|: at most this relative size change per frame from the deterministic part."))
+    min_noise_px: float = param(1.0, ge=0, le=100, doc=(
+        "Floor (pixels) for the position noise, so that tiny targets still explore."))
 
-    def __init__(self, params: ColorPFParams | None = None, *, rng=None, seed=None,
+
+class ColorParticleFilter(Tracker):
+    """A colour-histogram particle filter with the machinery of Nummiaro et al.
+
+    Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
+    multiply further likelihoods in (:meth:`_extra_log_lik`) and react to the new
+    estimate (:meth:`_after_estimate`).  The columns ``x, y`` (0, 1), ``vx, vy``
+    (2, 3) and ``hx, hy`` (4, 5) are common to every layout.
+    """
+
+    Params = ColorModelParams
+    state_names: tuple[str, ...] = ConstantVelocityScale.state_names
+
+    def __init__(self, params: ColorModelParams | None = None, *, rng=None, seed=None,
                  detector: Detector | None = None):
         super().__init__(params, rng=rng, seed=seed)
         p = self.params
+        self.dim = len(self.state_names)
         self.cue = ColorCue(p.color_space, tuple(p.bins) or None, p.kernel, p.max_pixels)
-        self.dynamics = ConstantVelocityScale(min_half_axis=p.min_half_axis, max_scale_rate=p.max_scale_rate,
-                                              scale_damping=p.scale_damping)
         self.resampler = get_resampler(p.resampler)
         if detector is not None and not callable(detector):
             raise ParameterError("detector must be a callable frame -> boxes")
@@ -175,7 +185,7 @@ class ColorPF(Tracker):
         self.q: np.ndarray | None = None
         self._sqrt_q: np.ndarray | None = None
         self.ps: ParticleSet | None = None
-        self.estimate = np.zeros(7)
+        self.estimate = np.zeros(self.dim)
         self.mode = "tracking"
         self.miss = 0
         self.bg_mu = 0.0
@@ -268,7 +278,8 @@ class ColorPF(Tracker):
             idx = idx[self.rng.integers(0, idx.size, n)] if idx.size != n else idx
             states = states[idx]
         states = np.array(states, dtype=np.float64)
-        states[:, VX] = states[:, VY] = states[:, AD] = 0.0
+        states[:, VX:VY + 1] = 0.0
+        states[:, HY + 1:] = 0.0
         self.ps = ParticleSet(states)
         self.estimate = self.ps._mean.copy()
         self.mode = "tracking"
@@ -281,7 +292,7 @@ class ColorPF(Tracker):
         ell = box_to_ellipse(box)
         self._set_model(self.cue.histogram(frame, ell))
         self.size = (float(ell[2]), float(ell[3]))
-        state = np.array([ell[0], ell[1], 0.0, 0.0, ell[2], ell[3], 0.0])
+        state = self._initial_state(ell)
         self._start_tracking(np.tile(state, (self.params.n_particles, 1)))
         self._background_stats(frame, ell)
         self.last_box = tuple(float(v) for v in box)
@@ -366,20 +377,41 @@ class ColorPF(Tracker):
     # ------------------------------------------------------------------ update
     def _update(self, frame: np.ndarray) -> TrackState:
         if self.mode == "tracking":
-            return self._track(frame)
-        if self.mode == "detecting":
+            state = self._track(frame)
+        elif self.mode == "detecting":
             box = self._best_detection(frame)
-            if box is None:
-                return self._state(box=(0.0, 0.0, 0.0, 0.0), score=0.0, lost=True)
-            return self._init(frame, box)
-        return self._search(frame)
+            state = (self._state(box=(0.0, 0.0, 0.0, 0.0), score=0.0, lost=True) if box is None
+                     else self._init(frame, box))
+        else:
+            state = self._search(frame)
+        self._on_frame(frame)
+        return state
 
-    def _noise_std(self, hx: float, hy: float) -> np.ndarray:
-        p = self.params
-        hbar = 0.5 * (hx + hy)
-        pos = max(p.position_noise * hbar, p.min_noise_px)
-        vel = p.velocity_noise * hbar
-        return np.array([pos, pos, vel, vel, p.size_noise * hx, p.size_noise * hy, p.scale_rate_noise])
+    # ------------------------------------------------------------------ hooks
+    def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:
+        """Move the samples with the dynamic model (in place); return the region their ellipses cover."""
+        raise NotImplementedError
+
+    def _initial_state(self, ellipse) -> np.ndarray:
+        """A state at rest on an ellipse ``(cx, cy, hx, hy)``."""
+        state = np.zeros(self.dim)
+        state[[X, Y, HX, HY]] = ellipse
+        return state
+
+    def _clip_states(self, states: np.ndarray) -> None:
+        """Bound the sizes of samples placed by the search (in place)."""
+        np.clip(states[:, HX:HY + 1], self.params.min_half_axis, None, out=states[:, HX:HY + 1])
+
+    def _extra_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray,
+                       roi: tuple[int, int, int, int]) -> np.ndarray:
+        """Further log-likelihood terms multiplied into the colour likelihood (default: none)."""
+        return log_lik
+
+    def _after_estimate(self, frame: np.ndarray, estimate: np.ndarray) -> None:
+        """Called with the new mean state after each tracked frame."""
+
+    def _on_frame(self, frame: np.ndarray) -> None:
+        """Called at the end of every update (tracking or searching)."""
 
     def _track(self, frame: np.ndarray) -> TrackState:
         p = self.params
@@ -390,18 +422,18 @@ class ColorPF(Tracker):
         if p.resample_ess >= 1.0 or ps._ess < p.resample_ess * n:
             ps.resample(self.resampler(ps.w, self.rng))
         # (2) propagate
-        est = self.estimate
-        x0, y0, x1, y1 = self.dynamics.propagate(ps.states, self._noise_std(est[HX], est[HY]), self.rng,
-                                                 frame_size=(fw, fh))
+        x0, y0, x1, y1 = self._propagate(ps.states)
         # (3) observe (the region the particles can reach is quantised once)
         ell = self._ellipses(ps.states)
         roi = (min(max(int(math.floor(x0)) - 1, 0), fw), min(max(int(math.floor(y0)) - 1, 0), fh),
                max(min(int(math.ceil(x1)) + 1, fw), 0), max(min(int(math.ceil(y1)) + 1, fh), 0))
         rho, tot, feats = self._rho(frame, ell, roi)
         # (4) weight
-        ok = ps.set_log_likelihood(self._log_lik(rho, tot), accumulate=p.resample_ess < 1.0)
+        log_lik = self._extra_log_lik(frame, ps.states, self._log_lik(rho, tot), roi)
+        ok = ps.set_log_likelihood(log_lik, accumulate=p.resample_ess < 1.0)
         # (5) estimate
         self.estimate = est = ps._mean.copy()
+        self._after_estimate(frame, est)
         e_ell = est[_ELL_COLS].reshape(1, 4)
         hist_e, tot_e = self.cue.histograms(feats, e_ell)
         p_e = hist_e[0].copy()
@@ -484,7 +516,7 @@ class ColorPF(Tracker):
         p = self.params
         n_s = self._n_search()
         hx, hy = self.size
-        states = np.zeros((n_s, 7))
+        states = np.zeros((n_s, self.dim))
         n_keep = 0
         if self._search_states is not None and p.search_keep > 0:
             n_keep = int(round(p.search_keep * n_s))
@@ -501,7 +533,7 @@ class ColorPF(Tracker):
         scale = np.exp(self.rng.normal(0.0, 0.1, (n_new, 1)))
         states[n_keep:, HX] = hx * scale[:, 0]
         states[n_keep:, HY] = hy * scale[:, 0]
-        self.dynamics.clip(states)
+        self._clip_states(states)
         ell = self._ellipses(states)
         rho, tot, _ = self._rho(frame, ell)
         loglik = self._log_lik(rho, tot)
@@ -535,7 +567,7 @@ class ColorPF(Tracker):
                 k = int(np.argmax(d_rho))
                 if d_rho[k] > thr:
                     self.size = (float(d_ell[k, 2]), float(d_ell[k, 3]))
-                    state = np.array([d_ell[k, 0], d_ell[k, 1], 0, 0, d_ell[k, 2], d_ell[k, 3], 0])
+                    state = self._initial_state(d_ell[k])
                     self._start_tracking(np.tile(state, (p.n_particles, 1)))
                     box = tuple(float(v) for v in boxes[k])
                     self.last_box = box
@@ -566,3 +598,33 @@ class ColorPF(Tracker):
                           particles=None if particles is None else particles.copy(),
                           weights=None if weights is None else np.array(weights, dtype=np.float64),
                           state_names=self.state_names, info=info or {})
+
+
+class ColorPF(ColorParticleFilter):
+    """The adaptive colour-based particle filter (see the module docstring)."""
+
+    name = "color-pf"
+    Params = ColorPFParams
+    state_names = ConstantVelocityScale.state_names
+
+    def __init__(self, params: ColorPFParams | None = None, *, rng=None, seed=None,
+                 detector: Detector | None = None):
+        super().__init__(params, rng=rng, seed=seed, detector=detector)
+        p = self.params
+        self.dynamics = ConstantVelocityScale(min_half_axis=p.min_half_axis, max_scale_rate=p.max_scale_rate,
+                                              scale_damping=p.scale_damping)
+
+    def _noise_std(self, hx: float, hy: float) -> np.ndarray:
+        p = self.params
+        hbar = 0.5 * (hx + hy)
+        pos = max(p.position_noise * hbar, p.min_noise_px)
+        vel = p.velocity_noise * hbar
+        return np.array([pos, pos, vel, vel, p.size_noise * hx, p.size_noise * hy, p.scale_rate_noise])
+
+    def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:
+        est = self.estimate
+        fh, fw = self._shape
+        return self.dynamics.propagate(states, self._noise_std(est[HX], est[HY]), self.rng, frame_size=(fw, fh))
+
+    def _clip_states(self, states: np.ndarray) -> None:
+        self.dynamics.clip(states)

@@ -1,0 +1,121 @@
+"""``local-motion-pf``: the combined colour/local-motion tracker of Kristan et al. (Algorithm 1).
+
+M. Kristan, J. Perš, S. Kovačič, A. Leonardis, "A local-motion-based probabilistic
+model for visual tracking", Pattern Recognition 42 (2009) — ``shared/seeds/000_*.txt``.
+
+* State ``{x, y, vx, vy, Hx, Hy}``; dynamics: nearly-constant velocity on the
+  position and a random walk on the size (Eq. 10), ``sigma_xy = 1`` px and size
+  changes of at most 15 % per step.
+* Likelihood: the product of the colour likelihood (the same cue and weighting as
+  ``color-pf``) and the local-motion likelihood (Eq. 11–12): Eq. 7 at the flow
+  feature of each particle's region, against the reference motion ``v_ref``.
+* After each estimate, ``v_ref`` adapts towards the local motion observed at the
+  estimate, by how much the tracker's estimated velocity agrees with it (Eqs. 8–9),
+  so it stops adapting when an occluder moving differently covers the target.
+* The colour model update is the same as ``color-pf``'s.
+* ``motion=false`` gives exactly the paper's reference colour tracker ``T_ref``:
+  the same dynamics, colour likelihood only — the paper's ablation in one switch.
+
+By default (as in the paper) the target is always tracked; ``search=true`` adds
+``color-pf``'s loss detection and re-acquisition by the appearance condition.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..cues.motion import LocalMotionCue, local_motion, to_gray
+from ..filtering.dynamics import VX, VY, NCVRandomWalk
+from ..params import param
+from .color_pf import _ELL_COLS, ColorModelParams, ColorParticleFilter
+
+
+@dataclass(frozen=True, kw_only=True)
+class LocalMotionPFParams(ColorModelParams):
+    """Parameters of ``local-motion-pf``; defaults from Kristan et al. §5."""
+
+    n_particles: int = param(50, ge=1, le=1_000_000, doc="N, the number of particles (§5: 50).")
+    search: bool = param(False, doc=(
+        "Detect loss with color-pf's appearance condition and re-acquire (off in the paper's trackers)."))
+    motion: bool = param(True, doc=(
+        "Multiply the local-motion likelihood into the colour likelihood (Eq. 11). False gives the paper's "
+        "reference colour tracker T_ref (same dynamics, colour likelihood only)."))
+    sigma_xy: float = param(1.0, gt=0, le=1000, doc=(
+        "Std (px) of the white acceleration of the nearly-constant-velocity model (Eq. 10; §5 uses 1 px, "
+        "3 px for hands). Larger follows more abrupt motion."))
+    max_size_change: float = param(0.15, gt=0, lt=1, doc=(
+        "The size random walk changes each half-axis by at most this fraction per step (§4: 15 %); its "
+        "std is a third of it."))
+    lambda_th: float = param(1e-3, gt=0, doc=(
+        "Shi-Tomasi threshold on the smallest eigenvalue (intensities in [0, 1], 3x3 neighbourhoods; §5)."))
+    lk_window: int = param(9, ge=3, le=101, doc="Lucas-Kanade integration window (px; §5: 9x9).")
+    lk_levels: int = param(1, ge=1, le=6, doc="Pyramid levels for the flow (§5: 1; 2 for fast motion).")
+    max_features: int = param(150, ge=1, le=1_000_000, doc=(
+        "At most this many Shi-Tomasi features per frame (taken on a regular lattice when more qualify); "
+        "bounds the cost of the flow."))
+    eps_th: float = param(1e-2, gt=0, doc="Amplitude noise threshold epsilon_th of Eqs. 5-6 (px; §5: 1e-2).")
+    sigma_theta: float = param(0.1, gt=0, doc="sigma_theta of Eq. 7 (§5: 0.1).")
+    sigma_r: float = param(0.3, gt=0, doc="sigma_r of Eq. 7 (§5: 0.3); larger than sigma_theta, so the "
+                                          "amplitude weighs less than the direction.")
+    w_noise: float = param(0.01, ge=0, lt=1, doc="Weight of the uniform component of Eq. 7 (§5: 0.01).")
+
+
+class LocalMotionPF(ColorParticleFilter):
+    """Colour + local-motion particle filter (Kristan et al.)."""
+
+    name = "local-motion-pf"
+    Params = LocalMotionPFParams
+    state_names = NCVRandomWalk.state_names
+
+    def __init__(self, params: LocalMotionPFParams | None = None, *, rng=None, seed=None, detector=None):
+        super().__init__(params, rng=rng, seed=seed, detector=detector)
+        p = self.params
+        self.dynamics = NCVRandomWalk(sigma_xy=p.sigma_xy, max_size_change=p.max_size_change,
+                                      min_half_axis=p.min_half_axis)
+        self.motion = LocalMotionCue(lambda_th=p.lambda_th, window=p.lk_window, levels=p.lk_levels,
+                                     max_features=p.max_features, eps=p.eps_th, sigma_theta=p.sigma_theta,
+                                     sigma_r=p.sigma_r, w_noise=p.w_noise)
+        self._prev_gray: np.ndarray | None = None
+        self._gray: np.ndarray | None = None
+        self._flow = None
+        self.v_ref: np.ndarray | None = None
+
+    def _init(self, frame, box):
+        st = super()._init(frame, box)
+        self.v_ref = None
+        self._prev_gray = to_gray(frame) if self.params.motion else None
+        return st
+
+    # ------------------------------------------------------------------ dynamics
+    def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:
+        fh, fw = self._shape
+        return self.dynamics.propagate(states, self.rng, frame_size=(fw, fh))
+
+    # ------------------------------------------------------------------ local motion
+    def _extra_log_lik(self, frame, states, log_lik, roi):
+        if not self.params.motion:
+            return log_lik
+        self._gray = to_gray(frame)
+        self._flow = self.motion.prepare(self._prev_gray, self._gray, roi)
+        if self.v_ref is None:
+            return log_lik  # no reference motion yet: the first frame pair only initialises it
+        return log_lik + self.motion.log_likelihood(self._flow, self._ellipses(states), self.v_ref)
+
+    def _after_estimate(self, frame, estimate):
+        if not self.params.motion or self._flow is None:
+            return
+        v_obs, defined = local_motion(self._flow, estimate[_ELL_COLS].reshape(1, 4))
+        if defined[0]:
+            if self.v_ref is None:
+                self.v_ref = v_obs[0].copy()
+            else:
+                v_est = estimate[[VX, VY]]
+                self.v_ref = self.motion.adapt(self.v_ref, v_est, v_obs[0])
+
+    def _on_frame(self, frame):
+        if self.params.motion:
+            self._prev_gray = self._gray if self._gray is not None else to_gray(frame)
+            self._gray = None
+            self._flow = None
