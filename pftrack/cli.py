@@ -17,7 +17,7 @@ from typing import Sequence
 from . import __version__
 from .errors import Interrupted, PftrackError
 
-DEFAULT_TRACKER = "color-pf"
+DEFAULT_TRACKER = "fusion-pf"
 
 
 class _ArgumentParser(argparse.ArgumentParser):
@@ -195,6 +195,26 @@ def cmd_demo(args) -> int:
 
 # ---------------------------------------------------------------------------------------------- eval
 
+def _reproduce_command(drop: tuple[str, ...] = ()) -> str | None:
+    """The command line that produced a report, without output-destination options (``drop``)."""
+    import shlex
+
+    if not sys.argv or Path(sys.argv[0]).name != "pftrack":
+        return None
+    args, skip = [], False
+    for a in sys.argv[1:]:
+        if skip:
+            skip = False
+            continue
+        if a in drop:
+            skip = True
+            continue
+        if any(a.startswith(d + "=") for d in drop):
+            continue
+        args.append(a)
+    return "pftrack " + shlex.join(args)
+
+
 def _add_eval(sub) -> None:
     p = sub.add_parser("eval", help="rank trackers on OTB/VOT sequences (one-pass or reset protocol)",
                        description="Run trackers x sequences x seeds and report accuracy and speed.")
@@ -255,7 +275,7 @@ def cmd_eval(args) -> int:
     except KeyboardInterrupt:
         where = f"; finished runs are kept in {report_dir / 'runs'} and reused next time" if report_dir else ""
         raise Interrupted(f"evaluation interrupted after {runner.ran} new runs{where}") from None
-    command = "pftrack " + shlex.join(sys.argv[1:]) if sys.argv and Path(sys.argv[0]).name == "pftrack" else None
+    command = _reproduce_command(drop=("--doc",))
     md = summary_markdown(records, command=command, title=args.title)
     print(md)
     if report_dir is not None:
@@ -353,7 +373,7 @@ def cmd_bench(args) -> int:
     except OSError:
         pass
     machine = f"Machine: {cpu}, {os.cpu_count()} logical cores; OpenCV {cv2.__version__}, threads {args.threads}."
-    command = "pftrack " + shlex.join(sys.argv[1:]) if sys.argv and Path(sys.argv[0]).name == "pftrack" else None
+    command = _reproduce_command(drop=("--out",))
     peer = "opencv-csrt" if "opencv-csrt" in names else names[-1]
     md = report_markdown(synth, real, reference_peer=peer, command=command, machine=machine)
     print(md)

@@ -97,14 +97,12 @@ def _pixel_span(c, h, n_pixels):
 
 
 @njit
-def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, step, ox, oy):
+def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1):
     """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)).
 
     Even and odd pixels of a row go to two separate histograms so that runs of the
     same bin do not serialise on one memory location, and the weight, a quadratic
-    in the pixel index, is advanced by finite differences along the row.  With
-    ``step > 1`` only the pixels on the lattice ``(i + ox) % step == 0``,
-    ``(j + oy) % step == 0`` (anchored to image coordinates) are sampled.
+    in the pixel index, is advanced by finite differences along the row.
     """
     hgt, wid = bins.shape
     if not (hx > 0.0 and hy > 0.0):
@@ -113,47 +111,41 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, step, ox, oy):
     ihy2 = 1.0 / (hy * hy)
     ia2 = 1.0 / (hx * hx + hy * hy)
     scale = ia2 if kernel == 0 else ihx2
-    fs = float(step)
-    dd = -2.0 * scale * fs * fs
+    dd = -2.0 * scale
     j_lo = max(0, int(math.ceil(cy - hy - 0.5)))
     j_hi = min(hgt - 1, int(math.floor(cy + hy - 0.5)))
-    if step > 1:
-        j_lo += (-(j_lo + oy)) % step
-    for j in range(j_lo, j_hi + 1, step):
+    for j in range(j_lo, j_hi + 1):
         dy = j + 0.5 - cy
         dy2 = dy * dy
         ry = dy2 * ihy2
         if ry > 1.0:
             continue
         a, b = _row_span(cx, hx, ihx2, ry, 0, wid - 1)
-        if step > 1:
-            a += (-(a + ox)) % step
         if a > b:
             continue
         row = bins[j]
         base = 1.0 - dy2 * ia2 if kernel == 0 else 1.0 - ry
         dx = a + 0.5 - cx
         w0 = base - dx * dx * scale  # weight of pixel i
-        d0 = -(2.0 * dx * fs + fs * fs) * scale  # w(i + step) - w(i)
+        d0 = -(2.0 * dx + 1.0) * scale  # w(i + 1) - w(i)
         i = a
-        while i + step <= b:
+        while i < b:
             acc0[row[i]] += w0
             w1 = w0 + d0
-            acc1[row[i + step]] += w1
+            acc1[row[i + 1]] += w1
             w0 = w1 + d0 + dd
             d0 += 2.0 * dd
-            i += 2 * step
-        if i <= b:
+            i += 2
+        if i == b:
             acc0[row[i]] += w0
 
 
 @njit
-def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc, step):
+def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc):
     n_part = ell.shape[0]
     n_bins = out.shape[1]
     for n in range(n_part):
-        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1],
-                            step, x0, y0)
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1])
         total = 0.0
         for u in range(n_bins):
             h = acc[0, u] + acc[1, u]
@@ -171,7 +163,7 @@ def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc, step):
     return out
 
 
-def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals, step=1):
+def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals):
     """Reference path: one ``bincount`` over (particle, bin) pairs, no Python loop over particles."""
     n_part = ell.shape[0]
     hgt, wid = bins.shape
@@ -209,8 +201,6 @@ def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals, step=1):
     dxx = dx * dx
     r2e = dxx[:, None, :] * ihx2[:, None, None] + ry[:, :, None]  # (N, hmax, wmax)
     inside = (r2e <= 1.0) & vi[:, None, :] & vj[:, :, None] & (ry <= 1.0)[:, :, None]
-    if step > 1:
-        inside &= ((ii + x0) % step == 0)[:, None, :] & ((jj + y0) % step == 0)[:, :, None]
     if kernel == 0:
         wgt = 1.0 - (dxx[:, None, :] + dy2[:, :, None]) * ia2[:, None, None]
     else:
@@ -265,7 +255,7 @@ def _rho_from_acc(acc0, acc1, sqrt_q):
 
 
 @njit
-def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc, step):
+def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc):
     """Fused kernel: the Bhattacharyya coefficient of every ellipse's histogram with q.
 
     ``acc`` (2, n_bins) must be zero on entry and is zero on exit.  Normalisation is
@@ -274,8 +264,7 @@ def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc, step
     acc0 = acc[0]
     acc1 = acc[1]
     for n in range(ell.shape[0]):
-        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1,
-                            step, x0, y0)
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1)
         s, total = _rho_from_acc(acc0, acc1, sqrt_q)
         totals[n] = total
         if total > 0.0:
@@ -288,7 +277,7 @@ def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc, step
 
 def ellipse_rho(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, sqrt_q: np.ndarray, *,
                 kernel: KernelName = "nummiaro", out: np.ndarray | None = None, totals: np.ndarray | None = None,
-                backend: str | None = None, step: int = 1, _scratch: np.ndarray | None = None
+                backend: str | None = None, _scratch: np.ndarray | None = None
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Bhattacharyya coefficients ``rho[p_n, q]`` of ``N`` ellipses without storing their histograms.
 
@@ -307,10 +296,10 @@ def ellipse_rho(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, sqrt_q
     use_numba = numba_enabled() if backend is None else backend == "numba"
     if use_numba:
         acc = _scratch if _scratch is not None else np.zeros((2, sq.size))
-        _ellipse_rho_numba(bins, int(x0), int(y0), ell, KERNELS[kernel], sq, out, totals, acc, int(step))
+        _ellipse_rho_numba(bins, int(x0), int(y0), ell, KERNELS[kernel], sq, out, totals, acc)
     else:
         h = np.empty((n, sq.size))
-        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, KERNELS[kernel], h, totals, int(step))
+        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, KERNELS[kernel], h, totals)
         np.sqrt(h, out=h)
         np.clip(h @ sq, 0.0, 1.0, out=out)
     return out, totals
@@ -318,7 +307,7 @@ def ellipse_rho(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, sqrt_q
 
 def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, n_bins: int, *,
                        kernel: KernelName = "nummiaro", out: np.ndarray | None = None,
-                       totals: np.ndarray | None = None, backend: str | None = None, step: int = 1
+                       totals: np.ndarray | None = None, backend: str | None = None
                        ) -> tuple[np.ndarray, np.ndarray]:
     """Normalised kernel-weighted histograms of ``N`` ellipses over quantised pixels.
 
@@ -329,8 +318,6 @@ def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray,
     kernel : ``"nummiaro"`` — ``k(||d|| / a)``, ``a = sqrt(Hx^2 + Hy^2)`` (Eq. 2–3), or
         ``"epanechnikov"`` — ``1 - r^2`` with ``r`` the ellipse-normalised radius.
     backend : ``"numba"``, ``"numpy"`` or None (Numba when enabled).
-    step : sample only the pixels on the lattice of this pitch anchored to image
-        coordinates (``(x, y) % step == 0``); 1 uses every pixel.
 
     Returns
     -------
@@ -347,9 +334,9 @@ def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray,
     k = KERNELS[kernel]
     use_numba = numba_enabled() if backend is None else backend == "numba"
     if use_numba:
-        _ellipse_hist_numba(bins, int(x0), int(y0), ell, k, out, totals, np.zeros((2, n_bins)), int(step))
+        _ellipse_hist_numba(bins, int(x0), int(y0), ell, k, out, totals, np.zeros((2, n_bins)))
     else:
-        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, k, out, totals, int(step))
+        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, k, out, totals)
     return out, totals
 
 
@@ -440,11 +427,34 @@ def reachable_roi(ellipses: np.ndarray, width: int, height: int, margin: int = 1
 
 @dataclass
 class ColorFeatures:
-    """A frame region quantised to colour bins (the output of :meth:`ColorCue.prepare`)."""
+    """A frame region quantised to colour bins (the output of :meth:`ColorCue.prepare`).
+
+    With ``pitch > 1`` only every ``pitch``-th pixel of every ``pitch``-th row was
+    quantised (a lattice anchored to the image grid): ``bins[k, l]`` is image pixel
+    ``(x0 + l * pitch, y0 + k * pitch)``.
+    """
 
     bins: np.ndarray  # (h, w) uint16, C-contiguous
     x0: int
     y0: int
+    pitch: int = 1
+
+    def to_lattice(self, ellipses: np.ndarray) -> tuple[np.ndarray, int, int]:
+        """Ellipses in the coordinates of ``bins`` (and the origin to pass to the kernels).
+
+        A lattice sample ``k`` has its centre at image ``x0 + k p + 0.5``; in lattice
+        units ``(c - x0 - 0.5) / p + 0.5`` puts it at ``k + 0.5``, and both the
+        ellipse test and the kernel weights are invariant to the common scaling.
+        """
+        if self.pitch == 1:
+            return ellipses, self.x0, self.y0
+        p = float(self.pitch)
+        e = np.empty_like(ellipses)
+        e[:, 0] = (ellipses[:, 0] - self.x0 - 0.5) / p + 0.5
+        e[:, 1] = (ellipses[:, 1] - self.y0 - 0.5) / p + 0.5
+        e[:, 2] = ellipses[:, 2] / p
+        e[:, 3] = ellipses[:, 3] / p
+        return e, 0, 0
 
 
 class ColorCue:
@@ -481,10 +491,17 @@ class ColorCue:
         self._scratch = np.zeros((2, self.n_bins))
 
     # -- features -----------------------------------------------------------------
-    def prepare(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> ColorFeatures:
-        """Quantise the region ``roi = (x0, y0, x1, y1)`` of a BGR frame once."""
+    def prepare(self, frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int = 1) -> ColorFeatures:
+        """Quantise the region ``roi = (x0, y0, x1, y1)`` of a BGR frame once.
+
+        With ``pitch > 1`` only the lattice ``x % pitch == y % pitch == 0`` is quantised
+        (see :meth:`step_for`), which divides the work by ``pitch**2``.
+        """
         x0, y0, x1, y1 = roi
-        region = frame[y0:y1, x0:x1]
+        pitch = max(int(pitch), 1)
+        x0 -= x0 % pitch
+        y0 -= y0 % pitch
+        region = frame[y0:y1:pitch, x0:x1:pitch]
         if self.color_space == "hsv" and region.size:
             region = cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2HSV)
         h, w = region.shape[:2]
@@ -493,14 +510,14 @@ class ColorCue:
         out = self._qbuf[: h * w].reshape(h, w)  # contiguous: rows of the region are adjacent in memory
         if h and w:
             quantize(region, self.lut, out)
-        return ColorFeatures(out, x0, y0)
+        return ColorFeatures(out, x0, y0, pitch)
 
-    def prepare_frame(self, frame: np.ndarray) -> ColorFeatures:
-        return self.prepare(frame, (0, 0, frame.shape[1], frame.shape[0]))
+    def prepare_frame(self, frame: np.ndarray, pitch: int = 1) -> ColorFeatures:
+        return self.prepare(frame, (0, 0, frame.shape[1], frame.shape[0]), pitch)
 
     # -- histograms ---------------------------------------------------------------
     def step_for(self, ellipses: np.ndarray) -> int:
-        """Sampling pitch for a batch: one lattice for all ellipses, from their mean area."""
+        """Lattice pitch for a batch of ellipses: one for all, from their mean area and ``max_pixels``."""
         if self.max_pixels <= 0:
             return 1
         e = np.asarray(ellipses).reshape(-1, 4)
@@ -520,8 +537,8 @@ class ColorCue:
             out, tot = self._hbuf[:n], self._tbuf[:n]
         else:
             out, tot = np.empty((n, self.n_bins)), np.empty(n)
-        return ellipse_histograms(features.bins, features.x0, features.y0, e, self.n_bins,
-                                  kernel=self.kernel, out=out, totals=tot, step=self.step_for(e))
+        e, ox, oy = features.to_lattice(e)
+        return ellipse_histograms(features.bins, ox, oy, e, self.n_bins, kernel=self.kernel, out=out, totals=tot)
 
     def rho(self, features: ColorFeatures, ellipses: np.ndarray, sqrt_q: np.ndarray, *, reuse: bool = True
             ) -> tuple[np.ndarray, np.ndarray]:
@@ -535,13 +552,14 @@ class ColorCue:
             out, tot = self._rbuf[:n], self._rtot[:n]
         else:
             out, tot = np.empty(n), np.empty(n)
-        return ellipse_rho(features.bins, features.x0, features.y0, e, sqrt_q, kernel=self.kernel, out=out,
-                           totals=tot, step=self.step_for(e), _scratch=self._scratch)
+        e, ox, oy = features.to_lattice(e)
+        return ellipse_rho(features.bins, ox, oy, e, sqrt_q, kernel=self.kernel, out=out, totals=tot,
+                           _scratch=self._scratch)
 
     def histogram(self, frame: np.ndarray, ellipse) -> np.ndarray:
         """Histogram of one ellipse in a frame (a new array)."""
         e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
         roi = reachable_roi(e, frame.shape[1], frame.shape[0])
-        feats = self.prepare(frame, roi)
+        feats = self.prepare(frame, roi, self.step_for(e))
         hist, _ = self.histograms(feats, e, reuse=False)
         return hist[0]

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 from .color_pf import ColorPF
+from .fusion_pf import FusionPF
 from .local_motion_pf import LocalMotionPF
 from .meanshift import KalmanMeanShift, MeanShift
 from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
 from .registry import register
 
+register("fusion-pf", FusionPF,
+         "pftrack's default: colour PF x background-aware contrast (x optional local motion), gated updates, "
+         "loss detection and re-acquisition", extra_kwargs=("detector",))
 register("color-pf", ColorPF,
          "Adaptive colour-based particle filter (Nummiaro, Koller-Meier & Van Gool 2003)",
          extra_kwargs=("detector",))

@@ -219,7 +219,7 @@ class ColorParticleFilter(Tracker):
         h, w = self._shape
         if roi is None:
             roi = reachable_roi(ellipses, w, h)
-        feats = self.cue.prepare(frame, roi)
+        feats = self.cue.prepare(frame, roi, self.cue.step_for(ellipses))
         rho, tot = self.cue.rho(feats, ellipses, self._sqrt_q)
         return rho, tot, feats
 
@@ -403,9 +403,14 @@ class ColorParticleFilter(Tracker):
         np.clip(states[:, HX:HY + 1], self.params.min_half_axis, None, out=states[:, HX:HY + 1])
 
     def _extra_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray,
-                       roi: tuple[int, int, int, int]) -> np.ndarray:
-        """Further log-likelihood terms multiplied into the colour likelihood (default: none)."""
+                       roi: tuple[int, int, int, int], feats) -> np.ndarray:
+        """Further log-likelihood terms multiplied into the colour likelihood (default: none).
+
+        ``feats`` is the quantised region ``roi`` (shared with the colour cue)."""
         return log_lik
+
+    def _update_models(self, frame: np.ndarray, estimate: np.ndarray, feats, rho_e: float) -> None:
+        """Called when the colour model update gate passes (hook for further adaptive models)."""
 
     def _after_estimate(self, frame: np.ndarray, estimate: np.ndarray) -> None:
         """Called with the new mean state after each tracked frame."""
@@ -429,7 +434,7 @@ class ColorParticleFilter(Tracker):
                max(min(int(math.ceil(x1)) + 1, fw), 0), max(min(int(math.ceil(y1)) + 1, fh), 0))
         rho, tot, feats = self._rho(frame, ell, roi)
         # (4) weight
-        log_lik = self._extra_log_lik(frame, ps.states, self._log_lik(rho, tot), roi)
+        log_lik = self._extra_log_lik(frame, ps.states, self._log_lik(rho, tot), roi, feats)
         ok = ps.set_log_likelihood(log_lik, accumulate=p.resample_ess < 1.0)
         # (5) estimate
         self.estimate = est = ps._mean.copy()
@@ -457,6 +462,7 @@ class ColorParticleFilter(Tracker):
             if p.update_gate == "threshold":
                 if rho_e > p.update_rho:
                     self._set_model((1.0 - p.alpha) * self.q + p.alpha * p_e)
+                    self._update_models(frame, est, feats, rho_e)
             elif p.update_gate == "lambda":
                 pi_e = self._pi(rho_e)
                 if self.lam is None:

@@ -94,7 +94,7 @@ class LocalMotionPF(ColorParticleFilter):
         return self.dynamics.propagate(states, self.rng, frame_size=(fw, fh))
 
     # ------------------------------------------------------------------ local motion
-    def _extra_log_lik(self, frame, states, log_lik, roi):
+    def _extra_log_lik(self, frame, states, log_lik, roi, feats):
         if not self.params.motion:
             return log_lik
         self._gray = to_gray(frame)

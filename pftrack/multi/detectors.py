@@ -1,0 +1,215 @@
+"""Object detectors behind one protocol: ``detector(frame) -> (K, 5) array of x, y, w, h, score``.
+
+* ``motion`` — the moving-object detector of the book *Object Tracking*, ch. 1: grey
+  level ``Y = 0.3R + 0.59G + 0.11B``, median filter, reduced resolution (block
+  averaging), three-frame differencing, threshold, closing, connected components and a
+  minimum area.  The book differences frame ``k`` with ``k-1`` and ``k+1``; to detect
+  online without a frame of latency we AND the differences of frame ``k`` with ``k-1``
+  and ``k-2``, which isolates the object at its position in frame ``k`` the same way
+  (the background uncovered since ``k-1`` equals frame ``k-2`` there and drops out).
+* ``mog2`` — OpenCV's Gaussian-mixture background subtraction (``createBackgroundSubtractorMOG2``)
+  with shadow detection: shadow pixels (127) are discarded, then opening/closing,
+  connected components and a minimum area.
+* ``hog`` — OpenCV's built-in HOG + linear SVM people detector (Dalal & Triggs), no downloads.
+* any callable with the same signature, wrapped by :func:`as_detector`.
+
+Boxes are in full-resolution image coordinates; ``score`` is in [0, 1].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Literal
+
+import cv2
+import numpy as np
+
+from ..errors import ParameterError
+from ..frames import as_bgr_uint8
+from ..params import Params, param
+
+Detector = Callable[[np.ndarray], np.ndarray]
+
+
+def _components(mask: np.ndarray, scale: float, min_area: float, max_area_fraction: float = 0.5,
+                split_aspect: float = 0.0) -> np.ndarray:
+    """Bounding boxes (full-resolution) of the connected components of a binary mask.
+
+    With ``split_aspect > 0`` (the expected width/height of one object, e.g. 0.4 for
+    standing people), a blob wider than 1.6 times that is split into
+    ``round(width / (split_aspect * height))`` side-by-side boxes: people walking
+    together form one foreground blob.
+    """
+    n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    h, w = mask.shape
+    out = []
+    for k in range(1, n):
+        x, y, bw, bh, area = stats[k]
+        full_area = area * scale * scale
+        if full_area < min_area or bw * bh > max_area_fraction * w * h:
+            continue
+        fill = min(1.0, area / float(bw * bh))
+        parts = 1
+        if split_aspect > 0 and bw > 1.6 * split_aspect * bh:
+            parts = max(1, int(round(bw / (split_aspect * bh))))
+        pw = bw / parts
+        for i in range(parts):
+            out.append(((x + i * pw) * scale, y * scale, pw * scale, bh * scale, fill))
+    return np.array(out, dtype=np.float64).reshape(-1, 5)
+
+
+@dataclass(frozen=True, kw_only=True)
+class MotionDetectorParams(Params):
+    downscale: int = param(2, ge=1, le=16, doc=(
+        "Block-averaging factor of the reduced resolution (book ch. 1: 320x240 down to 160x120, 80x60 or 40x30)."))
+    median: int = param(3, ge=1, le=15, doc="Median filter aperture (odd; 1 disables). The book does not give it.")
+    threshold: int = param(12, ge=1, le=255, doc="Threshold T on the grey-level differences (not given in the book).")
+    closing: int = param(7, ge=1, le=51, doc="Size of the closing (dilate then erode) element, in reduced pixels.")
+    min_area: float = param(300.0, ge=0, doc="Minimum blob area in full-resolution pixels (not given in the book).")
+    split_aspect: float = param(0.0, ge=0, le=10, doc=(
+        "Expected width/height of one object (0.4 for people); wider blobs are split (0: never)."))
+
+
+class MotionDetector:
+    """Three-frame differencing on reduced-resolution grey images (book ch. 1)."""
+
+    Params = MotionDetectorParams
+
+    def __init__(self, params: MotionDetectorParams | None = None):
+        self.params = params or MotionDetectorParams()
+        p = self.params
+        if p.median % 2 == 0:
+            raise ParameterError("parameter 'median' must be odd")
+        self._hist: list[np.ndarray] = []
+        self._kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (p.closing, p.closing))
+
+    def _grey(self, frame: np.ndarray) -> np.ndarray:
+        p = self.params
+        b, g, r = cv2.split(frame.astype(np.float32))
+        y = 0.3 * r + 0.59 * g + 0.11 * b
+        if p.downscale > 1:
+            h, w = y.shape
+            y = cv2.resize(y, (w // p.downscale, h // p.downscale), interpolation=cv2.INTER_AREA)
+        y = np.clip(y, 0, 255).astype(np.uint8)
+        if p.median > 1:
+            y = cv2.medianBlur(y, p.median)
+        return y
+
+    def __call__(self, frame: np.ndarray) -> np.ndarray:
+        p = self.params
+        g = self._grey(as_bgr_uint8(frame))
+        self._hist.append(g)
+        if len(self._hist) > 3:
+            self._hist.pop(0)
+        if len(self._hist) < 3:
+            return np.zeros((0, 5))
+        f2, f1, f0 = self._hist
+        d1 = cv2.absdiff(f0, f1) > p.threshold
+        d2 = cv2.absdiff(f0, f2) > p.threshold
+        mask = (d1 & d2).astype(np.uint8) * 255
+        mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._kernel)
+        return _components(mask, float(p.downscale), p.min_area, split_aspect=p.split_aspect)
+
+
+@dataclass(frozen=True, kw_only=True)
+class MOG2DetectorParams(Params):
+    history: int = param(500, ge=1, doc=(
+        "Frames of history of the background model; longer keeps standing people in the foreground longer."))
+    var_threshold: float = param(16.0, gt=0, doc="Mahalanobis threshold of MOG2 (OpenCV default 16).")
+    downscale: int = param(2, ge=1, le=16, doc="Run the subtractor on a frame reduced by this factor (speed).")
+    opening: int = param(3, ge=1, le=51, doc="Opening element size (reduced pixels): removes speckle.")
+    closing: int = param(9, ge=1, le=51, doc="Closing element size (reduced pixels): joins body parts.")
+    min_area: float = param(400.0, ge=0, doc="Minimum blob area in full-resolution pixels.")
+    learning_rate: float = param(-1.0, ge=-1, le=1, doc="MOG2 learning rate (-1: automatic, 1/history).")
+    split_aspect: float = param(0.0, ge=0, le=10, doc=(
+        "Expected width/height of one object (0.4 for people); wider blobs are split (0: never)."))
+
+
+class MOG2Detector:
+    """Background subtraction with shadow removal and morphology."""
+
+    Params = MOG2DetectorParams
+
+    def __init__(self, params: MOG2DetectorParams | None = None):
+        self.params = params or MOG2DetectorParams()
+        p = self.params
+        self._sub = cv2.createBackgroundSubtractorMOG2(history=p.history, varThreshold=p.var_threshold,
+                                                       detectShadows=True)
+        self._open = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (p.opening, p.opening))
+        self._close = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (p.closing, p.closing))
+
+    def __call__(self, frame: np.ndarray) -> np.ndarray:
+        p = self.params
+        f = as_bgr_uint8(frame)
+        if p.downscale > 1:
+            f = cv2.resize(f, (f.shape[1] // p.downscale, f.shape[0] // p.downscale), interpolation=cv2.INTER_AREA)
+        fg = self._sub.apply(f, learningRate=p.learning_rate)
+        mask = (fg > 200).astype(np.uint8) * 255  # 127 marks shadows
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._open)
+        mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._close)
+        return _components(mask, float(p.downscale), p.min_area, split_aspect=p.split_aspect)
+
+
+@dataclass(frozen=True, kw_only=True)
+class HOGDetectorParams(Params):
+    downscale: float = param(1.0, ge=1, le=8, doc="Reduce the frame by this factor before detection (speed).")
+    hit_threshold: float = param(0.0, doc="SVM score threshold of detectMultiScale.")
+    scale: float = param(1.05, gt=1, le=2, doc="Pyramid scale step of detectMultiScale.")
+    stride: int = param(8, ge=1, le=32, doc="Window stride (pixels).")
+
+
+class HOGDetector:
+    """OpenCV's default HOG people detector (64x128 window)."""
+
+    Params = HOGDetectorParams
+
+    def __init__(self, params: HOGDetectorParams | None = None):
+        self.params = params or HOGDetectorParams()
+        self._hog = cv2.HOGDescriptor()
+        self._hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+
+    def __call__(self, frame: np.ndarray) -> np.ndarray:
+        p = self.params
+        f = as_bgr_uint8(frame)
+        if p.downscale > 1:
+            f = cv2.resize(f, (int(f.shape[1] / p.downscale), int(f.shape[0] / p.downscale)),
+                           interpolation=cv2.INTER_AREA)
+        rects, weights = self._hog.detectMultiScale(f, hitThreshold=p.hit_threshold, winStride=(p.stride, p.stride),
+                                                    scale=p.scale)
+        if len(rects) == 0:
+            return np.zeros((0, 5))
+        rects = np.asarray(rects, dtype=np.float64) * p.downscale
+        w = np.asarray(weights, dtype=np.float64).reshape(-1)
+        score = 1.0 / (1.0 + np.exp(-w))
+        return np.column_stack([rects, score])
+
+
+DETECTORS = {"motion": MotionDetector, "mog2": MOG2Detector, "hog": HOGDetector}
+
+
+def create_detector(name: str, **params) -> Detector:
+    """A registered detector by name, with validated parameters."""
+    try:
+        cls = DETECTORS[name]
+    except KeyError:
+        raise ParameterError(f"unknown detector '{name}'; choose from {', '.join(DETECTORS)}") from None
+    return cls(cls.Params.from_mapping(params))
+
+
+def as_detector(fn) -> Detector:
+    """Wrap any callable ``frame -> boxes`` (rows of 4 or 5 numbers) into the protocol."""
+    if isinstance(fn, str):
+        return create_detector(fn)
+    if not callable(fn):
+        raise ParameterError("a detector is a registered name or a callable frame -> boxes")
+
+    def call(frame: np.ndarray) -> np.ndarray:
+        out = fn(frame)
+        rows = []
+        for det in out if out is not None else []:
+            det = [float(v) for v in det]
+            if len(det) >= 4 and det[2] > 0 and det[3] > 0 and all(np.isfinite(det[:4])):
+                rows.append(det[:4] + [det[4] if len(det) > 4 else 1.0])
+        return np.array(rows, dtype=np.float64).reshape(-1, 5)
+
+    return call

@@ -1,0 +1,441 @@
+"""``multi-pf``: colour particle filters for several targets (Sugandi et al.) with detection-driven life cycle.
+
+B. Sugandi, H. Kim, J. K. Tan, S. Ishikawa, "A color-based particle filter for
+multiple objects tracking in outdoor environment" — ``shared/seeds/001_*.txt``.
+
+Per target ``l`` (of ``L``): a colour model ``q_l`` (RGB 8x8x8 kernel histogram, Eqs. 5–9)
+and particles with state ``(x, y, vx, vy, w, h, vw, vh)`` — position, speed, box size and its
+rate — under constant-velocity dynamics (Eq. 4).  Each frame:
+
+1. **Detections** (``motion`` frame differencing, ``mog2`` background subtraction, ``hog``
+   people detector, or any callable) are associated one-to-one with the tracks' predicted
+   boxes by IoU (Hungarian assignment).
+2. **Weights**: colour likelihood (Eq. 10) times, when the track has a detection this frame,
+   a Gaussian term around the detected box; all targets' samples form one pool, and the
+   weights are **normalised per target to 1/L** (Eq. 11) so that no target absorbs the
+   others' samples (``normalize="global"`` normalises the pool as a whole — the ablation).
+3. **Occlusion** (§3.7): when two predicted centres are closer than ``R`` (Eq. 15), the
+   target whose maximum sample likelihood fell most below its recent history is the
+   occluded one.  While occluded its adaptation rates are 0 (it moves at constant
+   velocity), its samples are propagated but not resampled, and neither its colour model
+   nor its size is updated.  It leaves the state when the occlusion is no longer predicted
+   or its likelihood recovers.
+4. **Estimate** with adaptation rates (Eq. 12):
+   ``x = (1 - a_x)(x + vx) + a_x x_meas``, ``vx = (1 - a_v) vx + a_v (x - x_prev)``, and
+   likewise for the size.
+5. **Model update** gated by the expected likelihood ``lambda = (1 - a_u) lambda + a_u pi_est``
+   (Eqs. 13–14): ``q = (1 - a_q) q + a_q p_est`` when ``pi_est > lambda`` and not occluded.
+6. **Life cycle**: a detection that no track explains for ``birth_frames`` consecutive frames
+   becomes a confirmed track with a new identity (identities are never reused); a track
+   dies after ``max_misses`` frames without a detection (``max_occluded`` while occluded)
+   or when it leaves the image.
+
+Every threshold is a documented parameter (``MultiPFParams``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Literal
+
+import numpy as np
+
+from ..cues.color import ColorCue, warmup
+from ..errors import ParameterError
+from ..frames import as_bgr_uint8
+from ..geometry import iou_matrix
+from ..params import Params, param
+from .detectors import as_detector, create_detector
+
+STATE_NAMES = ("x", "y", "vx", "vy", "w", "h", "vw", "vh")
+
+
+@dataclass(frozen=True, kw_only=True)
+class MultiPFParams(Params):
+    """Parameters of ``multi-pf``; the paper gives none of the numbers, so each is chosen and documented."""
+
+    detector: Literal["mog2", "motion", "hog"] = param("mog2", doc=(
+        "Built-in detector (a callable passed to the constructor overrides it)."))
+    object_aspect: float = param(0.4, ge=0, le=10, doc=(
+        "Expected width/height of one target (0.4: standing people); the blob detectors split wider blobs "
+        "(people walking together). 0 disables splitting."))
+    n_particles: int = param(50, ge=1, le=100_000, doc="Particles per target.")
+    max_pixels: int = param(600, ge=0, le=1_000_000, doc=(
+        "Colour histograms of larger boxes are sampled on a lattice of about this many pixels (speed)."))
+    sigma: float = param(0.1, gt=0, le=10, doc="sigma of the colour weighting (Eq. 10).")
+    position_noise: float = param(0.1, ge=0, le=10, doc="Std of the position noise xi_x (Eq. 4), fraction of the box width.")
+    velocity_noise: float = param(0.05, ge=0, le=10, doc="Std of the speed noise xi_xdot, fraction of the box width.")
+    size_noise: float = param(0.02, ge=0, le=1, doc="Std of the size noise xi_w, fraction of the size.")
+    size_rate_noise: float = param(0.005, ge=0, le=1, doc="Std of the size-rate noise xi_wdot, fraction of the size.")
+    alpha_x: float = param(0.8, ge=0, le=1, doc="Adaptation rate of the position (Eq. 12).")
+    alpha_v: float = param(0.3, ge=0, le=1, doc="Adaptation rate of the speed (Eq. 12).")
+    alpha_w: float = param(0.3, ge=0, le=1, doc="Adaptation rate of the size (Eq. 12).")
+    alpha_vw: float = param(0.1, ge=0, le=1, doc="Adaptation rate of the size rate (Eq. 12).")
+    alpha_q: float = param(0.05, ge=0, le=1, doc="Learning rate of the colour model (Eq. 13).")
+    alpha_u: float = param(0.1, gt=0, le=1, doc="Learning rate of the expected likelihood lambda (Eq. 14).")
+    normalize: Literal["per-target", "global"] = param("per-target", doc=(
+        "Weight normalisation: 'per-target' to 1/L (Eq. 11), or 'global' over the pooled samples (ablation)."))
+    occlusion: bool = param(True, doc="Occlusion reasoning of §3.7 (False: every target is always updated).")
+    occlusion_radius: float = param(0.8, gt=0, le=10, doc=(
+        "R of Eq. 15 as a fraction of the pair's mean box width: occlusion is predicted when the predicted "
+        "centres are closer than R."))
+    occlusion_drop: float = param(0.6, gt=0, le=1, doc=(
+        "A target in a predicted occlusion is occluded when its maximum sample likelihood falls below this "
+        "fraction of its recent history; it recovers when it exceeds it again."))
+    history_rate: float = param(0.1, gt=0, le=1, doc="Rate of the running mean of each target's maximum likelihood.")
+    detection_sigma: float = param(0.3, gt=0, le=10, doc=(
+        "Std of the detection term: position and size offsets from the associated detection, as fractions of "
+        "the detection's size."))
+    match_iou: float = param(0.2, ge=0, le=1, doc="Minimum IoU to associate a detection with a track.")
+    birth_frames: int = param(3, ge=1, le=1000, doc="k: frames a detection must stay unexplained before a track is born.")
+    max_misses: int = param(12, ge=1, le=10_000, doc="m: a track dies after this many frames without a detection.")
+    max_occluded: int = param(40, ge=1, le=10_000, doc="... or this many while it is occluded.")
+    report_misses: int = param(4, ge=0, le=10_000, doc=(
+        "Tracks are reported while they matched a detection within this many frames, or are occluded."))
+    min_size: float = param(6.0, gt=0, doc="Smallest box side (pixels) of a track.")
+    exit_fraction: float = param(0.4, ge=0, le=1, doc="A track whose box is less than this fraction inside the image dies.")
+
+
+@dataclass
+class TrackOutput:
+    """One reported target in one frame."""
+
+    track_id: int
+    box: tuple[float, float, float, float]
+    score: float
+    occluded: bool
+
+
+@dataclass
+class _Track:
+    id: int
+    state: np.ndarray  # (8,) estimate x, y, vx, vy, w, h, vw, vh
+    particles: np.ndarray  # (N, 8)
+    q: np.ndarray
+    sqrt_q: np.ndarray
+    lam: float | None = None
+    hist_max: float | None = None
+    occluded: bool = False
+    misses: int = 0
+    occluded_frames: int = 0
+    age: int = 0
+    score: float = 0.0
+    det: np.ndarray | None = None
+    log_lik: np.ndarray | None = None
+    max_lik: float = 0.0
+
+    @property
+    def box(self) -> np.ndarray:
+        x, y, w, h = self.state[0], self.state[1], self.state[4], self.state[5]
+        return np.array([x - w / 2, y - h / 2, w, h])
+
+
+@dataclass
+class _Candidate:
+    box: np.ndarray
+    hits: int = 1
+    first_center: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+
+def _box_to_state(box) -> np.ndarray:
+    x, y, w, h = (float(v) for v in box)
+    return np.array([x + w / 2, y + h / 2, 0.0, 0.0, w, h, 0.0, 0.0])
+
+
+def _state_boxes(states: np.ndarray) -> np.ndarray:
+    return np.column_stack([states[:, 0] - states[:, 4] / 2, states[:, 1] - states[:, 5] / 2, states[:, 4], states[:, 5]])
+
+
+def _ellipses(states: np.ndarray) -> np.ndarray:
+    return np.column_stack([states[:, 0], states[:, 1], states[:, 4] / 2, states[:, 5] / 2])
+
+
+class MultiPF:
+    """Multi-target colour particle filter (see the module docstring)."""
+
+    name = "multi-pf"
+    Params = MultiPFParams
+
+    def __init__(self, params: MultiPFParams | None = None, *, seed: int | None = None,
+                 rng: np.random.Generator | None = None, detector: Callable | None = None):
+        self.params = params or MultiPFParams()
+        p = self.params
+        self.rng = rng if rng is not None else np.random.default_rng(seed)
+        if detector is not None:
+            self.detector = as_detector(detector)
+        else:
+            extra = {"split_aspect": p.object_aspect} if p.detector in ("mog2", "motion") else {}
+            self.detector = create_detector(p.detector, **extra)
+        self.cue = ColorCue("rgb", (8, 8, 8), "nummiaro", p.max_pixels)
+        warmup()
+        self.tracks: list[_Track] = []
+        self.candidates: list[_Candidate] = []
+        self.next_id = 1
+        self.frame_index = 0
+        self._shape: tuple[int, int] | None = None
+
+    # ------------------------------------------------------------------ helpers
+    def _histogram(self, frame: np.ndarray, box) -> np.ndarray:
+        st = _box_to_state(box)
+        return self.cue.histogram(frame, _ellipses(st[None, :])[0])
+
+    def _rho(self, frame: np.ndarray, states: np.ndarray, sqrt_q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        h, w = self._shape
+        ell = _ellipses(states)
+        x0 = int(max(math.floor(float(np.min(ell[:, 0] - ell[:, 2]))) - 1, 0))
+        y0 = int(max(math.floor(float(np.min(ell[:, 1] - ell[:, 3]))) - 1, 0))
+        x1 = int(min(math.ceil(float(np.max(ell[:, 0] + ell[:, 2]))) + 1, w))
+        y1 = int(min(math.ceil(float(np.max(ell[:, 1] + ell[:, 3]))) + 1, h))
+        feats = self.cue.prepare(frame, (x0, y0, max(x1, x0), max(y1, y0)), self.cue.step_for(ell))
+        rho, tot = self.cue.rho(feats, ell, sqrt_q, reuse=False)
+        return rho, tot
+
+    def _new_track(self, frame: np.ndarray, box, velocity=(0.0, 0.0)) -> _Track:
+        p = self.params
+        q = self._histogram(frame, box)
+        st = _box_to_state(box)
+        st[2:4] = velocity
+        parts = np.tile(st, (p.n_particles, 1))
+        tr = _Track(self.next_id, st, parts, q, np.sqrt(q))
+        self.next_id += 1
+        return tr
+
+    def _noise(self, n: int, w: float, h: float) -> np.ndarray:
+        p = self.params
+        std = np.array([p.position_noise * w, p.position_noise * h, p.velocity_noise * w, p.velocity_noise * h,
+                        p.size_noise * w, p.size_noise * h, p.size_rate_noise * w, p.size_rate_noise * h])
+        return self.rng.standard_normal((n, 8)) * std
+
+    # ------------------------------------------------------------------ the frame
+    def update(self, frame: np.ndarray) -> list[TrackOutput]:
+        """Process one frame; returns the reported targets."""
+        frame = as_bgr_uint8(frame, where=f"frame {self.frame_index + 1}")
+        h, w = frame.shape[:2]
+        if self._shape is None:
+            self._shape = (h, w)
+        elif self._shape != (h, w):
+            from ..errors import FrameError
+
+            raise FrameError(f"frame {self.frame_index + 1}: size {w}x{h} differs from the first frame's "
+                             f"{self._shape[1]}x{self._shape[0]}", index=self.frame_index + 1)
+        self.frame_index += 1
+        p = self.params
+        dets = self.detector(frame)
+        dets = dets[(dets[:, 2] >= p.min_size) & (dets[:, 3] >= p.min_size)] if len(dets) else dets
+        # 1. predict every track (constant velocity) and associate detections
+        for tr in self.tracks:
+            tr.age += 1
+            pred = tr.state.copy()
+            pred[0:2] += pred[2:4]
+            pred[4:6] += pred[6:8]
+            tr.pred = pred
+        used = np.zeros(len(dets), bool)
+        for tr in self.tracks:
+            tr.det = None
+        live = [t for t in self.tracks if not t.occluded]
+        if len(dets) and live:
+            from scipy.optimize import linear_sum_assignment
+
+            pred_boxes = np.array([_state_boxes(t.pred[None, :])[0] for t in live])
+            m = iou_matrix(pred_boxes, dets[:, :4])
+            rows, cols = linear_sum_assignment(-m)
+            for r, c in zip(rows, cols):
+                if m[r, c] >= p.match_iou:
+                    live[r].det = dets[c]
+                    used[c] = True
+        # 2. propagate, weigh
+        for tr in self.tracks:
+            n = tr.particles.shape[0]
+            if n == 0:
+                continue
+            s = tr.particles
+            s[:, 0:2] += s[:, 2:4]
+            s[:, 4:6] += s[:, 6:8]
+            s += self._noise(n, max(tr.state[4], p.min_size), max(tr.state[5], p.min_size))
+            np.maximum(s[:, 4:6], p.min_size, out=s[:, 4:6])
+            rho, tot = self._rho(frame, s, tr.sqrt_q)
+            ll = -(1.0 - rho) / (2.0 * p.sigma ** 2)
+            ll[tot <= 0] = -np.inf
+            colour_max = float(np.exp(np.max(ll))) if np.isfinite(ll).any() else 0.0
+            if tr.det is not None:
+                d = tr.det
+                dcx, dcy = d[0] + d[2] / 2, d[1] + d[3] / 2
+                z = (((s[:, 0] - dcx) / d[2]) ** 2 + ((s[:, 1] - dcy) / d[3]) ** 2
+                     + ((s[:, 4] - d[2]) / d[2]) ** 2 + ((s[:, 5] - d[3]) / d[3]) ** 2)
+                ll = ll - z / (2.0 * p.detection_sigma ** 2)
+            tr.log_lik = ll
+            tr.max_lik = colour_max
+        # 3. occlusion reasoning (Eq. 15 and §3.7)
+        if p.occlusion:
+            self._occlusions()
+        # 4. weights (Eq. 11), resampling of the non-occluded pool, estimates (Eq. 12), model updates (Eqs. 13-14)
+        self._weigh_and_resample()
+        for tr in self.tracks:
+            self._estimate(frame, tr)
+        # 5. life cycle
+        self._births(frame, dets, used)
+        self._deaths()
+        out = []
+        for tr in self.tracks:
+            if tr.misses <= p.report_misses or tr.occluded:
+                out.append(TrackOutput(tr.id, tuple(float(v) for v in tr.box), float(tr.score), tr.occluded))
+        return out
+
+    def _occlusions(self) -> None:
+        p = self.params
+        n = len(self.tracks)
+        predicted = [False] * n
+        for i in range(n):
+            for j in range(i + 1, n):
+                a, b = self.tracks[i], self.tracks[j]
+                r = p.occlusion_radius * 0.5 * (a.pred[4] + b.pred[4])
+                if (a.pred[0] - b.pred[0]) ** 2 + (a.pred[1] - b.pred[1]) ** 2 < r * r:
+                    predicted[i] = predicted[j] = True
+                    # the one whose likelihood fell most below its history is behind
+                    ra = a.max_lik / a.hist_max if a.hist_max else 1.0
+                    rb = b.max_lik / b.hist_max if b.hist_max else 1.0
+                    behind = a if ra < rb else b
+                    if (ra if behind is a else rb) < p.occlusion_drop and behind.det is None:
+                        behind.occluded = True
+        for i, tr in enumerate(self.tracks):
+            if tr.occluded:
+                recovered = tr.hist_max and tr.max_lik >= p.occlusion_drop * tr.hist_max
+                if not predicted[i] or recovered or tr.det is not None:
+                    tr.occluded = False
+
+    def _weigh_and_resample(self) -> None:
+        p = self.params
+        active = [t for t in self.tracks if not t.occluded and t.particles.shape[0] > 0]
+        if not active:
+            return
+        L = len(active)
+        logs = []
+        for t in active:
+            ll = t.log_lik
+            if p.normalize == "per-target":
+                m = np.max(ll) if np.isfinite(ll).any() else 0.0
+                w = np.exp(ll - m) if np.isfinite(ll).any() else np.ones_like(ll)
+                w = w / w.sum() / L  # Eq. 11: each target's weights sum to 1/L
+                logs.append(np.log(np.maximum(w, 1e-300)))
+            else:
+                logs.append(ll)
+        pool = np.concatenate(logs)
+        owner = np.concatenate([np.full(t.particles.shape[0], k) for k, t in enumerate(active)])
+        finite = np.isfinite(pool)
+        pool = np.where(finite, pool, -np.inf)
+        m = np.max(pool[finite]) if finite.any() else 0.0
+        wts = np.where(finite, np.exp(pool - m), 0.0)
+        if wts.sum() <= 0:
+            wts = np.ones_like(wts)
+        wts /= wts.sum()
+        # estimates from each target's own (normalised) weights before resampling
+        for k, t in enumerate(active):
+            wk = wts[owner == k]
+            t.meas = (wk / wk.sum()) @ t.particles if wk.sum() > 0 else t.pred.copy()
+        total = sum(t.particles.shape[0] for t in active)
+        u = (np.arange(total) + self.rng.random()) / total  # systematic over the pool
+        idx = np.searchsorted(np.cumsum(wts), u, side="left")
+        np.minimum(idx, total - 1, out=idx)
+        states = np.concatenate([t.particles for t in active])
+        new_owner = owner[idx]
+        for k, t in enumerate(active):
+            t.particles = states[idx[new_owner == k]].copy()
+
+    def _estimate(self, frame: np.ndarray, tr: _Track) -> None:
+        p = self.params
+        prev = tr.state
+        if tr.occluded or not hasattr(tr, "meas"):
+            # occluded: adaptation rates are 0, constant velocity, no size or model update
+            tr.state = tr.pred.copy()
+            tr.state[4:6] = prev[4:6]
+            tr.occluded_frames += 1
+            tr.misses += 1
+            if hasattr(tr, "meas"):
+                del tr.meas
+            return
+        meas = tr.meas
+        del tr.meas
+        st = tr.pred.copy()
+        st[0:2] = (1 - p.alpha_x) * tr.pred[0:2] + p.alpha_x * meas[0:2]
+        st[2:4] = (1 - p.alpha_v) * prev[2:4] + p.alpha_v * (st[0:2] - prev[0:2])
+        st[4:6] = (1 - p.alpha_w) * tr.pred[4:6] + p.alpha_w * meas[4:6]
+        st[6:8] = (1 - p.alpha_vw) * prev[6:8] + p.alpha_vw * (st[4:6] - prev[4:6])
+        st[4:6] = np.maximum(st[4:6], p.min_size)
+        tr.state = st
+        tr.occluded_frames = 0
+        tr.misses = 0 if tr.det is not None else tr.misses + 1
+        # gated model update (Eqs. 13-14)
+        est = st[None, :]
+        rho, tot = self._rho(frame, est, tr.sqrt_q)
+        pi_est = math.exp(-(1.0 - float(rho[0])) / (2 * p.sigma ** 2)) if tot[0] > 0 else 0.0
+        tr.score = float(rho[0]) if tot[0] > 0 else 0.0
+        if tr.lam is None:
+            tr.lam = pi_est
+        elif pi_est > tr.lam and p.alpha_q > 0:
+            q = (1 - p.alpha_q) * tr.q + p.alpha_q * self._histogram(frame, _state_boxes(est)[0])
+            tr.q = q / q.sum()
+            tr.sqrt_q = np.sqrt(tr.q)
+        tr.lam = (1 - p.alpha_u) * tr.lam + p.alpha_u * pi_est
+        tr.hist_max = tr.max_lik if tr.hist_max is None else (
+            (1 - p.history_rate) * tr.hist_max + p.history_rate * tr.max_lik)
+
+    def _births(self, frame: np.ndarray, dets: np.ndarray, used: np.ndarray) -> None:
+        p = self.params
+        free = dets[~used] if len(dets) else dets
+        if len(free) and self.tracks:
+            explained = iou_matrix(free[:, :4], np.array([t.box for t in self.tracks])).max(axis=1) > p.match_iou
+            free = free[~explained]
+        matched_cands: list[_Candidate] = []
+        remaining = list(range(len(free)))
+        if self.candidates and len(free):
+            m = iou_matrix(np.array([c.box for c in self.candidates]), free[:, :4])
+            for ci, c in enumerate(self.candidates):
+                j = int(np.argmax(m[ci])) if m.shape[1] else -1
+                if j >= 0 and m[ci, j] >= p.match_iou and j in remaining:
+                    remaining.remove(j)
+                    c.box = free[j, :4].copy()
+                    c.hits += 1
+                    matched_cands.append(c)
+        new_cands = []
+        for c in matched_cands:
+            if c.hits >= p.birth_frames:
+                center = c.box[:2] + c.box[2:] / 2
+                vel = (center - c.first_center) / max(c.hits - 1, 1)
+                self.tracks.append(self._new_track(frame, c.box, vel))
+            else:
+                new_cands.append(c)
+        for j in remaining:
+            b = free[j, :4].copy()
+            if p.birth_frames <= 1:
+                self.tracks.append(self._new_track(frame, b))
+            else:
+                new_cands.append(_Candidate(b, 1, b[:2] + b[2:] / 2))
+        self.candidates = new_cands
+
+    def _deaths(self) -> None:
+        p = self.params
+        h, w = self._shape
+        keep = []
+        for tr in self.tracks:
+            b = tr.box
+            ix = max(0.0, min(b[0] + b[2], w) - max(b[0], 0.0))
+            iy = max(0.0, min(b[1] + b[3], h) - max(b[1], 0.0))
+            inside = ix * iy / max(b[2] * b[3], 1e-9)
+            limit = p.max_occluded if tr.occluded else p.max_misses
+            if inside < p.exit_fraction or tr.misses > limit or not np.all(np.isfinite(tr.state)):
+                continue
+            keep.append(tr)
+        self.tracks = keep
+
+
+MULTI_TRACKERS = {"multi-pf": MultiPF}
+
+
+def create_multi_tracker(name: str = "multi-pf", *, seed: int | None = None, detector=None, **params) -> MultiPF:
+    """A multi-target tracker by name with validated parameters."""
+    try:
+        cls = MULTI_TRACKERS[name]
+    except KeyError:
+        raise ParameterError(f"unknown multi-target tracker '{name}'; choose from {', '.join(MULTI_TRACKERS)}") from None
+    return cls(cls.Params.from_mapping(params), seed=seed, detector=detector)

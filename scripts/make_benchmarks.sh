@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Regenerate docs/benchmarks.md: every tracker on the development sequences, then the fusion-pf ablation,
+# each in one `pftrack eval` run (so speeds are comparable within a table).  One worker = one core per run.
+# Usage: bash scripts/make_benchmarks.sh [DATA_DIR]   (default ../shared/data)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+DATA="${1:-../shared/data}"
+PFTRACK="${PFTRACK:-.venv/bin/pftrack}"
+OUT=docs/benchmarks.md
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+"$PFTRACK" eval "$DATA" --trackers all --seeds 5 --workers 1 --report reports/bench-all \
+  --title "All trackers on the development sequences (OTB one-pass)" --doc "$tmp/all.md" --quiet > /dev/null
+"$PFTRACK" eval "$DATA" --seeds 5 --workers 1 --report reports/bench-ablation \
+  --trackers "fusion-pf,fusion-pf[contrast=false],fusion-pf[motion=true],fusion-pf[search=false],fusion-pf[contrast_alpha=0],fusion-pf[update_gate=never],fusion-pf[scale_rate_noise=0],fusion-pf[max_pixels=0],color-pf,opencv-csrt" \
+  --title "fusion-pf ablation (each row removes or changes one ingredient)" --doc "$tmp/ablation.md" --quiet > /dev/null
+
+{
+  echo "# Benchmarks"
+  echo
+  echo "Produced by \`bash scripts/make_benchmarks.sh\` (both tables below; each table is one \`pftrack eval\` run,"
+  echo "so the speeds in a table were measured side by side). Definitions: [evaluation.md](evaluation.md)."
+  echo "Speed in detail (synthetic sweeps, end-to-end, ratios): [performance.md](performance.md)."
+  echo
+  sed 's/^# /## /; s/^## AUC/### AUC/; s/^## fps/### fps/' "$tmp/all.md"
+  echo
+  sed 's/^# /## /; s/^## AUC/### AUC/; s/^## fps/### fps/' "$tmp/ablation.md"
+} > "$OUT"
+echo "wrote $OUT" >&2

@@ -1,0 +1,99 @@
+"""The background-aware contrast cue and fusion-pf."""
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack._numba import NUMBA_INSTALLED
+from pftrack.cues.color import ColorCue
+from pftrack.cues.contrast import box_counts, contrast_scores, foreground_lut, probability_integral
+from pftrack.geometry import iou
+from pftrack.synth import SceneSpec, Target, occlusion_scene, simple_scene
+
+from .conftest import render_scene
+
+
+def test_foreground_lut():
+    lut = foreground_lut(np.array([3.0, 0.0, 1.0, 0.0]), np.array([1.0, 2.0, 1.0, 0.0]))
+    assert lut.tolist() == pytest.approx([0.75, 0.0, 0.5, 0.5])
+
+
+def test_box_counts_inside_and_ring():
+    bins = np.zeros((10, 10), np.uint16)
+    bins[4:6, 4:6] = 1  # a 2x2 object of colour 1 on colour 0
+    inside, ring = box_counts(bins, 0, 0, (4, 4, 2, 2), 2, ring=0.5)
+    assert inside.tolist() == [0, 4] and ring.tolist() == [12, 0]  # 4x4 outer box minus the 2x2
+
+
+def test_contrast_peaks_on_the_object_box_in_position_and_scale():
+    bins = np.zeros((100, 100), np.uint16)
+    bins[30:70, 40:60] = 1  # object: 20 wide, 40 high at (40, 30)
+    lut = foreground_lut(np.array([0.0, 800.0]), np.array([1200.0, 0.0]))
+    ii = probability_integral(bins, lut)
+    true = np.array([40.0, 30.0, 20.0, 40.0])
+    cands = [true, true + [5, 0, 0, 0], true + [0, -6, 0, 0], true * [1, 1, 1.4, 1.4] - [4, 8, 0, 0],
+             true * [1, 1, 0.6, 0.6] + [4, 8, 0, 0]]
+    c = contrast_scores(ii, 0, 0, np.array(cands), ring=0.5)
+    assert int(np.argmax(c)) == 0 and c[0] == pytest.approx(1.0)
+    assert c[3] < c[0] and c[4] < c[0]  # too large and too small both lose: the cue observes scale
+
+
+@pytest.mark.skipif(not NUMBA_INSTALLED, reason="numba not installed")
+def test_contrast_kernels_match_reference(rng):
+    from pftrack._numba import set_numba_enabled
+
+    bins = rng.integers(0, 512, (60, 90)).astype(np.uint16)
+    lut = rng.random(512).astype(np.float32)
+    boxes = np.column_stack([rng.uniform(-20, 100, 80), rng.uniform(-20, 70, 80), rng.uniform(1, 40, 80),
+                             rng.uniform(1, 40, 80)])
+    out = {}
+    for flag in (True, False):
+        prev = set_numba_enabled(flag)
+        try:
+            ii = probability_integral(bins, lut)
+            out[flag] = (ii, contrast_scores(ii, 3, 4, boxes, ring=0.5, pitch=2))
+        finally:
+            set_numba_enabled(prev)
+    assert np.allclose(out[True][0], out[False][0], atol=1e-9)
+    assert np.allclose(out[True][1], out[False][1], atol=1e-12)
+
+
+def run(name, spec, seed=0, **params):
+    scene, frames, _ = render_scene(spec)
+    gt = scene.groundtruth(0)
+    tr = pftrack.create_tracker(name, seed=seed, **params)
+    states = [tr.init(frames[0], gt[0])] + [tr.update(f) for f in frames[1:]]
+    return gt, np.array([s.box for s in states]), states
+
+
+def zoom_scene(seed):
+    rng = np.random.default_rng(seed)
+    path = ((0, 120.0, 120.0 + rng.uniform(-10, 10)), (79, 200.0, 120.0))
+    return SceneSpec(n_frames=80, seed=seed, targets=(Target(path=path, size=(20, 40), scale_rate=0.006),))
+
+
+def test_fusion_follows_a_growing_target_better_than_color_pf():
+    ious = {"fusion-pf": [], "color-pf": []}
+    for seed in range(3):
+        for name in ious:
+            gt, boxes, _ = run(name, zoom_scene(seed), seed)
+            ious[name].append(iou(boxes, gt)[-20:].mean())  # the target is 1.6x its first size by then
+    assert np.mean(ious["fusion-pf"]) > 0.45
+    assert np.mean(ious["fusion-pf"]) > np.mean(ious["color-pf"])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_fusion_tracks_and_reports_loss(seed):
+    gt, boxes, states = run("fusion-pf", simple_scene(seed), seed)
+    assert iou(boxes, gt).mean() > 0.75
+    gt, boxes, states = run("fusion-pf", occlusion_scene(seed, full=True), seed)
+    assert any(s.lost for s in states) and not states[-1].lost
+    assert iou(boxes[-10:], gt[-10:]).mean() > 0.5
+
+
+def test_fusion_is_the_default_tracker(capsys):
+    from pftrack.cli import DEFAULT_TRACKER, main
+
+    assert DEFAULT_TRACKER == "fusion-pf"
+    assert main(["list", "fusion-pf"]) == 0
+    assert "contrast_gain" in capsys.readouterr().out
