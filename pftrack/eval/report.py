@@ -27,7 +27,10 @@ import numpy as np
 from ..io.sinks import prepare_output
 
 CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "mean_iou", "failures", "accuracy",
-               "fps", "frames", "lost_frames"]
+               "fps", "frames", "lost_frames", "mota", "motp", "idf1", "num_switches", "num_fragmentations",
+               "mostly_tracked", "mostly_lost", "num_false_positives", "num_misses", "e2e_fps"]
+MOT_FIELDS = ["mota", "motp", "idf1", "num_switches", "num_fragmentations", "mostly_tracked", "mostly_lost",
+              "num_false_positives", "num_misses", "e2e_fps"]
 
 
 def _num(v) -> float:
@@ -69,6 +72,7 @@ def aggregate(records: list[dict]) -> dict:
             "accuracy": _mean(_num(r.get("accuracy")) for r in rs),
             "fps": _median(_num(r.get("fps")) for r in rs),
             "seeds": sorted(r["seed"] for r in rs),
+            **{k: _mean(_num(r.get(k)) for r in rs) for k in MOT_FIELDS},
         }
     overall = {}
     for t in trackers:
@@ -82,6 +86,7 @@ def aggregate(records: list[dict]) -> dict:
             "accuracy": _mean(c["accuracy"] for c in cells),
             "fps": _median(c["fps"] for c in cells),
             "seeds": sorted({s for c in cells for s in c["seeds"]}),
+            **{k: _mean(c[k] for c in cells) for k in MOT_FIELDS},
         }
     return {"trackers": trackers, "sequences": sequences, "cell": cell, "overall": overall}
 
@@ -95,6 +100,23 @@ def write_results_csv(records: list[dict], path: Path) -> None:
                         for c in CSV_COLUMNS])
 
 
+def _mot_markdown(records: list[dict], agg: dict, lines: list[str]) -> str:
+    head = ["tracker", "MOTA", "MOTP", "IDF1", "ID switches", "fragmentations", "MT", "ML", "FP", "FN", "fps",
+            "fps end to end"]
+    keys = ["mota", "motp", "idf1", "num_switches", "num_fragmentations", "mostly_tracked", "mostly_lost",
+            "num_false_positives", "num_misses", "fps", "e2e_fps"]
+    nd = [3, 3, 3, 1, 1, 1, 1, 0, 0, 0, 0]
+    lines += ["Metrics from py-motmetrics (IoU >= 0.5); MOTP is motmetrics' mean (1 - IoU) of matches; counts are "
+              "means over seeds; fps include detection, end to end also decoding.", "",
+              "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    order = sorted(agg["trackers"], key=lambda t: -np.nan_to_num(agg["overall"][t]["mota"], nan=-9))
+    for t in order:
+        o = agg["overall"][t]
+        lines.append(f"| `{t}` | " + " | ".join(_fmt(o[k], n) for k, n in zip(keys, nd)) + " |")
+    lines.append("")
+    return "\n".join(lines)
+
+
 def summary_markdown(records: list[dict], *, command: str | None = None, title: str = "Evaluation") -> str:
     agg = aggregate(records)
     protocols = sorted({r["protocol"] for r in records})
@@ -102,6 +124,10 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
     if command:
         lines += ["Reproduce with:", "", "```", command, "```", ""]
     seeds = sorted({r["seed"] for r in records})
+    if protocols == ["mot"]:
+        seqs = ", ".join(agg["sequences"])
+        lines += [f"Protocol: mot. Sequences: {seqs}. Seeds: {', '.join(map(str, seeds))}.", ""]
+        return _mot_markdown(records, agg, lines)
     lines += [f"Protocol: {', '.join(protocols)}. Seeds: {', '.join(map(str, seeds))} "
               "(deterministic trackers run once). fps = update calls per second on one core, decode excluded; "
               "per sequence the median over seeds, overall the median over sequences.", ""]
@@ -174,7 +200,12 @@ def _plots(records: list[dict], out: Path) -> list[str]:
             fig.savefig(out / f"{kind}.png")
             plt.close(fig)
             made.append(f"{kind}.png")
-    metric, fname = ("auc", "auc_per_sequence.png") if ope else ("failures", "failures_per_sequence.png")
+    if ope:
+        metric, fname = "auc", "auc_per_sequence.png"
+    elif any(r["protocol"] == "mot" for r in records):
+        metric, fname = "mota", "mota_per_sequence.png"
+    else:
+        metric, fname = "failures", "failures_per_sequence.png"
     fig, ax = plt.subplots(figsize=(max(6, 1.2 * len(seqs) + 2), 4.5), dpi=100)
     width = 0.8 / max(1, len(trackers))
     for k, t in enumerate(trackers):
@@ -182,7 +213,7 @@ def _plots(records: list[dict], out: Path) -> list[str]:
         ax.bar(np.arange(len(seqs)) + k * width, np.nan_to_num(vals), width, label=t)
     ax.set_xticks(np.arange(len(seqs)) + 0.4 - width / 2)
     ax.set_xticklabels(seqs, rotation=30, ha="right", fontsize=8)
-    ax.set_ylabel("OPE AUC" if ope else "VOT failures")
+    ax.set_ylabel({"auc": "OPE AUC", "mota": "MOTA", "failures": "VOT failures"}[metric])
     ax.legend(fontsize=7)
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
@@ -268,8 +299,17 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
             cells += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
         cells += [_fmt(o["fps"], 0)]
         rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
+    if "mot" in protocols:
+        rows = []
+        for t in agg["trackers"]:
+            o = agg["overall"][t]
+            cells = [e(t)] + [_fmt(o[k], n) for k, n in (("mota", 3), ("motp", 3), ("idf1", 3), ("num_switches", 1),
+                                                         ("num_fragmentations", 1), ("fps", 0), ("e2e_fps", 0))]
+            rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
     head = ["tracker"] + (["mean AUC", "precision@20"] if ope else []) + \
-        (["failures", "accuracy"] if "vot" in protocols else []) + ["median fps"]
+        (["failures", "accuracy"] if "vot" in protocols else []) + \
+        (["MOTA", "MOTP", "IDF1", "ID switches", "fragmentations", "fps", "fps end to end"] if "mot" in protocols
+         else ["median fps"])
     legend = " ".join(
         f'<span style="color:rgb({c[2]},{c[1]},{c[0]})">&#9632; {e(t)}</span>'
         for t, c in ((t, color_for(k + 1)) for k, t in enumerate(agg["trackers"])))

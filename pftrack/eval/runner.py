@@ -70,13 +70,33 @@ def _split_top(text: str) -> list[str]:
 _SPEC = re.compile(r"^([A-Za-z0-9_.\-]+)(?:\[(.*)\])?$")
 
 
-def parse_tracker_list(text: str, *, available: Callable[[str], list[str]] | None = None) -> list[TrackerConfig]:
+def parse_tracker_list(text: str, *, protocol: str = "ope") -> list[TrackerConfig]:
     """Parse ``"color-pf,opencv-csrt,local-motion-pf[motion=false]"``.
 
     The keywords ``all``, ``ours``, ``baselines`` and ``opencv`` expand to the
-    available registered trackers of those families.
+    available registered trackers of those families.  With ``protocol="mot"`` the
+    names are multi-target trackers (``multi-pf[detector=motion;occlusion=false]``).
     """
     from ..trackers.registry import get_spec, list_trackers
+
+    if protocol == "mot":
+        from ..multi.tracker import MULTI_TRACKERS
+
+        out = []
+        for item in _split_top(text):
+            m = _SPEC.match(item)
+            if not m or m.group(1) not in MULTI_TRACKERS:
+                raise ParameterError(f"unknown multi-target tracker spec {item!r}; choose from "
+                                     f"{', '.join(MULTI_TRACKERS)}")
+            params = tuple(tuple(kv.split("=", 1)) for kv in re.split(r"[;,]", m.group(2) or "") if kv.strip())
+            if any(len(kv) != 2 for kv in params):
+                raise ParameterError(f"tracker spec {item!r}: expected key=value")
+            params = tuple((k.strip(), v.strip()) for k, v in params)
+            MULTI_TRACKERS[m.group(1)].Params.from_mapping(dict(params))
+            out.append(TrackerConfig(item, m.group(1), params))
+        if not out:
+            raise ParameterError("no trackers given")
+        return out
 
     configs: list[TrackerConfig] = []
     for item in _split_top(text):
@@ -137,7 +157,7 @@ def build_jobs(sequences: Iterable, trackers: list[TrackerConfig], *, seeds: int
     jobs = []
     for seq in sequences:
         for cfg in trackers:
-            stochastic = get_spec(cfg.name).cls.stochastic
+            stochastic = True if protocol == "mot" else get_spec(cfg.name).cls.stochastic
             for seed in range(seeds if stochastic else 1):
                 jobs.append(Job(cfg, str(seq.path), seq.name, seed, protocol, threads))
     return jobs
@@ -164,6 +184,8 @@ def run_job(job: Job) -> dict:
 
     _pin_threads(job.threads)
     seq = read_sequence(job.sequence)
+    if job.protocol == "mot":
+        return _run_mot_job(job, seq)
     if seq.groundtruth is None:
         raise FormatError(f"{job.sequence}: no single-object ground truth for protocol {job.protocol}")
     tracker = create_tracker(job.tracker.name, seed=job.seed, params=job.tracker.param_dict)
@@ -223,9 +245,46 @@ def run_job(job: Job) -> dict:
     return rec
 
 
+def _run_mot_job(job: Job, seq) -> dict:
+    from ..frames import as_bgr_uint8
+    from ..io.sources import read_image
+    from ..multi.tracker import create_multi_tracker
+    from .mot import mot_scores
+
+    if seq.mot_gt is None:
+        raise FormatError(f"{job.sequence}: no MOTChallenge ground truth (gt/gt.txt) for protocol mot")
+    tracker = create_multi_tracker(job.tracker.name, seed=job.seed, **dict(job.tracker.params))
+    rows = []
+    upd = 0.0
+    t_all = time.perf_counter()
+    for t, path in enumerate(seq.frames, start=1):
+        img = read_image(path)
+        if img is None:
+            raise FormatError(f"{path}: frame {t} cannot be decoded")
+        frame = as_bgr_uint8(img, where=str(path))
+        t0 = time.perf_counter()
+        outs = tracker.update(frame)
+        upd += time.perf_counter() - t0
+        rows.extend([t, o.track_id, *o.box, o.score] for o in outs)
+    total = time.perf_counter() - t_all
+    hyp = np.array(rows, dtype=np.float64).reshape(-1, 7)
+    gt = seq.mot_gt[seq.mot_gt[:, 0] <= len(seq.frames)]
+    s = mot_scores(gt, hyp, frames=np.arange(1, len(seq.frames) + 1))
+    rec = {"version": RESULT_VERSION, "tracker": job.tracker.label, "name": job.tracker.name,
+           "params": dict(job.tracker.params), "sequence": job.sequence_name, "seed": job.seed, "protocol": "mot",
+           "frames": len(seq.frames), **{k: v for k, v in s.as_dict().items()},
+           "fps": len(seq.frames) / upd if upd > 0 else None, "e2e_fps": len(seq.frames) / total if total > 0 else None,
+           "update_seconds": upd, "identities": int(len(np.unique(hyp[:, 1]))) if len(hyp) else 0,
+           "auc": None, "precision": None, "mean_iou": None, "failures": None, "accuracy": None}
+    for k, v in list(rec.items()):
+        if isinstance(v, float) and not math.isfinite(v):
+            rec[k] = None
+    return rec
+
+
 # ---------------------------------------------------------------------------------------------- runner
 
-TIMING_FIELDS = ("fps", "update_seconds", "median_frame_ms")
+TIMING_FIELDS = ("fps", "update_seconds", "median_frame_ms", "e2e_fps")
 
 
 def _atomic_write_json(path: Path, obj: dict) -> None:

@@ -264,8 +264,9 @@ def read_seqinfo(path: Path) -> dict[str, str]:
     return {k: v for k, v in cp.items("Sequence")}
 
 
-def read_mot_txt(path: Path) -> np.ndarray:
+def read_mot_txt(path: str | Path) -> np.ndarray:
     """MOTChallenge rows ``frame,id,x,y,w,h,conf[,class,visibility[,z]]`` as a float array."""
+    path = Path(path)
     rows = read_number_rows(path, widths=(6, 7, 8, 9, 10))
     if not rows:
         return np.zeros((0, 10))

@@ -13,7 +13,10 @@
 * ``hog`` — OpenCV's built-in HOG + linear SVM people detector (Dalal & Triggs), no downloads.
 * any callable with the same signature, wrapped by :func:`as_detector`.
 
-Boxes are in full-resolution image coordinates; ``score`` is in [0, 1].
+Boxes are in full-resolution image coordinates; ``score`` is in [0, 1].  The
+blob detectors also keep the foreground mask of the last frame in
+``detector.foreground = (mask, scale)`` (``mask`` at 1/``scale`` resolution), which
+``multi-pf`` uses as a likelihood cue.
 """
 
 from __future__ import annotations
@@ -76,6 +79,7 @@ class MotionDetector:
     Params = MotionDetectorParams
 
     def __init__(self, params: MotionDetectorParams | None = None):
+        self.foreground = None
         self.params = params or MotionDetectorParams()
         p = self.params
         if p.median % 2 == 0:
@@ -102,12 +106,14 @@ class MotionDetector:
         if len(self._hist) > 3:
             self._hist.pop(0)
         if len(self._hist) < 3:
+            self.foreground = None
             return np.zeros((0, 5))
         f2, f1, f0 = self._hist
         d1 = cv2.absdiff(f0, f1) > p.threshold
         d2 = cv2.absdiff(f0, f2) > p.threshold
         mask = (d1 & d2).astype(np.uint8) * 255
         mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._kernel)
+        self.foreground = (mask, float(p.downscale))
         return _components(mask, float(p.downscale), p.min_area, split_aspect=p.split_aspect)
 
 
@@ -131,6 +137,7 @@ class MOG2Detector:
     Params = MOG2DetectorParams
 
     def __init__(self, params: MOG2DetectorParams | None = None):
+        self.foreground = None
         self.params = params or MOG2DetectorParams()
         p = self.params
         self._sub = cv2.createBackgroundSubtractorMOG2(history=p.history, varThreshold=p.var_threshold,
@@ -147,19 +154,27 @@ class MOG2Detector:
         mask = (fg > 200).astype(np.uint8) * 255  # 127 marks shadows
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._open)
         mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._close)
+        self.foreground = (mask, float(p.downscale))
         return _components(mask, float(p.downscale), p.min_area, split_aspect=p.split_aspect)
 
 
 @dataclass(frozen=True, kw_only=True)
 class HOGDetectorParams(Params):
-    downscale: float = param(1.0, ge=1, le=8, doc="Reduce the frame by this factor before detection (speed).")
+    resize: float = param(1.25, ge=0.25, le=4, doc=(
+        "Resize the frame by this factor before detection: >1 finds people smaller than the 64x128 window's "
+        "96-pixel person, <1 is faster."))
     hit_threshold: float = param(0.0, doc="SVM score threshold of detectMultiScale.")
     scale: float = param(1.05, gt=1, le=2, doc="Pyramid scale step of detectMultiScale.")
     stride: int = param(8, ge=1, le=32, doc="Window stride (pixels).")
+    person_width: float = param(0.5, gt=0, le=1, doc=(
+        "Width of the person inside a detection window (INRIA windows: 64 px wide around a ~32-px person); "
+        "boxes are shrunk to it so they match tight ground truth."))
+    person_height: float = param(0.75, gt=0, le=1, doc="Height of the person inside a window (96 of 128 px).")
+    nms_iou: float = param(0.5, gt=0, le=1, doc="Non-maximum suppression overlap of the (shrunk) boxes.")
 
 
 class HOGDetector:
-    """OpenCV's default HOG people detector (64x128 window)."""
+    """OpenCV's default HOG people detector (64x128 window), boxes shrunk to the person."""
 
     Params = HOGDetectorParams
 
@@ -171,17 +186,37 @@ class HOGDetector:
     def __call__(self, frame: np.ndarray) -> np.ndarray:
         p = self.params
         f = as_bgr_uint8(frame)
-        if p.downscale > 1:
-            f = cv2.resize(f, (int(f.shape[1] / p.downscale), int(f.shape[0] / p.downscale)),
-                           interpolation=cv2.INTER_AREA)
+        if p.resize != 1.0:
+            f = cv2.resize(f, (int(round(f.shape[1] * p.resize)), int(round(f.shape[0] * p.resize))),
+                           interpolation=cv2.INTER_LINEAR if p.resize > 1 else cv2.INTER_AREA)
         rects, weights = self._hog.detectMultiScale(f, hitThreshold=p.hit_threshold, winStride=(p.stride, p.stride),
                                                     scale=p.scale)
         if len(rects) == 0:
             return np.zeros((0, 5))
-        rects = np.asarray(rects, dtype=np.float64) * p.downscale
+        r = np.asarray(rects, dtype=np.float64) / p.resize
         w = np.asarray(weights, dtype=np.float64).reshape(-1)
+        cx, cy = r[:, 0] + r[:, 2] / 2, r[:, 1] + r[:, 3] / 2
+        bw, bh = r[:, 2] * p.person_width, r[:, 3] * p.person_height
+        boxes = np.column_stack([cx - bw / 2, cy - bh / 2, bw, bh])
         score = 1.0 / (1.0 + np.exp(-w))
-        return np.column_stack([rects, score])
+        keep = nms(boxes, score, p.nms_iou)
+        return np.column_stack([boxes[keep], score[keep]])
+
+
+def nms(boxes: np.ndarray, scores: np.ndarray, iou_threshold: float) -> np.ndarray:
+    """Greedy non-maximum suppression; indices of the kept boxes, best first."""
+    from ..geometry import iou_matrix
+
+    order = np.argsort(-scores, kind="stable")
+    keep: list[int] = []
+    m = iou_matrix(boxes, boxes)
+    suppressed = np.zeros(len(boxes), bool)
+    for i in order:
+        if suppressed[i]:
+            continue
+        keep.append(int(i))
+        suppressed |= m[i] > iou_threshold
+    return np.array(keep, dtype=int)
 
 
 DETECTORS = {"motion": MotionDetector, "mog2": MOG2Detector, "hog": HOGDetector}

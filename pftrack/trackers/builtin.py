@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from .color_pf import ColorPF
+from .flow_pf import FlowPF
 from .fusion_pf import FusionPF
 from .local_motion_pf import LocalMotionPF
 from .meanshift import KalmanMeanShift, MeanShift
@@ -18,6 +19,9 @@ register("color-pf", ColorPF,
 register("local-motion-pf", LocalMotionPF,
          "Colour particle filter fused with a local-motion (optical-flow) likelihood (Kristan et al. 2009)",
          extra_kwargs=("detector",))
+register("flow-pf", FlowPF,
+         "Colour PF driven by optical flow: HSV histograms, EMD, template subspace, KLT motion energies, "
+         "detection/tracking switching (Tung & Matsuyama)", extra_kwargs=("detector",))
 register("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
          family="baseline")
 register("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",

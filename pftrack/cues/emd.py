@@ -1,0 +1,62 @@
+"""Earth Mover's Distance between 1-D histograms in closed form (Tung & Matsuyama §4.3).
+
+The EMD (Rubner et al.; Eqs. 7–9 of Tung & Matsuyama) between two normalised
+histograms ``p`` and ``q`` of ``n`` bins with the L1 ground distance ``|i - j|``
+between bins has an exact closed form in one dimension:
+
+    EMD(p, q) = sum_i |P_i - Q_i|                       (linear axis)
+
+with ``P`` and ``Q`` the cumulative histograms.  On a circular axis (hue), where
+the ground distance is ``min(|i - j|, n - |i - j|)``, mass may also flow round the
+circle; the optimal flow shifts the cumulative difference by its median:
+
+    EMD_circ(p, q) = sum_i |D_i - median(D)|,    D_i = P_i - Q_i
+
+(Werman, Peleg & Rosenfeld 1985; Rabin, Delon & Gousseau 2008).  Both are exact
+and cost O(n) per pair, which is what makes scoring every particle against every
+template each frame affordable.  Tests check them against OpenCV's general solver
+``cv2.EMD`` on random histograms.
+
+Distances are in units of bins; divide by ``n - 1`` (linear) or ``n / 2``
+(circular) for a value in [0, 1].
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _normalise(h: np.ndarray) -> np.ndarray:
+    h = np.asarray(h, dtype=np.float64)
+    s = h.sum(axis=-1, keepdims=True)
+    return np.where(s > 0, h / np.where(s > 0, s, 1.0), 1.0 / h.shape[-1])
+
+
+def emd_linear(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """EMD with ground distance ``|i - j|`` (bins) between normalised 1-D histograms, batched over leading axes."""
+    d = np.cumsum(_normalise(p) - _normalise(q), axis=-1)
+    return np.abs(d[..., :-1]).sum(axis=-1)
+
+
+def emd_circular(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """EMD with the circular ground distance ``min(|i - j|, n - |i - j|)`` (bins), batched."""
+    d = np.cumsum(_normalise(p) - _normalise(q), axis=-1)
+    med = np.median(d, axis=-1, keepdims=True)
+    return np.abs(d - med).sum(axis=-1)
+
+
+def emd_general(p: np.ndarray, q: np.ndarray, *, circular: bool = False) -> float:
+    """Reference: OpenCV's transportation solver with the same ground distance (one pair, slow)."""
+    import cv2
+
+    p = _normalise(p).astype(np.float32)
+    q = _normalise(q).astype(np.float32)
+    n = p.size
+    i = np.arange(n)
+    cost = np.abs(i[:, None] - i[None, :]).astype(np.float32)
+    if circular:
+        cost = np.minimum(cost, n - cost)
+    s1 = np.column_stack([p, i.astype(np.float32)])
+    s2 = np.column_stack([q, i.astype(np.float32)])
+    dist, _, _ = cv2.EMD(s1, s2, cv2.DIST_USER, cost=cost)
+    return float(dist)

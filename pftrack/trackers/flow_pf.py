@@ -1,0 +1,338 @@
+"""``flow-pf``: colour particle filter driven by optical flow, with EMD and a template subspace.
+
+T. Tung, T. Matsuyama, "Human motion tracking using a color-based particle filter
+driven by optical flow" — ``shared/seeds/003_*.txt``.
+
+* **Colour model** (§4.2): separate H, S and V histograms of 10 bins each over the
+  region (a window of the initial box size); the model is their average in the sense
+  that the distance between two models is the mean of the three per-channel distances.
+* **Earth Mover's Distance** (§4.3) with the L1 ground distance between bins, in closed
+  form (:mod:`pftrack.cues.emd`): circular for hue, linear for saturation and value, in
+  units of bins (so ``E_s = D^2`` over ``sigma^2 = 0.1`` discriminates shifts of a
+  fraction of a bin).
+* **Template subspace** ``S_t`` of the last ``k = 5`` colour models;
+  ``E_s = min_{h in S_t} D^2[h, q(x)]`` (Eq. 6).  ``S_t`` is updated every frame with the
+  model of the response ``z_t``: the detection when there is one, else the estimate (§3.2).
+* **Motion energies** (§4.4, Eqs. 10–11), from KLT features ``Y_{t-1}`` around the
+  previous estimate tracked into the current frame ``Y_t``:
+  ``E_m = alpha ||x_i - y~||`` with ``y~ = x_{t-1} + median(Y_t - Y_{t-1})`` (the printed
+  formula subtracts the other way round, which would move the window against the
+  motion; we use the displacement from ``t-1`` to ``t``), and
+  ``E_d = beta (1 - |Y~_i ∩ Y_t| / |Y~_i|)``: the share of the Shi-Tomasi features inside
+  particle ``i``'s window that are not tracked ones.  ``alpha`` is relative to the window
+  size: a displacement of one window costs ``motion_weight``.
+* **Likelihood** ``exp(-E / sigma^2)``, ``E = E_s + E_m + E_d``, ``sigma^2 = 0.1`` (Eq. 4),
+  ``P = 200`` particles, bootstrap filter with constant-velocity dynamics.
+* **Detection / tracking switching** (§3.2): with a detector (any callable, or the Haar
+  frontal-face cascade shipped with OpenCV via ``detector="haar-face"``) a positive
+  detection near the target replaces the response (``z_t = y_t``), re-centres the
+  particles and feeds the subspace; without one the tracker runs in tracking mode alone.
+
+:class:`FlowPFGroup` tracks several objects at once (M objects with their own
+subspaces, §3.2) and returns the per-object states.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Callable, Literal, Sequence
+
+import cv2
+import numpy as np
+
+from ..cues.emd import emd_circular, emd_linear
+from ..cues.hsv import HSVHistogramCue
+from ..cues.motion import lattice_min_eigenvalues, to_gray
+from ..errors import ParameterError
+from ..filtering.particles import ParticleSet
+from ..filtering.resampling import get_resampler
+from ..frames import as_bgr_uint8
+from ..geometry import Box, iou, validate_box
+from ..params import Params, param
+from .base import Tracker, TrackState
+
+
+def haar_face_detector(min_size: int = 24) -> Callable[[np.ndarray], np.ndarray]:
+    """The frontal-face Haar cascade shipped with opencv-contrib (Viola & Jones), as a detector callable."""
+    path = cv2.data.haarcascades + "haarcascade_frontalface_default.xml"
+    cascade = cv2.CascadeClassifier(path)
+    if cascade.empty():
+        raise ParameterError(f"cannot load the Haar cascade {path}")
+
+    def detect(frame: np.ndarray) -> np.ndarray:
+        gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        found = cascade.detectMultiScale(gray, scaleFactor=1.1, minNeighbors=4, minSize=(min_size, min_size))
+        if len(found) == 0:
+            return np.zeros((0, 5))
+        return np.column_stack([np.asarray(found, dtype=np.float64), np.ones(len(found))])
+
+    return detect
+
+
+@dataclass(frozen=True, kw_only=True)
+class FlowPFParams(Params):
+    """Parameters of ``flow-pf``; defaults from Tung & Matsuyama §5 where given."""
+
+    n_particles: int = param(200, ge=1, le=1_000_000, doc="P, the number of particles (§5: 200).")
+    bins: int = param(10, ge=2, le=256, doc="N_h = N_s = N_v, bins of each of the three histograms (§5: 10).")
+    templates: int = param(5, ge=1, le=1000, doc="k, the size of the colour-model subspace (§5: 5).")
+    sigma2: float = param(0.1, gt=0, doc="sigma^2 of the likelihood exp(-E / sigma^2) (Eq. 4; §5: 0.1).")
+    anchor: bool = param(False, doc=(
+        "Keep the initial colour model in the subspace besides the last k - 1 responses (the drift correction of "
+        "Matthews et al.'s template update problem, which the paper cites); False is the paper's subspace."))
+    distance: Literal["emd", "bhattacharyya"] = param("emd", doc=(
+        "Colour distance D: the Earth Mover's Distance (§4.3), or the Bhattacharyya distance sqrt(1 - rho) "
+        "(the ablation)."))
+    motion: bool = param(True, doc="Add the motion energies E_m and E_d (§4.4); False for the ablation.")
+    motion_weight: float = param(1.0, ge=0, doc=(
+        "alpha of E_m = alpha ||x - y~|| per window size: a particle one window away from the flow-predicted "
+        "position pays this energy. The paper tunes alpha to the frame size; per window keeps it scale-free."))
+    drift_weight: float = param(0.5, ge=0, doc=(
+        "beta of E_d = beta C (Eq. 11), C in [0, 1] the share of a particle's features not among the tracked ones."))
+    position_noise: float = param(0.15, ge=0, le=10, doc="Std of the position noise, fraction of the window size.")
+    velocity_noise: float = param(0.05, ge=0, le=10, doc="Std of the velocity noise, fraction of the window size.")
+    klt_window: int = param(15, ge=3, le=101, doc="KLT window (px).")
+    klt_levels: int = param(3, ge=1, le=6, doc="KLT pyramid levels.")
+    max_features: int = param(100, ge=1, le=100_000, doc="Shi-Tomasi features per frame around the target.")
+    feature_radius: float = param(2.0, gt=0, doc="A detected feature is a tracked one when a KLT point lies this close (px).")
+    lost_distance: float = param(1.5, gt=0, doc=(
+        "Report lost when the colour distance of the estimate to the nearest template exceeds this (bins for EMD)."))
+    detector_min_iou: float = param(0.0, ge=0, le=1, doc=(
+        "A detection replaces the response only if it overlaps the estimate by more than this (any overlap by "
+        "default), so a detector does not jump between objects."))
+
+
+class FlowPF(Tracker):
+    """Tung & Matsuyama's colour particle filter driven by optical flow (single object)."""
+
+    name = "flow-pf"
+    Params = FlowPFParams
+    state_names = ("x", "y", "vx", "vy")
+
+    def __init__(self, params: FlowPFParams | None = None, *, rng=None, seed=None,
+                 detector: Callable | str | None = None):
+        super().__init__(params, rng=rng, seed=seed)
+        p = self.params
+        self.cue = HSVHistogramCue(p.bins)
+        self.resampler = get_resampler("systematic")
+        if isinstance(detector, str):
+            if detector != "haar-face":
+                raise ParameterError(f"unknown detector {detector!r} (built-in: 'haar-face')")
+            detector = haar_face_detector()
+        if detector is not None and not callable(detector):
+            raise ParameterError("detector must be a callable frame -> boxes or 'haar-face'")
+        self.detector = detector
+
+    # ------------------------------------------------------------------ colour distances
+    def _distance(self, hist: np.ndarray, template: np.ndarray) -> np.ndarray:
+        """Mean over H, S, V of the per-channel distance (hist: (N, 3, n), template: (3, n)).
+
+        EMD is in units of bins (the L1 ground distance between bin indices, Eq. 9);
+        the Bhattacharyya distance lies in [0, 1]."""
+        if self.params.distance == "emd":
+            dh = emd_circular(hist[:, 0], template[0])
+            ds = emd_linear(hist[:, 1], template[1])
+            dv = emd_linear(hist[:, 2], template[2])
+            return (dh + ds + dv) / 3.0
+        rho = np.sqrt(np.clip(hist, 0, None) * np.clip(template, 0, None)[None]).sum(axis=-1)
+        return np.sqrt(np.clip(1.0 - rho, 0.0, 1.0)).mean(axis=-1)
+
+    def _templates(self) -> list[np.ndarray]:
+        return ([self.first] if self.params.anchor else []) + list(self.subspace)
+
+    def _colour_energy(self, hist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        d = np.stack([self._distance(hist, t) for t in self._templates()])  # (k, N)
+        dmin = d.min(axis=0)
+        return dmin * dmin, dmin
+
+    # ------------------------------------------------------------------ protocol
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        p = self.params
+        x, y, w, h = box
+        self.size = (w, h)
+        self.window = 0.5 * (w + h)
+        st = np.array([x + w / 2, y + h / 2, 0.0, 0.0])
+        self.ps = ParticleSet(np.tile(st, (p.n_particles, 1)))
+        self.estimate = st.copy()
+        self.first = self.cue.histogram(frame, box)
+        self.subspace: deque = deque(maxlen=max(p.templates - (1 if p.anchor else 0), 1))
+        self.subspace.append(self.first)
+        self._prev_gray = to_gray(frame)
+        return self._state(box, 1.0, False)
+
+    def _boxes(self, states: np.ndarray) -> np.ndarray:
+        w, h = self.size
+        return np.column_stack([states[:, 0] - w / 2, states[:, 1] - h / 2, np.full(len(states), w),
+                                np.full(len(states), h)])
+
+    def _flow(self, gray: np.ndarray, roi) -> tuple[np.ndarray | None, np.ndarray, None]:
+        """KLT: features around the previous estimate, tracked into this frame.
+
+        Returns ``(median displacement or None, tracked points (M, 2), None)``.
+        """
+        p = self.params
+        fh, fw = gray.shape[:2]
+        w, h = self.size
+        ex, ey = self.estimate[0], self.estimate[1]
+        # features in the tracking window itself (the neighbourhood region of x_{t-1})
+        near = (int(max(ex - w / 2, 0)), int(max(ey - h / 2, 0)), int(min(ex + w / 2, fw)), int(min(ey + h / 2, fh)))
+        prev_pts = _features(self._prev_gray, near, p.max_features)
+        disp = None
+        tracked = np.empty((0, 2))
+        if len(prev_pts):
+            crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)
+            nxt, st, _ = cv2.calcOpticalFlowPyrLK(self._prev_gray, gray, prev_pts.reshape(-1, 1, 2), None,
+                                                  winSize=(p.klt_window, p.klt_window), maxLevel=p.klt_levels - 1,
+                                                  criteria=crit)
+            ok = st.ravel() == 1
+            if ok.any():
+                nxt = nxt.reshape(-1, 2)[ok].astype(np.float64)
+                disp = np.median(nxt - prev_pts[ok], axis=0)
+                tracked = nxt
+        return disp, tracked, None
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        p = self.params
+        ps = self.ps
+        fh, fw = self._shape
+        w, h = self.size
+        win = self.window
+        prev_est = self.estimate.copy()
+        gray = to_gray(frame)
+        disp = tracked = detected = None
+        if p.motion:
+            disp, tracked, _ = self._flow(gray, None)
+        # propagate: driven by the optical flow when it is available (the median KLT displacement moves every
+        # sample, as the flow-predicted position y~ does), else constant velocity; plus Gaussian noise
+        s = ps.states
+        if disp is not None:
+            s[:, 0:2] += disp
+            s[:, 2:4] = disp
+        else:
+            s[:, 0:2] += s[:, 2:4]
+        noise = self.rng.standard_normal(s.shape) * np.array([p.position_noise * win, p.position_noise * win,
+                                                              p.velocity_noise * win, p.velocity_noise * win])
+        s += noise
+        np.clip(s[:, 0], -w / 2, fw + w / 2, out=s[:, 0])
+        np.clip(s[:, 1], -h / 2, fh + h / 2, out=s[:, 1])
+        boxes = self._boxes(s)
+        roi = (int(max(np.floor(boxes[:, 0].min()) - 1, 0)), int(max(np.floor(boxes[:, 1].min()) - 1, 0)),
+               int(min(np.ceil((boxes[:, 0] + boxes[:, 2]).max()) + 1, fw)),
+               int(min(np.ceil((boxes[:, 1] + boxes[:, 3]).max()) + 1, fh)))
+        roi = (roi[0], roi[1], max(roi[2], roi[0]), max(roi[3], roi[1]))
+        feats = self.cue.prepare(frame, roi)
+        hist, npx = self.cue.box_histograms(feats, boxes)
+        e_s, _ = self._colour_energy(hist)
+        energy = e_s
+        if p.motion:
+            detected = _features(gray, roi, p.max_features * 4).astype(np.float64)
+            if disp is not None:
+                y_pred = prev_est[0:2] + disp
+                energy = energy + p.motion_weight * np.hypot(s[:, 0] - y_pred[0], s[:, 1] - y_pred[1]) / win
+            energy = energy + p.drift_weight * _untracked_share(detected, tracked, boxes, p.feature_radius)
+        log_lik = -energy / p.sigma2
+        log_lik[npx <= 0] = -np.inf
+        ok = ps.set_log_likelihood(log_lik)
+        est = ps._mean.copy()
+        # detection / tracking switching (§3.2): a positive detection replaces the response
+        det_box = self._detection(frame, est) if self.detector is not None else None
+        if det_box is not None:
+            dx, dy, dw, dh = det_box
+            c = np.array([dx + dw / 2, dy + dh / 2])
+            ps.states[:, 0:2] += c - est[0:2]
+            est[0:2] = c
+        est[2:4] = est[0:2] - prev_est[0:2]
+        self.estimate = est
+        box = tuple(float(v) for v in self._boxes(est[None, :])[0])
+        # subspace update with the response's colour model
+        model = self.cue.histogram(frame, det_box if det_box is not None else box)
+        d_est = float(self._colour_energy(model[None])[1][0])
+        self.subspace.append(model)
+        # resample for the next frame
+        ps.resample(self.resampler(ps.w, self.rng))
+        self._prev_gray = gray
+        lost = (not ok) or d_est > p.lost_distance
+        return self._state(box, 1.0 / (1.0 + d_est), lost, det=det_box is not None)
+
+    def _detection(self, frame: np.ndarray, est: np.ndarray) -> Box | None:
+        fh, fw = frame.shape[:2]
+        out = self.detector(frame)
+        rows = []
+        for d in out if out is not None else []:
+            d = [float(v) for v in d]
+            if len(d) >= 4 and d[2] > 0 and d[3] > 0 and all(math.isfinite(v) for v in d[:4]):
+                rows.append(d[:4])
+        if not rows:
+            return None
+        cand = np.array(rows)
+        ov = iou(cand, self._boxes(est[None, :])[0])
+        k = int(np.argmax(ov))
+        if ov[k] <= self.params.detector_min_iou:
+            return None
+        try:
+            return validate_box(cand[k], fw, fh)
+        except ValueError:
+            return None
+
+    def _state(self, box, score, lost, det: bool = False) -> TrackState:
+        return TrackState(box=tuple(float(v) for v in box), score=float(score), lost=bool(lost),
+                          particles=self.ps.states.copy(), weights=self.ps.w.copy(), state_names=self.state_names,
+                          info={"detection": det, "templates": len(self.subspace)})
+
+
+def _features(gray: np.ndarray, roi, max_features: int) -> np.ndarray:
+    """Shi-Tomasi features (lambda_min > 1e-3) on a lattice over ``roi`` (the #4 feature detector)."""
+    from ..cues.motion import shi_tomasi_features
+
+    x0, y0, x1, y1 = roi
+    if x1 - x0 < 5 or y1 - y0 < 5:
+        return np.empty((0, 2), np.float32)
+    return shi_tomasi_features(gray, roi, max_features=max_features)
+
+
+def _untracked_share(detected: np.ndarray, tracked: np.ndarray, boxes: np.ndarray, radius: float) -> np.ndarray:
+    """C(Y~_i, Y_t) = 1 - |Y~_i ∩ Y_t| / |Y~_i| for every box (Eq. 11); 1 for a box without features."""
+    n = len(boxes)
+    if len(detected) == 0:
+        return np.ones(n)
+    if len(tracked):
+        d2 = ((detected[:, None, :] - tracked[None, :, :]) ** 2).sum(axis=-1)
+        is_tracked = d2.min(axis=1) <= radius * radius
+    else:
+        is_tracked = np.zeros(len(detected), bool)
+    inside = ((detected[None, :, 0] >= boxes[:, 0:1]) & (detected[None, :, 0] < boxes[:, 0:1] + boxes[:, 2:3])
+              & (detected[None, :, 1] >= boxes[:, 1:2]) & (detected[None, :, 1] < boxes[:, 1:2] + boxes[:, 3:4]))
+    n_in = inside.sum(axis=1)
+    n_tr = (inside & is_tracked[None, :]).sum(axis=1)
+    return np.where(n_in > 0, 1.0 - n_tr / np.maximum(n_in, 1), 1.0)
+
+
+class FlowPFGroup:
+    """Several objects (e.g. body parts) tracked at once, each with its own subspace (§3.2).
+
+    >>> group = FlowPFGroup(seed=0)                       # doctest: +SKIP
+    >>> states = group.init(frame, [head_box, hand_box])  # doctest: +SKIP
+    >>> states = group.update(next_frame)                 # list of TrackState, one per object
+    """
+
+    def __init__(self, params: FlowPFParams | None = None, *, seed: int | None = None,
+                 detectors: Sequence[Callable | None] | None = None):
+        self.params = params or FlowPFParams()
+        self.seed = seed
+        self.detectors = detectors
+        self.trackers: list[FlowPF] = []
+
+    def init(self, frame: np.ndarray, boxes: Sequence) -> list[TrackState]:
+        frame = as_bgr_uint8(frame, where="init frame")
+        ss = np.random.SeedSequence(self.seed)
+        rngs = [np.random.default_rng(s) for s in ss.spawn(len(boxes))]
+        dets = list(self.detectors) if self.detectors is not None else [None] * len(boxes)
+        if len(dets) != len(boxes):
+            raise ParameterError("give one detector (or None) per object")
+        self.trackers = [FlowPF(self.params, rng=r, detector=d) for r, d in zip(rngs, dets)]
+        return [t.init(frame, b) for t, b in zip(self.trackers, boxes)]
+
+    def update(self, frame: np.ndarray) -> list[TrackState]:
+        return [t.update(frame) for t in self.trackers]

@@ -1,0 +1,109 @@
+"""EMD in closed form, HSV integral histograms and flow-pf (Tung & Matsuyama)."""
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.cues.emd import emd_circular, emd_general, emd_linear
+from pftrack.cues.hsv import HSVHistogramCue, integral_counts
+from pftrack.geometry import iou
+from pftrack.synth import simple_scene
+from pftrack.trackers.flow_pf import FlowPFGroup, FlowPFParams, _untracked_share
+
+from .conftest import render_scene
+
+
+def test_closed_form_emd_is_exact_against_the_general_solver(rng):
+    for _ in range(60):
+        n = int(rng.integers(3, 16))
+        p, q = rng.random(n) ** 3, rng.random(n) ** 3
+        # cv2.EMD works in float32: agreement to its precision
+        assert emd_linear(p, q) == pytest.approx(emd_general(p, q), rel=1e-4, abs=1e-5)
+        assert emd_circular(p, q) == pytest.approx(emd_general(p, q, circular=True), rel=1e-4, abs=1e-5)
+
+
+def test_emd_known_values_and_batching():
+    a = np.array([1.0, 0, 0, 0])
+    b = np.array([0, 0, 0, 1.0])
+    assert emd_linear(a, b) == pytest.approx(3.0)
+    assert emd_circular(a, b) == pytest.approx(1.0)  # around the circle
+    batch = np.stack([a, b, a])
+    assert emd_linear(batch, b).tolist() == pytest.approx([3.0, 0.0, 3.0])
+
+
+def test_integral_histograms_match_direct_counts(rng):
+    from pftrack._numba import NUMBA_INSTALLED, set_numba_enabled
+
+    img = rng.integers(0, 256, (40, 50, 3), dtype=np.uint8)
+    cue = HSVHistogramCue(10)
+    maps = cue.bin_maps(img)
+    for flag in ([True, False] if NUMBA_INSTALLED else [False]):
+        prev = set_numba_enabled(flag)
+        try:
+            feats = cue.prepare(img, (0, 0, 50, 40))
+        finally:
+            set_numba_enabled(prev)
+        boxes = np.array([[3, 4, 10, 12], [0, 0, 50, 40], [40, 30, 20, 20]], float)
+        hist, n = cue.box_histograms(feats, boxes)
+        for k, (x, y, w, h) in enumerate(boxes.astype(int)):
+            sub = maps[:, y:y + h, x:x + w].reshape(3, -1)
+            expected = np.stack([np.bincount(c, minlength=10) for c in sub]) / sub.shape[1]
+            assert np.allclose(hist[k], expected) and n[k] == sub.shape[1]
+    assert integral_counts(maps, 10).shape == (3, 10, 41, 51)
+
+
+def test_untracked_share():
+    detected = np.array([[5.0, 5.0], [6.0, 6.0], [50.0, 50.0]])
+    tracked = np.array([[5.5, 5.0]])
+    boxes = np.array([[0, 0, 10, 10], [40, 40, 20, 20], [100, 100, 5, 5]], float)
+    assert _untracked_share(detected, tracked, boxes, 1.0).tolist() == pytest.approx([0.5, 1.0, 1.0])
+
+
+@pytest.mark.parametrize("variant", [{}, {"motion": False}, {"anchor": True}])
+def test_flow_pf_tracks_a_simple_scene(variant):
+    scene, frames, _ = render_scene(simple_scene(1))
+    gt = scene.groundtruth(0)
+    tr = pftrack.create_tracker("flow-pf", seed=0, **variant)
+    boxes = [tr.init(frames[0], gt[0]).box] + [tr.update(f).box for f in frames[1:]]
+    assert iou(np.array(boxes), gt).mean() > 0.6
+    assert len(tr.subspace) <= tr.params.templates
+
+
+def test_detection_replaces_the_response_and_feeds_the_subspace():
+    scene, frames, _ = render_scene(simple_scene(2, n_frames=20))
+    gt = scene.groundtruth(0)
+    calls = []
+
+    def detector(frame):
+        calls.append(1)
+        t = next(i for i, f in enumerate(frames) if f is frame)
+        return [tuple(gt[t]) + (1.0,)]
+
+    tr = pftrack.create_tracker("flow-pf", seed=0, detector=detector)
+    tr.init(frames[0], gt[0])
+    for t in range(1, 20):
+        st = tr.update(frames[t])
+        assert st.info["detection"]
+        assert iou(np.array(st.box), gt[t]) > 0.95  # z_t = y_t
+    assert len(calls) == 19
+
+
+def test_haar_face_detector_loads():
+    from pftrack.trackers.flow_pf import haar_face_detector
+
+    det = haar_face_detector()
+    assert det(np.zeros((120, 160, 3), np.uint8)).shape[1] == 5
+
+
+def test_group_tracks_several_objects_with_their_own_subspaces():
+    from pftrack.synth import crossing_scene
+
+    scene, frames, truths = render_scene(crossing_scene(5, same_colors=False))
+    boxes0 = [tuple(truths[0].boxes[k]) for k in range(2)]
+    group = FlowPFGroup(FlowPFParams(motion=False), seed=1)
+    states = group.init(frames[0], boxes0)
+    assert len(states) == 2
+    for f in frames[1:]:
+        states = group.update(f)
+    assert len(states) == 2 and group.trackers[0].subspace is not group.trackers[1].subspace
+    assert iou(np.array(states[1].box), truths[-1].boxes[1]) > 0.3
