@@ -85,7 +85,7 @@ def iou(a, b) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)
     out = np.where(np.isfinite(out), out, 0.0)
-    return out
+    return np.clip(out, 0.0, 1.0)  # rounding can exceed 1 by an ulp for identical boxes
 
 
 def iou_matrix(a, b) -> np.ndarray:

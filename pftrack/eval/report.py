@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import html
 import math
+import re
 from collections import defaultdict
 from pathlib import Path
 from typing import Iterable
@@ -259,7 +260,8 @@ def _frames(records: list[dict], sequences: dict[str, str], out: Path, per_seque
                 box = [_num(v) for v in b[4 * t_idx: 4 * t_idx + 4]]
                 draw_box(img, box, color_for(k + 1), 1)
             cv2.putText(img, f"#{t_idx + 1}", (5, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1)
-            fn = f"frames/{name}_{t_idx + 1:05d}.jpg"
+            safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).lstrip(".") or "sequence"
+            fn = f"frames/{safe}_{t_idx + 1:05d}.jpg"
             cv2.imwrite(str(out / fn), img)
             files.append(fn)
         made[name] = files
