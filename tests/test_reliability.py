@@ -161,7 +161,7 @@ def test_interruption_keeps_whole_rows_and_a_playable_video(tmp_path, sig):
     proc = subprocess.Popen([sys.executable, "-m", "pftrack.cli", "track", str(clip), "--box", box, "--out", str(out),
                              "--video-out", str(video), "--quiet"], stderr=subprocess.PIPE, env=env, cwd=REPO)
     deadline = time.time() + 60
-    while time.time() < deadline and (not out.exists() or len(out.read_text().splitlines()) < 30):
+    while time.time() < deadline and (not out.exists() or len(out.read_text().splitlines()) < 31):
         time.sleep(0.05)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)

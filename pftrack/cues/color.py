@@ -240,9 +240,12 @@ def _row_span(cx, hx, ihx2, ry, lo, hi):
     return max(a, lo), min(b, hi)
 
 
-@njit(fastmath={"reassoc", "nsz", "arcp", "contract"})
+@njit
 def _rho_from_acc(acc0, acc1, sqrt_q):
-    """sum_u sqrt(h_u) sqrt(q_u) and sum_u h_u of h = acc0 + acc1, resetting both (vectorisable)."""
+    """sum_u sqrt(h_u) sqrt(q_u) and sum_u h_u of h = acc0 + acc1, resetting both.
+
+    No fastmath: the summation order must not depend on how the code was compiled or cached.
+    """
     total = 0.0
     s = 0.0
     for u in range(sqrt_q.shape[0]):
@@ -301,7 +304,7 @@ def ellipse_rho(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, sqrt_q
         h = np.empty((n, sq.size))
         _ellipse_hist_numpy(bins, int(x0), int(y0), ell, KERNELS[kernel], h, totals)
         np.sqrt(h, out=h)
-        np.clip(h @ sq, 0.0, 1.0, out=out)
+        np.clip((h * sq).sum(axis=1), 0.0, 1.0, out=out)
     return out, totals
 
 
@@ -399,8 +402,7 @@ def bhattacharyya_coefficient(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """``rho[p, q] = sum_u sqrt(p_u q_u)`` (Eq. 6), batched over leading axes of ``p``."""
     p = np.asarray(p, dtype=np.float64)
     q = np.asarray(q, dtype=np.float64)
-    rho = np.sqrt(np.clip(p, 0, None)) @ np.sqrt(np.clip(q, 0, None)) if q.ndim == 1 else \
-        np.sum(np.sqrt(np.clip(p, 0, None) * np.clip(q, 0, None)), axis=-1)
+    rho = np.sum(np.sqrt(np.clip(p, 0, None) * np.clip(q, 0, None)), axis=-1)
     return np.clip(rho, 0.0, 1.0)
 
 

@@ -208,8 +208,8 @@ def _normalize_numpy(log_lik, states, log_w, w, mean):
     _, ok = log_normalize(log_lik, out=log_w)
     np.exp(log_w, out=w)
     w /= w.sum()
-    mean[:] = w @ states
-    ss = float(w @ w)
+    mean[:] = (w[:, None] * states).sum(axis=0)
+    ss = float(np.sum(w * w))
     return ok, (1.0 / ss if ss > 0 else 0.0)
 
 

@@ -105,7 +105,7 @@ class ParticleSet:
 
     def mean(self) -> np.ndarray:
         """Weighted mean state ``E[S] = sum_n pi^(n) s^(n)`` (Nummiaro Eq. 1)."""
-        return self.w @ self.states
+        return (self.w[:, None] * self.states).sum(axis=0)
 
     def covariance(self) -> np.ndarray:
         w = self.w

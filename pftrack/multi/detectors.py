@@ -39,9 +39,9 @@ def _components(mask: np.ndarray, scale: float, min_area: float, max_area_fracti
     """Bounding boxes (full-resolution) of the connected components of a binary mask.
 
     With ``split_aspect > 0`` (the expected width/height of one object, e.g. 0.4 for
-    standing people), a blob wider than 1.6 times that is split into
-    ``round(width / (split_aspect * height))`` side-by-side boxes: people walking
-    together form one foreground blob.
+    standing people), a blob at least 32 px tall and wider than 1.6 times that is
+    split into ``round(width / (split_aspect * height))`` (at most 3) side-by-side
+    boxes: people walking together form one foreground blob.
     """
     n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     h, w = mask.shape
@@ -53,8 +53,10 @@ def _components(mask: np.ndarray, scale: float, min_area: float, max_area_fracti
             continue
         fill = min(1.0, area / float(bw * bh))
         parts = 1
-        if split_aspect > 0 and bw > 1.6 * split_aspect * bh:
-            parts = max(1, int(round(bw / (split_aspect * bh))))
+        # only blobs tall enough to be whole objects are split, into at most 3 (a wide, flat blob is a
+        # fragment -- legs, a shadow -- not several objects side by side)
+        if split_aspect > 0 and bw > 1.6 * split_aspect * bh and bh * scale >= 32:
+            parts = min(3, max(1, int(round(bw / (split_aspect * bh)))))
         pw = bw / parts
         for i in range(parts):
             out.append(((x + i * pw) * scale, y * scale, pw * scale, bh * scale, fill))

@@ -392,7 +392,7 @@ class MultiPF:
         # estimates from each target's own (normalised) weights before resampling
         for k, t in enumerate(active):
             wk = wts[owner == k]
-            t.meas = (wk / wk.sum()) @ t.particles if wk.sum() > 0 else t.pred.copy()
+            t.meas = ((wk / wk.sum())[:, None] * t.particles).sum(axis=0) if wk.sum() > 0 else t.pred.copy()
         total = sum(t.particles.shape[0] for t in active)
         u = (np.arange(total) + self.rng.random()) / total  # systematic over the pool
         idx = np.searchsorted(np.cumsum(wts), u, side="left")

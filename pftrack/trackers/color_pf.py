@@ -443,7 +443,8 @@ class ColorParticleFilter(Tracker):
         e_ell = est[_ELL_COLS].reshape(1, 4)
         hist_e, tot_e = self.cue.histograms(feats, e_ell)
         p_e = hist_e[0].copy()
-        rho_e = float(np.clip(np.sqrt(p_e) @ self._sqrt_q, 0.0, 1.0)) if tot_e[0] > 0 else 0.0
+        # element-wise sums, not BLAS: results must not depend on the BLAS thread count of the process
+        rho_e = float(np.clip(np.sum(np.sqrt(p_e) * self._sqrt_q), 0.0, 1.0)) if tot_e[0] > 0 else 0.0
         box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
         # appearance condition (Eq. 15) -> lost detection (§6)
         thr = self._threshold()
@@ -562,8 +563,8 @@ class ColorParticleFilter(Tracker):
             ww = np.exp(lw - lw.max())
             ww /= ww.sum()
             pos = states[:, X:Y + 1]
-            mean = ww @ pos
-            var = float(np.mean(ww @ (pos - mean) ** 2))
+            mean = (ww[:, None] * pos).sum(axis=0)
+            var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
             found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
         if not found and self.detector is not None and self.frame_index % p.detector_interval == 0:
             boxes, _ = self._detections(frame)

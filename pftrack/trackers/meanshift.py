@@ -78,7 +78,7 @@ class MeanShift(Tracker):
         hist, tot = self.cue.histograms(feats, np.asarray(ell).reshape(1, 4), reuse=False)
         if tot[0] <= 0:
             return 0.0, hist[0]
-        return float(np.sqrt(hist[0]) @ self._sqrt_q), hist[0]
+        return float(np.sum(np.sqrt(hist[0]) * self._sqrt_q)), hist[0]
 
     def _shift(self, feats, ell: np.ndarray) -> tuple[np.ndarray, float]:
         """Mean-shift iterations from ``ell`` at fixed size; returns the final ellipse and its rho."""
@@ -96,8 +96,8 @@ class MeanShift(Tracker):
             if sw <= 0:
                 break
             new = ell.copy()
-            new[0] = float(xs @ w / sw)
-            new[1] = float(ys @ w / sw)
+            new[0] = float(np.sum(xs * w) / sw)
+            new[1] = float(np.sum(ys * w) / sw)
             rho1, p1 = self._rho(feats, new)
             halvings = 0
             while rho1 < rho0 and halvings < 5 and np.hypot(*(new[:2] - ell[:2])) > p.epsilon:
