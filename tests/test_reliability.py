@@ -165,16 +165,19 @@ def test_interruption_keeps_whole_rows_and_a_playable_video(tmp_path, sig):
         time.sleep(0.05)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130
-    lines = err.decode().strip().splitlines()
-    assert len(lines) == 1 and "interrupted" in lines[0] and "Traceback" not in err.decode()
+    err = err.decode()
+    assert proc.returncode == 130, (proc.returncode, err)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "interrupted" in lines[0] and "Traceback" not in err, err
     text = out.read_text()
     assert text.endswith("\n")  # never half a row
     rows = read_track_csv(out)
-    assert 30 <= len(rows) < 2000 and rows[:, 0].tolist() == list(range(1, len(rows) + 1))
+    assert 30 <= len(rows) < 2000 and rows[:, 0].tolist() == list(range(1, len(rows) + 1)), len(rows)
     cap = cv2.VideoCapture(str(video))
-    assert cap.isOpened() and int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) >= 25
+    assert cap.isOpened(), err
+    frames = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
     cap.release()
+    assert frames >= 25, (frames, len(rows), err)
 
 
 def test_same_seed_gives_byte_identical_csv(tmp_path):
