@@ -205,7 +205,7 @@ def report_markdown(synth: list[Measurement], real: list[Measurement], *, refere
                                              "particles": REFERENCE["particles"]}]
     if ref:
         peer = next((m for m in ref if m.tracker == reference_peer), None)
-        lines += [f"## Reference synthetic clip: 640x480, 50x50 target, N = 100", "",
+        lines += ["## Reference synthetic clip: 640x480, 50x50 target, N = 100", "",
                   f"| tracker | update fps | end-to-end fps | × {reference_peer} (update) |", "|---|---|---|---|"]
         for m in sorted(ref, key=lambda m: -m.update):
             ratio = m.update / peer.update if peer and peer.update > 0 else float("nan")

@@ -85,7 +85,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
             sinks.append(video)
         bar = _progress(source.length, f"{tracker_name}", quiet)
         gt = source.groundtruth if gt_overlay else None
-        with interrupt_on_sigterm():
+        with interrupt_on_sigterm() as stop:
             for number, frame, state in track_source(source, tracker, init_box, run=run):
                 csv.write_state(number, state)
                 lost += int(state.lost)
@@ -98,6 +98,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
                     g = gt[number - 1] if gt is not None and number - 1 < len(gt) else None
                     video.write(drawer.draw(frame, state, number, gt_box=g))
                 bar.update(1)
+                stop.check()
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {run.frames} frames; rows so far are in {out}") from None
     finally:
@@ -170,7 +171,7 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
         if video:
             sinks.append(video)
         bar = _progress(source.length, "mot", quiet)
-        with interrupt_on_sigterm():
+        with interrupt_on_sigterm() as stop:
             for number, frame in source.numbered():
                 t0 = _time.perf_counter()
                 outs = tracker.update(frame)
@@ -186,6 +187,7 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
                         draw_box(img, o.box, color_for(o.track_id), 2, f"{o.track_id}{'*' if o.occluded else ''}")
                     video.write(img)
                 bar.update(1)
+                stop.check()
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {frames} frames; rows so far are in {out}") from None
     finally:
@@ -323,7 +325,6 @@ def _add_eval(sub) -> None:
 
 
 def cmd_eval(args) -> int:
-    import shlex
 
     from .errors import ParameterError, SourceError
     from .eval.report import summary_markdown, write_report
@@ -427,7 +428,6 @@ def _add_bench(sub) -> None:
 
 def cmd_bench(args) -> int:
     import platform
-    import shlex
 
     import cv2
 

@@ -71,18 +71,44 @@ def track_source(source: FrameSource, tracker: Tracker, box=None, *, run: TrackR
     run.total_seconds = time.perf_counter() - t_start
 
 
+class StopRequest:
+    """Set by SIGINT / SIGTERM inside :func:`interrupt_on_sigterm`; checked between frames."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+
+    def __bool__(self) -> bool:
+        return self.signum is not None
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if a stop was requested (call at a safe point, e.g. between frames)."""
+        if self.signum is not None:
+            raise KeyboardInterrupt(f"signal {self.signum}")
+
+
 @contextlib.contextmanager
 def interrupt_on_sigterm():
-    """Turn SIGTERM into KeyboardInterrupt inside the block, so both stop cleanly the same way."""
+    """Defer SIGINT and SIGTERM to the next frame boundary inside the block.
+
+    The first signal only sets the yielded :class:`StopRequest`; the loop calls
+    ``stop.check()`` after each frame, which raises ``KeyboardInterrupt`` there, so a
+    signal never lands inside compiled code (where it can surface as a ``SystemError``)
+    or halfway through writing a row.  A second signal interrupts at once.
+    """
+    stop = StopRequest()
+
     def _handler(signum, frame):  # noqa: ARG001
-        raise KeyboardInterrupt(f"signal {signum}")
+        if stop.signum is not None:
+            raise KeyboardInterrupt(f"signal {signum}")
+        stop.signum = signum
 
     try:
-        previous = signal.signal(signal.SIGTERM, _handler)
+        previous = {s: signal.signal(s, _handler) for s in (signal.SIGINT, signal.SIGTERM)}
     except ValueError:  # not in the main thread
-        yield
+        yield stop
         return
     try:
-        yield
+        yield stop
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for s, h in previous.items():
+            signal.signal(s, h)

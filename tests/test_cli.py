@@ -1,7 +1,6 @@
 """The command line: the happy path and every bad-input case exits with code 2 and one line."""
 
 import cv2
-import numpy as np
 import pytest
 
 from pftrack.cli import main

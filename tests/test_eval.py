@@ -1,6 +1,5 @@
 """Evaluation: metrics, protocols, MOT parity, peers, baselines, runner and report."""
 
-import json
 import re
 from pathlib import Path
 
@@ -9,7 +8,7 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.eval.metrics import THRESHOLDS, frame_ious, ope_scores, success_curve
+from pftrack.eval.metrics import THRESHOLDS, frame_ious, ope_scores
 from pftrack.eval.mot import import_motmetrics, mot_scores
 from pftrack.eval.report import write_report
 from pftrack.eval.runner import Job, Runner, TrackerConfig, build_jobs, parse_tracker_list, run_job, strip_timings

@@ -5,7 +5,6 @@ import pytest
 
 import pftrack
 from pftrack._numba import NUMBA_INSTALLED
-from pftrack.cues.color import ColorCue
 from pftrack.cues.contrast import box_counts, contrast_scores, foreground_lut, probability_integral
 from pftrack.geometry import iou
 from pftrack.synth import SceneSpec, Target, occlusion_scene, simple_scene

@@ -8,7 +8,7 @@ from pftrack.eval.mot import mot_scores
 from pftrack.io.datasets import read_mot_txt
 from pftrack.multi import create_detector, create_multi_tracker
 from pftrack.multi.detectors import nms
-from pftrack.synth import Scene, SceneSpec, Target, crossing_scene
+from pftrack.synth import SceneSpec, Target, crossing_scene
 
 from .conftest import render_scene, shared_sequence
 
@@ -160,7 +160,6 @@ def test_mot_cli_writes_motchallenge_rows(tmp_path, capsys):
 @pytest.mark.shared_data
 def test_mot_protocol_on_pets_prefix(tmp_path):
     from pftrack.eval.runner import Job, TrackerConfig, run_job
-    from pftrack.io import read_sequence
 
     path = shared_sequence("pets09_s2l1_dev")
     rec = run_job(Job(TrackerConfig("multi-pf", "multi-pf"), str(path), "pets", 0, "mot"))

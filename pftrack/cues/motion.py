@@ -189,31 +189,37 @@ def lucas_kanade_flow(prev_gray: np.ndarray, gray: np.ndarray, points: np.ndarra
 # ------------------------------------------------------------------------------------------ Eq. 4
 
 @njit
+def _region_sums(fx, fy, fvx, fvy, cx, cy, hx, hy):
+    """Epanechnikov-weighted sums of the flow vectors in the rectangle |x - cx| < hx, |y - cy| < hy."""
+    sx = 0.0
+    sy = 0.0
+    sw = 0.0
+    if hx > 0.0 and hy > 0.0:
+        ihx = 1.0 / hx
+        ihy = 1.0 / hy
+        for i in range(fx.shape[0]):
+            u = (fx[i] - cx) * ihx
+            if u <= -1.0 or u >= 1.0:
+                continue
+            v = (fy[i] - cy) * ihy
+            if v <= -1.0 or v >= 1.0:
+                continue
+            wgt = (1.0 - u * u) * (1.0 - v * v)
+            sx += wgt * fvx[i]
+            sy += wgt * fvy[i]
+            sw += wgt
+    return sx, sy, sw
+
+
+@njit
 def _local_motion_numba(fx, fy, fvx, fvy, ell, out, weight):
     n = ell.shape[0]
-    m = fx.shape[0]
     for k in range(n):
         cx = ell[k, 0]
         cy = ell[k, 1]
         hx = ell[k, 2]
         hy = ell[k, 3]
-        sx = 0.0
-        sy = 0.0
-        sw = 0.0
-        if hx > 0.0 and hy > 0.0:
-            ihx = 1.0 / hx
-            ihy = 1.0 / hy
-            for i in range(m):
-                u = (fx[i] - cx) * ihx
-                if u <= -1.0 or u >= 1.0:
-                    continue
-                v = (fy[i] - cy) * ihy
-                if v <= -1.0 or v >= 1.0:
-                    continue
-                wgt = (1.0 - u * u) * (1.0 - v * v)
-                sx += wgt * fvx[i]
-                sy += wgt * fvy[i]
-                sw += wgt
+        sx, sy, sw = _region_sums(fx, fy, fvx, fvy, cx, cy, hx, hy)
         weight[k] = sw
         if sw > 0.0:
             out[k, 0] = sx / sw
@@ -291,30 +297,13 @@ def motion_likelihood(g_theta, g_r, *, sigma_theta: float = 0.1, sigma_r: float 
 @njit
 def _motion_loglik_numba(fx, fy, fvx, fvy, ell, rx, ry, eps, s_t, s_r, w_noise, out):
     n = ell.shape[0]
-    m = fx.shape[0]
     r_ref = math.sqrt(rx * rx + ry * ry)
     for k in range(n):
         cx = ell[k, 0]
         cy = ell[k, 1]
         hx = ell[k, 2]
         hy = ell[k, 3]
-        sx = 0.0
-        sy = 0.0
-        sw = 0.0
-        if hx > 0.0 and hy > 0.0 and m > 0:
-            ihx = 1.0 / hx
-            ihy = 1.0 / hy
-            for i in range(m):
-                u = (fx[i] - cx) * ihx
-                if u <= -1.0 or u >= 1.0:
-                    continue
-                v = (fy[i] - cy) * ihy
-                if v <= -1.0 or v >= 1.0:
-                    continue
-                wgt = (1.0 - u * u) * (1.0 - v * v)
-                sx += wgt * fvx[i]
-                sy += wgt * fvy[i]
-                sw += wgt
+        sx, sy, sw = _region_sums(fx, fy, fvx, fvy, cx, cy, hx, hy)
         if sw > 0.0:
             vx = sx / sw
             vy = sy / sw

@@ -22,7 +22,7 @@ blob detectors also keep the foreground mask of the last frame in
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Literal
+from typing import Callable
 
 import cv2
 import numpy as np

@@ -18,7 +18,7 @@ visible fraction after occluders and targets in front of it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import cv2
 import numpy as np

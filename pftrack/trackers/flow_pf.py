@@ -44,7 +44,7 @@ import numpy as np
 
 from ..cues.emd import emd_circular, emd_linear
 from ..cues.hsv import HSVHistogramCue
-from ..cues.motion import lattice_min_eigenvalues, to_gray
+from ..cues.motion import to_gray
 from ..errors import ParameterError
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler

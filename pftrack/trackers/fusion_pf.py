@@ -19,14 +19,13 @@ ablation in ``docs/fusion-pf.md``:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..cues.contrast import box_counts, contrast_scores, foreground_lut, probability_integral
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
-from ..filtering.dynamics import HX, HY, VX, VY, X, Y
+from ..filtering.dynamics import HX, HY, VX, VY
 from ..geometry import box_to_ellipse, ellipse_to_box
 from ..params import param
 from .color_pf import _ELL_COLS, ColorPF, ColorPFParams

@@ -22,7 +22,6 @@ corrected with the mean-shift result.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Literal
 
