@@ -229,6 +229,8 @@ def report_markdown(synth: list[Measurement], real: list[Measurement], *, refere
                 if k not in cols:
                     cols.append(k)
             cols.sort(key=lambda k: (int(str(k).split("x")[0]) if isinstance(k, str) else k))
+            if len(cols) < 2:  # nothing swept: the reference table above says it all
+                continue
             lines += [f"### Update fps against {label}", "",
                       "| tracker | " + " | ".join(str(c) for c in cols) + " |", "|" + "---|" * (len(cols) + 1)]
             for t, r in rows.items():
@@ -280,7 +282,9 @@ def scaling_plot(synth: list[Measurement], path: Path) -> None:
         if key == "particles":
             ax.set_xscale("log")
         ax.grid(alpha=0.3, which="both")
-    axes[0].legend(fontsize=7)
+    handles = [h for ax in axes for h in ax.get_lines()]
+    if handles:
+        axes[0].legend(handles=[h for h in axes[0].get_lines()] or handles, fontsize=7)
     fig.suptitle("Update speed on one core (synthetic clip; one parameter varied around 640x480, 50x50, N=100)")
     fig.tight_layout()
     fig.savefig(path)

@@ -300,3 +300,18 @@ def test_csrt_auc_agrees_with_independent_scorer_on_dev_sequence():
     pred = np.array(rec["boxes"], float).reshape(-1, 4)
     auc, prec = independent_ope(pred, gt)
     assert rec["auc"] == pytest.approx(auc, abs=5e-4) and rec["precision"] == pytest.approx(prec, abs=5e-4)
+
+
+def test_bench_cli_writes_table_and_plot(tmp_path):
+    """A tiny `pftrack bench`: sweeps, peers in the same run, a markdown table and the scaling plot."""
+    from pftrack.cli import main
+
+    out = tmp_path / "b"
+    assert main(["bench", "--trackers", "color-pf,opencv-kcf", "--particles", "50,100", "--targets", "25",
+                 "--frames", "640x480", "--rounds", "1", "--n-frames", "20", "--out", str(out), "--quiet"]) == 0
+    text = (out / "bench.md").read_text()
+    assert "## Reference synthetic clip" in text and "`color-pf`" in text and "`opencv-kcf`" in text
+    assert "### Update fps against particles N" in text  # swept: 50 and 100
+    assert "### Update fps against frame size" not in text  # the reference size only: no one-column table
+    assert (out / "scaling.png").stat().st_size > 1000
+    assert main(["bench", "--trackers", "no-such-tracker", "--quiet", "--out", str(out)]) == 2
