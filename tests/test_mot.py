@@ -165,3 +165,29 @@ def test_mot_protocol_on_pets_prefix(tmp_path):
     rec = run_job(Job(TrackerConfig("multi-pf", "multi-pf"), str(path), "pets", 0, "mot"))
     assert rec["frames"] == 400 and rec["mota"] > 0.5 and rec["idf1"] > 0.5
     assert rec["fps"] > 10
+
+
+def test_association_uses_colour_when_overlap_is_ambiguous():
+    """Two tracks between two detections: by overlap alone the Hungarian assignment swaps them; the colour
+    term (appearance_weight) gives each track the detection of its own colour."""
+    frame = np.full((200, 300, 3), 128, np.uint8)
+    red, blue = (30, 30, 220), (220, 40, 30)
+    frame[50:110, 100:118] = red  # detection 1 (x 100..124) is mostly red
+    frame[50:110, 118:136] = blue  # detection 2 (x 112..136) is mostly blue
+    dets = np.array([[100, 50, 24, 60, 1.0], [112, 50, 24, 60, 1.0]])
+    init = frame.copy()
+    init[50:110, 40:64], init[50:110, 200:224] = red, blue  # where the tracks' colour models come from
+    results = {}
+    for w in (0.0, 1.0):
+        mt = create_multi_tracker(detector_fn=lambda f: np.zeros((0, 5)), appearance_weight=w)
+        mt._shape = frame.shape[:2]
+        a, b = mt._new_track(init, (40, 50, 24, 60)), mt._new_track(init, (200, 50, 24, 60))
+        # predictions: the red track's box overlaps the blue detection more, and vice versa
+        a.pred = np.array([119.0, 80, 0, 0, 24, 60, 0, 0])  # IoU 0.55 with detection 1, 0.66 with 2
+        b.pred = np.array([117.0, 80, 0, 0, 24, 60, 0, 0])  # IoU 0.66 with detection 1, 0.55 with 2
+        mt.tracks = [a, b]
+        used = mt._associate(frame, dets)
+        assert used.all()
+        results[w] = (a.det[0], b.det[0])
+    assert results[0.0] == (112, 100)  # overlap alone: swapped
+    assert results[1.0] == (100, 112)  # with colour: red to red, blue to blue
