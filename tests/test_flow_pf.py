@@ -53,10 +53,36 @@ def test_integral_histograms_match_direct_counts(rng):
 
 
 def test_untracked_share():
-    detected = np.array([[5.0, 5.0], [6.0, 6.0], [50.0, 50.0]])
-    tracked = np.array([[5.5, 5.0]])
+    features = np.array([[5.0, 5.0], [6.0, 6.0], [50.0, 50.0]])
+    tracked = np.array([True, False, False])
     boxes = np.array([[0, 0, 10, 10], [40, 40, 20, 20], [100, 100, 5, 5]], float)
-    assert _untracked_share(detected, tracked, boxes, 1.0).tolist() == pytest.approx([0.5, 1.0, 1.0])
+    assert _untracked_share(features, tracked, boxes).tolist() == pytest.approx([0.5, 1.0, 1.0])
+
+
+def test_flow_prediction_follows_the_target():
+    """The median displacement of the tracked features (those whose match lies in the previous window) is the
+    target's motion, also when the search region holds a background moving the other way."""
+    import cv2
+
+    rng = np.random.default_rng(0)
+    blob = lambda shape: cv2.normalize(cv2.GaussianBlur(rng.random(shape).astype(np.float32), (0, 0), 2.0), None, 0,
+                                       255, cv2.NORM_MINMAX).astype(np.uint8)  # smooth texture, like real surfaces
+    bg = np.stack([blob((240, 320))] * 3, axis=-1)
+    tex = blob((40, 40))
+    frames = []
+    for t in range(2):
+        f = np.roll(bg, -3 * t, axis=1).copy()  # background moves left by 3 px
+        x = 140 + 5 * t  # target moves right by 5 px, down by 2
+        y = 100 + 2 * t
+        f[y:y + 40, x:x + 40] = tex[..., None]
+        frames.append(f)
+    tr = pftrack.create_tracker("flow-pf", seed=0)
+    tr.init(frames[0], (140, 100, 40, 40))
+    from pftrack.cues.motion import to_gray
+
+    disp, feats, tracked = tr._flow(to_gray(frames[1]))
+    assert disp is not None and np.allclose(disp, [5, 2], atol=0.3)
+    assert tracked.sum() >= 10 and (~tracked).sum() >= 10  # background features are found but not tracked
 
 
 @pytest.mark.parametrize("variant", [{}, {"motion": False}, {"anchor": True}])
@@ -107,3 +133,17 @@ def test_group_tracks_several_objects_with_their_own_subspaces():
         states = group.update(f)
     assert len(states) == 2 and group.trackers[0].subspace is not group.trackers[1].subspace
     assert iou(np.array(states[1].box), truths[-1].boxes[1]) > 0.3
+
+
+def test_kernel_levels_weight_the_centre():
+    """kernel_levels = L: the mean of the histograms of L nested boxes, so central pixels weigh more."""
+    frame = np.zeros((60, 60, 3), np.uint8)
+    frame[20:40, 20:40] = (0, 0, 255)  # red centre, black border
+    flat = pftrack.create_tracker("flow-pf", kernel_levels=1)
+    nested = pftrack.create_tracker("flow-pf", kernel_levels=3)
+    box = (10, 10, 40, 40)
+    q1, q3 = flat._model(frame, box), nested._model(frame, box)
+    assert np.allclose(q1.sum(axis=-1), 1) and np.allclose(q3.sum(axis=-1), 1)
+    v_bin = nested.cue.bin_maps(frame[20:21, 20:21])[2, 0, 0]
+    # flat: 400 of 1600 pixels are red; nested (scales 1, 2/3, 1/3): about (0.25 + 0.59 + 1) / 3
+    assert q1[2, v_bin] == pytest.approx(0.25, abs=0.02) and q3[2, v_bin] > 0.55

@@ -41,7 +41,8 @@ def emd_linear(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 def emd_circular(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """EMD with the circular ground distance ``min(|i - j|, n - |i - j|)`` (bins), batched."""
     d = np.cumsum(_normalise(p) - _normalise(q), axis=-1)
-    med = np.median(d, axis=-1, keepdims=True)
+    # any median minimises sum |D_i - m|; the lower middle of the sorted values is one (and faster than np.median)
+    med = np.sort(d, axis=-1)[..., (d.shape[-1] - 1) // 2, None]
     return np.abs(d - med).sum(axis=-1)
 
 

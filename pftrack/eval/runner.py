@@ -146,8 +146,26 @@ class Job:
     def key(self) -> str:
         slug = re.sub(r"[^A-Za-z0-9_.=-]+", "_", self.tracker.label)[:80]
         h = hashlib.sha1(json.dumps([self.tracker.label, list(self.tracker.params), self.sequence_name,
-                                     self.seed, self.protocol]).encode()).hexdigest()[:8]
+                                     self.seed, self.protocol, _effective_params(self.tracker, self.protocol)],
+                                    default=str).encode()).hexdigest()[:8]
         return f"{self.protocol}__{self.sequence_name}__{slug}__s{self.seed}__{h}"
+
+
+def _effective_params(cfg: TrackerConfig, protocol: str) -> dict | None:
+    """Every parameter of the run with the defaults filled in, so that a cached result is not reused after a
+    default changed (resume is for interrupted runs of the same code)."""
+    try:
+        if protocol == "mot":
+            from ..multi.tracker import MULTI_TRACKERS
+
+            cls = MULTI_TRACKERS[cfg.name].Params
+        else:
+            from ..trackers.registry import get_spec
+
+            cls = get_spec(cfg.name).cls.Params
+        return cls.from_mapping(dict(cfg.params)).as_dict()
+    except Exception:  # noqa: BLE001 - invalid parameters are reported when the run starts
+        return None
 
 
 def build_jobs(sequences: Iterable, trackers: list[TrackerConfig], *, seeds: int, protocol: str,

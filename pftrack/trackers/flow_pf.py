@@ -13,14 +13,19 @@ driven by optical flow" — ``shared/seeds/003_*.txt``.
 * **Template subspace** ``S_t`` of the last ``k = 5`` colour models;
   ``E_s = min_{h in S_t} D^2[h, q(x)]`` (Eq. 6).  ``S_t`` is updated every frame with the
   model of the response ``z_t``: the detection when there is one, else the estimate (§3.2).
-* **Motion energies** (§4.4, Eqs. 10–11), from KLT features ``Y_{t-1}`` around the
-  previous estimate tracked into the current frame ``Y_t``:
-  ``E_m = alpha ||x_i - y~||`` with ``y~ = x_{t-1} + median(Y_t - Y_{t-1})`` (the printed
+* **Motion energies** (§4.4, Eqs. 10–11) from KLT: Shi-Tomasi features are detected in
+  the search region of this frame and tracked back to the previous one; those whose match
+  lies in the previous window give the target's displacement (their median), and
+  ``E_m = alpha ||x_i - y~||`` with ``y~ = x_{t-1} + median displacement`` (the printed
   formula subtracts the other way round, which would move the window against the
-  motion; we use the displacement from ``t-1`` to ``t``), and
-  ``E_d = beta (1 - |Y~_i ∩ Y_t| / |Y~_i|)``: the share of the Shi-Tomasi features inside
-  particle ``i``'s window that are not tracked ones.  ``alpha`` is relative to the window
-  size: a displacement of one window costs ``motion_weight``.
+  motion; we use the displacement from ``t-1`` to ``t``).
+  ``E_d = beta (1 - |Y~_i ∩ Y_t| / |Y~_i|)`` is the share of the features inside particle
+  ``i``'s window that are not tracked ones, ``Y_t`` being the features that move with the
+  target (its displacement within ``flow_tolerance``).  Counting instead every feature
+  that comes from the previous window also counts the background the target uncovers, and
+  holds the window behind a moving target (measured: a steady lag on ``otb_couple``).
+  ``alpha`` is relative to the window size: a displacement of one window costs
+  ``motion_weight``.
 * **Likelihood** ``exp(-E / sigma^2)``, ``E = E_s + E_m + E_d``, ``sigma^2 = 0.1`` (Eq. 4),
   ``P = 200`` particles, bootstrap filter with constant-velocity dynamics.
 * **Detection / tracking switching** (§3.2): with a detector (any callable, or the Haar
@@ -77,6 +82,10 @@ class FlowPFParams(Params):
 
     n_particles: int = param(200, ge=1, le=1_000_000, doc="P, the number of particles (§5: 200).")
     bins: int = param(10, ge=2, le=256, doc="N_h = N_s = N_v, bins of each of the three histograms (§5: 10).")
+    kernel_levels: int = param(3, ge=1, le=16, doc=(
+        "1: plain counts over the window (Eq. 5 as printed); L > 1: the mean of L nested boxes' histograms, a "
+        "kernel density estimate weighting the centre more (the text calls q a kernel density estimate); 3 selected "
+        "on the dev sequences plus synthetic scenes (docs/flow-pf.md)."))
     templates: int = param(5, ge=1, le=1000, doc="k, the size of the colour-model subspace (§5: 5).")
     sigma2: float = param(0.1, gt=0, doc="sigma^2 of the likelihood exp(-E / sigma^2) (Eq. 4; §5: 0.1).")
     anchor: bool = param(False, doc=(
@@ -86,17 +95,27 @@ class FlowPFParams(Params):
         "Colour distance D: the Earth Mover's Distance (§4.3), or the Bhattacharyya distance sqrt(1 - rho) "
         "(the ablation)."))
     motion: bool = param(True, doc="Add the motion energies E_m and E_d (§4.4); False for the ablation.")
-    motion_weight: float = param(1.0, ge=0, doc=(
+    motion_weight: float = param(0.5, ge=0, doc=(
         "alpha of E_m = alpha ||x - y~|| per window size: a particle one window away from the flow-predicted "
-        "position pays this energy. The paper tunes alpha to the frame size; per window keeps it scale-free."))
-    drift_weight: float = param(0.5, ge=0, doc=(
+        "position pays this energy. The paper tunes alpha to the frame size; per window keeps it scale-free. 0.5 was "
+        "selected with drift_weight and kernel_levels on the dev sequences plus synthetic scenes (docs/flow-pf.md)."))
+    drift_weight: float = param(0.2, ge=0, doc=(
         "beta of E_d = beta C (Eq. 11), C in [0, 1] the share of a particle's features not among the tracked ones."))
     position_noise: float = param(0.15, ge=0, le=10, doc="Std of the position noise, fraction of the window size.")
     velocity_noise: float = param(0.05, ge=0, le=10, doc="Std of the velocity noise, fraction of the window size.")
     klt_window: int = param(15, ge=3, le=101, doc="KLT window (px).")
     klt_levels: int = param(3, ge=1, le=6, doc="KLT pyramid levels.")
-    max_features: int = param(100, ge=1, le=100_000, doc="Shi-Tomasi features per frame around the target.")
-    feature_radius: float = param(2.0, gt=0, doc="A detected feature is a tracked one when a KLT point lies this close (px).")
+    max_features: int = param(300, ge=1, le=100_000, doc=(
+        "Shi-Tomasi features per frame in the search region (the strongest, on a lattice; lambda_min > 1e-3)."))
+    search: float = param(1.0, ge=0, le=10, doc=(
+        "The features are detected in the previous window widened by this many window sizes (plus the last "
+        "displacement) on every side: the region the particles reach."))
+    flow_tolerance: float = param(1.0, gt=0, le=100, doc=(
+        "A feature belongs to the tracked set Y_t when its displacement differs from the target's median "
+        "displacement by at most this (px) plus 20 % of that displacement."))
+    min_tracked: int = param(3, ge=1, le=10_000, doc=(
+        "Fewest tracked features for a flow prediction y~; with fewer the particles move at constant velocity and "
+        "E_m is left out."))
     lost_distance: float = param(1.5, gt=0, doc=(
         "Report lost when the colour distance of the estimate to the nearest template exceeds this (bins for EMD)."))
     detector_min_iou: float = param(0.0, ge=0, le=1, doc=(
@@ -139,6 +158,36 @@ class FlowPF(Tracker):
         rho = np.sqrt(np.clip(hist, 0, None) * np.clip(template, 0, None)[None]).sum(axis=-1)
         return np.sqrt(np.clip(1.0 - rho, 0.0, 1.0)).mean(axis=-1)
 
+    def _histograms(self, feats, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Colour models of boxes: with ``kernel_levels`` L > 1, the mean of the normalised histograms of L
+        nested boxes scaled by 1, (L-1)/L, ..., 1/L about the centre — a stepped kernel density estimate
+        whose weight falls linearly from the centre to the border, like the kernel of Nummiaro et al."""
+        hist, npx = self.cue.box_histograms(feats, boxes)
+        levels = self.params.kernel_levels
+        if levels > 1:
+            c = boxes[:, 0:2] + boxes[:, 2:4] / 2
+            for k in range(1, levels):
+                f = (levels - k) / levels
+                wh = boxes[:, 2:4] * f
+                hk, _ = self.cue.box_histograms(feats, np.column_stack([c - wh / 2, wh]))
+                hist = hist + hk
+            hist = hist / levels
+        return hist, npx
+
+    def _model(self, frame: np.ndarray, box, feats=None) -> np.ndarray:
+        """Colour model of one box; ``feats`` (this frame's prepared region) is reused when it holds the box."""
+        fh, fw = frame.shape[:2]
+        x, y, bw, bh = (float(v) for v in box)
+        if feats is not None:
+            rh, rw = feats.integral.shape[2] - 1, feats.integral.shape[3] - 1
+            if (feats.x0 <= max(np.floor(x), 0) and feats.y0 <= max(np.floor(y), 0)
+                    and min(np.ceil(x + bw), fw) <= feats.x0 + rw and min(np.ceil(y + bh), fh) <= feats.y0 + rh):
+                return self._histograms(feats, np.array([[x, y, bw, bh]]))[0][0]
+        roi = (max(int(np.floor(x)), 0), max(int(np.floor(y)), 0), min(int(np.ceil(x + bw)), fw),
+               min(int(np.ceil(y + bh)), fh))
+        roi = (roi[0], roi[1], max(roi[2], roi[0]), max(roi[3], roi[1]))
+        return self._histograms(self.cue.prepare(frame, roi), np.array([[x, y, bw, bh]]))[0][0]
+
     def _templates(self) -> list[np.ndarray]:
         return ([self.first] if self.params.anchor else []) + list(self.subspace)
 
@@ -156,7 +205,7 @@ class FlowPF(Tracker):
         st = np.array([x + w / 2, y + h / 2, 0.0, 0.0])
         self.ps = ParticleSet(np.tile(st, (p.n_particles, 1)))
         self.estimate = st.copy()
-        self.first = self.cue.histogram(frame, box)
+        self.first = self._model(frame, box)
         self.subspace: deque = deque(maxlen=max(p.templates - (1 if p.anchor else 0), 1))
         self.subspace.append(self.first)
         self._prev_gray = to_gray(frame)
@@ -167,31 +216,46 @@ class FlowPF(Tracker):
         return np.column_stack([states[:, 0] - w / 2, states[:, 1] - h / 2, np.full(len(states), w),
                                 np.full(len(states), h)])
 
-    def _flow(self, gray: np.ndarray, roi) -> tuple[np.ndarray | None, np.ndarray, None]:
-        """KLT: features around the previous estimate, tracked into this frame.
+    def _flow(self, gray: np.ndarray) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
+        """KLT motion features (§4.4) around the previous estimate.
 
-        Returns ``(median displacement or None, tracked points (M, 2), None)``.
+        Shi-Tomasi features are detected once in this frame over the search region (the
+        previous window widened by ``search`` windows) and tracked back to the previous
+        frame (pyramidal LK).  The median displacement of the features whose match lies
+        inside the previous window ``x_{t-1}`` is the target's motion; the tracked set
+        ``Y_t`` is the features that move that way (``flow_tolerance``); the others belong
+        to whatever else is in the region.  Returns ``(median displacement or None, the
+        features (M, 2), mask of the tracked ones)``.
         """
         p = self.params
         fh, fw = gray.shape[:2]
         w, h = self.size
         ex, ey = self.estimate[0], self.estimate[1]
-        # features in the tracking window itself (the neighbourhood region of x_{t-1})
-        near = (int(max(ex - w / 2, 0)), int(max(ey - h / 2, 0)), int(min(ex + w / 2, fw)), int(min(ey + h / 2, fh)))
-        prev_pts = _features(self._prev_gray, near, p.max_features)
-        disp = None
-        tracked = np.empty((0, 2))
-        if len(prev_pts):
-            crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)
-            nxt, st, _ = cv2.calcOpticalFlowPyrLK(self._prev_gray, gray, prev_pts.reshape(-1, 1, 2), None,
-                                                  winSize=(p.klt_window, p.klt_window), maxLevel=p.klt_levels - 1,
-                                                  criteria=crit)
-            ok = st.ravel() == 1
-            if ok.any():
-                nxt = nxt.reshape(-1, 2)[ok].astype(np.float64)
-                disp = np.median(nxt - prev_pts[ok], axis=0)
-                tracked = nxt
-        return disp, tracked, None
+        mx = w / 2 + p.search * self.window + abs(self.estimate[2])
+        my = h / 2 + p.search * self.window + abs(self.estimate[3])
+        region = (int(max(ex - mx, 0)), int(max(ey - my, 0)), int(min(ex + mx, fw)), int(min(ey + my, fh)))
+        feats = _features(gray, region, p.max_features).astype(np.float64)
+        tracked = np.zeros(len(feats), bool)
+        if not len(feats):
+            return None, feats, tracked
+        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)
+        back, st, _ = cv2.calcOpticalFlowPyrLK(gray, self._prev_gray, feats.astype(np.float32).reshape(-1, 1, 2),
+                                               None, winSize=(p.klt_window, p.klt_window),
+                                               maxLevel=p.klt_levels - 1, criteria=crit)
+        back = back.reshape(-1, 2).astype(np.float64) + 0.5  # pixel indices -> continuous coordinates
+        feats = feats + 0.5
+        ok = (st.ravel() == 1) & np.all(np.isfinite(back), axis=1)
+        in_prev = ok & (np.abs(back[:, 0] - ex) < w / 2) & (np.abs(back[:, 1] - ey) < h / 2)
+        if in_prev.sum() < p.min_tracked:
+            return None, feats, in_prev
+        d = feats - back
+        disp = np.median(d[in_prev], axis=0)
+        # Y_t: the features that move with the target (Y_{t-1}'s displacement, within tolerance) — not merely
+        # those that come from the previous window, which would count the background the target uncovers and
+        # make E_d hold the window behind a moving target
+        tol = p.flow_tolerance + 0.2 * float(np.hypot(*disp))
+        tracked = ok & (np.hypot(d[:, 0] - disp[0], d[:, 1] - disp[1]) <= tol)
+        return disp, feats, tracked
 
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
@@ -201,9 +265,9 @@ class FlowPF(Tracker):
         win = self.window
         prev_est = self.estimate.copy()
         gray = to_gray(frame)
-        disp = tracked = detected = None
+        disp = tracked = None
         if p.motion:
-            disp, tracked, _ = self._flow(gray, None)
+            disp, feats_m, tracked = self._flow(gray)
         # propagate: driven by the optical flow when it is available (the median KLT displacement moves every
         # sample, as the flow-predicted position y~ does), else constant velocity; plus Gaussian noise
         s = ps.states
@@ -223,15 +287,14 @@ class FlowPF(Tracker):
                int(min(np.ceil((boxes[:, 1] + boxes[:, 3]).max()) + 1, fh)))
         roi = (roi[0], roi[1], max(roi[2], roi[0]), max(roi[3], roi[1]))
         feats = self.cue.prepare(frame, roi)
-        hist, npx = self.cue.box_histograms(feats, boxes)
+        hist, npx = self._histograms(feats, boxes)
         e_s, _ = self._colour_energy(hist)
         energy = e_s
         if p.motion:
-            detected = _features(gray, roi, p.max_features * 4).astype(np.float64)
             if disp is not None:
                 y_pred = prev_est[0:2] + disp
                 energy = energy + p.motion_weight * np.hypot(s[:, 0] - y_pred[0], s[:, 1] - y_pred[1]) / win
-            energy = energy + p.drift_weight * _untracked_share(detected, tracked, boxes, p.feature_radius)
+            energy = energy + p.drift_weight * _untracked_share(feats_m, tracked, boxes)
         log_lik = -energy / p.sigma2
         log_lik[npx <= 0] = -np.inf
         ok = ps.set_log_likelihood(log_lik)
@@ -247,7 +310,7 @@ class FlowPF(Tracker):
         self.estimate = est
         box = tuple(float(v) for v in self._boxes(est[None, :])[0])
         # subspace update with the response's colour model
-        model = self.cue.histogram(frame, det_box if det_box is not None else box)
+        model = self._model(frame, det_box if det_box is not None else box, feats)
         d_est = float(self._colour_energy(model[None])[1][0])
         self.subspace.append(model)
         # resample for the next frame
@@ -292,20 +355,19 @@ def _features(gray: np.ndarray, roi, max_features: int) -> np.ndarray:
     return shi_tomasi_features(gray, roi, max_features=max_features)
 
 
-def _untracked_share(detected: np.ndarray, tracked: np.ndarray, boxes: np.ndarray, radius: float) -> np.ndarray:
-    """C(Y~_i, Y_t) = 1 - |Y~_i ∩ Y_t| / |Y~_i| for every box (Eq. 11); 1 for a box without features."""
+def _untracked_share(features: np.ndarray, tracked: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """C(Y~_i, Y_t) = 1 - |Y~_i ∩ Y_t| / |Y~_i| for every box (Eq. 11); 1 for a box without features.
+
+    ``features`` (M, 2) are this frame's features, ``tracked`` (M,) marks those in ``Y_t``
+    (matched to features of the previous window); ``Y~_i`` are the features inside box i.
+    """
     n = len(boxes)
-    if len(detected) == 0:
+    if len(features) == 0:
         return np.ones(n)
-    if len(tracked):
-        d2 = ((detected[:, None, :] - tracked[None, :, :]) ** 2).sum(axis=-1)
-        is_tracked = d2.min(axis=1) <= radius * radius
-    else:
-        is_tracked = np.zeros(len(detected), bool)
-    inside = ((detected[None, :, 0] >= boxes[:, 0:1]) & (detected[None, :, 0] < boxes[:, 0:1] + boxes[:, 2:3])
-              & (detected[None, :, 1] >= boxes[:, 1:2]) & (detected[None, :, 1] < boxes[:, 1:2] + boxes[:, 3:4]))
+    inside = ((features[None, :, 0] >= boxes[:, 0:1]) & (features[None, :, 0] < boxes[:, 0:1] + boxes[:, 2:3])
+              & (features[None, :, 1] >= boxes[:, 1:2]) & (features[None, :, 1] < boxes[:, 1:2] + boxes[:, 3:4]))
     n_in = inside.sum(axis=1)
-    n_tr = (inside & is_tracked[None, :]).sum(axis=1)
+    n_tr = (inside & tracked[None, :]).sum(axis=1)
     return np.where(n_in > 0, 1.0 - n_tr / np.maximum(n_in, 1), 1.0)
 
 
