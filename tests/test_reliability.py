@@ -224,3 +224,21 @@ def test_report_writes_stay_inside_the_folder(tmp_path):
     with pytest.raises(OutputError):
         prepare_output(tmp_path / "rep" / ".." / ".." / "x.csv", within=tmp_path / "rep")
     assert issubclass(OutputError, PftrackError)
+
+
+def test_signals_are_deferred_to_the_frame_boundary():
+    """The first SIGINT/SIGTERM only sets the flag checked between frames; a second one interrupts at once."""
+    from pftrack.pipeline import interrupt_on_sigterm
+
+    before = signal.getsignal(signal.SIGINT)
+    with interrupt_on_sigterm() as stop:
+        assert not stop
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(0.05)  # delivered, but nothing raised here
+        assert stop and stop.signum == signal.SIGTERM
+        with pytest.raises(KeyboardInterrupt):
+            stop.check()
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+    assert signal.getsignal(signal.SIGINT) is before  # handlers restored
