@@ -147,3 +147,20 @@ def test_kernel_levels_weight_the_centre():
     v_bin = nested.cue.bin_maps(frame[20:21, 20:21])[2, 0, 0]
     # flat: 400 of 1600 pixels are red; nested (scales 1, 2/3, 1/3): about (0.25 + 0.59 + 1) / 3
     assert q1[2, v_bin] == pytest.approx(0.25, abs=0.02) and q3[2, v_bin] > 0.55
+
+
+def test_subspace_update_is_gated_by_distance():
+    """An estimate whose colours are far from every template does not join the subspace (update_distance);
+    with the paper's ungated update it does."""
+    frame = np.full((120, 160, 3), 90, np.uint8)
+    frame[40:80, 60:100] = (0, 0, 230)
+    changed = frame.copy()
+    changed[40:80, 60:100] = (230, 160, 0)  # the target turns from red to blue-cyan
+    sizes = {}
+    for ud in (0.3, 1e9):
+        tr = pftrack.create_tracker("flow-pf", seed=0, update_distance=ud, motion=False)
+        tr.init(frame, (60, 40, 40, 40))
+        n0 = len(tr.subspace)
+        tr.update(changed)
+        sizes[ud] = len(tr.subspace) - n0
+    assert sizes == {0.3: 0, 1e9: 1}
