@@ -20,7 +20,9 @@ trap 'rm -rf "$tmp"' EXIT
   echo "# Benchmarks"
   echo
   echo "Produced by \`bash scripts/make_benchmarks.sh\` (both tables below; each table is one \`pftrack eval\` run,"
-  echo "so the speeds in a table were measured side by side). Definitions: [evaluation.md](evaluation.md)."
+  echo "so the speeds in a table were measured side by side — except that a rerun reuses the cached runs whose"
+  echo "tracker and parameters did not change, so a tracker whose defaults changed is timed in the later run)."
+  echo "Definitions: [evaluation.md](evaluation.md)."
   echo "Speed in detail (synthetic sweeps, end-to-end, ratios): [performance.md](performance.md)."
   echo
   sed 's/^# /## /; s/^## AUC/### AUC/; s/^## fps/### fps/' "$tmp/all.md"
