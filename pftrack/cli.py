@@ -325,7 +325,6 @@ def _add_eval(sub) -> None:
 
 
 def cmd_eval(args) -> int:
-
     from .errors import ParameterError, SourceError
     from .eval.report import summary_markdown, write_report
     from .eval.runner import Runner, build_jobs, parse_tracker_list
