@@ -50,6 +50,15 @@ def _add_track(sub) -> None:
     p.set_defaults(func=cmd_track)
 
 
+def _close_all(bar, sinks, source) -> None:
+    """Finish the progress bar, then every sink (flushing and finalising videos), then the source."""
+    if bar is not None:
+        bar.close()
+    for sink in sinks:
+        sink.close()
+    source.close()
+
+
 def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=None, seed=0, params=None,
               skip_bad_frames=False, quiet=False, gt_overlay=False) -> dict:
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
@@ -102,11 +111,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {run.frames} frames; rows so far are in {out}") from None
     finally:
-        if bar is not None:
-            bar.close()
-        for s in sinks:
-            s.close()
-        source.close()
+        _close_all(bar, sinks, source)
     return {"frames": run.frames, "update_fps": run.update_fps, "end_to_end_fps": run.end_to_end_fps,
             "lost_frames": lost, "skipped": list(source.skipped), "source": source}
 
@@ -191,11 +196,7 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {frames} frames; rows so far are in {out}") from None
     finally:
-        if bar is not None:
-            bar.close()
-        for s_ in sinks:
-            s_.close()
-        source.close()
+        _close_all(bar, sinks, source)
     total = _time.perf_counter() - t_start
     return {"frames": frames, "rows": rows, "identities": len(ids), "update_fps": frames / upd if upd > 0 else 0.0,
             "end_to_end_fps": frames / total if total > 0 else 0.0, "source": source}

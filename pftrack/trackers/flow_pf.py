@@ -246,16 +246,16 @@ class FlowPF(Tracker):
         mx = w / 2 + p.search * self.window + abs(self.estimate[2])
         my = h / 2 + p.search * self.window + abs(self.estimate[3])
         region = (int(max(ex - mx, 0)), int(max(ey - my, 0)), int(min(ex + mx, fw)), int(min(ey + my, fh)))
-        feats = _features(gray, region, p.max_features).astype(np.float64)
-        tracked = np.zeros(len(feats), bool)
-        if not len(feats):
-            return None, feats, tracked
+        pts = _features(gray, region, p.max_features)  # float32 pixel indices, as LK takes them
+        if not len(pts):
+            return None, np.empty((0, 2)), np.zeros(0, bool)
         crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)
-        back, st, _ = cv2.calcOpticalFlowPyrLK(gray, self._prev_gray, feats.astype(np.float32).reshape(-1, 1, 2),
-                                               None, winSize=(p.klt_window, p.klt_window),
-                                               maxLevel=p.klt_levels - 1, criteria=crit)
-        back = back.reshape(-1, 2).astype(np.float64) + 0.5  # pixel indices -> continuous coordinates
-        feats = feats + 0.5
+        back, st, _ = cv2.calcOpticalFlowPyrLK(gray, self._prev_gray, pts.reshape(-1, 1, 2), None,
+                                               winSize=(p.klt_window, p.klt_window), maxLevel=p.klt_levels - 1,
+                                               criteria=crit)
+        # pixel indices -> continuous coordinates
+        back = back.reshape(-1, 2).astype(np.float64) + 0.5
+        feats = pts.astype(np.float64) + 0.5
         ok = (st.ravel() == 1) & np.all(np.isfinite(back), axis=1)
         in_prev = ok & (np.abs(back[:, 0] - ex) < w / 2) & (np.abs(back[:, 1] - ey) < h / 2)
         if in_prev.sum() < p.min_tracked:
