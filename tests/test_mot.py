@@ -139,6 +139,38 @@ def test_occlusion_handling_helps_through_detection_gaps():
     assert np.mean([s.mota for s in on]) > np.mean([s.mota for s in off])
 
 
+def merged_blob_run(seed, occlusion):
+    """Two same-coloured targets cross; like a blob detector, the detector returns one box (their union)
+    while they overlap."""
+    from pftrack.geometry import iou_matrix
+
+    scene, frames, truths = render_scene(crossing_scene(seed, n_frames=80, same_colors=True))
+    dets = []
+    for t in range(80):
+        b = [np.asarray(x, float) for x, on in zip(truths[t].boxes, truths[t].present) if on]
+        if len(b) == 2 and iou_matrix(b[0][None], b[1][None])[0, 0] > 0:
+            lo, hi = np.minimum(b[0][:2], b[1][:2]), np.maximum(b[0][:2] + b[0][2:], b[1][:2] + b[1][2:])
+            b = [np.concatenate([lo, hi - lo])]
+        dets.append([tuple(x) for x in b])
+    tr = create_multi_tracker(seed=seed, birth_frames=2, occlusion=occlusion, detector_fn=scripted(dets))
+    gt_rows, hyp = [], []
+    for t, f in enumerate(frames):
+        gt_rows.extend([t + 1, k + 1, *truths[t].boxes[k], 1] for k in range(2) if truths[t].present[k])
+        hyp.extend([t + 1, o.track_id, *o.box, o.score] for o in tr.update(f))
+    return mot_scores(np.array(gt_rows), np.array(hyp).reshape(-1, 7))
+
+
+def test_merged_detections_keep_identities_through_crossings():
+    """Occlusion handling of merged blobs: the union box is the detection of neither target, so neither is
+    pulled over the pair and swapped with the other."""
+    on = [merged_blob_run(seed, True) for seed in range(8)]
+    off = [merged_blob_run(seed, False) for seed in range(8)]
+    assert 3 * sum(s.num_switches for s in on) <= sum(s.num_switches for s in off)
+    assert sum(s.num_switches for s in off) >= 4
+    assert np.mean([s.mota for s in on]) > np.mean([s.mota for s in off])
+    assert np.mean([s.idf1 for s in on]) > 0.9
+
+
 def test_mot_cli_writes_motchallenge_rows(tmp_path, capsys):
     import cv2
 
@@ -191,3 +223,23 @@ def test_association_uses_colour_when_overlap_is_ambiguous():
         results[w] = (a.det[0], b.det[0])
     assert results[0.0] == (112, 100)  # overlap alone: swapped
     assert results[1.0] == (100, 112)  # with colour: red to red, blue to blue
+
+
+def test_a_detection_covering_two_targets_is_a_group_but_not_a_duplicate():
+    frame = np.full((200, 300, 3), 128, np.uint8)
+    mt = create_multi_tracker(detector_fn=lambda f: np.zeros((0, 5)))
+    mt._shape = frame.shape[:2]
+    a, b = mt._new_track(frame, (100, 50, 24, 60)), mt._new_track(frame, (120, 50, 24, 60))
+    a.pred, b.pred = a.state.copy(), b.state.copy()
+    mt.tracks = [a, b]
+    blob = np.array([[98.0, 48, 50, 64, 1.0]])  # covers both
+    used = mt._associate(frame, blob)
+    assert used.all() and a.grouped and b.grouped and a.det is None and b.det is None
+    b.pred = a.pred.copy() + [2, 0, 0, 0, 0, 0, 0, 0]  # the same target twice: not a group
+    mt._associate(frame, blob)
+    assert not a.grouped and not b.grouped and (a.det is not None) != (b.det is not None)
+    mt = create_multi_tracker(detector_fn=lambda f: np.zeros((0, 5)), occlusion=False)
+    mt._shape, mt.tracks = frame.shape[:2], [a, b]
+    b.pred = b.state.copy()
+    mt._associate(frame, blob)
+    assert not a.grouped and not b.grouped

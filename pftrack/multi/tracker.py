@@ -87,10 +87,19 @@ class MultiPFParams(Params):
     alpha_u: float = param(0.1, gt=0, le=1, doc="Learning rate of the expected likelihood lambda (Eq. 14).")
     normalize: Literal["per-target", "global"] = param("per-target", doc=(
         "Weight normalisation: 'per-target' to 1/L (Eq. 11), or 'global' over the pooled samples (ablation)."))
-    occlusion: bool = param(False, doc=(
-        "Occlusion reasoning of §3.7 (predicted occlusion, occluded target coasts at constant velocity without "
-        "resampling or updates). Off by default: with detections in the likelihood it did not reduce identity "
-        "switches on PETS or on synthetic crossings (docs/mot.md)."))
+    occlusion: bool = param(True, doc=(
+        "Occlusion handling: the merged-detection reasoning (group_merges) and the predicted-occlusion state of "
+        "§3.7 (occlusion_predict). False turns both off (the ablation)."))
+    group_merges: bool = param(True, doc=(
+        "With occlusion: a detection that covers group_cover of two or more distinct targets' predicted boxes is "
+        "one blob for targets occluding each other. It is the detection of none of them (it would pull one box "
+        "over the whole group and leave the other without support), it keeps all of them alive and reported, and "
+        "each follows its own colour with its size frozen until the blob splits."))
+    group_cover: float = param(0.5, gt=0, le=1, doc=(
+        "Fraction of a target's predicted box inside a detection for the target to be part of that detection's "
+        "group."))
+    occlusion_predict: bool = param(True, doc=(
+        "With occlusion: the predicted-occlusion state of §3.7 (Eq. 15 and the likelihood test below)."))
     occlusion_radius: float = param(0.8, gt=0, le=10, doc=(
         "R of Eq. 15 as a fraction of the pair's mean box width: occlusion is predicted when the predicted "
         "centres are closer than R."))
@@ -141,6 +150,7 @@ class _Track:
     lam: float | None = None
     hist_max: float | None = None
     occluded: bool = False
+    grouped: bool = False  # inside a merged detection this frame
     misses: int = 0
     occluded_frames: int = 0
     age: int = 0
@@ -172,6 +182,15 @@ def _box_to_state(box) -> np.ndarray:
 
 def _state_boxes(states: np.ndarray) -> np.ndarray:
     return np.column_stack([states[:, 0] - states[:, 4] / 2, states[:, 1] - states[:, 5] / 2, states[:, 4], states[:, 5]])
+
+
+def _cover_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Fraction of each box of ``a`` (x, y, w, h) that lies inside each box of ``b``."""
+    ix = np.maximum(0.0, np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
+                    - np.maximum(a[:, None, 0], b[None, :, 0]))
+    iy = np.maximum(0.0, np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
+                    - np.maximum(a[:, None, 1], b[None, :, 1]))
+    return ix * iy / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
 
 
 def _ellipses(states: np.ndarray) -> np.ndarray:
@@ -320,7 +339,7 @@ class MultiPF:
             tr.log_lik = ll
             tr.max_lik = colour_max
         # 3. occlusion reasoning (Eq. 15 and §3.7)
-        if p.occlusion:
+        if p.occlusion and p.occlusion_predict:
             self._occlusions()
         # 4. weights (Eq. 11), resampling of the non-occluded pool, estimates (Eq. 12), model updates (Eqs. 13-14)
         self._weigh_and_resample()
@@ -347,6 +366,7 @@ class MultiPF:
         used = np.zeros(len(dets), bool)
         for tr in self.tracks:
             tr.det = None
+            tr.grouped = False
         live = list(self.tracks)
         if not len(dets) or not live:
             return used
@@ -355,6 +375,8 @@ class MultiPF:
         pred_boxes = np.array([_state_boxes(t.pred[None, :])[0] for t in live])
         m = iou_matrix(pred_boxes, dets[:, :4])
         gate = m >= p.match_iou
+        if p.occlusion and p.group_merges and len(live) > 1:
+            self._merged_detections(pred_boxes, dets, live, gate, used)
         if not gate.any():
             return used
         cost = 1.0 - m
@@ -368,6 +390,23 @@ class MultiPF:
                 live[r].det = dets[c]
                 used[c] = True
         return used
+
+    def _merged_detections(self, pred_boxes, dets, live, gate, used) -> None:
+        """Occlusion handling for merged blobs: a detection covering several distinct targets' predicted boxes
+        supports all of them (``grouped``) and is removed from the assignment (``gate``) and from births."""
+        p = self.params
+        inside = _cover_matrix(pred_boxes, dets[:, :4]) >= p.group_cover
+        if not (inside.sum(axis=0) >= 2).any():
+            return
+        pair_iou = iou_matrix(pred_boxes, pred_boxes)
+        for j in np.flatnonzero(inside.sum(axis=0) >= 2):
+            members = np.flatnonzero(inside[:, j])
+            if pair_iou[np.ix_(members, members)].min() >= 0.5:
+                continue  # one target tracked twice (a duplicate about to die), not a group
+            used[j] = True
+            gate[:, j] = False
+            for i in members:
+                live[i].grouped = True
 
     def _occlusions(self) -> None:
         p = self.params
@@ -446,8 +485,11 @@ class MultiPF:
         st = tr.pred.copy()
         st[0:2] = (1 - p.alpha_x) * tr.pred[0:2] + p.alpha_x * meas[0:2]
         st[2:4] = (1 - p.alpha_v) * prev[2:4] + p.alpha_v * (st[0:2] - prev[0:2])
-        st[4:6] = (1 - p.alpha_w) * tr.pred[4:6] + p.alpha_w * meas[4:6]
-        st[6:8] = (1 - p.alpha_vw) * prev[6:8] + p.alpha_vw * (st[4:6] - prev[4:6])
+        if tr.grouped and tr.det is None:
+            st[4:6], st[6:8] = prev[4:6], 0.0  # a group's blob says nothing of each member's size
+        else:
+            st[4:6] = (1 - p.alpha_w) * tr.pred[4:6] + p.alpha_w * meas[4:6]
+            st[6:8] = (1 - p.alpha_vw) * prev[6:8] + p.alpha_vw * (st[4:6] - prev[4:6])
         st[4:6] = np.maximum(st[4:6], p.min_size)
         tr.state = st
         tr.occluded_frames = 0
@@ -465,7 +507,7 @@ class MultiPF:
             if p.contrast_gain > 0:
                 self._contrast_model(feats, tr, _state_boxes(est)[0], p.alpha_q)
         tr.lam = (1 - p.alpha_u) * tr.lam + p.alpha_u * pi_est
-        tr.misses = 0 if tr.det is not None else tr.misses + 1
+        tr.misses = 0 if (tr.det is not None or tr.grouped) else tr.misses + 1
         tr.hist_max = tr.max_lik if tr.hist_max is None else (
             (1 - p.history_rate) * tr.hist_max + p.history_rate * tr.max_lik)
 
