@@ -9,7 +9,11 @@ rate — under constant-velocity dynamics (Eq. 4).  Each frame:
 
 1. **Detections** (``motion`` frame differencing, ``mog2`` background subtraction, ``hog``
    people detector, or any callable) are associated one-to-one with the tracks' predicted
-   boxes by IoU (Hungarian assignment).
+   boxes by IoU and colour (Hungarian assignment).  With occlusion handling, a detection
+   that covers several distinct targets' predicted boxes is a merged blob of targets
+   occluding each other: it supports all of them (they stay alive and reported) but is the
+   detection of none, so no box is pulled over the whole group; the members follow their
+   own colours with their sizes frozen until the blob splits.
 2. **Weights**: colour likelihood (Eq. 10) times, when the track has a detection this frame,
    a Gaussian term around the detected box; all targets' samples form one pool, and the
    weights are **normalised per target to 1/L** (Eq. 11) so that no target absorbs the
@@ -88,18 +92,24 @@ class MultiPFParams(Params):
     normalize: Literal["per-target", "global"] = param("per-target", doc=(
         "Weight normalisation: 'per-target' to 1/L (Eq. 11), or 'global' over the pooled samples (ablation)."))
     occlusion: bool = param(True, doc=(
-        "Occlusion handling: the merged-detection reasoning (group_merges) and the predicted-occlusion state of "
-        "§3.7 (occlusion_predict). False turns both off (the ablation)."))
-    group_merges: bool = param(True, doc=(
+        "Occlusion handling: the merged-detection reasoning (group_merges) and, if occlusion_predict, the "
+        "predicted-occlusion state of §3.7. False turns both off (the ablation)."))
+    group_merges: Literal["auto", "on", "off"] = param("auto", doc=(
         "With occlusion: a detection that covers group_cover of two or more distinct targets' predicted boxes is "
         "one blob for targets occluding each other. It is the detection of none of them (it would pull one box "
-        "over the whole group and leave the other without support), it keeps all of them alive and reported, and "
-        "each follows its own colour with its size frozen until the blob splits."))
+        "over the whole group and leave the others without support); its members are reported and kept for up "
+        "to max_occluded frames, each following its own colour with its size frozen, until the blob splits. "
+        "'auto': on, except with the motion detector, whose blobs are fragments of objects rather than whole "
+        "ones (there it measured worse, docs/mot.md)."))
     group_cover: float = param(0.5, gt=0, le=1, doc=(
         "Fraction of a target's predicted box inside a detection for the target to be part of that detection's "
         "group."))
-    occlusion_predict: bool = param(True, doc=(
-        "With occlusion: the predicted-occlusion state of §3.7 (Eq. 15 and the likelihood test below)."))
+    group_fit: float = param(0.6, gt=0, le=1, doc=(
+        "A member whose predicted box overlaps a group's detection by at least this IoU explains it alone: it is "
+        "in front and takes the detection; the other members are behind it."))
+    occlusion_predict: bool = param(False, doc=(
+        "With occlusion: also the predicted-occlusion state of §3.7 (Eq. 15 and the likelihood test below). Off by "
+        "default: on PETS it did not reduce identity switches, alone or with group_merges (docs/mot.md)."))
     occlusion_radius: float = param(0.8, gt=0, le=10, doc=(
         "R of Eq. 15 as a fraction of the pair's mean box width: occlusion is predicted when the predicted "
         "centres are closer than R."))
@@ -123,7 +133,7 @@ class MultiPFParams(Params):
         "(Hungarian assignment among the pairs with IoU >= match_iou); 0 associates by overlap alone."))
     birth_frames: int = param(3, ge=1, le=1000, doc="k: frames a detection must stay unexplained before a track is born.")
     max_misses: int = param(12, ge=1, le=10_000, doc="m: a track dies after this many frames without a detection.")
-    max_occluded: int = param(40, ge=1, le=10_000, doc="... or this many while it is occluded.")
+    max_occluded: int = param(40, ge=1, le=10_000, doc="... or this many while it is occluded or in a group.")
     report_misses: int = param(1, ge=0, le=10_000, doc=(
         "Tracks are reported while they matched a detection within this many frames, or are occluded."))
     min_size: float = param(6.0, gt=0, doc="Smallest box side (pixels) of a track.")
@@ -213,6 +223,8 @@ class MultiPF:
         else:
             extra = {"split_aspect": p.object_aspect} if p.detector in ("mog2", "motion") else {}
             self.detector = create_detector(p.detector, **extra)
+        self._group_merges = p.group_merges == "on" or (
+            p.group_merges == "auto" and (detector_fn is not None or p.detector != "motion"))
         self.cue = ColorCue("rgb", (8, 8, 8), "nummiaro", p.max_pixels)
         warmup()
         self.tracks: list[_Track] = []
@@ -350,7 +362,7 @@ class MultiPF:
         self._deaths()
         out = []
         for tr in self.tracks:
-            if tr.misses <= p.report_misses or (tr.occluded and p.report_occluded):
+            if tr.misses <= p.report_misses or tr.grouped or (tr.occluded and p.report_occluded):
                 out.append(TrackOutput(tr.id, tuple(float(v) for v in tr.box), float(tr.score), tr.occluded))
         return out
 
@@ -375,8 +387,8 @@ class MultiPF:
         pred_boxes = np.array([_state_boxes(t.pred[None, :])[0] for t in live])
         m = iou_matrix(pred_boxes, dets[:, :4])
         gate = m >= p.match_iou
-        if p.occlusion and p.group_merges and len(live) > 1:
-            self._merged_detections(pred_boxes, dets, live, gate, used)
+        if p.occlusion and self._group_merges and len(live) > 1:
+            self._merged_detections(pred_boxes, dets, live, gate, used, m)
         if not gate.any():
             return used
         cost = 1.0 - m
@@ -391,7 +403,7 @@ class MultiPF:
                 used[c] = True
         return used
 
-    def _merged_detections(self, pred_boxes, dets, live, gate, used) -> None:
+    def _merged_detections(self, pred_boxes, dets, live, gate, used, m) -> None:
         """Occlusion handling for merged blobs: a detection covering several distinct targets' predicted boxes
         supports all of them (``grouped``) and is removed from the assignment (``gate``) and from births."""
         p = self.params
@@ -403,10 +415,15 @@ class MultiPF:
             members = np.flatnonzero(inside[:, j])
             if pair_iou[np.ix_(members, members)].min() >= 0.5:
                 continue  # one target tracked twice (a duplicate about to die), not a group
-            used[j] = True
+            fit = m[members, j]
+            front = members[int(np.argmax(fit))] if fit.max() >= p.group_fit else -1
+            if front < 0:
+                used[j] = True  # no member explains the blob alone: the detection of none
             gate[:, j] = False
+            if front >= 0:
+                gate[front, j] = m[front, j] >= p.match_iou  # the one in front; the others are behind it
             for i in members:
-                live[i].grouped = True
+                live[i].grouped = i != front
 
     def _occlusions(self) -> None:
         p = self.params
@@ -507,7 +524,7 @@ class MultiPF:
             if p.contrast_gain > 0:
                 self._contrast_model(feats, tr, _state_boxes(est)[0], p.alpha_q)
         tr.lam = (1 - p.alpha_u) * tr.lam + p.alpha_u * pi_est
-        tr.misses = 0 if (tr.det is not None or tr.grouped) else tr.misses + 1
+        tr.misses = 0 if tr.det is not None else tr.misses + 1
         tr.hist_max = tr.max_lik if tr.hist_max is None else (
             (1 - p.history_rate) * tr.hist_max + p.history_rate * tr.max_lik)
 
@@ -553,7 +570,7 @@ class MultiPF:
             ix = max(0.0, min(b[0] + b[2], w) - max(b[0], 0.0))
             iy = max(0.0, min(b[1] + b[3], h) - max(b[1], 0.0))
             inside = ix * iy / max(b[2] * b[3], 1e-9)
-            limit = p.max_occluded if tr.occluded else p.max_misses
+            limit = p.max_occluded if (tr.occluded or tr.grouped) else p.max_misses
             if inside < p.exit_fraction or tr.misses > limit or not np.all(np.isfinite(tr.state)):
                 continue
             keep.append(tr)
