@@ -11,14 +11,15 @@ rate — under constant-velocity dynamics (Eq. 4).  Each frame:
    people detector, or any callable) are associated one-to-one with the tracks' predicted
    boxes by IoU and colour (Hungarian assignment).  With occlusion handling, a detection
    that covers several distinct targets' predicted boxes is a merged blob of targets
-   occluding each other: it supports all of them (they stay alive and reported) but is the
-   detection of none, so no box is pulled over the whole group; the members follow their
-   own colours with their sizes frozen until the blob splits.
+   occluding each other: unless one member fits it alone (it is in front and takes it), it
+   is the detection of none, so no box is pulled over the whole group; the members without
+   a detection stay reported for up to ``max_occluded`` frames and follow their own colours
+   with their sizes frozen until the blob splits.
 2. **Weights**: colour likelihood (Eq. 10) times, when the track has a detection this frame,
    a Gaussian term around the detected box; all targets' samples form one pool, and the
    weights are **normalised per target to 1/L** (Eq. 11) so that no target absorbs the
    others' samples (``normalize="global"`` normalises the pool as a whole — the ablation).
-3. **Occlusion** (§3.7): when two predicted centres are closer than ``R`` (Eq. 15), the
+3. **Predicted occlusion** (§3.7, optional: ``occlusion_predict``): when two predicted centres are closer than ``R`` (Eq. 15), the
    target whose maximum sample likelihood fell most below its recent history is the
    occluded one.  While occluded its adaptation rates are 0 (it moves at constant
    velocity), its samples are propagated but not resampled, and neither its colour model
