@@ -19,12 +19,12 @@ rate — under constant-velocity dynamics (Eq. 4).  Each frame:
    a Gaussian term around the detected box; all targets' samples form one pool, and the
    weights are **normalised per target to 1/L** (Eq. 11) so that no target absorbs the
    others' samples (``normalize="global"`` normalises the pool as a whole — the ablation).
-3. **Predicted occlusion** (§3.7, optional: ``occlusion_predict``): when two predicted centres are closer than ``R`` (Eq. 15), the
-   target whose maximum sample likelihood fell most below its recent history is the
-   occluded one.  While occluded its adaptation rates are 0 (it moves at constant
-   velocity), its samples are propagated but not resampled, and neither its colour model
-   nor its size is updated.  It leaves the state when the occlusion is no longer predicted
-   or its likelihood recovers.
+3. **Predicted occlusion** (§3.7, optional: ``occlusion_predict``): when two predicted
+   centres are closer than ``R`` (Eq. 15), the target whose maximum sample likelihood fell
+   most below its recent history is the occluded one.  While occluded its adaptation rates
+   are 0 (it moves at constant velocity), its samples are propagated but not resampled, and
+   neither its colour model nor its size is updated.  It leaves the state when the
+   occlusion is no longer predicted or its likelihood recovers.
 4. **Estimate** with adaptation rates (Eq. 12):
    ``x = (1 - a_x)(x + vx) + a_x x_meas``, ``vx = (1 - a_v) vx + a_v (x - x_prev)``, and
    likewise for the size.
@@ -136,7 +136,8 @@ class MultiPFParams(Params):
     max_misses: int = param(12, ge=1, le=10_000, doc="m: a track dies after this many frames without a detection.")
     max_occluded: int = param(40, ge=1, le=10_000, doc="... or this many while it is occluded or in a group.")
     report_misses: int = param(1, ge=0, le=10_000, doc=(
-        "Tracks are reported while they matched a detection within this many frames, or are occluded."))
+        "Tracks are reported while they matched a detection within this many frames, or are in a group (or "
+        "occluded, with report_occluded)."))
     min_size: float = param(6.0, gt=0, doc="Smallest box side (pixels) of a track.")
     exit_fraction: float = param(0.4, ge=0, le=1, doc="A track whose box is less than this fraction inside the image dies.")
 
@@ -406,7 +407,8 @@ class MultiPF:
 
     def _merged_detections(self, pred_boxes, dets, live, gate, used, m) -> None:
         """Occlusion handling for merged blobs: a detection covering several distinct targets' predicted boxes
-        supports all of them (``grouped``) and is removed from the assignment (``gate``) and from births."""
+        is gated to the member that fits it alone (in front), if any, and otherwise removed from the assignment
+        (``gate``) and from births (``used``); the members without it are ``grouped``."""
         p = self.params
         inside = _cover_matrix(pred_boxes, dets[:, :4]) >= p.group_cover
         if not (inside.sum(axis=0) >= 2).any():
