@@ -67,6 +67,15 @@ def box_area(boxes) -> np.ndarray:
     return np.clip(b[..., 2], 0, None) * np.clip(b[..., 3], 0, None)
 
 
+def intersection_area(a, b) -> np.ndarray:
+    """Area of the intersection of boxes ``a`` and ``b`` (broadcast)."""
+    a = as_boxes(a)
+    b = as_boxes(b)
+    iw = np.minimum(a[..., 0] + a[..., 2], b[..., 0] + b[..., 2]) - np.maximum(a[..., 0], b[..., 0])
+    ih = np.minimum(a[..., 1] + a[..., 3], b[..., 1] + b[..., 3]) - np.maximum(a[..., 1], b[..., 1])
+    return np.clip(iw, 0, None) * np.clip(ih, 0, None)
+
+
 def iou(a, b) -> np.ndarray:
     """Intersection over union of boxes ``a`` and ``b`` (broadcast).
 
@@ -74,13 +83,7 @@ def iou(a, b) -> np.ndarray:
     """
     a = as_boxes(a)
     b = as_boxes(b)
-    ax2 = a[..., 0] + a[..., 2]
-    ay2 = a[..., 1] + a[..., 3]
-    bx2 = b[..., 0] + b[..., 2]
-    by2 = b[..., 1] + b[..., 3]
-    iw = np.minimum(ax2, bx2) - np.maximum(a[..., 0], b[..., 0])
-    ih = np.minimum(ay2, by2) - np.maximum(a[..., 1], b[..., 1])
-    inter = np.clip(iw, 0, None) * np.clip(ih, 0, None)
+    inter = intersection_area(a, b)
     union = box_area(a) + box_area(b) - inter
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)

@@ -51,7 +51,7 @@ from ..cues.color import ColorCue, warmup
 from ..cues.contrast import box_counts, contrast_scores, foreground_lut, probability_integral
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
-from ..geometry import iou_matrix
+from ..geometry import intersection_area, iou_matrix
 from ..params import Params, param
 from .detectors import as_detector, create_detector
 
@@ -198,11 +198,7 @@ def _state_boxes(states: np.ndarray) -> np.ndarray:
 
 def _cover_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Fraction of each box of ``a`` (x, y, w, h) that lies inside each box of ``b``."""
-    ix = np.maximum(0.0, np.minimum(a[:, None, 0] + a[:, None, 2], b[None, :, 0] + b[None, :, 2])
-                    - np.maximum(a[:, None, 0], b[None, :, 0]))
-    iy = np.maximum(0.0, np.minimum(a[:, None, 1] + a[:, None, 3], b[None, :, 1] + b[None, :, 3])
-                    - np.maximum(a[:, None, 1], b[None, :, 1]))
-    return ix * iy / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
+    return intersection_area(a[:, None, :], b[None, :, :]) / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
 
 
 def _ellipses(states: np.ndarray) -> np.ndarray:
@@ -567,12 +563,10 @@ class MultiPF:
     def _deaths(self) -> None:
         p = self.params
         h, w = self._shape
+        image = np.array([[0.0, 0.0, w, h]])
         keep = []
         for tr in self.tracks:
-            b = tr.box
-            ix = max(0.0, min(b[0] + b[2], w) - max(b[0], 0.0))
-            iy = max(0.0, min(b[1] + b[3], h) - max(b[1], 0.0))
-            inside = ix * iy / max(b[2] * b[3], 1e-9)
+            inside = _cover_matrix(tr.box[None, :], image)[0, 0]
             limit = p.max_occluded if (tr.occluded or tr.grouped) else p.max_misses
             if inside < p.exit_fraction or tr.misses > limit or not np.all(np.isfinite(tr.state)):
                 continue
