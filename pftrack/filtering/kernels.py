@@ -202,9 +202,30 @@ def _normalize_numba(log_lik, states, log_w, w, mean):
     return ok, (1.0 / ss if ss > 0 else 0.0)
 
 
-def _normalize_numpy(log_lik, states, log_w, w, mean):
-    from .particles import log_normalize
+def log_normalize(log_w: np.ndarray, out: np.ndarray | None = None) -> tuple[np.ndarray, bool]:
+    """Normalise log-weights so that ``sum(exp(out)) == 1``.
 
+    Returns ``(out, ok)``.  ``ok`` is False when no weight is finite (every
+    particle had zero likelihood); the weights are then reset to uniform, so the
+    result is always finite and sums to one.
+    """
+    log_w = np.asarray(log_w, dtype=np.float64)
+    if out is None:
+        out = np.empty_like(log_w)
+    finite = np.isfinite(log_w)
+    if not finite.any():
+        out.fill(-np.log(log_w.size) if log_w.size else 0.0)
+        return out, False
+    m = log_w[finite].max()
+    # -inf stays -inf (weight 0); +inf/NaN are treated as invalid (weight 0).
+    np.subtract(log_w, m, out=out)
+    out[~finite] = -np.inf
+    lse = np.log(np.exp(out).sum())
+    out -= lse
+    return out, True
+
+
+def _normalize_numpy(log_lik, states, log_w, w, mean):
     _, ok = log_normalize(log_lik, out=log_w)
     np.exp(log_w, out=w)
     w /= w.sum()

@@ -10,28 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .kernels import log_normalize, normalize_and_estimate
 
-def log_normalize(log_w: np.ndarray, out: np.ndarray | None = None) -> tuple[np.ndarray, bool]:
-    """Normalise log-weights so that ``sum(exp(out)) == 1``.
-
-    Returns ``(out, ok)``.  ``ok`` is False when no weight is finite (every
-    particle had zero likelihood); the weights are then reset to uniform, so the
-    result is always finite and sums to one.
-    """
-    log_w = np.asarray(log_w, dtype=np.float64)
-    if out is None:
-        out = np.empty_like(log_w)
-    finite = np.isfinite(log_w)
-    if not finite.any():
-        out.fill(-np.log(log_w.size) if log_w.size else 0.0)
-        return out, False
-    m = log_w[finite].max()
-    # -inf stays -inf (weight 0); +inf/NaN are treated as invalid (weight 0).
-    np.subtract(log_w, m, out=out)
-    out[~finite] = -np.inf
-    lse = np.log(np.exp(out).sum())
-    out -= lse
-    return out, True
+__all__ = ["ParticleSet", "effective_sample_size", "log_normalize", "weights_from_log"]
 
 
 def weights_from_log(log_w: np.ndarray) -> np.ndarray:
@@ -95,8 +76,6 @@ class ParticleSet:
         Also computes the weighted mean and the effective sample size.  Returns
         False when every likelihood was zero; the weights are then uniform.
         """
-        from .kernels import normalize_and_estimate
-
         ll = np.asarray(log_lik, dtype=np.float64)
         if accumulate:
             ll = ll + self.log_weights

@@ -1,4 +1,8 @@
-"""Registration of the built-in trackers (imported lazily by the registry)."""
+"""The built-in trackers, as a table the registry reads on first use.
+
+This module only lists; it imports no registry code, so the registry depends on
+it and not the other way round.
+"""
 
 from __future__ import annotations
 
@@ -8,25 +12,29 @@ from .fusion_pf import FusionPF
 from .local_motion_pf import LocalMotionPF
 from .meanshift import KalmanMeanShift, MeanShift
 from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
-from .registry import register
 
-register("fusion-pf", FusionPF,
-         "pftrack's default: colour PF x background-aware contrast (x optional local motion), gated updates, "
-         "loss detection and re-acquisition", extra_kwargs=("detector",))
-register("color-pf", ColorPF,
-         "Adaptive colour-based particle filter (Nummiaro, Koller-Meier & Van Gool 2003)",
-         extra_kwargs=("detector",))
-register("local-motion-pf", LocalMotionPF,
-         "Colour particle filter fused with a local-motion (optical-flow) likelihood (Kristan et al. 2009)",
-         extra_kwargs=("detector",))
-register("flow-pf", FlowPF,
-         "Colour PF driven by optical flow: HSV histograms, EMD, template subspace, KLT motion energies, "
-         "detection/tracking switching (Tung & Matsuyama)", extra_kwargs=("detector",))
-register("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
-         family="baseline")
-register("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",
-         family="baseline")
-register("camshift", CamShift, "OpenCV CamShift on the hue back-projection (Bradski)", family="baseline")
+_DETECTOR = ("detector",)
+
+#: (name, class, summary, options for ``register``)
+BUILTIN: list[tuple[str, type, str, dict]] = [
+    ("fusion-pf", FusionPF,
+     "pftrack's default: colour PF x background-aware contrast (x optional local motion), gated updates, "
+     "loss detection and re-acquisition", {"extra_kwargs": _DETECTOR}),
+    ("color-pf", ColorPF, "Adaptive colour-based particle filter (Nummiaro, Koller-Meier & Van Gool 2003)",
+     {"extra_kwargs": _DETECTOR}),
+    ("local-motion-pf", LocalMotionPF,
+     "Colour particle filter fused with a local-motion (optical-flow) likelihood (Kristan et al. 2009)",
+     {"extra_kwargs": _DETECTOR}),
+    ("flow-pf", FlowPF,
+     "Colour PF driven by optical flow: HSV histograms, EMD, template subspace, KLT motion energies, "
+     "detection/tracking switching (Tung & Matsuyama)", {"extra_kwargs": _DETECTOR}),
+    ("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
+     {"family": "baseline"}),
+    ("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",
+     {"family": "baseline"}),
+    ("camshift", CamShift, "OpenCV CamShift on the hue back-projection (Bradski)", {"family": "baseline"}),
+]
+
 _SUMMARIES = {
     "csrt": "OpenCV CSRT (discriminative correlation filter with channel and spatial reliability)",
     "kcf": "OpenCV KCF (kernelized correlation filter)",
@@ -37,5 +45,5 @@ _SUMMARIES = {
 }
 for _name, _cls in OPENCV_TRACKERS.items():
     _kind = _name.split("-", 1)[1]
-    register(_name, _cls, _SUMMARIES[_kind], family="opencv",
-             available=(lambda k=_kind: opencv_available(k)))
+    BUILTIN.append((_name, _cls, _SUMMARIES[_kind],
+                    {"family": "opencv", "available": (lambda k=_kind: opencv_available(k))}))

@@ -95,4 +95,7 @@ def _ensure_loaded() -> None:
     if _loaded:
         return
     _loaded = True
-    from . import builtin  # noqa: F401  (registers the built-in trackers)
+    from .builtin import BUILTIN
+
+    for name, cls, summary, options in BUILTIN:
+        register(name, cls, summary, **options)

@@ -1,0 +1,64 @@
+"""The ``pftrack`` command line.  It only wires sources, trackers and sinks together.
+
+One module per command group: :mod:`.track` (track, demo), :mod:`.mot`,
+:mod:`.evaluate` (eval, list), :mod:`.bench` (bench, synth).
+
+Exit codes: 0 success, 2 bad usage or bad input (one line on stderr, never a
+traceback), 130 interrupted by Ctrl-C or SIGTERM (everything computed so far is
+written and the video finalised).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+from collections.abc import Sequence
+
+from .. import __version__
+from ..errors import Interrupted, PftrackError
+from .bench import add_bench, add_synth
+from .common import DEFAULT_TRACKER, ArgumentParser
+from .evaluate import add_eval, add_list
+from .mot import add_mot, run_mot
+from .track import add_demo, add_track, demo_clip, run_track
+
+__all__ = ["DEFAULT_TRACKER", "build_parser", "demo_clip", "main", "run_mot", "run_track"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = ArgumentParser(prog="pftrack", description="Fast probabilistic visual object tracking.")
+    parser.add_argument("--version", action="version", version=f"pftrack {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=ArgumentParser)
+    sub.required = True
+    add_track(sub)
+    add_mot(sub)
+    add_list(sub)
+    add_demo(sub)
+    add_eval(sub)
+    add_bench(sub)
+    add_synth(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    # FFmpeg prints decoder chatter ("moov atom not found") for bad files; our one-line error says it all.
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    warnings.simplefilter("default")
+    warnings.formatwarning = lambda msg, cat, *a, **k: f"pftrack: warning: {msg}\n"
+    try:
+        return int(args.func(args) or 0)
+    except Interrupted as exc:
+        print(f"pftrack: {exc}", file=sys.stderr)
+        return 130
+    except PftrackError as exc:
+        print(f"pftrack: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("pftrack: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 1

@@ -1,0 +1,50 @@
+"""Helpers shared by the command modules: the argument parser, progress bars, closing, reproduction lines."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+DEFAULT_TRACKER = "fusion-pf"
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    def error(self, message: str):  # one line, exit 2
+        self.exit(2, f"pftrack: error: {message}\n")
+
+
+def progress(total: int | None, desc: str, quiet: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="frame", file=sys.stderr, disable=quiet or None,
+                dynamic_ncols=True, leave=False)
+
+
+def close_all(bar, sinks, source) -> None:
+    """Finish the progress bar, then every sink (flushing and finalising videos), then the source."""
+    if bar is not None:
+        bar.close()
+    for sink in sinks:
+        sink.close()
+    source.close()
+
+
+def reproduce_command(drop: tuple[str, ...] = ()) -> str | None:
+    """The command line that produced a report, without output-destination options (``drop``)."""
+    import shlex
+
+    if not sys.argv or Path(sys.argv[0]).name != "pftrack":
+        return None
+    args, skip = [], False
+    for a in sys.argv[1:]:
+        if skip:
+            skip = False
+            continue
+        if a in drop:
+            skip = True
+            continue
+        if any(a.startswith(d + "=") for d in drop):
+            continue
+        args.append(a)
+    return "pftrack " + shlex.join(args)

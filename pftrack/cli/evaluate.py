@@ -1,0 +1,110 @@
+"""``pftrack eval`` and ``pftrack list``: accuracy of trackers on sequences, and the registry."""
+
+from __future__ import annotations
+
+import os
+import sys
+import warnings
+from pathlib import Path
+
+from ..errors import Interrupted
+from .common import reproduce_command
+
+
+def add_eval(sub) -> None:
+    p = sub.add_parser("eval", help="rank trackers on OTB/VOT sequences (one-pass or reset protocol)",
+                       description="Run trackers x sequences x seeds and report accuracy and speed.")
+    p.add_argument("data", nargs="+", help="sequence folders or folders of sequences (OTB, VOT, MOTChallenge)")
+    p.add_argument("--trackers", required=True,
+                   help="comma-separated tracker specs: NAME or NAME[key=value;...]; 'all', 'ours', 'baselines', "
+                        "'opencv' expand to registered families; with --protocol mot: multi-pf[...]")
+    p.add_argument("--protocol", choices=["ope", "vot", "mot"], default="ope",
+                   help="OTB one-pass (default), VOT reset, or MOTChallenge multi-object (trackers: multi-pf[...])")
+    p.add_argument("--seeds", type=int, default=1, help="seeds per stochastic tracker (default 1)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local worker processes")
+    g.add_argument("--scheduler", help="Dask distributed scheduler address (e.g. tcp://host:8786)")
+    p.add_argument("--threads", type=int, default=1, help="OpenCV threads per run (default 1: per-core speed)")
+    p.add_argument("--report", help="report folder: results.csv, summary.md, plots, index.html; runs are cached "
+                                    "there so an interrupted evaluation resumes")
+    p.add_argument("--doc", help="also write the Markdown summary (with the command) to this file")
+    p.add_argument("--title", default="pftrack evaluation", help="title of the report")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=cmd_eval)
+
+
+def cmd_eval(args) -> int:
+    from ..errors import ParameterError, SourceError
+    from ..eval.report import summary_markdown, write_report
+    from ..eval.runner import Runner, build_jobs, parse_tracker_list
+    from ..io.datasets import discover_sequences
+    from ..io.sinks import prepare_output
+
+    if args.seeds < 1:
+        raise ParameterError("--seeds must be >= 1")
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError("--workers must be >= 1")
+    trackers = parse_tracker_list(args.trackers, protocol=args.protocol)
+    seqs = []
+    mot = args.protocol == "mot"
+    for d in args.data:
+        for seq in discover_sequences(d):
+            if (seq.mot_gt is None) if mot else (seq.groundtruth is None):
+                kind = "MOTChallenge" if mot else "single-object"
+                warnings.warn(f"{seq.name}: no {kind} ground truth, skipped for --protocol {args.protocol}")
+                continue
+            seqs.append(seq)
+    if not seqs:
+        raise SourceError(f"no sequences with {'MOTChallenge' if mot else 'single-object'} ground truth to evaluate")
+    names = [s.name for s in seqs]
+    if len(set(names)) != len(names):
+        raise SourceError("two sequences share a name; evaluate them separately")
+    if args.doc:
+        prepare_output(args.doc)
+    report_dir = Path(args.report) if args.report else None
+    if report_dir is not None:
+        prepare_output(report_dir / "results.csv")
+    jobs = build_jobs(seqs, trackers, seeds=args.seeds, protocol=args.protocol, threads=args.threads)
+    runner = Runner(report_dir=report_dir, workers=args.workers or 1, scheduler=args.scheduler,
+                    progress=not args.quiet)
+    try:
+        records = runner.run(jobs)
+    except KeyboardInterrupt:
+        where = f"; finished runs are kept in {report_dir / 'runs'} and reused next time" if report_dir else ""
+        raise Interrupted(f"evaluation interrupted after {runner.ran} new runs{where}") from None
+    command = reproduce_command(drop=("--doc",))
+    md = summary_markdown(records, command=command, title=args.title)
+    print(md)
+    if report_dir is not None:
+        write_report(records, report_dir, sequences={s.name: str(s.path) for s in seqs}, command=command,
+                     title=args.title)
+        print(f"report: {report_dir / 'index.html'} ({runner.ran} runs computed, {runner.reused} reused)",
+              file=sys.stderr)
+    if args.doc:
+        Path(args.doc).write_text(md, encoding="utf-8")
+    return 0
+
+
+def add_list(sub) -> None:
+    p = sub.add_parser("list", help="registered trackers and their parameters")
+    p.add_argument("name", nargs="?", help="show the parameters of one tracker")
+    p.set_defaults(func=cmd_list)
+
+
+def cmd_list(args) -> int:
+    import textwrap
+
+    from ..trackers.registry import get_spec, list_trackers
+
+    specs = [get_spec(args.name)] if args.name else list_trackers()
+    for spec in specs:
+        avail = "" if spec.available() else "  (not available here)"
+        print(f"{spec.name:20s} {spec.summary}{avail}")
+        if args.name:
+            for name, typ, default, doc in spec.params_cls.describe():
+                print(f"  {name} ({typ}, default {default!r})")
+                for line in textwrap.wrap(doc, 88):
+                    print(f"      {line}")
+    if not args.name:
+        print("\n'pftrack list NAME' shows a tracker's parameters; set them with --param KEY=VALUE.")
+    return 0
