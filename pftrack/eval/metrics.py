@@ -101,3 +101,64 @@ def ope_scores(pred: np.ndarray, gt: np.ndarray) -> OPEResult:
         precision_curve=prec,
         n_frames=int(ious.size),
     )
+
+
+# ------------------------------------------------------------------------------ the lost flag as a detector
+
+#: IoU at or above which the estimate "covers" the visible target (GUIDE §8).
+COVER_IOU = 0.5
+#: A reappearing target counts as re-acquired when the tracker covers it, not lost, within this many frames.
+REACQUIRE_WITHIN = 15
+
+
+@dataclass(frozen=True)
+class LostResult:
+    """The ``lost`` flag scored as a detector of target absence (GUIDE §8).
+
+    * ``recall``: fraction of the frames where the target is absent or fully hidden on
+      which ``lost`` is raised (NaN when the sequence has no such frame);
+    * ``false_rate``: fraction of the frames where the estimate covers the visible target
+      (IoU >= 0.5) on which ``lost`` is raised (NaN when there is no such frame);
+    * ``reacquired`` / ``reappearances``: reappearance events (an absent run followed by
+      a visible frame) after which the tracker covers the target with ``lost`` down
+      within :data:`REACQUIRE_WITHIN` frames.
+    """
+
+    recall: float
+    false_rate: float
+    absent_frames: int
+    covered_frames: int
+    reappearances: int
+    reacquired: int
+
+
+def lost_detection(lost: np.ndarray, pred: np.ndarray, gt: np.ndarray, absent: np.ndarray, *,
+                   within: int = REACQUIRE_WITHIN) -> LostResult:
+    """Score a per-frame ``lost`` flag against the frames where the target is absent.
+
+    ``lost``, ``pred`` (boxes), ``gt`` (boxes, NaN allowed) and ``absent`` (bool) are
+    aligned per frame.  Frames that are neither absent nor covered (the estimate is
+    off the visible target) count in neither rate: there the flag may go either way.
+    """
+    lost = np.asarray(lost, dtype=bool).ravel()
+    absent = np.asarray(absent, dtype=bool).ravel()
+    n = min(lost.size, absent.size, len(pred), len(gt))
+    lost, absent = lost[:n], absent[:n]
+    pred = _clean_pred(np.asarray(pred, dtype=np.float64).reshape(-1, 4)[:n])
+    gt = np.asarray(gt, dtype=np.float64).reshape(-1, 4)[:n]
+    ok = valid_gt(gt) & ~absent
+    ious = np.zeros(n)
+    if ok.any():
+        ious[ok] = iou(pred[ok], gt[ok])
+    covered = ok & (ious >= COVER_IOU)
+    recall = float(lost[absent].mean()) if absent.any() else float("nan")
+    false_rate = float(lost[covered].mean()) if covered.any() else float("nan")
+    events = reacq = 0
+    for t in range(1, n):
+        if absent[t - 1] and ok[t]:
+            events += 1
+            win = slice(t, min(n, t + within))
+            if np.any(covered[win] & ~lost[win]):
+                reacq += 1
+    return LostResult(recall=recall, false_rate=false_rate, absent_frames=int(absent.sum()),
+                      covered_frames=int(covered.sum()), reappearances=events, reacquired=reacq)

@@ -28,7 +28,8 @@ import numpy as np
 from ..io.sinks import prepare_output
 
 CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "mean_iou", "failures", "accuracy",
-               "fps", "frames", "lost_frames", "mota", "motp", "idf1", "num_switches", "num_fragmentations",
+               "fps", "frames", "lost_frames", "lost_recall", "false_lost", "absent_frames", "reappearances",
+               "reacquired", "mota", "motp", "idf1", "num_switches", "num_fragmentations",
                "mostly_tracked", "mostly_lost", "num_false_positives", "num_misses", "e2e_fps"]
 MOT_FIELDS = ["mota", "motp", "idf1", "num_switches", "num_fragmentations", "mostly_tracked", "mostly_lost",
               "num_false_positives", "num_misses", "e2e_fps"]
@@ -56,6 +57,11 @@ def _fmt(v, nd=3) -> str:
     return f"{v:.{nd}f}"
 
 
+def _reacq(o: dict) -> str:
+    n = int(o.get("reappearances") or 0)
+    return f"{int(o.get('reacquired') or 0)}/{n}" if n else "–"
+
+
 def aggregate(records: list[dict]) -> dict:
     """Per (tracker, sequence): means over seeds; per tracker: means over sequences."""
     per: dict[tuple[str, str], list[dict]] = defaultdict(list)
@@ -72,6 +78,10 @@ def aggregate(records: list[dict]) -> dict:
             "failures": _mean(_num(r.get("failures")) for r in rs),
             "accuracy": _mean(_num(r.get("accuracy")) for r in rs),
             "fps": _median(_num(r.get("fps")) for r in rs),
+            "lost_recall": _mean(_num(r.get("lost_recall")) for r in rs),
+            "false_lost": _mean(_num(r.get("false_lost")) for r in rs),
+            "reappearances": sum(int(r.get("reappearances") or 0) for r in rs),
+            "reacquired": sum(int(r.get("reacquired") or 0) for r in rs),
             "seeds": sorted(r["seed"] for r in rs),
             **{k: _mean(_num(r.get(k)) for r in rs) for k in MOT_FIELDS},
         }
@@ -86,6 +96,11 @@ def aggregate(records: list[dict]) -> dict:
                 math.isfinite(c["failures"]) for c in cells) else float("nan"),
             "accuracy": _mean(c["accuracy"] for c in cells),
             "fps": _median(c["fps"] for c in cells),
+            # the lost flag: means over the sequences where the rate is defined (absent / covered frames exist)
+            "lost_recall": _mean(c["lost_recall"] for c in cells),
+            "false_lost": _mean(c["false_lost"] for c in cells),
+            "reappearances": sum(c["reappearances"] for c in cells),
+            "reacquired": sum(c["reacquired"] for c in cells),
             "seeds": sorted({s for c in cells for s in c["seeds"]}),
             **{k: _mean(c[k] for c in cells) for k in MOT_FIELDS},
         }
@@ -132,11 +147,16 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
     lines += [f"Protocol: {', '.join(protocols)}. Seeds: {', '.join(map(str, seeds))} "
               "(deterministic trackers run once). fps = update calls per second on one core, decode excluded; "
               "per sequence the median over seeds, overall the median over sequences.", ""]
+    if "ope" in protocols:
+        lines += ["The lost flag as a detector: *lost recall* = fraction of the frames with the target absent or "
+                  "fully hidden on which `lost` is raised; *false-lost rate* = fraction of the frames with IoU >= 0.5 "
+                  "on which it is raised (means over the sequences where each is defined); *re-acquired* = "
+                  "reappearances after which the target is covered with `lost` down within 15 frames.", ""]
     ope = "ope" in protocols
     vot = "vot" in protocols
     head = ["tracker"]
     if ope:
-        head += ["mean AUC", "precision@20"]
+        head += ["mean AUC", "precision@20", "lost recall", "false-lost rate", "re-acquired"]
     if vot:
         head += ["failures (sum)", "accuracy"]
     head += ["median fps"]
@@ -146,7 +166,8 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         o = agg["overall"][t]
         row = [f"`{t}`"]
         if ope:
-            row += [_fmt(o["auc"]), _fmt(o["precision"])]
+            row += [_fmt(o["auc"]), _fmt(o["precision"]), _fmt(o["lost_recall"]), _fmt(o["false_lost"]),
+                    _reacq(o)]
         if vot:
             row += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
         row += [_fmt(o["fps"], 0)]
@@ -160,6 +181,16 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
     for t in order:
         lines.append(f"| `{t}` | " + " | ".join(_fmt(agg["cell"].get((t, s), {}).get(metric), 3 if ope else 1)
                                                 for s in seqs) + " |")
+    if ope and any(math.isfinite(agg["cell"].get((t, s), {}).get("lost_recall", float("nan")))
+                   for t in order for s in seqs):
+        lines += ["", "## lost recall / false-lost rate per sequence (mean over seeds)", ""]
+        lines += ["| tracker | " + " | ".join(seqs) + " |", "|" + "---|" * (len(seqs) + 1)]
+        for t in order:
+            cells = []
+            for s in seqs:
+                c = agg["cell"].get((t, s), {})
+                cells.append(f"{_fmt(c.get('lost_recall'), 2)} / {_fmt(c.get('false_lost'), 2)}")
+            lines.append(f"| `{t}` | " + " | ".join(cells) + " |")
     lines += ["", "## fps per sequence (median over seeds)", ""]
     lines += ["| tracker | " + " | ".join(seqs) + " |", "|" + "---|" * (len(seqs) + 1)]
     for t in order:
@@ -296,7 +327,8 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
         o = agg["overall"][t]
         cells = [e(t)]
         if ope:
-            cells += [_fmt(o["auc"]), _fmt(o["precision"])]
+            cells += [_fmt(o["auc"]), _fmt(o["precision"]), _fmt(o["lost_recall"]), _fmt(o["false_lost"]),
+                      _reacq(o)]
         if "vot" in protocols:
             cells += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
         cells += [_fmt(o["fps"], 0)]
@@ -308,7 +340,8 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
             cells = [e(t)] + [_fmt(o[k], n) for k, n in (("mota", 3), ("motp", 3), ("idf1", 3), ("num_switches", 1),
                                                          ("num_fragmentations", 1), ("fps", 0), ("e2e_fps", 0))]
             rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
-    head = ["tracker"] + (["mean AUC", "precision@20"] if ope else []) + \
+    head = ["tracker"] + (["mean AUC", "precision@20", "lost recall", "false-lost rate", "re-acquired"] if ope
+                          else []) + \
         (["failures", "accuracy"] if "vot" in protocols else []) + \
         (["MOTA", "MOTP", "IDF1", "ID switches", "fragmentations", "fps", "fps end to end"] if "mot" in protocols
          else ["median fps"])

@@ -33,9 +33,9 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from ..errors import FormatError, ParameterError
-from .metrics import ope_scores
+from .metrics import lost_detection, ope_scores, valid_gt
 
-RESULT_VERSION = 1
+RESULT_VERSION = 2  # 2: lost-flag detection metrics
 
 
 # ---------------------------------------------------------------------------------------------- specs
@@ -224,7 +224,7 @@ def run_job(job: Job) -> dict:
     if job.protocol == "ope":
         start = seq.init_index
         boxes = np.full((len(seq.frames), 4), np.nan)
-        lost = 0
+        lost_flags = np.zeros(len(seq.frames), dtype=bool)
         upd_s = 0.0
         times = []
         for t, frame in enumerate(frames()):
@@ -239,10 +239,16 @@ def run_job(job: Job) -> dict:
                 upd_s += dt
                 times.append(dt)
             boxes[t] = st.box
-            lost += int(st.lost)
+            lost_flags[t] = bool(st.lost)
         scores = ope_scores(boxes[start:], gt[start:])
+        # the init frame is given, not detected: the flag is scored from the first update on
+        absent = seq.absent if seq.absent is not None else ~valid_gt(gt)
+        ld = lost_detection(lost_flags[start + 1:], boxes[start + 1:], gt[start + 1:], absent[start + 1:])
         rec.update(auc=scores.auc, precision=scores.precision, mean_iou=scores.mean_iou, failures=None,
-                   accuracy=None, lost_frames=lost, success=_finite_list(scores.success),
+                   accuracy=None, lost_frames=int(lost_flags.sum()), lost_recall=ld.recall,
+                   false_lost=ld.false_rate, absent_frames=ld.absent_frames, covered_frames=ld.covered_frames,
+                   reappearances=ld.reappearances, reacquired=ld.reacquired,
+                   lost=[int(v) for v in lost_flags], success=_finite_list(scores.success),
                    precision_curve=_finite_list(scores.precision_curve), boxes=_finite_list(boxes),
                    update_seconds=upd_s, updates=len(times),
                    fps=(len(times) / upd_s) if upd_s > 0 else None,

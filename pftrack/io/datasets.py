@@ -49,6 +49,10 @@ class Sequence:
     fps: float | None = None
     size: tuple[int, int] | None = None  # (width, height) when the layout states it
     attributes: list[str] = field(default_factory=list)
+    #: (n_frames,) bool: frames where the target is out of view or fully hidden (ground truth rows of NaN
+    #: in the file, or the ``hidden`` frames of a ``meta.json`` beside it); None when unknown
+    absent: np.ndarray | None = None
+    meta: dict = field(default_factory=dict)  # the parsed meta.json, when present
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -223,7 +227,32 @@ def read_otb(path: str | Path) -> Sequence:
     attrs_txt = path / "attrs.txt"
     if not attributes and attrs_txt.is_file():
         attributes = [a.strip() for a in attrs_txt.read_text(encoding="utf-8", errors="replace").split(",") if a.strip()]
-    return Sequence(path.name, "otb", path, files, groundtruth=_pad_gt(boxes, len(files)), attributes=attributes)
+    absent = np.zeros(len(files), dtype=bool)
+    m = min(len(files), boxes.shape[0])
+    absent[:m] = ~np.all(np.isfinite(boxes[:m]), axis=1)  # NaN rows in the file: out of view (TLD convention)
+    meta = read_meta(path)
+    hidden = meta.get("hidden", [])
+    if not isinstance(hidden, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in hidden):
+        raise FormatError(f"{path / 'meta.json'}: 'hidden' must be a list of frame numbers (from 1)")
+    for number in hidden:
+        if 1 <= number <= len(files):
+            absent[number - 1] = True
+    return Sequence(path.name, "otb", path, files, groundtruth=_pad_gt(boxes, len(files)), attributes=attributes,
+                    absent=absent, meta=meta)
+
+
+def read_meta(path: Path) -> dict:
+    """The optional ``meta.json`` of a sequence folder (synthetic scenes write one), or ``{}``."""
+    meta_path = Path(path) / "meta.json"
+    if not meta_path.is_file():
+        return {}
+    try:
+        meta = json.loads(meta_path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise FormatError(f"{meta_path}: invalid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise FormatError(f"{meta_path}: expected a JSON object")
+    return meta
 
 
 # ------------------------------------------------------------------------------ VOT

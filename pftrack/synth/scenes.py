@@ -93,6 +93,9 @@ class SceneSpec:
     illumination: tuple[float, float, float] | None = None  # BGR gain reached at the last frame (linear drift)
     illumination_target_only: bool = False
     camera_path: tuple[tuple[float, float, float], ...] = ()  # (frame, dx, dy): background pan
+    gray: bool = False  # render grey frames (all three channels equal), as from a monochrome camera
+    kind: str = ""  # the generator's name, written to meta.json
+    nuisances: tuple[tuple[str, object], ...] = ()  # what the generator drew from the seed (meta.json)
 
 
 @dataclass(frozen=True)
@@ -254,6 +257,8 @@ class Scene:
             nrng = np.random.default_rng([spec.seed, 3, t])
             canvas += nrng.standard_normal(canvas.shape, dtype=np.float32) * np.float32(spec.noise)
         frame = np.clip(canvas + 0.5, 0, 255).astype(np.uint8)
+        if spec.gray:
+            frame = cv2.cvtColor(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
         return frame, Truth(boxes=boxes, visible=np.clip(visible, 0.0, 1.0), present=present)
 
     def __iter__(self):
@@ -374,28 +379,45 @@ def waving_scene(seed: int = 0, n_frames: int = 200, *, crossings: int = 6, ampl
     return SceneSpec(n_frames=n_frames, seed=seed, targets=(tgt, dis))
 
 
-SCENES = {
-    "simple": simple_scene,
-    "occlusion": occlusion_scene,
-    "full-occlusion": lambda seed=0, **kw: occlusion_scene(seed, full=True, **kw),
-    "illumination": illumination_scene,
-    "entering": entering_scene,
-    "crossing": crossing_scene,
-    "waving": waving_scene,
-}
+#: A target with less than this visible fraction counts as fully hidden (``hidden`` frames of meta.json).
+HIDDEN_BELOW = 0.1
 
 
 def export_otb(spec: SceneSpec, folder, *, target: int = 0, ext: str = ".png") -> None:
-    """Write a scene as an OTB sequence folder (``img/``, ``groundtruth_rect.txt``, ``attrs.txt``)."""
+    """Write a scene as an OTB sequence folder.
+
+    ``img/``, ``groundtruth_rect.txt`` (NaN rows where the target is out of the frame),
+    ``attrs.txt`` and ``meta.json``: the generator, seed and nuisances, the target's
+    visible fraction per frame and its ``hidden`` frames (numbers from 1: out of the
+    frame, or less than :data:`HIDDEN_BELOW` visible), which ``pftrack eval`` uses to
+    score the lost flag.
+    """
+    import json
     from pathlib import Path
 
     folder = Path(folder)
     (folder / "img").mkdir(parents=True, exist_ok=True)
     scene = Scene(spec)
+    visible = []
     for t in range(spec.n_frames):
-        frame, _ = scene.render(t)
+        frame, truth = scene.render(t)
+        visible.append(float(truth.visible[target]) if truth.present[target] else 0.0)
         cv2.imwrite(str(folder / "img" / f"{t + 1:04d}{ext}"), frame)
+    hidden = [t + 1 for t, v in enumerate(visible) if v < HIDDEN_BELOW]
+    meta = {"kind": spec.kind, "seed": spec.seed, "gray": spec.gray,
+            "nuisances": {k: v for k, v in spec.nuisances}, "hidden_below": HIDDEN_BELOW,
+            "hidden": hidden, "visible": [round(v, 4) for v in visible]}
+    (folder / "meta.json").write_text(json.dumps(meta, default=_jsonable) + "\n", encoding="utf-8")
     gt = scene.groundtruth(target)
+    gt[np.asarray(visible) <= 0.0] = np.nan  # out of the frame (hidden behind an occluder keeps its box)
     lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.3f}" for v in b) for b in gt]
     (folder / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
     (folder / "attrs.txt").write_text(f"synthetic, seed {spec.seed}\n", encoding="utf-8")
+
+
+def _jsonable(v):
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    return str(v)
