@@ -2,8 +2,9 @@ import numpy as np
 import pytest
 
 from pftrack._numba import NUMBA_INSTALLED
-from pftrack.cues.color import (ColorCue, bhattacharyya_coefficient, bhattacharyya_distance, ellipse_histograms,
-                                ellipse_rho, kernel_weights, make_lut, quantize, reachable_roi)
+from pftrack.cues.color import (bhattacharyya_coefficient, bhattacharyya_distance, ellipse_histograms, ellipse_rho,
+                                kernel_weights, make_lut, quantize, reachable_roi)
+from pftrack.cues.histogram_cue import ColorCue
 
 
 def reference_histogram(frame_bins, ellipse, n_bins, kernel="nummiaro"):

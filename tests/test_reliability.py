@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 import pftrack
-from pftrack.cues.color import ColorCue, bhattacharyya_coefficient
+from pftrack.cues.color import bhattacharyya_coefficient
+from pftrack.cues.histogram_cue import ColorCue
 from pftrack.cues.emd import emd_circular, emd_linear
 from pftrack.errors import FormatError, PftrackError
 from pftrack.filtering import RESAMPLERS, log_normalize

@@ -47,7 +47,8 @@ from typing import Callable, Literal
 import cv2
 import numpy as np
 
-from ..cues.color import ColorCue, warmup
+from ..cues.color import warmup
+from ..cues.histogram_cue import ColorCue
 from ..cues.contrast import box_counts, contrast_scores, foreground_lut, probability_integral
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8

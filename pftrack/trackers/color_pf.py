@@ -34,129 +34,29 @@ the particle-position variance falls below a threshold).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Callable, Literal, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..cues.color import ColorCue, reachable_roi, warmup
+from ..cues.color import reachable_roi, warmup
+from ..cues.histogram_cue import ColorCue
 from ..errors import ParameterError
-from ..filtering.dynamics import HX, HY, VX, VY, X, Y, ConstantVelocityScale
+from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
+from ..filtering.loss import LossDetector
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
-from ..frames import as_bgr_uint8
-from ..geometry import Box, box_to_ellipse, ellipse_to_box, validate_box
-from ..params import Params, param
+from ..geometry import Box, box_to_ellipse, ellipse_to_box
 from .base import Tracker, TrackState
+from .color_params import ColorModelParams, ColorPFParams
+from .color_search import SearchMixin
+
+__all__ = ["ColorModelParams", "ColorPF", "ColorPFParams", "ColorParticleFilter"]
 
 Detector = Callable[[np.ndarray], Sequence]
 _ELL_COLS = np.array([X, Y, HX, HY])
 
 
-@dataclass(frozen=True, kw_only=True)
-class ColorModelParams(Params):
-    """Colour model, weighting, model update and appearance-condition parameters shared by the colour PFs."""
-
-    n_particles: int = param(100, ge=1, le=1_000_000, doc=(
-        "N, the number of samples (§4, Fig. 2; the paper uses 100). More samples: a smoother, more "
-        "accurate estimate at linear cost."))
-    color_space: Literal["rgb", "hsv"] = param("rgb", doc=(
-        "Colour space of h(x) (§3): 'rgb' (8x8x8 bins) or 'hsv' (8x8x4 bins, less sensitive to V)."))
-    bins: tuple[int, ...] = param((), ge=1, le=256, doc=(
-        "Bins per channel; empty for the paper's 8,8,8 (RGB) or 8,8,4 (HSV). Fewer bins: more tolerant "
-        "to noise and lighting, less discriminative."))
-    kernel: Literal["nummiaro", "epanechnikov"] = param("nummiaro", doc=(
-        "Pixel weighting inside the ellipse: 'nummiaro' is k(||y-x||/a) = 1 - r^2 with "
-        "a = sqrt(Hx^2 + Hy^2) (Eqs. 2-3); 'epanechnikov' normalises r by the ellipse itself."))
-    max_pixels: int = param(1500, ge=0, le=10_000_000, doc=(
-        "Speed bound for large targets: an ellipse with more pixels than this is sampled on a regular "
-        "lattice (pitch ceil(sqrt(area / max_pixels)), anchored to the image grid) instead of at every "
-        "pixel. 1500 leaves targets up to ~44x44 px exact; measured on the dev set, 0 (every pixel, Eq. 3 "
-        "literally), 4000 and 1500 give the same accuracy (docs/color-pf.md)."))
-    sigma: float = param(0.1, gt=0, le=10, doc=(
-        "sigma of the weighting pi ∝ exp(-(1 - rho)/(2 sigma^2)) (Eq. 10). Smaller: sharper weights, "
-        "faster collapse onto the best sample; larger: flatter posterior."))
-    adaptive_sigma: bool = param(False, doc=(
-        "Book ch. 4 variant: set sigma^2 = d_min^2 / 2 each frame from the smallest Bhattacharyya "
-        "distance among the samples, so the likelihood adapts to how well the best sample matches."))
-    min_half_axis: float = param(2.0, ge=0.5, le=1000, doc="Smallest half-axis a sample may have (pixels).")
-    resampler: Literal["multinomial", "systematic", "stratified", "residual"] = param("multinomial", doc=(
-        "Selection step (Fig. 2, step 1): 'multinomial' is the paper's cumulative sums + binary search."))
-    resample_ess: float = param(1.0, gt=0, le=1, doc=(
-        "Resample when N_eff < resample_ess * N. 1 resamples every frame, as in Fig. 2."))
-    alpha: float = param(0.05, ge=0, le=1, doc=(
-        "alpha of the model update q <- (1 - alpha) q + alpha p_E[S] (Eq. 12); 0 disables adaptation. "
-        "The paper leaves it open; larger adapts faster but drifts more easily."))
-    update_gate: Literal["threshold", "lambda", "never"] = param("threshold", doc=(
-        "When to update the model: 'threshold' is Eq. 11 (pi_E[S] > pi_T); 'lambda' is the book's "
-        "ch. 4 running gate lambda = (1 - alpha_u) lambda + alpha_u pi_est; 'never' keeps the first model."))
-    update_rho: float = param(0.8, ge=0, le=1, doc=(
-        "pi_T of Eq. 11, stated as the Bhattacharyya coefficient rho_T it corresponds to: since pi (Eq. 10) "
-        "increases with rho, pi_E > pi_T <=> rho_E > rho_T. Stated on rho so it does not move with sigma."))
-    lambda_rate: float = param(0.1, gt=0, le=1, doc="alpha_u of the 'lambda' update gate (book ch. 4).")
-    kickoff_fraction: float = param(0.1, gt=0, le=1, doc=(
-        "b, the kick-off fraction (§6): tracking starts when more than b*N samples satisfy the "
-        "appearance condition, and the target is lost when fewer do for lost_frames frames."))
-    appearance_k: float = param(2.0, ge=0, le=10, doc=(
-        "The appearance condition rho > mu + k sigma_bg (Eq. 15; k = 2 gives ~95 % confidence that a "
-        "sample is not background)."))
-    lost_frames: int = param(3, ge=1, le=1000, doc=(
-        "'A couple of frames' (§6): consecutive frames with too few passing samples before the target "
-        "is declared lost."))
-    background_positions: int = param(100, ge=4, le=100_000, doc=(
-        "At most this many ellipses on a grid over the background give mu and sigma_bg (Eqs. 13-14)."))
-    background_interval: int = param(10, ge=0, le=100_000, doc=(
-        "Recompute the background statistics every this many frames while tracking (0: only at "
-        "initialisation), so they follow the adapting model and a moving camera."))
-    search: bool = param(True, doc=(
-        "Detect loss with the appearance condition and search for the target (initialisation mode). "
-        "False: always track, never report lost."))
-    search_particles: int = param(0, ge=0, le=1_000_000, doc=(
-        "Samples used while searching; 0 chooses enough to place about one sample per target-sized "
-        "cell of the frame (between N and 10 N)."))
-    search_keep: float = param(0.5, ge=0, lt=1, doc=(
-        "Fraction of search samples drawn from the previous search posterior; the rest are spread "
-        "uniformly (stratified) over the frame or the entry regions."))
-    search_method: Literal["appearance", "variance"] = param("appearance", doc=(
-        "Acquisition test: 'appearance' (Eq. 15 with the kick-off fraction b), or the book's ch. 4 "
-        "'variance' test (particle-position variance below variance_threshold)."))
-    variance_threshold: float = param(10.0, gt=0, doc=(
-        "Book ch. 4: tracking is declared when the weighted variance of the particle positions (px^2, "
-        "mean of x and y) falls below this value."))
-    detector_interval: int = param(1, ge=1, le=100_000, doc=(
-        "While searching with a detector, run it every this many frames."))
-
-    def validate(self) -> None:
-        if self.bins and len(self.bins) != 3:
-            raise ParameterError(f"parameter 'bins' must have 3 values (one per channel), got {self.bins}")
-
-
-@dataclass(frozen=True, kw_only=True)
-class ColorPFParams(ColorModelParams):
-    """Parameters of ``color-pf``; defaults follow Nummiaro et al. where the paper gives them."""
-
-    position_noise: float = param(0.2, ge=0, le=10, doc=(
-        "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
-        "(scale-invariant). The paper leaves it open."))
-    velocity_noise: float = param(0.1, ge=0, le=10, doc=(
-        "Std of the noise on the velocity (vx, vy) per frame, as a fraction of the mean half-axis."))
-    size_noise: float = param(0.0, ge=0, le=1, doc=(
-        "Std of independent noise on the half-axes Hx, Hy, as a fraction of each half-axis. 0 (default) "
-        "changes the size only through adot, which keeps the aspect ratio."))
-    scale_rate_noise: float = param(0.005, ge=0, le=1, doc=(
-        "Std of the noise on the scale-change rate adot (1/frame): about 0.5 % size change per frame."))
-    scale_damping: float = param(0.0, ge=0, le=1, doc=(
-        "Factor kappa on the scale-change rate (adot_t = kappa adot_{t-1} + w). 1 is the paper's literal "
-        "constant scale change; colour histograms observe scale weakly, so a persistent rate drifts the "
-        "size away (measured on the dev set: docs/color-pf.md). The default 0 makes the size a random "
-        "walk, as in Perez et al. and Kristan et al."))
-    max_scale_rate: float = param(0.05, ge=0, le=1, doc=(
-        "Bound on |adot|: at most this relative size change per frame from the deterministic part."))
-    min_noise_px: float = param(1.0, ge=0, le=100, doc=(
-        "Floor (pixels) for the position noise, so that tiny targets still explore."))
-
-
-class ColorParticleFilter(Tracker):
+class ColorParticleFilter(SearchMixin, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
     Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
@@ -173,7 +73,11 @@ class ColorParticleFilter(Tracker):
         super().__init__(params, rng=rng, seed=seed)
         p = self.params
         self.dim = len(self.state_names)
-        self.cue = ColorCue(p.color_space, tuple(p.bins) or None, p.kernel, p.max_pixels)
+        self.cue = ColorCue(p.color_space, tuple(p.bins) or None, p.kernel, p.max_pixels,
+                            gray_bins=tuple(p.gray_bins), gradient_threshold=p.gradient_threshold)
+        self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
+                                 history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
+                                 sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
         self.resampler = get_resampler(p.resampler)
         if detector is not None and not callable(detector):
             raise ParameterError("detector must be a callable frame -> boxes")
@@ -196,6 +100,9 @@ class ColorParticleFilter(Tracker):
         self.last_score = 0.0
         self.lam: float | None = None
         self.size = (0.0, 0.0)  # half-axes used while searching
+        self._confident_size = (0.0, 0.0)  # half-axes when the loss test was last confident
+        self._confident_motion = None  # (frame index, position, velocity) when last confident
+        self._lost_at = None  # the same, for the current loss (search prediction)
         self.regions: np.ndarray | None = None
         self._search_states: np.ndarray | None = None
         self._search_loglik: np.ndarray | None = None
@@ -266,8 +173,10 @@ class ColorParticleFilter(Tracker):
         rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h))
         rho = rho[tot > 0]
         if rho.size >= 2:
-            self.bg_mu = float(rho.mean())
-            self.bg_sd = float(rho.std())
+            # Eqs. 13-14, with a floor on the spread so a non-discriminative scene cannot collapse it
+            self.loss.set_background(rho)
+            self.bg_mu = self.loss.app_mu
+            self.bg_sd = self.loss.app_sd
         self._since_bg = 0
 
     # ------------------------------------------------------------------ init
@@ -285,14 +194,21 @@ class ColorParticleFilter(Tracker):
         self.estimate = self.ps._mean.copy()
         self.mode = "tracking"
         self.miss = 0
+        self.loss.miss = 0
+        self.loss.lost = False
+        self._lost_at = None
         self._search_states = None
         self._search_loglik = None
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         self._reset()
+        self.cue.adapt_to(frame)  # grey features on grey input ("auto")
+        self.cue.new_frame(frame)
+        self.loss.reset(1.0)
         ell = box_to_ellipse(box)
         self._set_model(self.cue.histogram(frame, ell))
         self.size = (float(ell[2]), float(ell[3]))
+        self._confident_size = self.size
         state = self._initial_state(ell)
         self._start_tracking(np.tile(state, (self.params.n_particles, 1)))
         self._background_stats(frame, ell)
@@ -300,83 +216,9 @@ class ColorParticleFilter(Tracker):
         self.last_score = 1.0
         return self._state(box=self.last_box, score=1.0, lost=False)
 
-    def init_auto(self, frame: np.ndarray, histogram: np.ndarray, size: tuple[float, float], *,
-                  regions: Sequence[Sequence[float]] | None = None) -> TrackState:
-        """Automatic initialisation from a known target histogram (§6).
-
-        Parameters
-        ----------
-        histogram : the target model ``q`` (any non-negative array with ``cue.n_bins``
-            entries; it is normalised).
-        size : expected ``(w, h)`` of the target in pixels.
-        regions : optional entry regions ``(x, y, w, h)`` where the target is expected
-            to appear (doors, image borders); by default samples cover the whole frame.
-
-        The tracker starts in initialisation mode and reports ``lost=True`` until more
-        than ``b N`` samples satisfy the appearance condition (Eq. 15).
-        """
-        frame = as_bgr_uint8(frame, where="init frame")
-        hist = np.asarray(histogram, dtype=np.float64).ravel()
-        if hist.size != self.cue.n_bins or not np.all(np.isfinite(hist)) or hist.min() < 0 or hist.sum() <= 0:
-            raise ParameterError(f"histogram must have {self.cue.n_bins} finite non-negative values with a positive sum")
-        w, h = (float(v) for v in size)
-        if not (w > 0 and h > 0 and math.isfinite(w) and math.isfinite(h)):
-            raise ParameterError(f"size must be a positive (w, h), got {size!r}")
-        self._shape = frame.shape[:2]
-        self.frame_index = 0
-        self._reset()
-        self._set_model(hist)
-        self.size = (w / 2.0, h / 2.0)
-        if regions is not None:
-            fh, fw = self._shape
-            self.regions = np.array([validate_box(r, fw, fh) for r in regions], dtype=np.float64).reshape(-1, 4)
-        self._background_stats(frame, None)
-        self.mode = "searching"
-        return self._search(frame)
-
-    def init_detect(self, frame: np.ndarray) -> TrackState:
-        """Initialise from the tracker's detector: the highest-scoring detection becomes the target.
-
-        Without a detection the tracker waits (``lost=True``) and runs the detector on
-        the following frames until one appears.
-        """
-        if self.detector is None:
-            raise ParameterError("init_detect needs a detector (create_tracker(..., detector=callable))")
-        frame = as_bgr_uint8(frame, where="init frame")
-        self._shape = frame.shape[:2]
-        self.frame_index = 0
-        self._reset()
-        box = self._best_detection(frame)
-        if box is not None:
-            return self._init(frame, box)
-        self.mode = "detecting"
-        return self._state(box=(0.0, 0.0, 0.0, 0.0), score=0.0, lost=True)
-
-    def _detections(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        out = self.detector(frame)
-        boxes, scores = [], []
-        for det in out if out is not None else []:
-            det = [float(v) for v in det]
-            if len(det) < 4:
-                continue
-            x, y, w, h = det[:4]
-            if w > 0 and h > 0 and all(math.isfinite(v) for v in det[:4]):
-                boxes.append((x, y, w, h))
-                scores.append(det[4] if len(det) > 4 else 1.0)
-        return np.array(boxes, dtype=np.float64).reshape(-1, 4), np.array(scores, dtype=np.float64)
-
-    def _best_detection(self, frame: np.ndarray) -> Box | None:
-        boxes, scores = self._detections(frame)
-        fh, fw = frame.shape[:2]
-        for i in np.argsort(-scores, kind="stable"):
-            try:
-                return validate_box(boxes[i], fw, fh)
-            except ValueError:
-                continue
-        return None
-
     # ------------------------------------------------------------------ update
     def _update(self, frame: np.ndarray) -> TrackState:
+        self.cue.new_frame(frame)
         if self.mode == "tracking":
             state = self._track(frame)
         elif self.mode == "detecting":
@@ -449,23 +291,44 @@ class ColorParticleFilter(Tracker):
         # appearance condition (Eq. 15) -> lost detection (§6)
         thr = self._threshold()
         n_pass = int(np.count_nonzero(rho > thr))
-        if not ok or n_pass < p.kickoff_fraction * n:
-            self.miss += 1
+        info = {"mode": "tracking", "n_pass": n_pass, "threshold": thr, "rho": rho_e}
+        if p.loss_test == "likelihood":
+            # two-class test on the estimate's score with hysteresis (pftrack.filtering.loss)
+            lost_now, score = self.loss.step(rho_e if ok and tot_e[0] > 0 else float("nan"))
+            self.miss = self.loss.miss
+            confident = self.loss.confident(rho_e)
+            info["llr"] = self.loss.llr
         else:
-            self.miss = 0
-        info = {"mode": "tracking", "n_pass": n_pass, "threshold": thr}
-        if p.search and (self.miss >= p.lost_frames or not ok):
-            self.size = (float(est[HX]), float(est[HY]))
+            if not ok or n_pass < p.kickoff_fraction * n:
+                self.miss += 1
+            else:
+                self.miss = 0
+            lost_now, score = self.miss >= p.lost_frames or not ok, rho_e
+            confident = self.miss == 0
+        if confident:
+            self._confident_size = (float(est[HX]), float(est[HY]))
+            self._confident_motion = (self.frame_index, est[[X, Y]].copy(), est[[VX, VY]].copy())
+        if p.search and lost_now:
+            # search at the size the target had when last seen clearly (a target that is leaving the
+            # frame or being covered shrinks the estimate on its way out)
+            self.size = self._confident_size if p.loss_test == "likelihood" else (float(est[HX]), float(est[HY]))
             self.mode = "searching"
+            self.loss.lost = True
+            self._lost_at = self._confident_motion
             self._search_states = None
-            return self._state(box=self.last_box or box, score=rho_e, lost=True, info={**info, "mode": "lost"})
-        # (6) model update (Eqs. 11-12) or the book's lambda gate
+            return self._state(box=self.last_box or box, score=min(score, 0.5) if p.loss_test == "likelihood"
+                               else score, lost=True, info={**info, "mode": "lost"})
+        if not p.search:
+            self.loss.lost = False
+        # (6) model update (Eqs. 11-12), the loss test's own confidence, or the book's lambda gate
         if ok and tot_e[0] > 0 and p.alpha > 0:
-            if p.update_gate == "threshold":
-                if rho_e > p.update_rho:
-                    self._set_model((1.0 - p.alpha) * self.q + p.alpha * p_e)
-                    self._update_models(frame, est, feats, rho_e)
-            elif p.update_gate == "lambda":
+            gate = p.update_gate
+            if gate == "confident" and p.loss_test != "likelihood":
+                gate = "threshold"
+            if (gate == "confident" and confident) or (gate == "threshold" and rho_e > p.update_rho):
+                self._set_model((1.0 - p.alpha) * self.q + p.alpha * p_e)
+                self._update_models(frame, est, feats, rho_e)
+            elif gate == "lambda":
                 pi_e = self._pi(rho_e)
                 if self.lam is None:
                     self.lam = pi_e
@@ -473,7 +336,7 @@ class ColorParticleFilter(Tracker):
                     if pi_e > self.lam and self.miss == 0:
                         self._set_model((1.0 - p.alpha) * self.q + p.alpha * p_e)
                     self.lam = (1.0 - p.lambda_rate) * self.lam + p.lambda_rate * pi_e
-        if p.background_interval and self.miss == 0:
+        if p.background_interval and confident:
             self._since_bg += 1
             if self._since_bg >= p.background_interval:
                 self.size = (float(est[HX]), float(est[HY]))
@@ -481,119 +344,7 @@ class ColorParticleFilter(Tracker):
         if self.miss == 0:
             self.last_box = box
         self.last_score = rho_e
-        return self._state(box=box, score=rho_e, lost=False, info=info)
-
-    # ------------------------------------------------------------------ search
-    def _n_search(self) -> int:
-        p = self.params
-        if p.search_particles:
-            return p.search_particles
-        fh, fw = self._shape
-        hx, hy = self.size
-        area = fw * fh if self.regions is None else float(np.sum(self.regions[:, 2] * self.regions[:, 3]))
-        cells = int(math.ceil(area / max(4.0 * hx * hy, 1.0)))
-        return int(min(max(cells, p.n_particles), 10 * p.n_particles))
-
-    def _uniform_positions(self, m: int) -> np.ndarray:
-        """``m`` stratified positions over the frame (or the entry regions)."""
-        rng = self.rng
-        if self.regions is None:
-            fh, fw = self._shape
-            boxes = np.array([[0.0, 0.0, fw, fh]])
-        else:
-            boxes = self.regions
-        areas = boxes[:, 2] * boxes[:, 3]
-        # split m among the regions in proportion to their area (largest remainder)
-        share = m * areas / areas.sum()
-        counts = np.floor(share).astype(int)
-        counts[np.argsort(-(share - counts))[: m - counts.sum()]] += 1
-        out = []
-        for (x, y, w, h), c in zip(boxes, counts):
-            if c <= 0:
-                continue
-            nx = max(1, int(round(math.sqrt(c * w / h))))
-            ny = max(1, int(math.ceil(c / nx)))
-            cell = rng.permutation(nx * ny)[:c]
-            cx = (cell % nx + rng.random(c)) * (w / nx) + x
-            cy = (cell // nx + rng.random(c)) * (h / ny) + y
-            out.append(np.column_stack([cx, cy]))
-        return np.concatenate(out) if out else np.empty((0, 2))
-
-    def _search(self, frame: np.ndarray) -> TrackState:
-        """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
-        p = self.params
-        n_s = self._n_search()
-        hx, hy = self.size
-        states = np.zeros((n_s, self.dim))
-        n_keep = 0
-        if self._search_states is not None and p.search_keep > 0:
-            n_keep = int(round(p.search_keep * n_s))
-            w = np.exp(self._search_loglik - self._search_loglik.max())
-            idx = self.resampler(w / w.sum(), self.rng)[:n_keep]
-            if idx.size < n_keep:
-                idx = idx[self.rng.integers(0, idx.size, n_keep)]
-            states[:n_keep] = self._search_states[idx]
-            spread = max(p.position_noise * 0.5 * (hx + hy), p.min_noise_px) * 2.0
-            states[:n_keep, X:Y + 1] += self.rng.normal(0.0, spread, (n_keep, 2))
-            states[:n_keep, HX:HY + 1] *= np.exp(self.rng.normal(0.0, 0.05, (n_keep, 1)))
-        n_new = n_s - n_keep
-        states[n_keep:, X:Y + 1] = self._uniform_positions(n_new)
-        scale = np.exp(self.rng.normal(0.0, 0.1, (n_new, 1)))
-        states[n_keep:, HX] = hx * scale[:, 0]
-        states[n_keep:, HY] = hy * scale[:, 0]
-        self._clip_states(states)
-        ell = self._ellipses(states)
-        rho, tot, _ = self._rho(frame, ell)
-        loglik = self._log_lik(rho, tot)
-        if not np.isfinite(loglik).any():
-            loglik = np.zeros_like(loglik)
-        self._search_states = states
-        self._search_loglik = loglik
-        thr = self._threshold()
-        best = int(np.argmax(np.where(tot > 0, rho, -1.0)))
-        # samples belonging to the best candidate: within one target size of it
-        near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
-        found = False
-        if p.search_method == "appearance":
-            cluster = near & (rho > thr) & (tot > 0)
-            found = cluster.sum() > p.kickoff_fraction * p.n_particles
-        else:
-            cluster = near & (tot > 0)
-            lw = np.where(cluster, loglik, -np.inf)
-            ww = np.exp(lw - lw.max())
-            ww /= ww.sum()
-            pos = states[:, X:Y + 1]
-            mean = (ww[:, None] * pos).sum(axis=0)
-            var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
-            found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
-        if not found and self.detector is not None and self.frame_index % p.detector_interval == 0:
-            boxes, _ = self._detections(frame)
-            if boxes.shape[0]:
-                d_ell = box_to_ellipse(boxes)
-                d_rho, d_tot, _ = self._rho(frame, d_ell)
-                d_rho = np.where(d_tot > 0, d_rho, -1.0)
-                k = int(np.argmax(d_rho))
-                if d_rho[k] > thr:
-                    self.size = (float(d_ell[k, 2]), float(d_ell[k, 3]))
-                    state = self._initial_state(d_ell[k])
-                    self._start_tracking(np.tile(state, (p.n_particles, 1)))
-                    box = tuple(float(v) for v in boxes[k])
-                    self.last_box = box
-                    return self._state(box=box, score=float(d_rho[k]), lost=False,
-                                       info={"mode": "acquired", "threshold": thr})
-        info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr}
-        if found:
-            self._start_tracking(states[cluster], loglik[cluster])
-            est = self.estimate
-            box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
-            self.last_box = box
-            self.size = (float(est[HX]), float(est[HY]))
-            return self._state(box=box, score=float(rho[best]), lost=False, info={**info, "mode": "acquired"})
-        box = self.last_box
-        if box is None:
-            box = tuple(float(v) for v in ellipse_to_box(ell[best]))
-        return self._state(box=box, score=float(max(rho[best], 0.0)), lost=True, info=info,
-                           particles=states, weights=np.exp(loglik - loglik.max()))
+        return self._state(box=box, score=score, lost=False, info=info)
 
     # ------------------------------------------------------------------ output
     def _state(self, *, box, score, lost, info=None, particles=None, weights=None) -> TrackState:

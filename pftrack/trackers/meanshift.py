@@ -27,7 +27,8 @@ from typing import Literal
 
 import numpy as np
 
-from ..cues.color import ColorCue, ellipse_pixels, warmup
+from ..cues.color import ellipse_pixels, warmup
+from ..cues.histogram_cue import ColorCue
 from ..filtering.kalman import KalmanFilter
 from ..geometry import Box, box_to_ellipse, ellipse_to_box
 from ..params import Params, param

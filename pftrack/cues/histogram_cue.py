@@ -1,0 +1,220 @@
+"""The histogram observation model of the colour trackers, with features chosen from the input.
+
+:class:`ColorCue` quantises the region the particles can reach once per frame and
+scores a batch of ellipses by their kernel histograms (Nummiaro et al., Eqs. 3-6;
+kernels in :mod:`pftrack.cues.color`).  What a pixel's bin describes depends on
+the input (the cue chooses its features, GUIDE §8):
+
+* ``"rgb"`` (8x8x8) or ``"hsv"`` (8x8x4) colour bins;
+* ``"gray"``: equalised intensity x gradient orientation (:mod:`pftrack.cues.intensity`)
+  for frames that carry no colour;
+* ``"auto"`` (the trackers' default): ``"gray"`` when the first frame is grey, else
+  the colour space given as ``fallback`` — decided by :meth:`ColorCue.adapt_to`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .color import (DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, make_lut,
+                    quantize, reachable_roi)
+from .intensity import equalization_lut, is_gray, quantize_gray
+
+FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
+#: Default grey features: intensity bins, orientation bins (plus one "flat" bin).
+DEFAULT_GRAY_BINS = (16, 8)
+
+
+@dataclass
+class ColorFeatures:
+    """A frame region quantised to colour bins (the output of :meth:`ColorCue.prepare`).
+
+    With ``pitch > 1`` only every ``pitch``-th pixel of every ``pitch``-th row was
+    quantised (a lattice anchored to the image grid): ``bins[k, l]`` is image pixel
+    ``(x0 + l * pitch, y0 + k * pitch)``.
+    """
+
+    bins: np.ndarray  # (h, w) uint16, C-contiguous
+    x0: int
+    y0: int
+    pitch: int = 1
+
+    def to_lattice(self, ellipses: np.ndarray) -> tuple[np.ndarray, int, int]:
+        """Ellipses in the coordinates of ``bins`` (and the origin to pass to the kernels).
+
+        A lattice sample ``k`` has its centre at image ``x0 + k p + 0.5``; in lattice
+        units ``(c - x0 - 0.5) / p + 0.5`` puts it at ``k + 0.5``, and both the
+        ellipse test and the kernel weights are invariant to the common scaling.
+        """
+        if self.pitch == 1:
+            return ellipses, self.x0, self.y0
+        p = float(self.pitch)
+        e = np.empty_like(ellipses)
+        e[:, 0] = (ellipses[:, 0] - self.x0 - 0.5) / p + 0.5
+        e[:, 1] = (ellipses[:, 1] - self.y0 - 0.5) / p + 0.5
+        e[:, 2] = ellipses[:, 2] / p
+        e[:, 3] = ellipses[:, 3] / p
+        return e, 0, 0
+
+
+class ColorCue:
+    """Histogram observation model (colour, or intensity x orientation on grey input).
+
+    Parameters
+    ----------
+    color_space : ``"rgb"`` (8x8x8 bins), ``"hsv"`` (8x8x4 bins), ``"gray"`` (intensity x
+        gradient orientation) or ``"auto"`` (grey features on grey input, else ``fallback``;
+        see :meth:`adapt_to`).
+    bins : colour bins per channel; ``None`` for the default of the colour space.
+    kernel : see :func:`~pftrack.cues.color.ellipse_histograms`.
+    max_pixels : when an ellipse has more pixels than this, sample it on a regular
+        lattice of pitch ``ceil(sqrt(area / max_pixels))`` (0: always every pixel).
+    gray_bins : ``(n_intensity, n_orientation)`` of the grey features.
+    gradient_threshold : Sobel magnitude (on the equalised image, levels 0-255) below
+        which a pixel falls in the "flat" orientation bin.
+    fallback : the colour space ``"auto"`` uses on colour input.
+    """
+
+    def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
+                 kernel: KernelName = "nummiaro", max_pixels: int = 0, *,
+                 gray_bins: tuple[int, int] = DEFAULT_GRAY_BINS, gradient_threshold: float = 40.0,
+                 fallback: ColorSpace = "rgb"):
+        if color_space not in FEATURE_SPACES:
+            raise ValueError(f"unknown colour space {color_space!r}")
+        if fallback not in DEFAULT_BINS:
+            raise ValueError(f"unknown fallback colour space {fallback!r}")
+        if kernel not in KERNELS:
+            raise ValueError(f"unknown kernel {kernel!r}")
+        gb = tuple(int(b) for b in gray_bins)
+        if len(gb) != 2 or not (1 <= gb[0] <= 256 and 1 <= gb[1] <= 64):
+            raise ValueError(f"gray_bins must be (intensity 1-256, orientation 1-64), got {gray_bins!r}")
+        self.requested = color_space
+        self.fallback = fallback
+        self.user_bins = bins
+        self.gray_bins = gb
+        self.gradient_threshold = float(gradient_threshold)
+        self.kernel = kernel
+        self.max_pixels = int(max_pixels)
+        self._eq_lut = np.arange(256, dtype=np.uint8)
+        self._set_space(fallback if color_space == "auto" else color_space)
+
+    def adapt_to(self, frame: np.ndarray) -> str:
+        """Choose the features from the input (``"auto"``): grey features on a grey frame.
+
+        Called by the trackers on their initialisation frame; returns the space in use.
+        """
+        if self.requested == "auto":
+            self._set_space("gray" if is_gray(frame) else self.fallback)
+        return self.color_space
+
+    def new_frame(self, frame: np.ndarray) -> None:
+        """Per-frame preparation: the equalisation table of the grey features (cheap, subsampled)."""
+        if self.color_space == "gray":
+            self._eq_lut = equalization_lut(frame)
+
+    def _set_space(self, space: str) -> None:
+        self.color_space = space
+        if space == "gray":
+            ni, no = self.gray_bins
+            self.bins = (ni, no + 1, 1)
+            self.lut = None
+        else:
+            self.bins = tuple(int(b) for b in (self.user_bins or DEFAULT_BINS[space]))
+            if len(self.bins) != 3 or min(self.bins) < 1 or max(self.bins) > 256:
+                raise ValueError(f"bins must be 3 integers in [1, 256], got {self.user_bins!r}")
+            self.lut = make_lut(space, self.bins)
+        self.n_bins = int(np.prod(self.bins))
+        self._qbuf = np.empty(0, dtype=np.uint16)
+        self._hbuf = np.empty((0, self.n_bins))
+        self._tbuf = np.empty(0)
+        self._rbuf = np.empty(0)
+        self._rtot = np.empty(0)
+        self._scratch = np.zeros((2, self.n_bins))
+
+    # -- features -----------------------------------------------------------------
+    def prepare(self, frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int = 1) -> ColorFeatures:
+        """Quantise the region ``roi = (x0, y0, x1, y1)`` of a BGR frame once.
+
+        With ``pitch > 1`` only the lattice ``x % pitch == y % pitch == 0`` is quantised
+        (see :meth:`step_for`), which divides the work by ``pitch**2``.
+        """
+        x0, y0, x1, y1 = roi
+        pitch = max(int(pitch), 1)
+        x0 -= x0 % pitch
+        y0 -= y0 % pitch
+        if self.color_space == "gray":
+            h, w = len(range(y0, min(y1, frame.shape[0]), pitch)), len(range(x0, min(x1, frame.shape[1]), pitch))
+            if self._qbuf.size < h * w:
+                self._qbuf = np.empty(h * w, dtype=np.uint16)
+            out = self._qbuf[: h * w].reshape(h, w)
+            if h and w:
+                ni, no = self.gray_bins
+                quantize_gray(frame, (x0, y0, x1, y1), pitch, self._eq_lut, n_intensity=ni, n_orientation=no,
+                              gradient_threshold=self.gradient_threshold, out=out)
+            return ColorFeatures(out, x0, y0, pitch)
+        region = frame[y0:y1:pitch, x0:x1:pitch]
+        if self.color_space == "hsv" and region.size:
+            region = cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2HSV)
+        h, w = region.shape[:2]
+        if self._qbuf.size < h * w:
+            self._qbuf = np.empty(h * w, dtype=np.uint16)
+        out = self._qbuf[: h * w].reshape(h, w)  # contiguous: rows of the region are adjacent in memory
+        if h and w:
+            quantize(region, self.lut, out)
+        return ColorFeatures(out, x0, y0, pitch)
+
+    def prepare_frame(self, frame: np.ndarray, pitch: int = 1) -> ColorFeatures:
+        return self.prepare(frame, (0, 0, frame.shape[1], frame.shape[0]), pitch)
+
+    # -- histograms ---------------------------------------------------------------
+    def step_for(self, ellipses: np.ndarray) -> int:
+        """Lattice pitch for a batch of ellipses: one for all, from their mean area and ``max_pixels``."""
+        if self.max_pixels <= 0:
+            return 1
+        e = np.asarray(ellipses).reshape(-1, 4)
+        area = math.pi * float(np.mean(e[:, 2] * e[:, 3]))
+        return max(1, int(math.ceil(math.sqrt(area / self.max_pixels))))
+
+    def histograms(self, features: ColorFeatures, ellipses: np.ndarray, *, reuse: bool = True
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Histograms of a batch of ellipses; with ``reuse`` the returned arrays are
+        internal buffers valid until the next call."""
+        e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
+        n = e.shape[0]
+        if reuse:
+            if self._hbuf.shape[0] < n:
+                self._hbuf = np.empty((n, self.n_bins))
+                self._tbuf = np.empty(n)
+            out, tot = self._hbuf[:n], self._tbuf[:n]
+        else:
+            out, tot = np.empty((n, self.n_bins)), np.empty(n)
+        e, ox, oy = features.to_lattice(e)
+        return ellipse_histograms(features.bins, ox, oy, e, self.n_bins, kernel=self.kernel, out=out, totals=tot)
+
+    def rho(self, features: ColorFeatures, ellipses: np.ndarray, sqrt_q: np.ndarray, *, reuse: bool = True
+            ) -> tuple[np.ndarray, np.ndarray]:
+        """Bhattacharyya coefficients with a model (given as ``sqrt(q)``) and kernel masses of a batch."""
+        e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
+        n = e.shape[0]
+        if reuse:
+            if self._rbuf.shape[0] < n:
+                self._rbuf = np.empty(n)
+                self._rtot = np.empty(n)
+            out, tot = self._rbuf[:n], self._rtot[:n]
+        else:
+            out, tot = np.empty(n), np.empty(n)
+        e, ox, oy = features.to_lattice(e)
+        return ellipse_rho(features.bins, ox, oy, e, sqrt_q, kernel=self.kernel, out=out, totals=tot,
+                           _scratch=self._scratch)
+
+    def histogram(self, frame: np.ndarray, ellipse) -> np.ndarray:
+        """Histogram of one ellipse in a frame (a new array)."""
+        e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
+        roi = reachable_roi(e, frame.shape[1], frame.shape[0])
+        feats = self.prepare(frame, roi, self.step_for(e))
+        hist, _ = self.histograms(feats, e, reuse=False)
+        return hist[0]

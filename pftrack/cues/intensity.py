@@ -1,0 +1,96 @@
+"""Features for grey frames: equalised intensity x gradient orientation.
+
+On a grey frame (a monochrome camera, or all three channels equal) an RGB
+histogram collapses onto its diagonal: 8 of its 512 bins are used, the target
+and the background look alike, and the appearance condition of Nummiaro et al.
+loses its meaning.  The colour trackers then describe a pixel instead by
+
+* its **intensity after global histogram equalisation** of the frame (the rank
+  of its grey level in the frame), which a global, monotonic illumination change
+  leaves almost unchanged, in ``n_intensity`` bins; and
+* the **orientation of its intensity gradient** (3x3 Sobel on the equalised
+  image), in ``n_orientation`` bins over ``[0, 2 pi)``, or a "flat" bin when the
+  gradient magnitude is below ``gradient_threshold``: a structure cue that a
+  gain change does not move at all.
+
+The joint bin is ``i_bin * (n_orientation + 1) + o_bin``: the histogram has
+``n_intensity * (n_orientation + 1)`` bins and plugs into the same kernel
+histogram and Bhattacharyya machinery as the colour bins.
+
+:func:`is_gray` decides from the input which features a cue uses.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+
+def is_gray(frame: np.ndarray, *, tolerance: int = 2, stride: int = 4) -> bool:
+    """True when a BGR frame carries no colour (every channel within ``tolerance`` of the others).
+
+    Checked on a ``stride`` lattice; a 2-D array is grey by definition.  JPEG
+    compression of a grey source leaves channel differences of a level or two.
+    """
+    if frame.ndim == 2 or frame.shape[2] == 1:
+        return True
+    s = frame[::stride, ::stride].astype(np.int16)
+    d = np.maximum(np.abs(s[..., 0] - s[..., 1]), np.abs(s[..., 1] - s[..., 2]))
+    return bool(np.percentile(d, 99) <= tolerance)
+
+
+def to_gray(region: np.ndarray) -> np.ndarray:
+    """uint8 grey of a BGR or grey region (contiguous)."""
+    if region.ndim == 2:
+        return np.ascontiguousarray(region)
+    if region.shape[2] == 1:
+        return np.ascontiguousarray(region[..., 0])
+    return cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2GRAY)
+
+
+def equalization_lut(frame: np.ndarray, *, stride: int = 4) -> np.ndarray:
+    """``(256,)`` uint8 lookup table of global histogram equalisation, from a ``stride`` lattice.
+
+    The table maps a grey level to its rank in the frame (the cumulative
+    histogram), scaled to ``[0, 255]``; it is monotonic, so structure is kept.
+    """
+    sub = to_gray(frame[::stride, ::stride])
+    hist = np.bincount(sub.ravel(), minlength=256).astype(np.float64)
+    cdf = np.cumsum(hist)
+    total = cdf[-1]
+    if total <= 0:
+        return np.arange(256, dtype=np.uint8)
+    # mid-rank of each level, so a flat frame maps to the middle grey rather than to 255
+    mid = (cdf - 0.5 * hist) / total
+    return np.clip(np.round(mid * 255.0), 0, 255).astype(np.uint8)
+
+
+def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int, lut: np.ndarray, *,
+                  n_intensity: int, n_orientation: int, gradient_threshold: float,
+                  out: np.ndarray | None = None) -> np.ndarray:
+    """Joint intensity/orientation bin of every ``pitch``-th pixel of ``roi = (x0, y0, x1, y1)``.
+
+    ``x0, y0`` must already be multiples of ``pitch``.  The gradient is computed on
+    the full-resolution region grown by one pixel (so the region's border pixels
+    have true gradients), then sampled on the lattice.  Returns ``(h, w)`` uint16.
+    """
+    x0, y0, x1, y1 = roi
+    fh, fw = frame.shape[:2]
+    gx0, gy0, gx1, gy1 = max(x0 - 1, 0), max(y0 - 1, 0), min(x1 + 1, fw), min(y1 + 1, fh)
+    g = cv2.LUT(to_gray(frame[gy0:gy1, gx0:gx1]), lut)
+    dx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    dy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    sl = (slice(y0 - gy0, y1 - gy0, pitch), slice(x0 - gx0, x1 - gx0, pitch))
+    g, dx, dy = g[sl], dx[sl], dy[sl]
+    mag, ang = cv2.cartToPolar(np.ascontiguousarray(dx), np.ascontiguousarray(dy))
+    ob = (ang * np.float32(n_orientation / (2.0 * math.pi))).astype(np.int32)
+    ob[ob >= n_orientation] = 0  # the angle 2 pi wraps to 0
+    ob[mag < gradient_threshold] = n_orientation  # the "flat" bin
+    ib = (g.astype(np.int32) * n_intensity) >> 8
+    h, w = g.shape
+    if out is None:
+        out = np.empty((h, w), dtype=np.uint16)
+    np.add(ib * (n_orientation + 1), ob, out=out, casting="unsafe")
+    return out

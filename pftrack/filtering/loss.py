@@ -1,0 +1,214 @@
+"""Loss detection: is the estimate on the target, or has the target gone?
+
+Nummiaro et al. (§6, Eqs. 13-15) decide with the *appearance condition*: a sample
+is target-like when its Bhattacharyya coefficient ``rho`` exceeds ``mu + 2 sigma`` of
+the coefficients measured at background positions, and the target is lost when
+fewer than ``b N`` samples pass "for a couple of frames".  That test has two
+weaknesses on real and varied video:
+
+* the background statistics collapse when the model does not discriminate (grey
+  frames, a flat scene): ``sigma -> 0`` and nothing passes, so the target is "lost"
+  while the estimate sits on it;
+* it knows only the background: a clutter patch or a similar-hued distractor that
+  beats ``mu + 2 sigma`` keeps the flag down while the target is hidden.
+
+This module keeps the appearance condition as the background half of a two-class
+test and adds what it needs to generalise:
+
+* **background statistics that do not collapse**: ``sigma_b`` has a floor;
+* **a target score history**: the mean and spread of the estimate's score while
+  it was confidently tracked (exponentially weighted), whose spread grows while
+  the target is unobserved, so a changed target can still be re-acquired;
+* **a likelihood ratio**: ``LLR(s) = log N(s; mu_t, sigma_t) - log N(s; mu_b, sigma_b)``
+  with the score clamped to ``[mu_b, mu_t]`` (the test is one-sided on both ends,
+  so a score better than the history is never evidence of absence);
+* **hysteresis**: lost after ``lost_frames`` consecutive frames with ``LLR < 0``,
+  found again only when ``LLR > reacquire_margin``.
+
+The **confidence** reported to the user is the posterior ``P(target | s) =
+sigmoid(LLR)`` with equal priors, so ``score < 0.5`` on ``lost_frames`` frames is
+exactly what raises ``lost`` (the flag and the score agree).
+
+Pure functions (:func:`score_llr`, :func:`robust_background`) and a small state
+holder (:class:`LossDetector`); no images.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+_LOG_CLIP = 30.0
+
+
+def robust_background(scores: np.ndarray, *, sd_floor: float) -> tuple[float, float]:
+    """Mean and spread of background scores (Eqs. 13-14) with a floor on the spread.
+
+    The spread is the larger of the standard deviation and ``1.4826 MAD`` (so a few
+    outlying background positions do not shrink it), and at least ``sd_floor``.
+    """
+    s = np.asarray(scores, dtype=np.float64)
+    s = s[np.isfinite(s)]
+    if s.size == 0:
+        return 0.0, sd_floor
+    mu = float(s.mean())
+    sd = float(s.std())
+    mad = 1.4826 * float(np.median(np.abs(s - np.median(s))))
+    return mu, max(sd, mad, sd_floor)
+
+
+def absent_distribution(scores: np.ndarray, *, tail: float, sd_floor: float) -> tuple[float, float]:
+    """Mean and spread of the score the estimate has when the target is absent.
+
+    With the target gone, the particles settle on the best-matching clutter near
+    them, so the estimate's score is not a typical background score but one from
+    the upper tail of the background's: the mean and spread of the top ``tail``
+    fraction (at least three positions) of the background scores, spread floored.
+    """
+    s = np.sort(np.asarray(scores, dtype=np.float64)[np.isfinite(scores)])
+    if s.size == 0:
+        return 0.0, sd_floor
+    k = max(3, int(math.ceil(tail * s.size)))
+    top = s[-k:]
+    return float(top.mean()), max(float(top.std()), sd_floor)
+
+
+def score_llr(s: float, mu_t: float, sd_t: float, mu_b: float, sd_b: float) -> float:
+    """Log-likelihood ratio target vs background of a score ``s`` (clamped to ``[mu_b, mu_t]``).
+
+    ``s`` above the target mean counts as the target mean and below the background
+    mean as the background mean, so the ratio is monotone in ``s``.  When the
+    target history is not above the background (``mu_t <= mu_b``) the ratio is
+    0: the score does not discriminate.
+    """
+    if not math.isfinite(s):
+        return -_LOG_CLIP
+    if mu_t <= mu_b:
+        return 0.0
+    x = min(max(s, mu_b), mu_t)
+    zt = (x - mu_t) / sd_t
+    zb = (x - mu_b) / sd_b
+    llr = -0.5 * zt * zt - math.log(sd_t) + 0.5 * zb * zb + math.log(sd_b)
+    return float(min(max(llr, -_LOG_CLIP), _LOG_CLIP))
+
+
+def confidence(llr: float) -> float:
+    """``P(target | s) = 1 / (1 + exp(-LLR))`` with equal priors."""
+    return 1.0 / (1.0 + math.exp(-llr))
+
+
+@dataclass
+class LossDetector:
+    """Two-class loss test with a score history and hysteresis (see the module docstring).
+
+    Parameters
+    ----------
+    lost_frames : consecutive frames with ``LLR < 0`` before the target is declared lost.
+    reacquire_margin : ``LLR`` a candidate must exceed to end a loss (hysteresis).
+    history_rate : weight of a new score in the exponentially weighted target history.
+    sd_floor_target, sd_floor_background : floors on the two spreads (scores in [0, 1]).
+    unseen_growth, unseen_max : while the target is not confidently observed, ``sigma_t``
+        grows by ``unseen_growth`` per frame, up to ``unseen_max`` (its appearance may have
+        changed meanwhile).
+    background_tail : the absent hypothesis is the top fraction of the background scores.
+    learn_z : a score more than this many spreads below the history's mean is not
+        learned and does not re-acquire (see :meth:`confident`).
+    """
+
+    lost_frames: int = 3
+    reacquire_margin: float = 1.0
+    history_rate: float = 0.05
+    sd_floor_target: float = 0.03
+    sd_floor_background: float = 0.03
+    unseen_growth: float = 0.001
+    unseen_max: float = 0.1
+    background_tail: float = 0.1
+    learn_z: float = 2.0
+
+    def __post_init__(self) -> None:
+        self.reset(1.0)
+
+    def reset(self, initial_score: float, *, sd: float = 0.1) -> None:
+        """Start a new target whose expected score is ``initial_score`` with spread ``sd`` (a vague prior
+        that the history narrows as confident scores arrive)."""
+        self.mu_t = float(initial_score)
+        self.var_t = max(float(sd), self.sd_floor_target) ** 2
+        self.unseen = 0
+        self.mu_b = self.app_mu = 0.0
+        self.sd_b = self.app_sd = self.sd_floor_background
+        self.miss = 0
+        self.lost = False
+        self.llr = _LOG_CLIP
+
+    @property
+    def sd_t(self) -> float:
+        return math.sqrt(self.var_t) + min(self.unseen * self.unseen_growth, self.unseen_max)
+
+    def set_background(self, scores: np.ndarray) -> None:
+        """Background scores of the current frame: the appearance statistics (Eqs. 13-14) and the
+        absent hypothesis (their upper tail)."""
+        self.app_mu, self.app_sd = robust_background(scores, sd_floor=self.sd_floor_background)
+        self.mu_b, self.sd_b = absent_distribution(scores, tail=self.background_tail,
+                                                   sd_floor=self.sd_floor_background)
+
+    def threshold(self) -> float:
+        """The score at which ``LLR = 0`` (for display; the test itself uses :meth:`evaluate`)."""
+        lo, hi = self.mu_b, self.mu_t
+        if hi <= lo:
+            return lo
+        for _ in range(40):  # bisection on a monotone function
+            mid = 0.5 * (lo + hi)
+            if score_llr(mid, self.mu_t, self.sd_t, self.mu_b, self.sd_b) < 0:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi)
+
+    def evaluate(self, s: float) -> float:
+        """``LLR`` of a score under the current statistics (no state change)."""
+        return score_llr(s, self.mu_t, self.sd_t, self.mu_b, self.sd_b)
+
+    def step(self, s: float) -> tuple[bool, float]:
+        """Feed the estimate's score of a tracked frame; returns ``(lost, confidence)``.
+
+        The target history learns from the score only while it is clearly
+        target-like (``LLR > reacquire_margin``) and consistent with the history
+        (no lower than ``learn_z`` spreads below its mean), so the history does not
+        follow the score down while the target is being covered.
+        """
+        llr = self.evaluate(s)
+        self.llr = llr
+        if llr < 0.0:
+            self.miss += 1
+        else:
+            self.miss = 0
+        if self.confident(s):
+            a = self.history_rate
+            d = s - self.mu_t
+            self.mu_t += a * d
+            self.var_t = max((1.0 - a) * (self.var_t + a * d * d), self.sd_floor_target ** 2)
+            self.unseen = 0
+        else:
+            self.unseen += 1
+        self.lost = self.miss >= self.lost_frames
+        return self.lost, confidence(llr)
+
+    def confident(self, s: float) -> bool:
+        """Is ``s`` clearly the target's (``LLR > reacquire_margin``) and consistent with its history?
+
+        The same condition gates the model update of the trackers, so the update and
+        the loss test never disagree."""
+        return (math.isfinite(s) and self.llr > self.reacquire_margin
+                and (s - self.mu_t) / self.sd_t > -self.learn_z)
+
+    def acquire(self, s: float) -> bool:
+        """While lost: does a candidate with score ``s`` end the loss (hysteresis margin)?"""
+        self.unseen += 1
+        self.llr = self.evaluate(s)
+        if self.confident(s):
+            self.lost = False
+            self.miss = 0
+            return True
+        return False

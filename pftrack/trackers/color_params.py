@@ -1,0 +1,149 @@
+"""Parameters shared by the colour particle filters (``color-pf``, ``fusion-pf``, ``local-motion-pf``).
+
+Each field cites the equation of Nummiaro et al. (``shared/seeds/004_*``) it comes
+from, or says that the paper leaves it open and what raising or lowering it does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from ..errors import ParameterError
+from ..params import Params, param
+
+
+@dataclass(frozen=True, kw_only=True)
+class ColorModelParams(Params):
+    """Colour model, weighting, model update and appearance-condition parameters shared by the colour PFs."""
+
+    n_particles: int = param(100, ge=1, le=1_000_000, doc=(
+        "N, the number of samples (§4, Fig. 2; the paper uses 100). More samples: a smoother, more "
+        "accurate estimate at linear cost."))
+    color_space: Literal["auto", "rgb", "hsv", "gray"] = param("auto", doc=(
+        "Features of h(x) (§3): 'rgb' (8x8x8 bins), 'hsv' (8x8x4, less sensitive to V), 'gray' (equalised "
+        "intensity x gradient orientation, for frames without colour) or 'auto': 'gray' when the first frame "
+        "is grey, else 'rgb'. On grey input an RGB histogram collapses onto 8 diagonal bins."))
+    bins: tuple[int, ...] = param((), ge=1, le=256, doc=(
+        "Colour bins per channel; empty for the paper's 8,8,8 (RGB) or 8,8,4 (HSV). Fewer bins: more tolerant "
+        "to noise and lighting, less discriminative."))
+    gray_bins: tuple[int, ...] = param((16, 8), ge=1, le=256, doc=(
+        "Grey features: (intensity bins after global equalisation, gradient-orientation bins); one more bin "
+        "holds flat pixels. More intensity bins: more discriminative, less tolerant to local lighting."))
+    gradient_threshold: float = param(40.0, ge=0, le=2000, doc=(
+        "Grey features: Sobel magnitude (equalised levels) below which a pixel counts as flat."))
+    kernel: Literal["nummiaro", "epanechnikov"] = param("nummiaro", doc=(
+        "Pixel weighting inside the ellipse: 'nummiaro' is k(||y-x||/a) = 1 - r^2 with "
+        "a = sqrt(Hx^2 + Hy^2) (Eqs. 2-3); 'epanechnikov' normalises r by the ellipse itself."))
+    max_pixels: int = param(1500, ge=0, le=10_000_000, doc=(
+        "Speed bound for large targets: an ellipse with more pixels than this is sampled on a regular "
+        "lattice (pitch ceil(sqrt(area / max_pixels)), anchored to the image grid) instead of at every "
+        "pixel. 1500 leaves targets up to ~44x44 px exact; measured on the dev set, 0 (every pixel, Eq. 3 "
+        "literally), 4000 and 1500 give the same accuracy (docs/color-pf.md)."))
+    sigma: float = param(0.1, gt=0, le=10, doc=(
+        "sigma of the weighting pi ∝ exp(-(1 - rho)/(2 sigma^2)) (Eq. 10). Smaller: sharper weights, "
+        "faster collapse onto the best sample; larger: flatter posterior."))
+    adaptive_sigma: bool = param(False, doc=(
+        "Book ch. 4 variant: set sigma^2 = d_min^2 / 2 each frame from the smallest Bhattacharyya "
+        "distance among the samples, so the likelihood adapts to how well the best sample matches."))
+    min_half_axis: float = param(2.0, ge=0.5, le=1000, doc="Smallest half-axis a sample may have (pixels).")
+    resampler: Literal["multinomial", "systematic", "stratified", "residual"] = param("multinomial", doc=(
+        "Selection step (Fig. 2, step 1): 'multinomial' is the paper's cumulative sums + binary search."))
+    resample_ess: float = param(1.0, gt=0, le=1, doc=(
+        "Resample when N_eff < resample_ess * N. 1 resamples every frame, as in Fig. 2."))
+    alpha: float = param(0.05, ge=0, le=1, doc=(
+        "alpha of the model update q <- (1 - alpha) q + alpha p_E[S] (Eq. 12); 0 disables adaptation. "
+        "The paper leaves it open; larger adapts faster but drifts more easily."))
+    update_gate: Literal["confident", "threshold", "lambda", "never"] = param("confident", doc=(
+        "When to update the model: 'confident' updates while the loss test is sure the estimate is on the "
+        "target (LLR > reacquire_margin), so the update and the loss test never disagree under a lighting "
+        "drift; 'threshold' is Eq. 11 (pi_E[S] > pi_T); 'lambda' is the book's ch. 4 running gate "
+        "lambda = (1 - alpha_u) lambda + alpha_u pi_est; 'never' keeps the first model."))
+    update_rho: float = param(0.8, ge=0, le=1, doc=(
+        "pi_T of Eq. 11, stated as the Bhattacharyya coefficient rho_T it corresponds to: since pi (Eq. 10) "
+        "increases with rho, pi_E > pi_T <=> rho_E > rho_T. Stated on rho so it does not move with sigma."))
+    lambda_rate: float = param(0.1, gt=0, le=1, doc="alpha_u of the 'lambda' update gate (book ch. 4).")
+    kickoff_fraction: float = param(0.1, gt=0, le=1, doc=(
+        "b, the kick-off fraction (§6): tracking starts when more than b*N samples satisfy the "
+        "appearance condition, and the target is lost when fewer do for lost_frames frames."))
+    appearance_k: float = param(2.0, ge=0, le=10, doc=(
+        "The appearance condition rho > mu + k sigma_bg (Eq. 15; k = 2 gives ~95 % confidence that a "
+        "sample is not background)."))
+    lost_frames: int = param(3, ge=1, le=1000, doc=(
+        "'A couple of frames' (§6): consecutive frames of absence evidence before the target is declared "
+        "lost. Larger: fewer false alarms, later detection."))
+    loss_test: Literal["likelihood", "appearance"] = param("likelihood", doc=(
+        "'likelihood': the estimate's rho is tested against two distributions, the background's (Eqs. 13-14, "
+        "spread floored) and the target's own score history, LLR = log N(rho; mu_t, s_t) - log N(rho; mu_b, "
+        "s_b); lost after lost_frames frames with LLR < 0, found again when a candidate has LLR > "
+        "reacquire_margin (pftrack.filtering.loss). 'appearance': the paper's test, fewer than b N samples "
+        "with rho > mu + k sigma."))
+    reacquire_margin: float = param(1.0, ge=0, le=20, doc=(
+        "Hysteresis of the loss test: LLR a candidate must exceed to end a loss (and, with the 'confident' "
+        "gate, for the model to update). Larger: fewer false re-acquisitions on distractors, slower recovery."))
+    history_rate: float = param(0.05, gt=0, le=1, doc=(
+        "Weight of a new confident score in the target's score history (mean and spread of rho)."))
+    history_z: float = param(2.0, gt=0, le=20, doc=(
+        "A score more than this many spreads below the target history's mean is not learned, does not update "
+        "the model and does not re-acquire. Smaller: stricter re-acquisition, more false 'lost' on fast "
+        "appearance change."))
+    score_sd_floor: float = param(0.03, gt=0, le=1, doc=(
+        "Floor on the spreads of the background and target score distributions, so neither collapses "
+        "(grey or flat scenes)."))
+    background_positions: int = param(100, ge=4, le=100_000, doc=(
+        "At most this many ellipses on a grid over the background give mu and sigma_bg (Eqs. 13-14)."))
+    background_interval: int = param(10, ge=0, le=100_000, doc=(
+        "Recompute the background statistics every this many frames while tracking (0: only at "
+        "initialisation), so they follow the adapting model and a moving camera."))
+    search: bool = param(True, doc=(
+        "Detect loss with the appearance condition and search for the target (initialisation mode). "
+        "False: always track, never report lost."))
+    search_particles: int = param(0, ge=0, le=1_000_000, doc=(
+        "Samples used while searching; 0 chooses enough to place about four samples per target-sized "
+        "cell of the frame (between N and 10 N)."))
+    search_keep: float = param(0.1, ge=0, lt=1, doc=(
+        "Fraction of search samples drawn from the previous search posterior; the rest are spread "
+        "uniformly (stratified) over the frame or the entry regions."))
+    search_predict: float = param(0.5, ge=0, le=1, doc=(
+        "Fraction of the new search samples drawn around the position predicted from the target's last "
+        "confident velocity (constant-velocity extrapolation, spread growing with the time lost); the rest "
+        "are spread over the frame. 0: uniform search only (the paper)."))
+    search_method: Literal["appearance", "variance"] = param("appearance", doc=(
+        "Acquisition test: 'appearance' (Eq. 15 with the kick-off fraction b), or the book's ch. 4 "
+        "'variance' test (particle-position variance below variance_threshold)."))
+    variance_threshold: float = param(10.0, gt=0, doc=(
+        "Book ch. 4: tracking is declared when the weighted variance of the particle positions (px^2, "
+        "mean of x and y) falls below this value."))
+    detector_interval: int = param(1, ge=1, le=100_000, doc=(
+        "While searching with a detector, run it every this many frames."))
+
+    def validate(self) -> None:
+        if self.bins and len(self.bins) != 3:
+            raise ParameterError(f"parameter 'bins' must have 3 values (one per channel), got {self.bins}")
+        if len(self.gray_bins) != 2 or self.gray_bins[1] > 64:
+            raise ParameterError(f"parameter 'gray_bins' must be (intensity, orientation <= 64), got {self.gray_bins}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ColorPFParams(ColorModelParams):
+    """Parameters of ``color-pf``; defaults follow Nummiaro et al. where the paper gives them."""
+
+    position_noise: float = param(0.2, ge=0, le=10, doc=(
+        "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
+        "(scale-invariant). The paper leaves it open."))
+    velocity_noise: float = param(0.1, ge=0, le=10, doc=(
+        "Std of the noise on the velocity (vx, vy) per frame, as a fraction of the mean half-axis."))
+    size_noise: float = param(0.0, ge=0, le=1, doc=(
+        "Std of independent noise on the half-axes Hx, Hy, as a fraction of each half-axis. 0 (default) "
+        "changes the size only through adot, which keeps the aspect ratio."))
+    scale_rate_noise: float = param(0.005, ge=0, le=1, doc=(
+        "Std of the noise on the scale-change rate adot (1/frame): about 0.5 % size change per frame."))
+    scale_damping: float = param(0.0, ge=0, le=1, doc=(
+        "Factor kappa on the scale-change rate (adot_t = kappa adot_{t-1} + w). 1 is the paper's literal "
+        "constant scale change; colour histograms observe scale weakly, so a persistent rate drifts the "
+        "size away (measured on the dev set: docs/color-pf.md). The default 0 makes the size a random "
+        "walk, as in Perez et al. and Kristan et al."))
+    max_scale_rate: float = param(0.05, ge=0, le=1, doc=(
+        "Bound on |adot|: at most this relative size change per frame from the deterministic part."))
+    min_noise_px: float = param(1.0, ge=0, le=100, doc=(
+        "Floor (pixels) for the position noise, so that tiny targets still explore."))

@@ -1,0 +1,238 @@
+"""Initialisation mode of the colour particle filters (Nummiaro et al. §6): search, detect, re-acquire.
+
+While the target is lost, or before it has been seen, samples are spread over
+the frame (or over entry regions) and the appearance condition (Eq. 15) picks a
+candidate; with the likelihood loss test (:mod:`pftrack.filtering.loss`) the
+candidate must also look like the target's score history before tracking
+resumes.  A detector callable may propose candidates too.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..filtering.dynamics import HX, HY, X, Y
+from ..filtering.loss import confidence
+from ..frames import as_bgr_uint8
+from ..geometry import Box, box_to_ellipse, ellipse_to_box, validate_box
+from .base import TrackState
+
+_ELL_COLS = np.array([X, Y, HX, HY])
+
+
+class SearchMixin:
+    """Search, automatic initialisation and detector hand-off for :class:`ColorParticleFilter`."""
+
+    def init_auto(self, frame: np.ndarray, histogram: np.ndarray, size: tuple[float, float], *,
+                  regions: Sequence[Sequence[float]] | None = None) -> TrackState:
+        """Automatic initialisation from a known target histogram (§6).
+
+        Parameters
+        ----------
+        histogram : the target model ``q`` (any non-negative array with ``cue.n_bins``
+            entries; it is normalised).
+        size : expected ``(w, h)`` of the target in pixels.
+        regions : optional entry regions ``(x, y, w, h)`` where the target is expected
+            to appear (doors, image borders); by default samples cover the whole frame.
+
+        The tracker starts in initialisation mode and reports ``lost=True`` until more
+        than ``b N`` samples satisfy the appearance condition (Eq. 15).
+        """
+        frame = as_bgr_uint8(frame, where="init frame")
+        hist = np.asarray(histogram, dtype=np.float64).ravel()
+        if hist.size != self.cue.n_bins or not np.all(np.isfinite(hist)) or hist.min() < 0 or hist.sum() <= 0:
+            raise ParameterError(f"histogram must have {self.cue.n_bins} finite non-negative values with a positive sum")
+        w, h = (float(v) for v in size)
+        if not (w > 0 and h > 0 and math.isfinite(w) and math.isfinite(h)):
+            raise ParameterError(f"size must be a positive (w, h), got {size!r}")
+        self._shape = frame.shape[:2]
+        self.frame_index = 0
+        self._reset()
+        self._set_model(hist)
+        self.size = (w / 2.0, h / 2.0)
+        if regions is not None:
+            fh, fw = self._shape
+            self.regions = np.array([validate_box(r, fw, fh) for r in regions], dtype=np.float64).reshape(-1, 4)
+        self.cue.adapt_to(frame)
+        self.cue.new_frame(frame)
+        self._background_stats(frame, None)
+        self.loss.reset(1.0, sd=0.2)  # no target history yet: a vague prior on its score
+        self.loss.lost = True
+        self.mode = "searching"
+        return self._search(frame)
+
+    def init_detect(self, frame: np.ndarray) -> TrackState:
+        """Initialise from the tracker's detector: the highest-scoring detection becomes the target.
+
+        Without a detection the tracker waits (``lost=True``) and runs the detector on
+        the following frames until one appears.
+        """
+        if self.detector is None:
+            raise ParameterError("init_detect needs a detector (create_tracker(..., detector=callable))")
+        frame = as_bgr_uint8(frame, where="init frame")
+        self._shape = frame.shape[:2]
+        self.frame_index = 0
+        self._reset()
+        box = self._best_detection(frame)
+        if box is not None:
+            return self._init(frame, box)
+        self.mode = "detecting"
+        return self._state(box=(0.0, 0.0, 0.0, 0.0), score=0.0, lost=True)
+
+    def _detections(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        out = self.detector(frame)
+        boxes, scores = [], []
+        for det in out if out is not None else []:
+            det = [float(v) for v in det]
+            if len(det) < 4:
+                continue
+            x, y, w, h = det[:4]
+            if w > 0 and h > 0 and all(math.isfinite(v) for v in det[:4]):
+                boxes.append((x, y, w, h))
+                scores.append(det[4] if len(det) > 4 else 1.0)
+        return np.array(boxes, dtype=np.float64).reshape(-1, 4), np.array(scores, dtype=np.float64)
+
+    def _best_detection(self, frame: np.ndarray) -> Box | None:
+        boxes, scores = self._detections(frame)
+        fh, fw = frame.shape[:2]
+        for i in np.argsort(-scores, kind="stable"):
+            try:
+                return validate_box(boxes[i], fw, fh)
+            except ValueError:
+                continue
+        return None
+
+    # ------------------------------------------------------------------ search
+    def _n_search(self) -> int:
+        p = self.params
+        if p.search_particles:
+            return p.search_particles
+        fh, fw = self._shape
+        hx, hy = self.size
+        area = fw * fh if self.regions is None else float(np.sum(self.regions[:, 2] * self.regions[:, 3]))
+        # about four samples per target-sized cell: the likelihood peak is narrower than the target
+        cells = int(math.ceil(area / max(hx * hy, 1.0)))
+        return int(min(max(cells, p.n_particles), 10 * p.n_particles))
+
+    def _uniform_positions(self, m: int) -> np.ndarray:
+        """``m`` stratified positions over the frame (or the entry regions)."""
+        rng = self.rng
+        if self.regions is None:
+            fh, fw = self._shape
+            boxes = np.array([[0.0, 0.0, fw, fh]])
+        else:
+            boxes = self.regions
+        areas = boxes[:, 2] * boxes[:, 3]
+        # split m among the regions in proportion to their area (largest remainder)
+        share = m * areas / areas.sum()
+        counts = np.floor(share).astype(int)
+        counts[np.argsort(-(share - counts))[: m - counts.sum()]] += 1
+        out = []
+        for (x, y, w, h), c in zip(boxes, counts):
+            if c <= 0:
+                continue
+            nx = max(1, int(round(math.sqrt(c * w / h))))
+            ny = max(1, int(math.ceil(c / nx)))
+            cell = rng.permutation(nx * ny)[:c]
+            cx = (cell % nx + rng.random(c)) * (w / nx) + x
+            cy = (cell // nx + rng.random(c)) * (h / ny) + y
+            out.append(np.column_stack([cx, cy]))
+        return np.concatenate(out) if out else np.empty((0, 2))
+
+    def _search(self, frame: np.ndarray) -> TrackState:
+        """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
+        p = self.params
+        n_s = self._n_search()
+        hx, hy = self.size
+        states = np.zeros((n_s, self.dim))
+        n_keep = 0
+        if self._search_states is not None and p.search_keep > 0:
+            n_keep = int(round(p.search_keep * n_s))
+            w = np.exp(self._search_loglik - self._search_loglik.max())
+            idx = self.resampler(w / w.sum(), self.rng)[:n_keep]
+            if idx.size < n_keep:
+                idx = idx[self.rng.integers(0, idx.size, n_keep)]
+            states[:n_keep] = self._search_states[idx]
+            spread = max(p.position_noise * 0.5 * (hx + hy), p.min_noise_px) * 2.0
+            states[:n_keep, X:Y + 1] += self.rng.normal(0.0, spread, (n_keep, 2))
+            # sizes are drawn afresh around the searched size (a random walk would let them drift)
+            states[:n_keep, HX:HY + 1] = np.array([hx, hy]) * np.exp(self.rng.normal(0.0, 0.1, (n_keep, 1)))
+        n_new = n_s - n_keep
+        n_pred = 0
+        if self._lost_at is not None and p.search_predict > 0:
+            # a share of the new samples where the target would be had it kept its velocity (behind an
+            # occluder, a target usually comes out on the far side), spreading as time passes
+            k = self.frame_index - self._lost_at[0]
+            n_pred = int(round(p.search_predict * n_new))
+            centre = self._lost_at[1] + k * self._lost_at[2]
+            sd = 0.5 * (hx + hy) * (0.5 + 0.1 * k)
+            states[n_keep:n_keep + n_pred, X:Y + 1] = centre + self.rng.normal(0.0, sd, (n_pred, 2))
+        states[n_keep + n_pred:, X:Y + 1] = self._uniform_positions(n_new - n_pred)
+        scale = np.exp(self.rng.normal(0.0, 0.1, (n_new, 1)))
+        states[n_keep:, HX] = hx * scale[:, 0]
+        states[n_keep:, HY] = hy * scale[:, 0]
+        self._clip_states(states)
+        ell = self._ellipses(states)
+        rho, tot, _ = self._rho(frame, ell)
+        loglik = self._log_lik(rho, tot)
+        if not np.isfinite(loglik).any():
+            loglik = np.zeros_like(loglik)
+        self._search_states = states
+        self._search_loglik = loglik
+        thr = self._threshold()
+        best = int(np.argmax(np.where(tot > 0, rho, -1.0)))
+        # samples belonging to the best candidate: within one target size of it
+        near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
+        found = False
+        conf = None
+        if p.search_method == "appearance":
+            cluster = near & (rho > thr) & (tot > 0)
+            found = cluster.sum() > p.kickoff_fraction * p.n_particles
+            if found and p.loss_test == "likelihood":
+                # the best candidate must also look like the target's score history (hysteresis)
+                found = self.loss.acquire(float(rho[best]))
+                conf = confidence(self.loss.llr)
+        else:
+            cluster = near & (tot > 0)
+            lw = np.where(cluster, loglik, -np.inf)
+            ww = np.exp(lw - lw.max())
+            ww /= ww.sum()
+            pos = states[:, X:Y + 1]
+            mean = (ww[:, None] * pos).sum(axis=0)
+            var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
+            found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
+        if not found and self.detector is not None and self.frame_index % p.detector_interval == 0:
+            boxes, _ = self._detections(frame)
+            if boxes.shape[0]:
+                d_ell = box_to_ellipse(boxes)
+                d_rho, d_tot, _ = self._rho(frame, d_ell)
+                d_rho = np.where(d_tot > 0, d_rho, -1.0)
+                k = int(np.argmax(d_rho))
+                if d_rho[k] > thr and (p.loss_test != "likelihood" or self.loss.acquire(float(d_rho[k]))):
+                    self.size = self._confident_size = (float(d_ell[k, 2]), float(d_ell[k, 3]))
+                    state = self._initial_state(d_ell[k])
+                    self._start_tracking(np.tile(state, (p.n_particles, 1)))
+                    box = tuple(float(v) for v in boxes[k])
+                    self.last_box = box
+                    return self._state(box=box, score=float(d_rho[k]), lost=False,
+                                       info={"mode": "acquired", "threshold": thr})
+        info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr}
+        if found:
+            self._start_tracking(states[cluster], loglik[cluster])
+            est = self.estimate
+            box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
+            self.last_box = box
+            self.size = self._confident_size = (float(est[HX]), float(est[HY]))
+            score = float(rho[best]) if conf is None else conf
+            return self._state(box=box, score=score, lost=False, info={**info, "mode": "acquired"})
+        box = self.last_box
+        if box is None:
+            box = tuple(float(v) for v in ellipse_to_box(ell[best]))
+        score = float(max(rho[best], 0.0)) if p.loss_test != "likelihood" else min(
+            confidence(self.loss.evaluate(float(rho[best]))), 0.5)
+        return self._state(box=box, score=score, lost=True, info=info,
+                           particles=states, weights=np.exp(loglik - loglik.max()))

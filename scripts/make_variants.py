@@ -1,0 +1,68 @@
+"""Write grey and grey + illumination-change copies of OTB-layout sequences (for the tune/report experiments).
+
+    python scripts/make_variants.py ../shared/data/otb_crossing ../shared/data/otb_couple --out variants/
+
+For each sequence two folders are written next to each other in ``--out``:
+
+* ``NAME-gray``: every frame converted to grey (a monochrome camera);
+* ``NAME-gray-light``: grey, with a strong smooth illumination change: a global gain that
+  falls from 1.0 to 0.4 and back over the sequence, times a bright spot that drifts across the
+  frame (a lamp), seeded by the sequence name.
+
+Ground truth (``groundtruth_rect.txt``) is copied unchanged.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import zlib
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from pftrack.io.datasets import read_sequence
+
+
+def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
+    rng = np.random.default_rng(rng_seed)
+    x0, y0 = rng.uniform(0, w), rng.uniform(0, h)
+    x1, y1 = rng.uniform(0, w), rng.uniform(0, h)
+    cx, cy = x0 + (x1 - x0) * t, y0 + (y1 - y0) * t
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    r2 = ((xx - cx) ** 2 + (yy - cy) ** 2) / (0.35 * max(h, w)) ** 2
+    gain = 1.0 - 0.6 * np.sin(np.pi * t)  # 1 -> 0.4 -> 1
+    return (gain * (0.55 + 0.9 * np.exp(-r2))).astype(np.float32)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("sequences", nargs="+")
+    ap.add_argument("--out", required=True)
+    args = ap.parse_args()
+    out = Path(args.out)
+    for spec in args.sequences:
+        seq = read_sequence(spec)
+        n = len(seq.frames)
+        seed = zlib.crc32(seq.name.encode())
+        for variant in ("gray", "gray-light"):
+            dest = out / f"{seq.name}-{variant}"
+            (dest / "img").mkdir(parents=True, exist_ok=True)
+            for i, path in enumerate(seq.frames):
+                img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+                if variant == "gray-light":
+                    f = light_field(i / max(n - 1, 1), img.shape[0], img.shape[1], seed)
+                    img = np.clip(img.astype(np.float32) * f, 0, 255).astype(np.uint8)
+                cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+            gt = seq.groundtruth
+            lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.2f}" for v in b) for b in gt]
+            (dest / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+            for extra in ("ATTRIBUTION.md", "provenance.json"):
+                if (seq.path / extra).is_file():
+                    shutil.copy(seq.path / extra, dest / extra)
+        print(f"{seq.name}: {n} frames -> {out}/{seq.name}-gray, -gray-light")
+
+
+if __name__ == "__main__":
+    main()
