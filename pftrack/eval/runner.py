@@ -206,6 +206,9 @@ def run_job(job: Job) -> dict:
         return _run_mot_job(job, seq)
     if seq.groundtruth is None:
         raise FormatError(f"{job.sequence}: no single-object ground truth for protocol {job.protocol}")
+    from ..trackers.warmup import warm_up
+
+    warm_up(job.tracker.name, job.tracker.param_dict)  # no compilation inside the timed updates
     tracker = create_tracker(job.tracker.name, seed=job.seed, params=job.tracker.param_dict)
 
     def frames():
