@@ -1,0 +1,68 @@
+"""Synthetic scenes whose nuisances vary with the seed, and their meta.json."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from pftrack.cues.intensity import is_gray
+from pftrack.io.datasets import read_sequence
+from pftrack.synth import Scene, export_otb, hidden_frames, leave_scene, vanish_scene, varied_scene
+
+
+def test_nuisances_vary_with_the_seed():
+    specs = [vanish_scene(s) for s in range(12)]
+    nz = [dict(s.nuisances) for s in specs]
+    assert len({n["colors"] for n in nz}) == 12
+    assert len({round(n["size"][0], 3) for n in nz}) == 12
+    assert {n["gray"] for n in nz} == {True, False}
+    assert {n["illumination"] is None for n in nz} == {True, False}
+    assert len({n["distractors"] for n in nz}) > 1
+    assert vanish_scene(3) == vanish_scene(3)  # and are reproducible
+
+
+def test_vanish_scenes_hide_the_target_and_show_it_again():
+    for seed in range(8):
+        hid = hidden_frames(vanish_scene(seed))
+        assert 12 <= hid.sum() <= 45, (seed, hid.sum())
+        assert not hid[:5].any() and not hid[-10:].any()
+        assert np.count_nonzero(np.diff(hid.astype(int)) == 1) == 1  # one hidden run
+
+
+def test_leave_scene_target_leaves_the_frame():
+    spec = leave_scene(4)
+    scene = Scene(spec)
+    present = [scene.render(t)[1].present[0] for t in range(spec.n_frames)]
+    assert present[0] and present[-1] and not all(present)
+
+
+def test_export_writes_hidden_frames_and_grey_frames(tmp_path):
+    spec = vanish_scene(0, gray=1.0, n_frames=90)
+    export_otb(spec, tmp_path / "v")
+    meta = json.loads((tmp_path / "v" / "meta.json").read_text())
+    assert meta["gray"] and meta["kind"] == "vanish" and len(meta["visible"]) == 90
+    seq = read_sequence(tmp_path / "v")
+    assert seq.absent is not None and seq.absent.sum() == len(meta["hidden"]) > 0
+    assert list(np.nonzero(seq.absent)[0] + 1) == meta["hidden"]
+    import cv2
+
+    assert is_gray(cv2.imread(str(seq.frames[0])))
+    assert len(varied_scene(1).targets) >= 1
+
+
+def test_eval_reports_both_lost_flag_rates(tmp_path, capsys):
+    import csv
+
+    from pftrack.cli import main
+
+    assert main(["synth", "leave", "--seeds", "0", "--out", str(tmp_path / "s")]) == 0
+    rep = tmp_path / "rep"
+    assert main(["eval", str(tmp_path / "s"), "--trackers", "color-pf", "--workers", "1", "--quiet",
+                 "--report", str(rep)]) == 0
+    out = capsys.readouterr().out
+    assert "lost recall" in out and "false-lost rate" in out
+    rows = list(csv.DictReader(open(rep / "results.csv", encoding="utf-8")))
+    assert rows and rows[0]["lost_recall"] != "" and rows[0]["false_lost"] != ""
+    assert float(rows[0]["absent_frames"]) > 0
+    assert "lost recall" in (rep / "index.html").read_text(encoding="utf-8")
