@@ -32,8 +32,10 @@ class TrackState:
     ----------
     box : ``(x, y, w, h)``; while ``lost`` it is the last confident box (or the
         best candidate before the first acquisition).  Always finite.
-    score : confidence in ``[0, 1]`` (for the colour trackers the Bhattacharyya
-        coefficient of the estimate).
+    score : confidence in ``[0, 1]``. For the colour particle filters it is the loss
+        test's posterior P(target | rho) (:mod:`pftrack.filtering.loss`): ``lost`` is raised
+        when it stays below 0.5 for ``lost_frames`` frames; the Bhattacharyya coefficient of
+        the estimate is ``info["rho"]`` (with ``loss_test="appearance"`` the score is rho).
     lost : True while the target is judged absent or occluded.
     particles : ``(N, D)`` particle states (None for trackers without particles);
         ``state_names`` labels the columns.
