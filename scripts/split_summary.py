@@ -5,30 +5,53 @@
 Columns: mean OTB AUC per group; lost recall and false-lost rate (means over the runs where each is defined);
 the fraction of reappearances re-acquired within 15 frames; the median update fps on the real sequences.
 """
-import csv, sys, collections, math
-rows=list(csv.DictReader(open(sys.argv[1], encoding="utf-8")))
-def grp(seq):
-    for g in ("vanish","leave","varied"):
-        if seq.startswith(g+"-"): return g
-    if seq.endswith("-gray-light"): return "graylight"
-    if seq.endswith("-gray"): return "gray"
+
+from __future__ import annotations
+
+import csv
+import sys
+from collections import defaultdict
+
+GROUPS = ["real", "gray", "graylight", "varied", "vanish", "leave"]
+
+
+def group_of(sequence: str) -> str:
+    for g in ("vanish", "leave", "varied"):
+        if sequence.startswith(g + "-"):
+            return g
+    if sequence.endswith("-gray-light"):
+        return "graylight"
+    if sequence.endswith("-gray"):
+        return "gray"
     return "real"
-agg=collections.defaultdict(lambda: collections.defaultdict(list))
-for r in rows:
-    g=grp(r["sequence"]); t=r["tracker"]
-    for k in ("auc","lost_recall","false_lost","fps"):
-        v=r.get(k)
-        if v not in ("",None): agg[(t,g)][k].append(float(v))
-    agg[(t,g)]["reapp"].append(float(r.get("reappearances") or 0)); agg[(t,g)]["reacq"].append(float(r.get("reacquired") or 0))
-ts=sorted({t for t,_ in agg}); gs=["real","gray","graylight","varied","vanish","leave"]
-print(f"{'tracker':40s} "+" ".join(f"{g:>10s}" for g in gs)+"   recall  falseL  reacq   fps")
-for t in ts:
-    cells=[]
-    for g in gs:
-        a=agg.get((t,g),{}).get("auc",[])
-        cells.append(f"{sum(a)/len(a):10.3f}" if a else " "*10)
-    rec=[v for g in gs for v in agg.get((t,g),{}).get("lost_recall",[])]
-    fl=[v for g in gs for v in agg.get((t,g),{}).get("false_lost",[])]
-    ra=sum(v for g in gs for v in agg.get((t,g),{}).get("reacq",[])); rp=sum(v for g in gs for v in agg.get((t,g),{}).get("reapp",[]))
-    fps=sorted(v for g in ("real",) for v in agg.get((t,g),{}).get("fps",[]))
-    print(f"{t:40s} "+" ".join(cells)+f"   {sum(rec)/max(len(rec),1):.3f}   {sum(fl)/max(len(fl),1):.3f}  {ra/max(rp,1):.2f}  {fps[len(fps)//2] if fps else 0:.0f}")
+
+
+def _mean(vals: list[float]) -> float:
+    return sum(vals) / len(vals) if vals else float("nan")
+
+
+def main(path: str) -> None:
+    with open(path, encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    cells: dict[tuple[str, str], dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
+    for r in rows:
+        cell = cells[(r["tracker"], group_of(r["sequence"]))]
+        for key in ("auc", "lost_recall", "false_lost", "fps", "reappearances", "reacquired"):
+            if r.get(key) not in ("", None):
+                cell[key].append(float(r[key]))
+    trackers = sorted({t for t, _ in cells})
+    print(f"{'tracker':40s} " + " ".join(f"{g:>10s}" for g in GROUPS) + "   recall  falseL  reacq   fps")
+    for t in trackers:
+        per = [cells.get((t, g), {}) for g in GROUPS]
+        aucs = " ".join(f"{_mean(c.get('auc', [])):10.3f}" for c in per)
+        recall = _mean([v for c in per for v in c.get("lost_recall", [])])
+        false = _mean([v for c in per for v in c.get("false_lost", [])])
+        reapp = sum(v for c in per for v in c.get("reappearances", []))
+        reacq = sum(v for c in per for v in c.get("reacquired", []))
+        fps = sorted(cells.get((t, "real"), {}).get("fps", []))
+        med = fps[len(fps) // 2] if fps else float("nan")
+        print(f"{t:40s} {aucs}   {recall:.3f}   {false:.3f}  {reacq / max(reapp, 1):.2f}  {med:.0f}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
