@@ -7,10 +7,16 @@ the distractor has the target's colours and passes in front). A failure is a mea
 10 frames. Kernels are warmed up before timing. Results: docs/robustness.md.
 """
 
-import time, sys, numpy as np, pftrack
-from pftrack.synth import Scene, crossing_scene
+import sys
+import time
+
+import numpy as np
+
+import pftrack
 from pftrack.geometry import iou
+from pftrack.synth import Scene, crossing_scene
 from pftrack.trackers.warmup import warm_up
+
 cfgs = {"color": ("local-motion-pf", {"motion": False}), "motion": ("local-motion-pf", {}), "color-pf": ("color-pf", {})}
 extra = dict(a.split("=") for a in sys.argv[1:])
 extra = {k: (int(v) if v.isdigit() else float(v) if v.replace('.','',1).isdigit() else v) for k,v in extra.items()}
