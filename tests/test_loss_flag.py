@@ -146,3 +146,33 @@ def test_lost_flag_on_a_target_leaving_the_frame():
     assert recall >= 0.7, recall
     assert false <= 0.15, false  # measured 0.10 on these seeds (the paper's test: 0.16)
     assert all(math.isfinite(r.recall) for r in res)
+
+
+def test_gain_normalisation_undoes_a_per_channel_light_change():
+    """'gain'/'adaptive' RGB normalisation: a frame under a coloured light change gets the reference bins back."""
+    rng = np.random.default_rng(5)
+    ref = rng.integers(30, 160, (60, 80, 3), dtype=np.uint8)
+    lit = np.clip(ref.astype(np.float64) * np.array([1.4, 0.8, 1.2]), 0, 255).astype(np.uint8)
+    for mode in ("gain", "adaptive"):
+        cue = ColorCue("rgb", normalize=mode)
+        cue.adapt_to(ref)
+        cue.new_frame(ref)
+        a = cue.prepare_frame(ref).bins.copy()
+        cue.new_frame(lit)
+        b = cue.prepare_frame(lit).bins
+        assert np.mean(a == b) > 0.9, mode
+    raw = ColorCue("rgb")
+    raw.new_frame(lit)
+    assert np.mean(raw.prepare_frame(lit).bins == a) < 0.5
+
+
+def test_adaptive_reference_follows_confident_frames_only():
+    rng = np.random.default_rng(6)
+    f0 = rng.integers(30, 160, (40, 40, 3), dtype=np.uint8)
+    f1 = np.clip(f0 * 1.5, 0, 255).astype(np.uint8)
+    cue = ColorCue("rgb", normalize="adaptive")
+    cue.adapt_to(f0)
+    cue.new_frame(f1)
+    before = cue._ref_levels.copy()
+    cue.confirm(0.5)
+    assert np.all(cue._ref_levels > before)  # moved half-way towards the new light

@@ -22,7 +22,8 @@ import numpy as np
 
 from .color import (DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, make_lut,
                     quantize, reachable_roi)
-from .intensity import equalization_lut, is_gray, quantize_gray
+from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
+                        quantize_gray)
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Default grey features: intensity bins, orientation bins (plus one "flat" bin).
@@ -77,12 +78,22 @@ class ColorCue:
     gradient_threshold : Sobel magnitude (on the equalised image, levels 0-255) below
         which a pixel falls in the "flat" orientation bin.
     fallback : the colour space ``"auto"`` uses on colour input.
+    normalize : RGB features under changing light: ``"none"``; ``"gain"`` divides each channel
+        by its gain relative to the initialisation frame (per-channel medians, von Kries);
+        ``"adaptive"`` is ``"gain"`` with a reference that follows the frames the tracker is
+        confident on (:meth:`confirm`) and freezes otherwise, so a lighting change that
+        happens while the target is hidden is undone when it reappears;
+        ``"equalize"`` equalises each channel's histogram over the frame.
     """
 
     def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
                  kernel: KernelName = "nummiaro", max_pixels: int = 0, *,
                  gray_bins: tuple[int, int] = DEFAULT_GRAY_BINS, gradient_threshold: float = 40.0,
-                 fallback: ColorSpace = "rgb"):
+                 fallback: ColorSpace = "rgb", normalize: str = "none"):
+        if normalize not in ("none", "gain", "adaptive", "equalize"):
+            raise ValueError(f"unknown colour normalisation {normalize!r}")
+        self.normalize = normalize
+        self._ref_levels: np.ndarray | None = None
         if color_space not in FEATURE_SPACES:
             raise ValueError(f"unknown colour space {color_space!r}")
         if fallback not in DEFAULT_BINS:
@@ -109,12 +120,30 @@ class ColorCue:
         """
         if self.requested == "auto":
             self._set_space("gray" if is_gray(frame) else self.fallback)
+        if self.color_space == "rgb" and self.normalize in ("gain", "adaptive") and frame.ndim == 3:
+            self._ref_levels = channel_levels(frame)
         return self.color_space
 
     def new_frame(self, frame: np.ndarray) -> None:
-        """Per-frame preparation: the equalisation table of the grey features (cheap, subsampled)."""
+        """Per-frame preparation (cheap, from a subsampled frame): the equalisation table of the grey
+        features, or the lighting normalisation of the RGB bins."""
         if self.color_space == "gray":
             self._eq_lut = equalization_lut(frame)
+        elif self.color_space == "rgb" and self.normalize != "none" and frame.ndim == 3:
+            if self.normalize in ("gain", "adaptive"):
+                self._levels = channel_levels(frame)
+                if self._ref_levels is None:
+                    self._ref_levels = self._levels.copy()
+                maps = gain_maps(self._ref_levels, self._levels)
+            else:
+                maps = channel_equalization_maps(frame)
+            # compose: bin index = base_lut[c][map_c[value]]
+            self.lut = np.ascontiguousarray(np.take_along_axis(self._base_lut, maps.astype(np.intp), axis=1))
+
+    def confirm(self, rate: float) -> None:
+        """The tracker is confident on this frame: move the ``"adaptive"`` reference towards its levels."""
+        if self.normalize == "adaptive" and self._ref_levels is not None and getattr(self, "_levels", None) is not None:
+            self._ref_levels += rate * (self._levels - self._ref_levels)
 
     def _set_space(self, space: str) -> None:
         self.color_space = space
@@ -127,6 +156,7 @@ class ColorCue:
             if len(self.bins) != 3 or min(self.bins) < 1 or max(self.bins) > 256:
                 raise ValueError(f"bins must be 3 integers in [1, 256], got {self.user_bins!r}")
             self.lut = make_lut(space, self.bins)
+        self._base_lut = self.lut
         self.n_bins = int(np.prod(self.bins))
         self._qbuf = np.empty(0, dtype=np.uint16)
         self._hbuf = np.empty((0, self.n_bins))

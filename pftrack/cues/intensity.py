@@ -94,3 +94,29 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
         out = np.empty((h, w), dtype=np.uint16)
     np.add(ib * (n_orientation + 1), ob, out=out, casting="unsafe")
     return out
+
+
+# ------------------------------------------------------------------------------ colour frames under changing light
+
+def channel_levels(frame: np.ndarray, *, stride: int = 4) -> np.ndarray:
+    """Robust per-channel level of a BGR frame: the median of a ``stride`` lattice, ``(3,)`` float."""
+    sub = frame[::stride, ::stride].reshape(-1, frame.shape[2] if frame.ndim == 3 else 1)
+    return np.maximum(np.median(sub, axis=0).astype(np.float64), 1.0)
+
+
+def gain_maps(reference: np.ndarray, current: np.ndarray) -> np.ndarray:
+    """``(3, 256)`` uint8 maps that undo a per-channel gain (von Kries adaptation to a reference frame).
+
+    A global illumination change scales each channel by a factor; dividing by the
+    ratio of the channel levels now and in the reference frame brings the colours
+    back, so a colour model learnt in the reference frame still matches.
+    """
+    g = np.asarray(reference, np.float64) / np.asarray(current, np.float64)
+    v = np.arange(256, dtype=np.float64)
+    return np.clip(np.round(v[None, :] * g[:, None]), 0, 255).astype(np.uint8)
+
+
+def channel_equalization_maps(frame: np.ndarray, *, stride: int = 4) -> np.ndarray:
+    """``(3, 256)`` uint8 maps: global histogram equalisation of each channel (ranks, see :func:`equalization_lut`)."""
+    return np.stack([equalization_lut(np.ascontiguousarray(frame[::stride, ::stride, c]), stride=1)
+                     for c in range(3)])

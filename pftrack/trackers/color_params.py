@@ -30,6 +30,14 @@ class ColorModelParams(Params):
     gray_bins: tuple[int, ...] = param((16, 8), ge=1, le=256, doc=(
         "Grey features: (intensity bins after global equalisation, gradient-orientation bins); one more bin "
         "holds flat pixels. More intensity bins: more discriminative, less tolerant to local lighting."))
+    color_normalize: Literal["none", "gain", "adaptive", "equalize"] = param("none", doc=(
+        "RGB features under changing light: 'gain' divides each channel by its gain relative to the "
+        "initialisation frame (per-channel medians of the frame, von Kries adaptation); 'adaptive' relative to "
+        "a reference that follows the confident frames at normalize_rate and freezes while the target is "
+        "unseen; 'equalize' equalises each channel over the frame; 'none' uses raw colours (the paper)."))
+    normalize_rate: float = param(0.05, ge=0, le=1, doc=(
+        "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
+        "on."))
     gradient_threshold: float = param(40.0, ge=0, le=2000, doc=(
         "Grey features: Sobel magnitude (equalised levels) below which a pixel counts as flat."))
     kernel: Literal["nummiaro", "epanechnikov"] = param("nummiaro", doc=(
@@ -108,6 +116,9 @@ class ColorModelParams(Params):
         "Fraction of the new search samples drawn around the position predicted from the target's last "
         "confident velocity (constant-velocity extrapolation, spread growing with the time lost); the rest "
         "are spread over the frame. 0: uniform search only (the paper)."))
+    acquire_samples: int = param(3, ge=1, le=1_000_000, doc=(
+        "With the likelihood loss test: search samples near the best candidate that must pass the appearance "
+        "condition before the candidate is tested against the target's history (at most the paper's b N)."))
     search_method: Literal["appearance", "variance"] = param("appearance", doc=(
         "Acquisition test: 'appearance' (Eq. 15 with the kick-off fraction b), or the book's ch. 4 "
         "'variance' test (particle-position variance below variance_threshold)."))

@@ -74,7 +74,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         p = self.params
         self.dim = len(self.state_names)
         self.cue = ColorCue(p.color_space, tuple(p.bins) or None, p.kernel, p.max_pixels,
-                            gray_bins=tuple(p.gray_bins), gradient_threshold=p.gradient_threshold)
+                            gray_bins=tuple(p.gray_bins), gradient_threshold=p.gradient_threshold,
+                            normalize=p.color_normalize)
         self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
                                  history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                  sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
@@ -306,6 +307,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
             lost_now, score = self.miss >= p.lost_frames or not ok, rho_e
             confident = self.miss == 0
         if confident:
+            self.cue.confirm(p.normalize_rate)
             self._confident_size = (float(est[HX]), float(est[HY]))
             self._confident_motion = (self.frame_index, est[[X, Y]].copy(), est[[VX, VY]].copy())
         if p.search and lost_now:

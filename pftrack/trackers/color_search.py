@@ -191,11 +191,14 @@ class SearchMixin:
         conf = None
         if p.search_method == "appearance":
             cluster = near & (rho > thr) & (tot > 0)
-            found = cluster.sum() > p.kickoff_fraction * p.n_particles
-            if found and p.loss_test == "likelihood":
-                # the best candidate must also look like the target's score history (hysteresis)
-                found = self.loss.acquire(float(rho[best]))
+            if p.loss_test == "likelihood":
+                # the best candidate must look like the target's score history (hysteresis); that test is
+                # stricter than the count of passing samples, which then only needs a few supporters
+                found = cluster.sum() >= min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1) and \
+                    self.loss.acquire(float(rho[best]))
                 conf = confidence(self.loss.llr)
+            else:
+                found = cluster.sum() > p.kickoff_fraction * p.n_particles
         else:
             cluster = near & (tot > 0)
             lw = np.where(cluster, loglik, -np.inf)
