@@ -1,8 +1,29 @@
 """Synthetic scenes with exact ground truth (seeded)."""
 
-from .scenes import (HIDDEN_BELOW, Occluder, Scene, SceneSpec, Target, Truth, crossing_scene, entering_scene,
-                     export_otb, illumination_scene, occlusion_scene, simple_scene, waving_scene)
-from .varied import VARIED_SCENES, draw_nuisances, hidden_frames, leave_scene, vanish_scene, varied_scene
+from .scenes import (
+                     HIDDEN_BELOW,
+                     Occluder,
+                     Scene,
+                     SceneSpec,
+                     Target,
+                     Truth,
+                     crossing_scene,
+                     entering_scene,
+                     export_otb,
+                     illumination_scene,
+                     occlusion_scene,
+                     simple_scene,
+                     waving_scene,
+)
+from .varied import (
+                     VARIED_SCENES,
+                     camouflage_scene,
+                     draw_nuisances,
+                     hidden_frames,
+                     leave_scene,
+                     vanish_scene,
+                     varied_scene,
+)
 
 SCENES = {
     "simple": simple_scene,
@@ -16,5 +37,5 @@ SCENES = {
 }
 
 __all__ = ["HIDDEN_BELOW", "SCENES", "VARIED_SCENES", "Occluder", "Scene", "SceneSpec", "Target", "Truth",
-           "crossing_scene", "draw_nuisances", "entering_scene", "export_otb", "hidden_frames", "illumination_scene",
+           "camouflage_scene", "crossing_scene", "draw_nuisances", "entering_scene", "export_otb", "hidden_frames", "illumination_scene",
            "leave_scene", "occlusion_scene", "simple_scene", "vanish_scene", "varied_scene", "waving_scene"]

@@ -52,7 +52,7 @@ class Target:
     scale_rate: float = 0.0
     appear: int = 0
     disappear: int | None = None
-    shape: str = "ellipse"  # "ellipse" | "rect"
+    shape: str = "ellipse"  # "ellipse" | "rect" | "camouflage" (a flipped patch of the background, rectangular)
 
     def center(self, t: float) -> tuple[float, float]:
         pts = np.asarray(self.path, dtype=np.float64).reshape(-1, 3)
@@ -88,7 +88,7 @@ class SceneSpec:
     seed: int = 0
     targets: tuple[Target, ...] = ()
     occluders: tuple[Occluder, ...] = ()
-    background: str = "texture"  # "texture" | "flat"
+    background: str = "texture"  # "texture" | "flat" | "noise" (smoothed colour noise)
     noise: float = 3.0  # std of per-frame pixel noise
     illumination: tuple[float, float, float] | None = None  # BGR gain reached at the last frame (linear drift)
     illumination_target_only: bool = False
@@ -124,7 +124,11 @@ class Scene:
         pad = 64
         self._pad = pad
         H, W = spec.height + 2 * pad, spec.width + 2 * pad
-        if spec.background == "texture":
+        if spec.background == "noise":
+            # colour noise smoothed with sigma 2 (book ch. 2's camouflage scene, ch02.md S1)
+            bg = rng.normal(128.0, 90.0, (H, W, 3)).astype(np.float32)
+            bg = cv2.GaussianBlur(bg, (0, 0), 2.0)
+        elif spec.background == "texture":
             coarse = _BG_PALETTE[rng.integers(0, len(_BG_PALETTE), (H // 24 + 2, W // 24 + 2))]
             bg = cv2.resize(coarse.astype(np.float32), (W, H), interpolation=cv2.INTER_CUBIC)
             bg += _speckle(rng, H, W, 10.0)
@@ -147,6 +151,14 @@ class Scene:
             sprite[: base_h // 2] = tgt.colors[0]
             sprite[base_h // 2:] = tgt.colors[1]
             sprite += _speckle(srng, base_h, base_w, tgt.texture)
+            if tgt.shape == "camouflage":
+                # a patch of this very background, flipped on both axes: its colour histogram is a
+                # background patch's, only its structure differs
+                bw, bh = int(round(tgt.size[0])), int(round(tgt.size[1]))
+                px = int(srng.integers(pad, W - pad - bw))
+                py = int(srng.integers(pad, H - pad - bh))
+                patch = bg[py:py + bh, px:px + bw][::-1, ::-1]
+                sprite = cv2.resize(np.ascontiguousarray(patch), (base_w, base_h), interpolation=cv2.INTER_LINEAR)
             mask = np.zeros((base_h, base_w), np.float32)
             if tgt.shape == "ellipse":
                 cv2.ellipse(mask, ((base_w / 2.0, base_h / 2.0), (float(base_w), float(base_h)), 0.0), 1.0, -1,
@@ -177,7 +189,9 @@ class Scene:
             return alpha_full
         M = np.array([[w / sw, 0.0, x - x0], [0.0, h / sh, y - y0]], dtype=np.float64)
         size = (x1 - x0, y1 - y0)
-        warped = cv2.warpAffine(sprite, M, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+        # the sprite's colours are replicated past its edge (the mask does the blending), so interpolation
+        # does not draw a dark outline around the target
+        warped = cv2.warpAffine(sprite, M, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         alpha = cv2.warpAffine(mask, M, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
         a3 = alpha[..., None]
         region = canvas[y0:y1, x0:x1]

@@ -15,7 +15,9 @@ Scenes:
 * :func:`vanish_scene` — the target walks fully behind a wide textured occluder for
   15-35 frames and comes out on the other side (the lost flag and re-acquisition);
 * :func:`leave_scene` — the target walks out of the frame and comes back later
-  (ground truth NaN while it is out).
+  (ground truth NaN while it is out);
+* :func:`camouflage_scene` — a flipped patch of the background moves over it: only its
+  structure tells it apart (book ch. 2).
 
 Every scene records what was drawn in ``SceneSpec.nuisances`` (written to
 ``meta.json`` by :func:`~pftrack.synth.scenes.export_otb`).
@@ -168,7 +170,32 @@ def leave_scene(seed: int = 0, n_frames: int = 140, **draw) -> SceneSpec:
     return _spec(seed, n_frames, "leave", nz, [tgt, *_distractors(rng, nz, n_frames, avoid=(x0, y))])
 
 
+def camouflage_scene(seed: int = 0, n_frames: int = 150, **draw) -> SceneSpec:
+    """A target cut from the background itself (flipped): colour cannot find it, structure can.
+
+    Book ch. 2's decisive scene (ch02.md §5.2 S1): smoothed colour-noise background; the
+    target (about 32x48, drawn from the seed) is a background patch flipped on both axes,
+    so its colour histogram is a background patch's; it moves on a Lissajous path
+    (at most ~4 px/frame) while a global illumination gain falls to 0.55-0.8.
+    """
+    rng = np.random.default_rng([seed, 75])
+    w = float(rng.uniform(26, 38))
+    h = w * float(rng.uniform(1.2, 1.7))
+    ax, ay = float(rng.uniform(70, 100)), float(rng.uniform(40, 60))
+    fx, fy = float(rng.uniform(0.02, 0.035)), float(rng.uniform(0.02, 0.035))
+    ph = float(rng.uniform(0, 2 * np.pi))
+    ts = np.arange(n_frames, dtype=np.float64)
+    xs = W / 2 + ax * np.sin(fx * ts + ph)
+    ys = H / 2 + ay * np.sin(fy * ts)
+    gain = float(rng.uniform(0.55, 0.8))
+    tgt = Target(path=tuple(zip(ts, xs, ys)), size=(w, h), texture=0.0, shape="camouflage")
+    nz = {"size": (w, h), "speed": float(np.hypot(ax * fx, ay * fy)), "illumination_gain": gain}
+    return SceneSpec(n_frames=n_frames, seed=seed, targets=(tgt,), background="noise", noise=2.0,
+                     illumination=(gain, gain, gain), kind="camouflage", nuisances=tuple(sorted(nz.items())))
+
+
 VARIED_SCENES = {
+    "camouflage": camouflage_scene,
     "varied": varied_scene,
     "vanish": vanish_scene,
     "leave": leave_scene,

@@ -7,11 +7,13 @@ it and not the other way round.
 from __future__ import annotations
 
 from .color_pf import ColorPF
+from .dssim import DSSIMTracker
 from .flow_pf import FlowPF
 from .fusion_pf import FusionPF
 from .local_motion_pf import LocalMotionPF
 from .meanshift import KalmanMeanShift, MeanShift
 from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
+from .ssim_pf import SSIMPF, HybridSSIMPF
 
 _DETECTOR = ("detector",)
 
@@ -28,6 +30,13 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
     ("flow-pf", FlowPF,
      "Colour PF driven by optical flow: HSV histograms, EMD, template subspace, KLT motion energies, "
      "detection/tracking switching (Tung & Matsuyama)", {"extra_kwargs": _DETECTOR}),
+    ("ssim-pf", SSIMPF,
+     "Particle filter with a structural-similarity (SSIM) likelihood against a fixed reference patch; also runs "
+     "the colour / edge / colour+edge cues of its comparison (book ch. 2)", {}),
+    ("dssim", DSSIMTracker, "Deterministic gradient ascent on SSIM with +-5 % scale search (book ch. 2, Table 3)", {}),
+    ("hybrid-ssim-pf", HybridSSIMPF,
+     "SSIM particle filter whose particles are moved by DSSIM, with mixture-proposal weights (book ch. 2, Table 4)",
+     {}),
     ("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
      {"family": "baseline"}),
     ("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",

@@ -1,0 +1,419 @@
+"""Structural similarity (SSIM) for a whole particle set at once, and its gradient for DSSIM (book ch. 2).
+
+Book *Object Tracking*, ch. 2 (``shared/seeds/002_*`` lines 754-1953; specification
+``shared/book/ch02.md``), after Wang, Bovik, Sheikh & Simoncelli (IEEE TIP 2004):
+
+* **(21)** ``S(I, J) = (2 mu_I mu_J + C1)/(mu_I^2 + mu_J^2 + C1) * (2 sigma_IJ + C2)/(sigma_I^2 + sigma_J^2 + C2)``
+  with ``C3 = C2/2``, ``C1 = (0.01 * 255)^2``, ``C2 = (0.03 * 255)^2``;
+* computed **locally** in an 11x11 Gaussian window (sigma 1.5, restored from Wang 2004) and
+  averaged over the map (MSSIM), optionally after cropping the 5-px border (scikit-image's
+  convention) — :func:`ssim_batch`;
+* **(25)** the dissimilarity ``D = (1 - S)/2`` and **(29)** the likelihood
+  ``exp(-D^2 / D_min^2)`` with ``D_min`` the smallest ``D`` of the frame's particles —
+  :func:`log_likelihood_dmin`;
+* **(18)-(20)** global statistics over the L pixels of a region (``L - 1`` denominators) —
+  :func:`ssim_global`; **(31)-(39)** the analytic gradient of ``rho = sign(S) log|S|`` with
+  respect to the region's position, with the corrected ``A3 = 2/(2 sigma_IJ + C2)`` (the book
+  prints ``1/(...)``; ch02.md P5) — :func:`grad_rho`;
+* the DSSIM ascent of Table 3 (one-pixel steps to the 8-neighbour along the gradient while
+  S does not decrease), compiled — :func:`dssim_ascent`, :func:`dssim_ascent_batch`.
+
+Speed (GUIDE §3): every particle's patch is sampled with one ``cv2.remap`` over stacked
+maps, and the five local statistics of the whole batch come from separable Gaussian
+filters over a ``(h, w, N)`` stack (``cv2.sepFilter2D`` filters all channels at once).
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from .._numba import njit, numba_enabled
+
+K1, K2, DATA_RANGE = 0.01, 0.03, 255.0
+C1 = (K1 * DATA_RANGE) ** 2
+C2 = (K2 * DATA_RANGE) ** 2
+WINDOW, WINDOW_SIGMA = 11, 1.5
+_MAX_CHANNELS = 512  # OpenCV's CV_CN_MAX
+_MAX_ROWS = 32000  # remap sizes must stay below SHRT_MAX
+
+
+def to_gray(frame: np.ndarray) -> np.ndarray:
+    """float32 grey image of a BGR or grey frame (levels 0-255)."""
+    if frame.ndim == 2:
+        return frame.astype(np.float32, copy=False)
+    if frame.shape[2] == 1:
+        return frame[..., 0].astype(np.float32)
+    return cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY).astype(np.float32)
+
+
+def gaussian_window(size: int = WINDOW, sigma: float = WINDOW_SIGMA) -> np.ndarray:
+    """The normalised 1-D Gaussian of the separable SSIM window (Wang 2004: 11 taps, sigma 1.5)."""
+    return cv2.getGaussianKernel(size, sigma, cv2.CV_64F).ravel()
+
+
+# ------------------------------------------------------------------------------ patches
+
+def patch_grid(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets ``(u, v)`` of the pixel centres of a ``(h, w)`` reference patch from its centre."""
+    h, w = shape
+    u = np.arange(w, dtype=np.float64) - (w - 1) / 2.0
+    v = np.arange(h, dtype=np.float64) - (h - 1) / 2.0
+    return u, v
+
+
+def sample_patches(image: np.ndarray, states: np.ndarray, shape: tuple[int, int], *,
+                   border: int = cv2.BORDER_REFLECT) -> np.ndarray:
+    """Every state's region resampled to the reference size: ``(N, h, w[, c])`` float32.
+
+    ``states`` rows are ``(cx, cy, s[, angle])``: a region of size ``s * (w, h)`` centred
+    at ``(cx, cy)`` (pixel-centre coordinates: pixel ``(i, j)`` has its centre at
+    ``(i + 0.5, j + 0.5)``), rotated by ``angle`` radians when given.  Bilinear
+    sampling through one ``cv2.remap`` per chunk of states.
+    """
+    st = np.asarray(states, dtype=np.float64).reshape(len(states), -1)
+    n = st.shape[0]
+    h, w = shape
+    u, v = patch_grid(shape)
+    uu, vv = np.meshgrid(u.astype(np.float32), v.astype(np.float32))  # (h, w)
+    out_shape = (n, h, w) + image.shape[2:]
+    out = np.empty(out_shape, dtype=np.float32)
+    if n == 0:
+        return out
+    src = image if image.dtype == np.float32 else image.astype(np.float32)
+    per = max(1, _MAX_ROWS // h)
+    stf = st.astype(np.float32)
+    for a in range(0, n, per):
+        b = min(n, a + per)
+        cx = (stf[a:b, 0] - 0.5)[:, None, None]
+        cy = (stf[a:b, 1] - 0.5)[:, None, None]
+        sc = stf[a:b, 2, None, None]
+        if st.shape[1] > 3:
+            ca, sa = np.cos(stf[a:b, 3])[:, None, None], np.sin(stf[a:b, 3])[:, None, None]
+            mx = cx + sc * (ca * uu - sa * vv)
+            my = cy + sc * (sa * uu + ca * vv)
+        else:
+            mx = sc * uu
+            mx += cx
+            my = sc * vv
+            my += cy
+        res = cv2.remap(src, mx.reshape((b - a) * h, w), my.reshape((b - a) * h, w), cv2.INTER_LINEAR,
+                        borderMode=border)
+        out[a:b] = res.reshape((b - a, h, w) + image.shape[2:])
+    return out
+
+
+def sample_stack(gray: np.ndarray, states: np.ndarray, shape: tuple[int, int], *,
+                 border: int = cv2.BORDER_REFLECT) -> np.ndarray:
+    """As :func:`sample_patches` for a grey image, laid out as an ``(h, w, N)`` stack (no rotation).
+
+    The maps are built column-interleaved (``(h, w * N)``), so the remapped image is the
+    stack that :func:`ssim_stack` filters, without a transpose.
+    """
+    st = np.asarray(states, dtype=np.float32).reshape(len(states), -1)
+    n = st.shape[0]
+    h, w = shape
+    u, v = patch_grid(shape)
+    src = gray if gray.dtype == np.float32 else gray.astype(np.float32)
+    out = np.empty((h, w, n), dtype=np.float32)
+    per = max(1, _MAX_ROWS // w)
+    for a in range(0, n, per):
+        b = min(n, a + per)
+        cx, cy, sc = st[a:b, 0] - 0.5, st[a:b, 1] - 0.5, st[a:b, 2]
+        mx = np.broadcast_to((u.astype(np.float32)[:, None] * sc[None, :] + cx[None, :])[None], (h, w, b - a))
+        my = np.broadcast_to((v.astype(np.float32)[:, None] * sc[None, :] + cy[None, :])[:, None, :], (h, w, b - a))
+        res = cv2.remap(src, np.ascontiguousarray(mx).reshape(h, w * (b - a)),
+                        np.ascontiguousarray(my).reshape(h, w * (b - a)), cv2.INTER_LINEAR, borderMode=border)
+        out[:, :, a:b] = res.reshape(h, w, b - a)
+    return out
+
+
+# ------------------------------------------------------------------------------ SSIM
+
+def _filter_stack(stack: np.ndarray, k: np.ndarray, border: int) -> np.ndarray:
+    """Separable filter of every channel of an ``(h, w, N)`` float32 stack (chunks of 512 channels)."""
+    n = stack.shape[2]
+    if n <= _MAX_CHANNELS:  # (OpenCV returns a single channel as a 2-D array)
+        return cv2.sepFilter2D(stack, cv2.CV_32F, k, k, borderType=border).reshape(stack.shape)
+    return np.concatenate([_filter_stack(np.ascontiguousarray(stack[..., a:a + _MAX_CHANNELS]), k, border)
+                           for a in range(0, n, _MAX_CHANNELS)], axis=2)
+
+
+def ssim_batch(patches: np.ndarray, template: np.ndarray, *, crop: bool = True, sigma: float = WINDOW_SIGMA,
+               size: int = WINDOW, c1: float = C1, c2: float = C2, border: int = cv2.BORDER_REFLECT) -> np.ndarray:
+    """MSSIM of each of ``N`` grey patches ``(N, h, w)`` against one template ``(h, w)``: ``(N,)``.
+
+    Local statistics in a ``size`` x ``size`` Gaussian window (Wang 2004, weighted, no
+    ``L - 1``), eq. (21), averaged over the map; ``crop`` drops ``(size - 1)/2`` pixels
+    at each border first (scikit-image's ``structural_similarity`` convention).
+    ``border=cv2.BORDER_REFLECT_101`` with ``crop=False`` is OpenCV's ``quality.QualitySSIM``.
+    """
+    p = np.asarray(patches, dtype=np.float32)
+    if p.shape[0] == 0:
+        return np.empty(0)
+    return ssim_stack(np.ascontiguousarray(p.transpose(1, 2, 0)), template, crop=crop, sigma=sigma, size=size,
+                      c1=c1, c2=c2, border=border)
+
+
+def ssim_stack(stack: np.ndarray, template: np.ndarray, *, crop: bool = True, sigma: float = WINDOW_SIGMA,
+               size: int = WINDOW, c1: float = C1, c2: float = C2, border: int = cv2.BORDER_REFLECT) -> np.ndarray:
+    """:func:`ssim_batch` on an ``(h, w, N)`` float32 stack of patches (the layout of :func:`sample_stack`)."""
+    stack = np.ascontiguousarray(stack, dtype=np.float32)
+    t = np.asarray(template, dtype=np.float32)
+    h, w, n = stack.shape
+    if t.shape != (h, w):
+        raise ValueError(f"template {t.shape} and patches {(h, w)} differ in size")
+    if n == 0:
+        return np.empty(0)
+    k = cv2.getGaussianKernel(size, sigma, cv2.CV_32F)
+    mu_p = _filter_stack(stack, k, border)
+    e_pp = _filter_stack(stack * stack, k, border)
+    e_pt = _filter_stack(stack * t[..., None], k, border)
+    mu_t = cv2.sepFilter2D(t, cv2.CV_32F, k, k, borderType=border)[..., None]
+    e_tt = cv2.sepFilter2D(t * t, cv2.CV_32F, k, k, borderType=border)[..., None]
+    r = (size - 1) // 2 if crop else 0
+    if h <= 2 * r or w <= 2 * r:
+        raise ValueError(f"patches of {h}x{w} px leave nothing after the {r}-px crop of the SSIM window")
+    if numba_enabled():
+        out = np.empty(n)
+        _combine(mu_p, e_pp, e_pt, mu_t[..., 0], e_tt[..., 0], r, c1, c2, out)
+        return out
+    # float32 is enough: levels <= 255, so E[x^2] - mu^2 keeps ~1e-2 absolute against C2 = 58.5
+    mu_pt = mu_p * mu_t
+    mu_pp = mu_p * mu_p
+    mu_tt = mu_t * mu_t
+    num = mu_pt * 2 + np.float32(c1)
+    num *= (e_pt - mu_pt) * 2 + np.float32(c2)
+    den = mu_pp + mu_tt + np.float32(c1)
+    den *= (e_pp - mu_pp) + (e_tt - mu_tt) + np.float32(c2)
+    smap = num
+    smap /= den
+    return smap[r:h - r, r:w - r].mean(axis=(0, 1), dtype=np.float64)
+
+
+@njit
+def _combine(mu_p, e_pp, e_pt, mu_t, e_tt, r, c1, c2, out):
+    """Eq. (21) per pixel from the filtered statistics, averaged over the cropped map, in one pass."""
+    h, w, n = mu_p.shape
+    for k in range(n):
+        out[k] = 0.0
+    for i in range(r, h - r):
+        for j in range(r, w - r):
+            mt = np.float64(mu_t[i, j])
+            vt = np.float64(e_tt[i, j]) - mt * mt
+            for k in range(n):
+                mp = np.float64(mu_p[i, j, k])
+                vp = np.float64(e_pp[i, j, k]) - mp * mp
+                cv = np.float64(e_pt[i, j, k]) - mp * mt
+                out[k] += ((2 * mp * mt + c1) * (2 * cv + c2)) / ((mp * mp + mt * mt + c1) * (vp + vt + c2))
+    m = (h - 2 * r) * (w - 2 * r)
+    for k in range(n):
+        out[k] /= m
+
+
+def ssim_reference(a: np.ndarray, b: np.ndarray, *, crop: bool = True, sigma: float = WINDOW_SIGMA,
+                   size: int = WINDOW, c1: float = C1, c2: float = C2, border: int = cv2.BORDER_REFLECT) -> float:
+    """Wang et al.'s MSSIM of one pair, written straight from the formula (float64; the tests' oracle)."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    k = cv2.getGaussianKernel(size, sigma, cv2.CV_64F)
+
+    def g(x):
+        return cv2.sepFilter2D(x, cv2.CV_64F, k, k, borderType=border)
+
+    mu_a, mu_b = g(a), g(b)
+    va, vb, cab = g(a * a) - mu_a ** 2, g(b * b) - mu_b ** 2, g(a * b) - mu_a * mu_b
+    smap = ((2 * mu_a * mu_b + c1) * (2 * cab + c2)) / ((mu_a ** 2 + mu_b ** 2 + c1) * (va + vb + c2))
+    if crop:
+        r = (size - 1) // 2
+        smap = smap[r:-r, r:-r]
+    return float(smap.mean())
+
+
+def dissimilarity(s: np.ndarray) -> np.ndarray:
+    """Eq. (25): ``D = (1 - S) / 2`` in ``[0, 1]``."""
+    return (1.0 - np.asarray(s, dtype=np.float64)) / 2.0
+
+
+def log_likelihood_dmin(d: np.ndarray, *, floor: float = 1e-3) -> np.ndarray:
+    """Eq. (29) in the log domain: ``-D^2 / max(D_min, floor)^2`` (the best particle scores -1)."""
+    d = np.asarray(d, dtype=np.float64)
+    finite = np.isfinite(d)
+    dmin = max(float(d[finite].min()) if finite.any() else 1.0, floor)
+    out = -(d * d) / (dmin * dmin)
+    out[~finite] = -np.inf
+    return out
+
+
+# ------------------------------------------------------------------------------ global SSIM and its gradient
+
+def ssim_global(i: np.ndarray, j: np.ndarray, *, c1: float = C1, c2: float = C2) -> float:
+    """Eq. (21) with the global statistics (18)-(20) over all L pixels (``L - 1`` denominators)."""
+    i = np.asarray(i, dtype=np.float64).ravel()
+    j = np.asarray(j, dtype=np.float64).ravel()
+    n = i.size
+    mi, mj = i.mean(), j.mean()
+    vi = ((i - mi) ** 2).sum() / (n - 1)
+    vj = ((j - mj) ** 2).sum() / (n - 1)
+    cij = ((i - mi) * (j - mj)).sum() / (n - 1)
+    return float((2 * mi * mj + c1) * (2 * cij + c2) / ((mi * mi + mj * mj + c1) * (vi + vj + c2)))
+
+
+def grad_rho(i: np.ndarray, j: np.ndarray, gix: np.ndarray, giy: np.ndarray, *, c1: float = C1, c2: float = C2,
+             a3_paper: bool = False) -> np.ndarray:
+    """Eq. (39): gradient of ``rho = sign(S) log|S|`` w.r.t. the region's position.
+
+    ``i`` is the frame region, ``j`` the template, ``gix, giy`` the frame's intensity
+    gradient at the region's pixels.  ``a3_paper`` uses the printed ``A3 = 1/(2 sigma_IJ + C2)``
+    instead of the analytic ``2/(2 sigma_IJ + C2)``.
+    """
+    i = np.asarray(i, dtype=np.float64).ravel()
+    j = np.asarray(j, dtype=np.float64).ravel()
+    gx = np.asarray(gix, dtype=np.float64).ravel()
+    gy = np.asarray(giy, dtype=np.float64).ravel()
+    n = i.size
+    mi, mj = i.mean(), j.mean()
+    vi = ((i - mi) ** 2).sum() / (n - 1)
+    vj = ((j - mj) ** 2).sum() / (n - 1)
+    cij = ((i - mi) * (j - mj)).sum() / (n - 1)
+    s = (2 * mi * mj + c1) * (2 * cij + c2) / ((mi * mi + mj * mj + c1) * (vi + vj + c2))
+    sign = 1.0 if s >= 0 else -1.0
+    a1 = 2 * mj / (2 * mi * mj + c1) - 2 * mi / (mi * mi + mj * mj + c1)
+    a2 = -1.0 / (vi + vj + c2)
+    a3 = (1.0 if a3_paper else 2.0) / (2 * cij + c2)
+    coef = a1 / n + (2 * a2 * (i - mi) + a3 * (j - mj)) / (n - 1)
+    return sign * np.array([np.sum(coef * gx), np.sum(coef * gy)])
+
+
+@njit
+def _bilinear(img, x, y):
+    """Bilinear value at continuous pixel-centre coordinates (clamped to the image)."""
+    h, w = img.shape
+    fx = min(max(x - 0.5, 0.0), w - 1.0)
+    fy = min(max(y - 0.5, 0.0), h - 1.0)
+    x0 = min(int(fx), w - 2) if w > 1 else 0
+    y0 = min(int(fy), h - 2) if h > 1 else 0
+    ax = fx - x0
+    ay = fy - y0
+    x1 = min(x0 + 1, w - 1)
+    y1 = min(y0 + 1, h - 1)
+    return ((1 - ay) * ((1 - ax) * img[y0, x0] + ax * img[y0, x1])
+            + ay * ((1 - ax) * img[y1, x0] + ax * img[y1, x1]))
+
+
+@njit
+def _region_ssim_grad(gray, gx, gy, tmpl, cx, cy, s, c1, c2, want_grad):
+    """Global SSIM (21) of the region at ``(cx, cy)``, scale ``s``, and (optionally) grad rho (39)."""
+    h, w = tmpl.shape
+    n = h * w
+    vals = np.empty(n)
+    dxs = np.empty(n)
+    dys = np.empty(n)
+    k = 0
+    for r in range(h):
+        yy = cy + s * (r - (h - 1) / 2.0)
+        for c in range(w):
+            xx = cx + s * (c - (w - 1) / 2.0)
+            vals[k] = _bilinear(gray, xx, yy)
+            if want_grad:
+                dxs[k] = _bilinear(gx, xx, yy)
+                dys[k] = _bilinear(gy, xx, yy)
+            k += 1
+    mi = 0.0
+    mj = 0.0
+    for k in range(n):
+        mi += vals[k]
+        mj += tmpl.flat[k]
+    mi /= n
+    mj /= n
+    vi = 0.0
+    vj = 0.0
+    cij = 0.0
+    for k in range(n):
+        di = vals[k] - mi
+        dj = tmpl.flat[k] - mj
+        vi += di * di
+        vj += dj * dj
+        cij += di * dj
+    vi /= n - 1
+    vj /= n - 1
+    cij /= n - 1
+    sv = (2 * mi * mj + c1) * (2 * cij + c2) / ((mi * mi + mj * mj + c1) * (vi + vj + c2))
+    gxo = 0.0
+    gyo = 0.0
+    if want_grad:
+        sign = 1.0 if sv >= 0 else -1.0
+        a1 = 2 * mj / (2 * mi * mj + c1) - 2 * mi / (mi * mi + mj * mj + c1)
+        a2 = -1.0 / (vi + vj + c2)
+        a3 = 2.0 / (2 * cij + c2)
+        for k in range(n):
+            coef = a1 / n + (2 * a2 * (vals[k] - mi) + a3 * (tmpl.flat[k] - mj)) / (n - 1)
+            gxo += coef * dxs[k]
+            gyo += coef * dys[k]
+        gxo *= sign
+        gyo *= sign
+    return sv, gxo, gyo
+
+
+@njit
+def _ascent(gray, gx, gy, tmpl, cx, cy, s, max_iter, c1, c2):
+    """Table 3: one-pixel steps to the 8-neighbour nearest the gradient direction while S does not drop."""
+    s0, g_x, g_y = _region_ssim_grad(gray, gx, gy, tmpl, cx, cy, s, c1, c2, True)
+    it = 0
+    while it < max_iter:
+        if abs(s0) < 1e-6 or (g_x == 0.0 and g_y == 0.0):
+            break
+        ang = math.atan2(g_y, g_x)
+        sector = int(math.floor(ang / (math.pi / 4.0) + 0.5))
+        dx = round(math.cos(sector * math.pi / 4.0))
+        dy = round(math.sin(sector * math.pi / 4.0))
+        nx = cx + dx
+        ny = cy + dy
+        s1, g1x, g1y = _region_ssim_grad(gray, gx, gy, tmpl, nx, ny, s, c1, c2, True)
+        it += 1
+        if s1 < s0:
+            break
+        if s1 == s0 and it > 1:  # a plateau: stop rather than wander
+            cx, cy = nx, ny
+            break
+        cx, cy, s0, g_x, g_y = nx, ny, s1, g1x, g1y
+    return cx, cy, s0, it
+
+
+def dssim_ascent(gray: np.ndarray, gx: np.ndarray, gy: np.ndarray, template: np.ndarray, center, *, scale: float = 1.0,
+                 max_iter: int = 20, c1: float = C1, c2: float = C2) -> tuple[float, float, float, int]:
+    """DSSIM (Table 3) from ``center``: returns ``(cx, cy, S, iterations)`` (global SSIM, eq. 21)."""
+    cx, cy, s, it = _ascent(np.ascontiguousarray(gray, np.float32), np.ascontiguousarray(gx, np.float32),
+                            np.ascontiguousarray(gy, np.float32), np.ascontiguousarray(template, np.float64),
+                            float(center[0]), float(center[1]), float(scale), int(max_iter), float(c1), float(c2))
+    return float(cx), float(cy), float(s), int(it)
+
+
+@njit
+def _ascent_batch(gray, gx, gy, tmpl, states, max_iter, c1, c2, out):
+    for k in range(states.shape[0]):
+        cx, cy, s, it = _ascent(gray, gx, gy, tmpl, states[k, 0], states[k, 1], states[k, 2], max_iter, c1, c2)
+        out[k, 0] = cx
+        out[k, 1] = cy
+        out[k, 2] = s
+        out[k, 3] = it
+
+
+def dssim_ascent_batch(gray: np.ndarray, gx: np.ndarray, gy: np.ndarray, template: np.ndarray, states: np.ndarray, *,
+                       max_iter: int = 10, c1: float = C1, c2: float = C2) -> np.ndarray:
+    """DSSIM from every state ``(cx, cy, s, ...)`` (position only): ``(N, 4)`` rows ``cx, cy, S, iterations``."""
+    st = np.ascontiguousarray(np.asarray(states, dtype=np.float64)[:, :3])
+    out = np.empty((st.shape[0], 4))
+    _ascent_batch(np.ascontiguousarray(gray, np.float32), np.ascontiguousarray(gx, np.float32),
+                  np.ascontiguousarray(gy, np.float32), np.ascontiguousarray(template, np.float64), st, int(max_iter),
+                  float(c1), float(c2), out)
+    return out
+
+
+def image_gradients(gray: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Central-difference intensity gradients ``(dI/dx, dI/dy)`` of a grey float image (ch02.md §2)."""
+    gx = cv2.Sobel(gray, cv2.CV_32F, 1, 0, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
+    gy = cv2.Sobel(gray, cv2.CV_32F, 0, 1, ksize=1, scale=0.5, borderType=cv2.BORDER_REPLICATE)
+    return gx, gy

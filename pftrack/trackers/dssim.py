@@ -1,0 +1,139 @@
+"""``dssim``: deterministic gradient ascent on the structural similarity (book ch. 2, Table 3).
+
+From the previous position the tracker takes one-pixel steps to the 8-neighbour
+nearest the direction of the analytic gradient of ``rho = sign(S) log|S|`` (eq. 39,
+with the corrected ``A3 = 2/(2 sigma_IJ + C2)``), while the global SSIM (21) of the
+region with the fixed reference patch does not decrease.  Scale: the ascent runs at
+``s * {0.95, 1, 1.05}`` and the size with the best SSIM is kept (L1832-1834).  The loss
+test of :mod:`pftrack.filtering.loss` on that SSIM gives ``lost``; while lost the tracker
+searches the frame on a grid and re-acquires.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..cues import ssim as S
+from ..filtering.loss import LossDetector, confidence
+from ..geometry import Box
+from ..params import Params, param
+from .base import Tracker, TrackState
+
+
+@dataclass(frozen=True, kw_only=True)
+class DSSIMParams(Params):
+    """Parameters of ``dssim`` (Table 3; values the text leaves open are ch02.md §2's)."""
+
+    max_iter: int = param(20, ge=1, le=1000, doc="Iteration limit of the ascent (the text: about 5 on average).")
+    scale_step: float = param(0.05, ge=0, le=0.5, doc="Relative size change tried each frame (+-5 %, L1833); 0: fixed.")
+    template_pixels: int = param(2500, ge=144, le=1_000_000, doc=(
+        "The reference patch keeps the box's aspect with at most this many pixels (speed bound)."))
+    min_scale: float = param(0.2, gt=0, le=1, doc="Smallest scale relative to the initial box.")
+    max_scale: float = param(5.0, ge=1, le=100, doc="Largest scale relative to the initial box.")
+    lost_frames: int = param(3, ge=1, le=1000, doc="Frames with LLR < 0 before lost (pftrack.filtering.loss).")
+    reacquire_margin: float = param(1.0, ge=0, le=20, doc="LLR that ends a loss (hysteresis).")
+    background_positions: int = param(60, ge=4, le=10_000, doc="Background grid positions for the loss test.")
+    background_interval: int = param(10, ge=1, le=10_000, doc="Recompute the background scores every this many frames.")
+
+
+class DSSIMTracker(Tracker):
+    """DSSIM gradient ascent (deterministic: ``particles`` is None)."""
+
+    name = "dssim"
+    Params = DSSIMParams
+    stochastic = False
+
+    def __init__(self, params: DSSIMParams | None = None, *, rng=None, seed=None):
+        super().__init__(params, rng=rng, seed=seed)
+        p = self.params
+        self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin)
+
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        p = self.params
+        x, y, w, h = box
+        f = min(1.0, math.sqrt(p.template_pixels / (w * h)))
+        tw, th = max(12, int(round(w * f))), max(12, int(round(h * f)))
+        self.tshape = (th, tw)
+        self.pix = w / tw
+        self.size0 = (float(w), float(h))
+        self.c = np.array([x + w / 2.0, y + h / 2.0])
+        self.s = 1.0
+        gray = S.to_gray(frame)
+        self.template = S.sample_patches(gray, np.array([[*self.c, self.pix]]), self.tshape)[0].astype(np.float64)
+        self.mode = "tracking"
+        self.loss.reset(1.0)
+        self._since_bg = 0
+        self._background(gray)
+        self._box_out = tuple(float(v) for v in box)
+        return TrackState(box=self._box_out, score=1.0, lost=False, info={"ssim": 1.0})
+
+    def _background(self, gray: np.ndarray) -> None:
+        p = self.params
+        fh, fw = self._shape
+        w, h = self.size0[0] * self.s, self.size0[1] * self.s
+        nx = max(2, int(math.sqrt(p.background_positions * fw / fh)))
+        ny = max(2, int(math.ceil(p.background_positions / nx)))
+        gx, gy = np.meshgrid((np.arange(nx) + 0.5) * fw / nx, (np.arange(ny) + 0.5) * fh / ny)
+        far = (np.abs(gx - self.c[0]) >= w) | (np.abs(gy - self.c[1]) >= h)
+        if far.sum() >= 2:
+            st = np.column_stack([gx[far], gy[far], np.full(int(far.sum()), self.s * self.pix)])
+            patches = S.sample_patches(gray, st, self.tshape)
+            self.loss.set_background(np.array([S.ssim_global(q, self.template) for q in patches]))
+        self._since_bg = 0
+
+    def _ascend(self, gray, gx, gy, centre) -> tuple[np.ndarray, float, float, int]:
+        p = self.params
+        best = None
+        scales = (self.s,) if p.scale_step <= 0 else (self.s * (1 - p.scale_step), self.s, self.s * (1 + p.scale_step))
+        for sc in scales:
+            sc = min(max(sc, p.min_scale), p.max_scale)
+            cx, cy, sv, it = S.dssim_ascent(gray, gx, gy, self.template, centre, scale=sc * self.pix,
+                                            max_iter=p.max_iter)
+            if best is None or sv > best[1]:
+                best = (np.array([cx, cy]), sv, sc, it)
+        return best
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        p = self.params
+        gray = S.to_gray(frame)
+        gx, gy = S.image_gradients(gray)
+        if self.mode == "searching":
+            return self._search(gray, gx, gy)
+        c, sv, sc, it = self._ascend(gray, gx, gy, self.c)
+        self.c, self.s = c, sc
+        lost, conf = self.loss.step(sv)
+        box = self._box()
+        if self.loss.confident(sv):
+            self._since_bg += 1
+            if self._since_bg >= p.background_interval:
+                self._background(gray)
+        if lost:
+            self.mode = "searching"
+            return TrackState(box=self._box_out, score=min(conf, 0.5), lost=True, info={"ssim": sv, "iterations": it})
+        self._box_out = box
+        return TrackState(box=box, score=conf, lost=False, info={"ssim": sv, "iterations": it, "llr": self.loss.llr})
+
+    def _search(self, gray, gx, gy) -> TrackState:
+        """Ascent from a grid of starts over the frame; the best end point must pass the loss test."""
+        fh, fw = self._shape
+        w, h = self.size0[0] * self.s, self.size0[1] * self.s
+        xs = np.arange(w / 2, fw, max(w / 2, 4.0))
+        ys = np.arange(h / 2, fh, max(h / 2, 4.0))
+        starts = np.array([[x, y, self.s * self.pix] for y in ys for x in xs])
+        res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts, max_iter=self.params.max_iter)
+        k = int(np.argmax(res[:, 2]))
+        if self.loss.acquire(float(res[k, 2])):
+            self.mode = "tracking"
+            self.c = res[k, :2].copy()
+            self._box_out = self._box()
+            return TrackState(box=self._box_out, score=confidence(self.loss.llr), lost=False,
+                              info={"ssim": float(res[k, 2]), "mode": "acquired"})
+        return TrackState(box=self._box_out, score=min(confidence(self.loss.llr), 0.5), lost=True,
+                          info={"ssim": float(res[k, 2]), "mode": "searching"})
+
+    def _box(self) -> tuple[float, float, float, float]:
+        w, h = self.size0[0] * self.s, self.size0[1] * self.s
+        return (float(self.c[0] - w / 2), float(self.c[1] - h / 2), float(w), float(h))

@@ -1,0 +1,310 @@
+"""``ssim-pf`` and ``hybrid-ssim-pf``: particle filters with a structural-similarity likelihood (book ch. 2).
+
+Book *Object Tracking*, ch. 2 (``shared/seeds/002_*`` lines 754-1953; ``shared/book/ch02.md``):
+
+* **SSIM-PF** (Table 2): state ``(x, y, s)`` (plus an angle with ``rotation``), random walk
+  ``x_k = x_{k-1} + v``, ``v ~ N(0, Q)`` (26)-(27); each particle's region, of size
+  ``s (w0, h0)``, is resampled to the reference size and compared with the **fixed**
+  reference patch by MSSIM (21); ``D = (1 - S)/2`` (25) and ``L ∝ exp(-D^2 / D_min^2)`` (29);
+  posterior-mean estimate (9); systematic resampling when ``N_eff <= N_thr`` (Table 1).
+* The chapter's comparison cues run in the very same filter (``cue``): colour, edges, or
+  colour & edges (product of likelihoods), on the same patches — Table 5's set-up.
+* **Hybrid SSIM-PF-DSSIM** (Table 4): every predicted particle is moved by the DSSIM ascent
+  (position only); the weight uses the alpha = 0.5 mixture proposal (40)-(42), literally
+  (``proposal="literal"``: the optimised particle is used as if drawn from the mixture) or
+  as a proper importance sampler (``"mixture_sample"``: draw from the mixture, then weight).
+* The loss test of :mod:`pftrack.filtering.loss` on the estimate's MSSIM against the MSSIM
+  at background positions gives ``lost`` (not in the chapter).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..cues import patch_histograms as ph
+from ..cues import ssim as S
+from ..errors import ParameterError
+from ..filtering.loss import LossDetector, confidence
+from ..filtering.particles import ParticleSet
+from ..filtering.resampling import systematic
+from ..geometry import Box
+from ..params import Params, param
+from .base import Tracker, TrackState
+
+Cue = Literal["ssim", "color", "edges", "color+edges"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class SSIMPFParams(Params):
+    """Parameters of ``ssim-pf`` (book ch. 2, Table 2; values the text leaves open are ch02.md §2's)."""
+
+    n_particles: int = param(100, ge=1, le=100_000, doc="N (ch. 2: 100 in the speed test, 20 in the hybrid test).")
+    cue: Cue = param("ssim", doc=(
+        "Likelihood cue on the particles' patches: 'ssim' (MSSIM, eq. 21), or the chapter's comparators "
+        "'color' (Nummiaro RGB 8x8x8), 'edges' (gradient-orientation histogram), 'color+edges' (product); "
+        "all through eq. (29)."))
+    position_noise: float = param(4.0, gt=0, le=200, doc=(
+        "sigma_x = sigma_y of Q (eq. 27), px at a 320-px-wide frame, scaled by width/320 (ch02.md §2, proposed: "
+        "the text gives no value). Larger follows faster motion with a flatter posterior."))
+    scale_noise: float = param(0.02, ge=0, le=1, doc="sigma_s of Q (eq. 27): relative scale change per frame.")
+    rotation: bool = param(False, doc="Add the in-plane angle to the state (the chapter's rotation extension).")
+    angle_noise: float = param(2.0, ge=0, le=90, doc="sigma of the angle's random walk (degrees) with rotation.")
+    resample_threshold: float = param(0.5, gt=0, le=1, doc="N_thr / N: resample when N_eff <= N_thr (Table 1).")
+    d_floor: float = param(1e-3, gt=0, le=1, doc="Floor on D_min of eq. (29), so a perfect match gives no NaN.")
+    template_pixels: int = param(2500, ge=144, le=1_000_000, doc=(
+        "Speed bound: the reference patch keeps the box's aspect with at most this many pixels (larger boxes "
+        "are compared at reduced resolution). At least 12 px per side remain for the 11x11 window."))
+    template_update: float = param(0.0, ge=0, le=1, doc=(
+        "Rate of the gated template update t <- (1 - a) t + a p_est while the loss test is confident; "
+        "0 keeps the chapter's fixed reference."))
+    min_scale: float = param(0.2, gt=0, le=1, doc="Smallest scale s relative to the initial box.")
+    max_scale: float = param(5.0, ge=1, le=100, doc="Largest scale s relative to the initial box.")
+    background_positions: int = param(60, ge=4, le=10_000, doc=(
+        "Background positions (a grid over the frame, away from the target) whose scores define the loss "
+        "test's absent hypothesis."))
+    background_interval: int = param(10, ge=1, le=10_000, doc="Recompute the background scores every this many frames.")
+    lost_frames: int = param(3, ge=1, le=1000, doc="Frames with LLR < 0 before lost (pftrack.filtering.loss).")
+    reacquire_margin: float = param(1.0, ge=0, le=20, doc="LLR that ends a loss (hysteresis).")
+    search_particles: int = param(0, ge=0, le=100_000, doc=(
+        "While lost, particles spread over the frame to re-acquire (0: 3 N)."))
+
+
+@dataclass(frozen=True, kw_only=True)
+class HybridSSIMPFParams(SSIMPFParams):
+    """Parameters of ``hybrid-ssim-pf`` (Table 4)."""
+
+    n_particles: int = param(20, ge=1, le=100_000, doc="N (ch. 2's hybrid experiment: 20).")
+    alpha: float = param(0.5, ge=0, le=1, doc="alpha of the mixture proposal (41): weight of the DSSIM component.")
+    max_iter: int = param(10, ge=0, le=100, doc="DSSIM iterations per particle (ch02.md: 10 in the hybrid).")
+    proposal: Literal["literal", "mixture_sample"] = param("literal", doc=(
+        "'literal': the DSSIM-optimised particle weighted by eqs. (40)-(42) as printed; 'mixture_sample': with "
+        "probability alpha draw from N(x_opt, Q), else keep the prediction, then weight (a proper importance "
+        "sampler; ch02.md P9)."))
+
+    def validate(self) -> None:
+        if self.rotation:
+            raise ParameterError("hybrid-ssim-pf moves position only (DSSIM has no angle): rotation is not available")
+
+
+class SSIMPF(Tracker):
+    """SSIM particle filter (Table 2) with the chapter's comparison cues and a loss test."""
+
+    name = "ssim-pf"
+    Params = SSIMPFParams
+
+    def __init__(self, params: SSIMPFParams | None = None, *, rng=None, seed=None):
+        super().__init__(params, rng=rng, seed=seed)
+        p = self.params
+        self.dim = 4 if p.rotation else 3
+        self.state_names = ("x", "y", "s", "angle")[: self.dim]
+        self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin)
+
+    # ------------------------------------------------------------------ observation
+    def _scaled(self, states: np.ndarray) -> np.ndarray:
+        """States in patch-sampling form: scale relative to the reference patch's pixels."""
+        st = np.array(states[:, : self.dim], dtype=np.float64)
+        st[:, 2] *= self.pix_scale
+        if self.dim == 4:
+            st[:, 3] = np.deg2rad(st[:, 3])
+        return st
+
+    def _distances(self, frame: np.ndarray, gray: np.ndarray, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per-state dissimilarity D for the likelihood (29), and the MSSIM (for the loss test)."""
+        cue = self.params.cue
+        sc = self._scaled(states)
+        if cue == "ssim":
+            stack = S.sample_stack(gray, sc, self.tshape) if self.dim == 3 else \
+                np.ascontiguousarray(S.sample_patches(gray, sc, self.tshape).transpose(1, 2, 0))
+            s = S.ssim_stack(stack, self.template)
+            return S.dissimilarity(s), s
+        g = S.sample_patches(gray, sc, self.tshape)
+        d2 = np.zeros(len(states))
+        if "color" in cue:
+            c = S.sample_patches(frame, sc, self.tshape)
+            d2 += ph.bhattacharyya_distance(ph.color_histograms(c), self.ref_color) ** 2
+        if "edges" in cue:
+            d2 += ph.bhattacharyya_distance(ph.edge_histograms(g), self.ref_edges) ** 2
+        return np.sqrt(d2), None
+
+    def _log_lik(self, d: np.ndarray) -> np.ndarray:
+        return S.log_likelihood_dmin(d, floor=self.params.d_floor)
+
+    # ------------------------------------------------------------------ init
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        p = self.params
+        x, y, w, h = box
+        area = w * h
+        f = min(1.0, math.sqrt(p.template_pixels / area)) if area > 0 else 1.0
+        tw, th = max(12, int(round(w * f))), max(12, int(round(h * f)))
+        self.tshape = (th, tw)
+        self.pix_scale = w / tw  # frame pixels per reference pixel at s = 1
+        self.size0 = (float(w), float(h))
+        gray = S.to_gray(frame)
+        centre = np.array([x + w / 2.0, y + h / 2.0, 1.0, 0.0][: self.dim])
+        self.template = S.sample_patches(gray, self._scaled(centre[None, :]), self.tshape)[0]
+        if "color" in p.cue:
+            self.ref_color = ph.color_histograms(S.sample_patches(frame, self._scaled(centre[None, :]), self.tshape))[0]
+        if "edges" in p.cue:
+            self.ref_edges = ph.edge_histograms(self.template[None])[0]
+        n = p.n_particles
+        self.ps = ParticleSet(np.tile(centre, (n, 1)))
+        self.estimate = centre.copy()
+        self.mode = "tracking"
+        self._since_bg = 0
+        self.loss.reset(1.0)
+        self._background(frame, gray)
+        return self._state(box, 1.0, False, {"mode": "init", "ssim": 1.0})
+
+    def _background(self, frame, gray) -> None:
+        """Scores at background positions (a grid away from the target): the loss test's absent hypothesis."""
+        p = self.params
+        fh, fw = self._shape
+        w, h = self.size0[0] * self.estimate[2], self.size0[1] * self.estimate[2]
+        nx = max(2, int(math.sqrt(p.background_positions * fw / fh)))
+        ny = max(2, int(math.ceil(p.background_positions / nx)))
+        gx, gy = np.meshgrid((np.arange(nx) + 0.5) * fw / nx, (np.arange(ny) + 0.5) * fh / ny)
+        far = (np.abs(gx - self.estimate[0]) >= w) | (np.abs(gy - self.estimate[1]) >= h)
+        st = np.zeros((int(far.sum()), self.dim))
+        st[:, 0], st[:, 1], st[:, 2] = gx[far], gy[far], self.estimate[2]
+        if len(st) >= 2:
+            d, _ = self._distances(frame, gray, st)
+            self.loss.set_background(1.0 - 2.0 * d)  # scores on S's scale: S = 1 - 2 D
+        self._since_bg = 0
+
+    # ------------------------------------------------------------------ update
+    def _noise(self) -> np.ndarray:
+        p = self.params
+        sxy = p.position_noise * self._shape[1] / 320.0
+        sd = [sxy, sxy, p.scale_noise]
+        if self.dim == 4:
+            sd.append(p.angle_noise)
+        return np.array(sd)
+
+    def _propagate(self, states: np.ndarray) -> None:
+        p = self.params
+        states += self.rng.normal(0.0, 1.0, states.shape) * self._noise()
+        fh, fw = self._shape
+        np.clip(states[:, 0], 0.0, fw, out=states[:, 0])
+        np.clip(states[:, 1], 0.0, fh, out=states[:, 1])
+        np.clip(states[:, 2], p.min_scale, p.max_scale, out=states[:, 2])
+
+    def _weights(self, frame, gray, states) -> tuple[np.ndarray, np.ndarray]:
+        """Log-likelihoods of the (propagated) states; hook for the hybrid's proposal."""
+        d, _ = self._distances(frame, gray, states)
+        return self._log_lik(d), states
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        p = self.params
+        gray = S.to_gray(frame)
+        if self.mode == "searching":
+            return self._search(frame, gray)
+        ps = self.ps
+        self._prev = ps.states.copy()  # x_{k-1}, for the hybrid's proposal density
+        self._propagate(ps.states)
+        loglik, moved = self._weights(frame, gray, ps.states)
+        ps.states[:] = moved
+        ok = ps.set_log_likelihood(loglik, accumulate=True)
+        est = ps._mean.copy()
+        self.estimate = est
+        d_e, s_e = self._distances(frame, gray, est[None, :])
+        score_s = float(1.0 - 2.0 * d_e[0])
+        lost, conf = self.loss.step(score_s if ok else float("nan"))
+        info = {"mode": "tracking", "ssim": float(s_e[0]) if s_e is not None else float("nan"),
+                "llr": self.loss.llr, "ess": ps._ess}
+        if self.loss.confident(score_s):
+            if p.template_update > 0:
+                patch = S.sample_patches(gray, self._scaled(est[None, :]), self.tshape)[0]
+                self.template = (1.0 - p.template_update) * self.template + p.template_update * patch
+            self._since_bg += 1
+            if self._since_bg >= p.background_interval:
+                self._background(frame, gray)
+        if ps._ess <= p.resample_threshold * ps.n:
+            ps.resample(systematic(ps.w, self.rng))
+        box = self._box(est)
+        if lost:
+            self.mode = "searching"
+            self._last_box = self._last_box if getattr(self, "_last_box", None) else box
+            return self._state(self._last_box, min(conf, 0.5), True, {**info, "mode": "lost"})
+        self._last_box = box
+        return self._state(box, conf, False, info)
+
+    def _search(self, frame, gray) -> TrackState:
+        """Lost: particles spread over the frame at the last scale; the best must pass the loss test."""
+        p = self.params
+        m = p.search_particles or 3 * p.n_particles
+        fh, fw = self._shape
+        st = np.tile(self.estimate, (m, 1))
+        st[:, 0] = self.rng.uniform(0, fw, m)
+        st[:, 1] = self.rng.uniform(0, fh, m)
+        st[:, 2] = self.estimate[2] * np.exp(self.rng.normal(0.0, 0.05, m))
+        d, _ = self._distances(frame, gray, st)
+        k = int(np.argmin(d))
+        score = float(1.0 - 2.0 * d[k])
+        if self.loss.acquire(score):
+            self.mode = "tracking"
+            self.estimate = st[k].copy()
+            self.ps = ParticleSet(np.tile(st[k], (p.n_particles, 1)))
+            box = self._box(st[k])
+            self._last_box = box
+            return self._state(box, confidence(self.loss.llr), False, {"mode": "acquired"})
+        return self._state(self._last_box, min(confidence(self.loss.llr), 0.5), True, {"mode": "searching"},
+                           particles=st, weights=np.full(m, 1.0 / m))
+
+    # ------------------------------------------------------------------ output
+    def _box(self, st: np.ndarray) -> tuple[float, float, float, float]:
+        w, h = self.size0[0] * st[2], self.size0[1] * st[2]
+        return (float(st[0] - w / 2.0), float(st[1] - h / 2.0), float(w), float(h))
+
+    def _state(self, box, score, lost, info, particles=None, weights=None) -> TrackState:
+        if particles is None:
+            particles, weights = self.ps.states, self.ps.w
+        return TrackState(box=tuple(float(v) for v in box), score=float(score), lost=bool(lost),
+                          particles=particles.copy(), weights=np.array(weights, dtype=np.float64),
+                          state_names=self.state_names, info=info)
+
+
+class HybridSSIMPF(SSIMPF):
+    """Hybrid SSIM-PF-DSSIM (Table 4): DSSIM moves every predicted particle; mixture-proposal weights."""
+
+    name = "hybrid-ssim-pf"
+    Params = HybridSSIMPFParams
+
+    def _weights(self, frame, gray, states):
+        p = self.params
+        # DSSIM on the sampled reference grid: positions in frame pixels, scale in reference pixels
+        if p.max_iter > 0:
+            gx, gy = S.image_gradients(gray)
+            opt = S.dssim_ascent_batch(gray, gx, gy, self.template.astype(np.float64), self._scaled(states),
+                                       max_iter=p.max_iter)
+        else:
+            opt = np.column_stack([states[:, :2], np.zeros((len(states), 2))])
+        x_opt = opt[:, :2]
+        prior_mean = self._prev[:, :2]  # the random walk's mean: x_{k-1}
+        sd = self._noise()[:2]
+        new = states.copy()
+        if p.proposal == "literal":
+            new[:, :2] = x_opt
+        elif p.alpha > 0:
+            take = self.rng.random(len(states)) < p.alpha
+            new[take, :2] = x_opt[take] + self.rng.normal(0.0, 1.0, (int(take.sum()), 2)) * sd
+        d, _ = self._distances(frame, gray, new)
+        loglik = self._log_lik(d)
+
+        def log_n(x, mu):
+            z = (x - mu) / sd
+            return -0.5 * np.sum(z * z, axis=1) - np.sum(np.log(sd)) - math.log(2 * math.pi)
+
+        lp = log_n(new[:, :2], prior_mean)  # p(x~ | x_{k-1})
+        if p.alpha <= 0:  # the proposal is the prior: the correction p/q is exactly 1
+            self.dssim_iterations = float(opt[:, 3].mean())
+            return loglik, new
+        if p.alpha >= 1:
+            lq = log_n(new[:, :2], x_opt)
+        else:
+            lq = np.logaddexp(math.log(p.alpha) + log_n(new[:, :2], x_opt), math.log(1 - p.alpha) + lp)
+        self.dssim_iterations = float(opt[:, 3].mean())
+        return loglik + lp - lq, new
