@@ -213,6 +213,20 @@ def _combine(mu_p, e_pp, e_pt, mu_t, e_tt, r, c1, c2, out):
         out[k] /= m
 
 
+def ssim_global_stack(stack: np.ndarray, template: np.ndarray, *, c1: float = C1, c2: float = C2) -> np.ndarray:
+    """Eq. (21) with global statistics (18)-(20) for every patch of an ``(h, w, N)`` stack: ``(N,)``."""
+    x = np.asarray(stack, dtype=np.float64).reshape(-1, stack.shape[2])
+    t = np.asarray(template, dtype=np.float64).ravel()
+    n = t.size
+    mt = t.mean()
+    dt = t - mt
+    vt = float(dt @ dt) / (n - 1)
+    mx = x.mean(axis=0)
+    vx = (np.einsum("ij,ij->j", x, x) - n * mx * mx) / (n - 1)
+    cxt = (dt @ x) / (n - 1)  # sum (x - mx)(t - mt) = sum x (t - mt)
+    return (2 * mx * mt + c1) * (2 * cxt + c2) / ((mx * mx + mt * mt + c1) * (vx + vt + c2))
+
+
 def ssim_reference(a: np.ndarray, b: np.ndarray, *, crop: bool = True, sigma: float = WINDOW_SIGMA,
                    size: int = WINDOW, c1: float = C1, c2: float = C2, border: int = cv2.BORDER_REFLECT) -> float:
     """Wang et al.'s MSSIM of one pair, written straight from the formula (float64; the tests' oracle)."""

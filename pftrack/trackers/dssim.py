@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from ..cues import ssim as S
@@ -31,10 +32,22 @@ class DSSIMParams(Params):
     scale_step: float = param(0.05, ge=0, le=0.5, doc="Relative size change tried each frame (+-5 %, L1833); 0: fixed.")
     template_pixels: int = param(2500, ge=144, le=1_000_000, doc=(
         "The reference patch keeps the box's aspect with at most this many pixels (speed bound)."))
+    template_update: float = param(0.0, ge=0, le=1, doc=(
+        "Rate of the gated template update t <- (1 - a) t + a p_est while the loss test is confident; "
+        "0 keeps the chapter's fixed reference."))
     min_scale: float = param(0.2, gt=0, le=1, doc="Smallest scale relative to the initial box.")
     max_scale: float = param(5.0, ge=1, le=100, doc="Largest scale relative to the initial box.")
     lost_frames: int = param(3, ge=1, le=1000, doc="Frames with LLR < 0 before lost (pftrack.filtering.loss).")
     reacquire_margin: float = param(1.0, ge=0, le=20, doc="LLR that ends a loss (hysteresis).")
+    smooth: float = param(0.0, ge=0, le=10, doc=(
+        "sigma (px) of a Gaussian pre-smoothing of the grey frame (0: none, as in the chapter). Smoothing "
+        "widens the SSIM peak: more tolerant to noise and small deformations, less precise."))
+    history_prior_sd: float = param(0.25, gt=0, le=1, doc=(
+        "Spread of the loss test's prior on the target's score before any frame is learned: the template "
+        "scores 1 against itself, but a frame later a real target's SSIM is typically 0.6-0.9."))
+    score_sd_floor: float = param(0.05, gt=0, le=1, doc=(
+        "Floor on the spreads of the target's and the background's score distributions in the loss test. "
+        "A fixed template's SSIM varies more from frame to frame than a colour histogram's rho."))
     background_positions: int = param(60, ge=4, le=10_000, doc="Background grid positions for the loss test.")
     background_interval: int = param(10, ge=1, le=10_000, doc="Recompute the background scores every this many frames.")
 
@@ -49,7 +62,8 @@ class DSSIMTracker(Tracker):
     def __init__(self, params: DSSIMParams | None = None, *, rng=None, seed=None):
         super().__init__(params, rng=rng, seed=seed)
         p = self.params
-        self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin)
+        self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
+                                 sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor)
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
@@ -61,10 +75,10 @@ class DSSIMTracker(Tracker):
         self.size0 = (float(w), float(h))
         self.c = np.array([x + w / 2.0, y + h / 2.0])
         self.s = 1.0
-        gray = S.to_gray(frame)
+        gray = self._gray(frame)
         self.template = S.sample_patches(gray, np.array([[*self.c, self.pix]]), self.tshape)[0].astype(np.float64)
         self.mode = "tracking"
-        self.loss.reset(1.0)
+        self.loss.reset(1.0, sd=p.history_prior_sd)
         self._since_bg = 0
         self._background(gray)
         self._box_out = tuple(float(v) for v in box)
@@ -98,15 +112,29 @@ class DSSIMTracker(Tracker):
 
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
-        gray = S.to_gray(frame)
-        gx, gy = S.image_gradients(gray)
+        gray = self._gray(frame)
         if self.mode == "searching":
-            return self._search(gray, gx, gy)
-        c, sv, sc, it = self._ascend(gray, gx, gy, self.c)
+            return self._search(gray, *S.image_gradients(gray))
+        # only the region the ascent can reach: the box at the largest scale tried, plus max_iter steps
+        fh, fw = self._shape
+        m = p.max_iter + 2
+        hw = 0.5 * self.size0[0] * self.s * (1 + p.scale_step) + m
+        hh = 0.5 * self.size0[1] * self.s * (1 + p.scale_step) + m
+        x0, y0 = max(int(self.c[0] - hw), 0), max(int(self.c[1] - hh), 0)
+        x1, y1 = min(int(math.ceil(self.c[0] + hw)) + 1, fw), min(int(math.ceil(self.c[1] + hh)) + 1, fh)
+        if x1 - x0 < 3 or y1 - y0 < 3:
+            x0, y0, x1, y1 = 0, 0, fw, fh
+        roi = np.ascontiguousarray(gray[y0:y1, x0:x1])
+        gx, gy = S.image_gradients(roi)
+        c, sv, sc, it = self._ascend(roi, gx, gy, self.c - np.array([x0, y0]))
+        c = c + np.array([x0, y0])
         self.c, self.s = c, sc
         lost, conf = self.loss.step(sv)
         box = self._box()
         if self.loss.confident(sv):
+            if p.template_update > 0:
+                patch = S.sample_patches(gray, np.array([[*self.c, self.s * self.pix]]), self.tshape)[0]
+                self.template = (1.0 - p.template_update) * self.template + p.template_update * patch
             self._since_bg += 1
             if self._since_bg >= p.background_interval:
                 self._background(gray)
@@ -133,6 +161,13 @@ class DSSIMTracker(Tracker):
                               info={"ssim": float(res[k, 2]), "mode": "acquired"})
         return TrackState(box=self._box_out, score=min(confidence(self.loss.llr), 0.5), lost=True,
                           info={"ssim": float(res[k, 2]), "mode": "searching"})
+
+    def _gray(self, frame: np.ndarray) -> np.ndarray:
+        """Grey frame, pre-smoothed by ``smooth`` (a wider SSIM peak, less sensitive to noise and misalignment)."""
+        g = S.to_gray(frame)
+        if self.params.smooth > 0:
+            g = cv2.GaussianBlur(g, (0, 0), self.params.smooth)
+        return g
 
     def _box(self) -> tuple[float, float, float, float]:
         w, h = self.size0[0] * self.s, self.size0[1] * self.s
