@@ -89,3 +89,34 @@ def test_color_pf_update(benchmark, clip, backend):
         benchmark(lambda: tr.update(next(it)))
     finally:
         set_numba_enabled(prev)
+
+
+# ---------------------------------------------------------------------------- book ch. 2: batched SSIM
+
+def _ssim_inputs():
+    rng = np.random.default_rng(0)
+    return rng.uniform(0, 255, (100, 64, 64)).astype(np.float32), rng.uniform(0, 255, (64, 64))
+
+
+def test_ssim_batch_100x64x64(benchmark):
+    from pftrack.cues.ssim import ssim_batch
+
+    patches, tmpl = _ssim_inputs()
+    benchmark(lambda: ssim_batch(patches, tmpl))
+
+
+def test_ssim_reference_loop_100x64x64(benchmark):
+    """The per-particle loop the batch replaces (Wang's formula, one pair per call)."""
+    from pftrack.cues.ssim import ssim_reference
+
+    patches, tmpl = _ssim_inputs()
+    benchmark.pedantic(lambda: [ssim_reference(p, tmpl) for p in patches], rounds=5, iterations=1)
+
+
+def test_skimage_loop_100x64x64(benchmark):
+    skm = pytest.importorskip("skimage.metrics")
+    patches, tmpl = _ssim_inputs()
+    p64 = patches.astype(np.float64)
+    benchmark.pedantic(lambda: [skm.structural_similarity(p, tmpl, gaussian_weights=True, sigma=1.5,
+                                                          use_sample_covariance=False, data_range=255) for p in p64],
+                       rounds=3, iterations=1)

@@ -178,3 +178,17 @@ def test_ssim_pf_rotation_state_and_grey_input():
         st = t.update(f)
     assert st.particles.shape == (60, 4) and st.state_names[-1] == "angle"
     assert center_error(np.array([st.box]), gt[-1:])[0] < 5.0
+
+
+@pytest.mark.parametrize("name", ["ssim-pf", "dssim", "hybrid-ssim-pf"])
+def test_registered_and_usable_from_the_cli(tmp_path, name):
+    from pftrack.cli import main
+    from pftrack.io.sinks import read_track_csv
+    from pftrack.synth import export_otb
+
+    export_otb(camouflage_scene(1, n_frames=12), tmp_path / "seq")
+    out = tmp_path / "t.csv"
+    assert main(["track", str(tmp_path / "seq"), "--tracker", name, "--out", str(out), "--quiet"]) == 0
+    rows = read_track_csv(out)
+    assert rows.shape[0] == 12 and np.all(np.isfinite(rows[:, 1:5]))
+    assert name in [s.name for s in pftrack.list_trackers()]
