@@ -1,4 +1,4 @@
-"""Group a pftrack eval results.csv by kind of sequence: real, grey, grey+light, synthetic varied/vanish/leave.
+"""Group a pftrack eval results.csv by kind of sequence: real, grey, grey+light, synthetic varied/vanish/leave/camouflage.
 
     python scripts/split_summary.py reports/split/report/results.csv
 
@@ -12,11 +12,11 @@ import csv
 import sys
 from collections import defaultdict
 
-GROUPS = ["real", "gray", "graylight", "varied", "vanish", "leave"]
+GROUPS = ["real", "gray", "graylight", "varied", "vanish", "leave", "camouflage"]
 
 
 def group_of(sequence: str) -> str:
-    for g in ("vanish", "leave", "varied"):
+    for g in ("vanish", "leave", "varied", "camouflage"):
         if sequence.startswith(g + "-"):
             return g
     if sequence.endswith("-gray-light"):

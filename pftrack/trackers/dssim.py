@@ -148,10 +148,12 @@ class DSSIMTracker(Tracker):
         """Ascent from a grid of starts over the frame; the best end point must pass the loss test."""
         fh, fw = self._shape
         w, h = self.size0[0] * self.s, self.size0[1] * self.s
-        xs = np.arange(w / 2, fw, max(w / 2, 4.0))
-        ys = np.arange(h / 2, fh, max(h / 2, 4.0))
+        # starts 3/4 of a box apart: each start's ascent covers about a quarter box (a few 1-px steps)
+        xs = np.arange(w / 2, fw, max(0.75 * w, 4.0))
+        ys = np.arange(h / 2, fh, max(0.75 * h, 4.0))
         starts = np.array([[x, y, self.s * self.pix] for y in ys for x in xs])
-        res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts, max_iter=self.params.max_iter)
+        res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts,
+                                   max_iter=min(self.params.max_iter, int(0.25 * min(w, h)) + 2))
         k = int(np.argmax(res[:, 2]))
         if self.loss.acquire(float(res[k, 2])):
             self.mode = "tracking"
