@@ -30,8 +30,8 @@ class DSSIMParams(Params):
 
     max_iter: int = param(20, ge=1, le=1000, doc="Iteration limit of the ascent (the text: about 5 on average).")
     scale_step: float = param(0.05, ge=0, le=0.5, doc="Relative size change tried each frame (+-5 %, L1833); 0: fixed.")
-    template_pixels: int = param(2500, ge=144, le=1_000_000, doc=(
-        "The reference patch keeps the box's aspect with at most this many pixels (speed bound)."))
+    template_pixels: int = param(1000, ge=144, le=1_000_000, doc=(
+        "The reference patch keeps the box's aspect with at most this many pixels (speed bound; as ssim-pf)."))
     template_update: float = param(0.0, ge=0, le=1, doc=(
         "Rate of the gated template update t <- (1 - a) t + a p_est while the loss test is confident; "
         "0 keeps the chapter's fixed reference."))
@@ -145,15 +145,23 @@ class DSSIMTracker(Tracker):
         return TrackState(box=box, score=conf, lost=False, info={"ssim": sv, "iterations": it, "llr": self.loss.llr})
 
     def _search(self, gray, gx, gy) -> TrackState:
-        """Ascent from a grid of starts over the frame; the best end point must pass the loss test."""
+        """Coarse to fine: global SSIM on a grid over the frame (one batched pass), then the ascent from
+        the best few; the best end point must pass the loss test."""
         fh, fw = self._shape
         w, h = self.size0[0] * self.s, self.size0[1] * self.s
-        # starts 3/4 of a box apart: each start's ascent covers about a quarter box (a few 1-px steps)
-        xs = np.arange(w / 2, fw, max(0.75 * w, 4.0))
-        ys = np.arange(h / 2, fh, max(0.75 * h, 4.0))
-        starts = np.array([[x, y, self.s * self.pix] for y in ys for x in xs])
-        res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts,
-                                   max_iter=min(self.params.max_iter, int(0.25 * min(w, h)) + 2))
+        step = max(0.25 * min(w, h), 2.0)
+        while (fw / step) * (fh / step) > 1200:  # bound the cost: the ascent covers the gaps
+            step *= 1.25
+        xs, ys = np.arange(step / 2, fw, step), np.arange(step / 2, fh, step)
+        gxs, gys = np.meshgrid(xs, ys)
+        starts = np.column_stack([gxs.ravel(), gys.ravel(), np.full(gxs.size, self.s * self.pix)])
+        # the coarse pass compares at half resolution (a quarter of the pixels)
+        half = self.template[::2, ::2]
+        coarse_states = starts.copy()
+        coarse_states[:, 2] *= 2.0
+        coarse = S.ssim_global_stack(S.sample_stack(gray, coarse_states, half.shape), half)
+        top = np.argsort(-coarse)[:5]
+        res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts[top], max_iter=self.params.max_iter)
         k = int(np.argmax(res[:, 2]))
         if self.loss.acquire(float(res[k, 2])):
             self.mode = "tracking"
