@@ -134,6 +134,10 @@ class ColorCue:
                 self._levels = channel_levels(frame)
                 if self._ref_levels is None:
                     self._ref_levels = self._levels.copy()
+                gains = self._ref_levels / self._levels
+                if self.normalize == "adaptive" and np.all(np.abs(gains - 1.0) < 0.05):
+                    self.lut = self._base_lut  # within the dead zone: raw colours (no jitter from the medians)
+                    return
                 maps = gain_maps(self._ref_levels, self._levels)
             else:
                 maps = channel_equalization_maps(frame)
