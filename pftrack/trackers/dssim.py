@@ -112,8 +112,8 @@ class DSSIMTracker(Tracker):
 
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
-        gray = self._gray(frame)
         if self.mode == "searching":
+            gray = self._gray(frame)
             return self._search(gray, *S.image_gradients(gray))
         # only the region the ascent can reach: the box at the largest scale tried, plus max_iter steps
         fh, fw = self._shape
@@ -124,7 +124,7 @@ class DSSIMTracker(Tracker):
         x1, y1 = min(int(math.ceil(self.c[0] + hw)) + 1, fw), min(int(math.ceil(self.c[1] + hh)) + 1, fh)
         if x1 - x0 < 3 or y1 - y0 < 3:
             x0, y0, x1, y1 = 0, 0, fw, fh
-        roi = np.ascontiguousarray(gray[y0:y1, x0:x1])
+        roi = self._gray(frame[y0:y1, x0:x1])  # grey conversion of the reachable region only
         gx, gy = S.image_gradients(roi)
         c, sv, sc, it = self._ascend(roi, gx, gy, self.c - np.array([x0, y0]))
         c = c + np.array([x0, y0])
@@ -133,11 +133,12 @@ class DSSIMTracker(Tracker):
         box = self._box()
         if self.loss.confident(sv):
             if p.template_update > 0:
-                patch = S.sample_patches(gray, np.array([[*self.c, self.s * self.pix]]), self.tshape)[0]
+                patch = S.sample_patches(roi, np.array([[self.c[0] - x0, self.c[1] - y0, self.s * self.pix]]),
+                                         self.tshape)[0]
                 self.template = (1.0 - p.template_update) * self.template + p.template_update * patch
             self._since_bg += 1
             if self._since_bg >= p.background_interval:
-                self._background(gray)
+                self._background(self._gray(frame))
         if lost:
             self.mode = "searching"
             return TrackState(box=self._box_out, score=min(conf, 0.5), lost=True, info={"ssim": sv, "iterations": it})
