@@ -120,3 +120,24 @@ def test_skimage_loop_100x64x64(benchmark):
     benchmark.pedantic(lambda: [skm.structural_similarity(p, tmpl, gaussian_weights=True, sigma=1.5,
                                                           use_sample_covariance=False, data_range=255) for p in p64],
                        rounds=3, iterations=1)
+
+
+# ---------------------------------------------------------------------------- book ch. 14: matching criteria
+
+@pytest.mark.parametrize("method", ["sad", "morph", "mi"])
+def test_match_surface_compiled(benchmark, method):
+    from pftrack.cues.template import match_surface
+
+    rng = np.random.default_rng(0)
+    search, tmpl = rng.uniform(0, 255, (64, 64)), rng.uniform(0, 255, (24, 24))
+    match_surface(search, tmpl, method)
+    benchmark(lambda: match_surface(search, tmpl, method))
+
+
+@pytest.mark.parametrize("method", ["sad", "morph", "mi"])
+def test_match_surface_numpy_loop(benchmark, method):
+    from pftrack.cues.template import match_surface_reference
+
+    rng = np.random.default_rng(0)
+    search, tmpl = rng.uniform(0, 255, (64, 64)), rng.uniform(0, 255, (24, 24))
+    benchmark.pedantic(lambda: match_surface_reference(search, tmpl, method), rounds=3, iterations=1)

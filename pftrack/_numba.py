@@ -36,6 +36,10 @@ def set_numba_enabled(flag: bool) -> bool:
     return previous
 
 
+#: ``numba.prange`` (parallel loops in kernels compiled with ``parallel=True``), or ``range`` without Numba.
+prange = range if _numba is None else _numba.prange
+
+
 def njit(*args, **kwargs):
     """``numba.njit`` with caching when available, otherwise a no-op decorator."""
     kwargs.setdefault("cache", True)

@@ -14,6 +14,7 @@ from .local_motion_pf import LocalMotionPF
 from .meanshift import KalmanMeanShift, MeanShift
 from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
 from .ssim_pf import SSIMPF, HybridSSIMPF
+from .template import TemplateTracker
 
 _DETECTOR = ("detector",)
 
@@ -37,6 +38,9 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
     ("hybrid-ssim-pf", HybridSSIMPF,
      "SSIM particle filter whose particles are moved by DSSIM, with mixture-proposal weights (book ch. 2, Table 4)",
      {}),
+    ("template", TemplateTracker,
+     "Exhaustive template matching around the last position with one of six criteria (SSD, correlation, NCC, "
+     "SAD, morphological correlation, mutual information), window enlarged on poor matches (book ch. 14)", {}),
     ("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
      {"family": "baseline"}),
     ("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",
