@@ -1,7 +1,7 @@
 """The ``pftrack`` command line.  It only wires sources, trackers and sinks together.
 
 One module per command group: :mod:`.track` (track, demo), :mod:`.mot`,
-:mod:`.evaluate` (eval, list), :mod:`.bench` (bench, synth).
+:mod:`.evaluate` (eval, list), :mod:`.bench` (bench, synth), :mod:`.densitometry` (book ch. 14).
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr, never a
 traceback), 130 interrupted by Ctrl-C or SIGTERM (everything computed so far is
@@ -20,6 +20,7 @@ from .. import __version__
 from ..errors import Interrupted, PftrackError
 from .bench import add_bench, add_synth
 from .common import DEFAULT_TRACKER, ArgumentParser
+from .densitometry import add_densitometry
 from .evaluate import add_eval, add_list
 from .mot import add_mot, run_mot
 from .track import add_demo, add_track, demo_clip, run_track
@@ -39,6 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_eval(sub)
     add_bench(sub)
     add_synth(sub)
+    add_densitometry(sub)
     return parser
 
 

@@ -33,9 +33,8 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     from ..io.sources import open_source
     from ..pipeline import TrackRun, interrupt_on_sigterm, track_source
     from ..trackers.registry import create_tracker
-    from ..viz.draw import TrackDrawer
-
     from ..trackers.warmup import warm_up
+    from ..viz.draw import TrackDrawer
 
     tracker = create_tracker(tracker_name, seed=seed, params=params or {})
     # kernels are compiled (first run) or loaded from the on-disk cache here, never inside the timed loop
