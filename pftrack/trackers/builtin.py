@@ -6,6 +6,7 @@ it and not the other way round.
 
 from __future__ import annotations
 
+from .block_matching import PISCTracker
 from .color_pf import ColorPF
 from .dssim import DSSIMTracker
 from .flow_pf import FlowPF
@@ -41,6 +42,9 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
     ("template", TemplateTracker,
      "Exhaustive template matching around the last position with one of six criteria (SSD, correlation, NCC, "
      "SAD, morphological correlation, mutual information), window enlarged on poor matches (book ch. 14)", {}),
+    ("pisc", PISCTracker,
+     "Block matching on peripheral increment sign codes: 9x9 blocks, median motion of the matching blocks, "
+     "insensitive to monotonic brightness change (book ch. 1)", {}),
     ("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
      {"family": "baseline"}),
     ("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",
