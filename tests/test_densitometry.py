@@ -7,8 +7,13 @@ import numpy as np
 import pytest
 
 from pftrack.cli import main
-from pftrack.densitometry import (background_line, densitometric_area, profile_along, translate_line,
-                                  vessel_edges)
+from pftrack.densitometry import (
+    background_line,
+    densitometric_area,
+    profile_along,
+    translate_line,
+    vessel_edges,
+)
 
 
 def _vessel_frame(shift=(0.0, 0.0), contrast=0.5, size=(160, 200), seed=0):
