@@ -18,6 +18,9 @@ def add_mot(sub) -> None:
     p.add_argument("--video-out", help="annotated video output")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="multi-pf parameter (repeatable)")
+    p.add_argument("--identify", action="store_true",
+                   help="book ch. 1 identification: give a returning person their old identity (colour and spatial "
+                        "features of the upper and lower body)")
     p.add_argument("--skip-bad-frames", action="store_true", help="skip unreadable frames instead of stopping")
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_mot)
@@ -81,8 +84,11 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
 def cmd_mot(args) -> int:
     from ..params import parse_param_assignments
 
+    params = parse_param_assignments(args.param)
+    if args.identify:
+        params["identify"] = True
     res = run_mot(args.source, out=args.out, detector=args.detector, video_out=args.video_out, seed=args.seed,
-                  params=parse_param_assignments(args.param), skip_bad_frames=args.skip_bad_frames, quiet=args.quiet)
+                  params=params, skip_bad_frames=args.skip_bad_frames, quiet=args.quiet)
     print(f"{res['frames']} frames, {res['identities']} identities, {res['rows']} boxes: {res['update_fps']:.0f} fps "
           f"(detection + tracking), {res['end_to_end_fps']:.0f} fps end to end -> {args.out}", file=sys.stderr)
     return 0

@@ -48,13 +48,19 @@ import cv2
 import numpy as np
 
 from ..cues.color import warmup
+from ..cues.contrast import (
+    box_counts,
+    contrast_scores,
+    foreground_lut,
+    probability_integral,
+)
 from ..cues.histogram_cue import ColorCue
-from ..cues.contrast import box_counts, contrast_scores, foreground_lut, probability_integral
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
 from ..geometry import intersection_area, iou_matrix
 from ..params import Params, param
 from .detectors import as_detector, create_detector
+from .identify import IdentityMemory, person_features
 
 STATE_NAMES = ("x", "y", "vx", "vy", "w", "h", "vw", "vh")
 
@@ -141,6 +147,11 @@ class MultiPFParams(Params):
         "occluded, with report_occluded)."))
     min_size: float = param(6.0, gt=0, doc="Smallest box side (pixels) of a track.")
     exit_fraction: float = param(0.4, ge=0, le=1, doc="A track whose box is less than this fraction inside the image dies.")
+    identify: bool = param(False, doc=(
+        "Book ch. 1 identification: a new track takes the identity of an ended one when their upper/lower-body "
+        "colour and spatial features are similar enough (pftrack.multi.identify; reconstructed Eqs. 16-19)."))
+    identify_threshold: float = param(0.8, ge=0, le=1, doc="Least similarity (Eq. 16) to give an old identity back.")
+    identify_memory: int = param(300, ge=1, le=1_000_000, doc="Frames an ended identity is remembered.")
 
 
 @dataclass
@@ -167,6 +178,7 @@ class _Track:
     misses: int = 0
     occluded_frames: int = 0
     age: int = 0
+    features: object = None  # ch. 1 identification features at the last detection
     score: float = 0.0
     det: np.ndarray | None = None
     log_lik: np.ndarray | None = None
@@ -229,6 +241,7 @@ class MultiPF:
         self.tracks: list[_Track] = []
         self.candidates: list[_Candidate] = []
         self.next_id = 1
+        self.identities = IdentityMemory(threshold=self.params.identify_threshold, memory=self.params.identify_memory)
         self.frame_index = 0
         self._shape: tuple[int, int] | None = None
 
@@ -270,11 +283,16 @@ class MultiPF:
         st = _box_to_state(box)
         st[2:4] = velocity
         parts = np.tile(st, (p.n_particles, 1))
-        tr = _Track(self.next_id, st, parts, q, np.sqrt(q))
+        tid = None
+        if p.identify:
+            h, w = frame.shape[:2]
+            tid = self.identities.recall(person_features(frame, box), self.frame_index, w, h)
+        tr = _Track(self.next_id if tid is None else tid, st, parts, q, np.sqrt(q))
         if p.contrast_gain > 0:
             _, _, feats = self._rho(frame, st[None, :], tr.sqrt_q, margin=p.ring)
             self._contrast_model(feats, tr, box, None)
-        self.next_id += 1
+        if tid is None:
+            self.next_id += 1
         return tr
 
     def _noise(self, n: int, w: float, h: float) -> np.ndarray:
@@ -357,6 +375,10 @@ class MultiPF:
         for tr in self.tracks:
             self._estimate(frame, tr)
         # 5. life cycle
+        if p.identify:
+            for tr in self.tracks:
+                if tr.det is not None:
+                    tr.features = person_features(frame, tr.box)
         self._births(frame, dets, used)
         self._deaths()
         out = []
@@ -570,6 +592,8 @@ class MultiPF:
             inside = _cover_matrix(tr.box[None, :], image)[0, 0]
             limit = p.max_occluded if (tr.occluded or tr.grouped) else p.max_misses
             if inside < p.exit_fraction or tr.misses > limit or not np.all(np.isfinite(tr.state)):
+                if p.identify:
+                    self.identities.remember(tr.id, tr.features, self.frame_index)
                 continue
             keep.append(tr)
         self.tracks = keep
