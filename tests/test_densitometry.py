@@ -80,3 +80,23 @@ def test_cli_bad_input_exits_2(tmp_path, capsys):
     assert "outside" in capsys.readouterr().err and not out.exists()
     assert main(["densitometry", str(tmp_path / "missing"), "--box", "1,1,5,5", "--line", "1,1,4,4",
                  "--out", str(out)]) == 2
+
+
+def test_cli_template_frame_in_the_middle_tracks_backwards(tmp_path):
+    shifts = [(2.0 * np.sin(t / 3), 1.5 * t / 4) for t in range(12)]
+    folder = tmp_path / "cine"
+    folder.mkdir()
+    for i, s in enumerate(shifts):
+        cv2.imwrite(str(folder / f"{i + 1:03d}.png"), np.clip(_vessel_frame(s), 0, 255).astype(np.uint8))
+    nr = 5
+    sx, sy = shifts[nr - 1]
+    out = tmp_path / "curve.csv"
+    box = f"{80 + sx:.2f},{40 + sy:.2f},40,50"
+    line = f"{88 + sx:.2f},{65 + sy:.2f},{112 + sx:.2f},{65 + sy:.2f}"
+    assert main(["densitometry", str(folder), "--box", box, "--line", line, "--template-frame", str(nr),
+                 "--out", str(out), "--quiet"]) == 0
+    rows = np.genfromtxt(out, delimiter=",", names=True)
+    assert list(rows["frame"].astype(int)) == [5, 4, 3, 2, 1, 6, 7, 8, 9, 10, 11, 12]  # rows as computed
+    for r in rows:
+        k = int(r["frame"]) - 1
+        assert abs(r["dx"] - (shifts[k][0] - sx)) < 0.3 and abs(r["dy"] - (shifts[k][1] - sy)) < 0.3

@@ -17,6 +17,10 @@ def add_densitometry(sub) -> None:
     p.add_argument("source", help="video file, frame folder, OTB/VOT folder or camera index")
     p.add_argument("--box", required=True, help="template window X,Y,W,H (around the artery segment)")
     p.add_argument("--line", required=True, help="cross-sectional line X1,Y1,X2,Y2 in the first frame")
+    p.add_argument("--template-frame", type=int, default=1,
+                   help="frame (from 1) where --box and --line are given, e.g. the end of the contrast injection; "
+                        "frames before it are tracked backwards from it (rows are written as computed: that "
+                        "frame, then back to frame 1, then forwards)")
     p.add_argument("--metric", default="ncc", help="matching criterion (ssd, ccorr, ncc, sad, morph, morph_normed, "
                                                    "mi, nmi; default ncc)")
     p.add_argument("--width", type=int, default=1, help="line width in pixels (the profile is averaged across it)")
@@ -58,11 +62,18 @@ def cmd_densitometry(args) -> int:
         prepare_output(args.video_out)
     source = open_source(args.source)
     frames = source.numbered()
-    try:  # check the line and the box on the first frame, before any output is created
+    if args.template_frame < 1:
+        source.close()
+        raise ParameterError("--template-frame must be >= 1")
+    before = []  # frames before the template frame, tracked backwards from it
+    try:  # check the line and the box on the template frame, before any output is created
         first = next(frames)
+        while first[0] < args.template_frame:
+            before.append(first)
+            first = next(frames)
     except StopIteration:
         source.close()
-        raise BoxError(f"{args.source}: no frames") from None
+        raise BoxError(f"{args.source}: no frame {args.template_frame}") from None
     try:
         h, w = first[1].shape[:2]
         check_line(line, w, h)
@@ -92,8 +103,15 @@ def cmd_densitometry(args) -> int:
                 bar.update(1)
                 stop.check()
 
-            done = run_densitometry(itertools.chain([first], frames), tracker, box, line, sink, width=args.width,
-                                    background=args.background, on_frame=on_frame)
+            done = 0
+            if before:  # the chapter's frame nr in the middle: first backwards to frame 1
+                back = create_tracker("template", params={"metric": args.metric,
+                                                          **parse_param_assignments(args.param)})
+                done += run_densitometry(itertools.chain([first], reversed(before)), back, box, line, sink,
+                                         width=args.width, background=args.background, on_frame=on_frame)
+                before.clear()
+            done += run_densitometry(itertools.chain([first], frames), tracker, box, line, sink, width=args.width,
+                                     background=args.background, on_frame=on_frame, write_first=not done)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; rows so far are in {args.out}") from None
     finally:

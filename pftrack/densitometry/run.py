@@ -62,15 +62,17 @@ def measure(gray: np.ndarray, line, *, width: int = 1, background: str = "II") -
 
 
 def run_densitometry(frames, tracker, box, line, sink: DensitometrySink, *, width: int = 1, background: str = "II",
-                     on_frame=None) -> int:
+                     on_frame=None, write_first: bool = True) -> int:
     """Track ``box`` with ``tracker`` through ``frames`` (an iterable of ``(number, frame)``), translate
     ``line`` with the box's displacement from the first frame, and write one row per frame.
 
-    ``on_frame(number, frame, state, line)`` is called after each row (for a video sink).  Returns
-    the number of frames measured.
+    ``on_frame(number, frame, state, line)`` is called after each row (for a video sink).  With
+    ``write_first=False`` the first frame only initialises (its row was written by an earlier pass).
+    Returns the number of rows written.
     """
     count = 0
     c0 = None
+    skip = not write_first
     for number, frame in frames:
         if c0 is None:
             h, w = frame.shape[:2]
@@ -82,6 +84,9 @@ def run_densitometry(frames, tracker, box, line, sink: DensitometrySink, *, widt
         c = np.array([state.box[0] + state.box[2] / 2, state.box[1] + state.box[3] / 2])
         offset = c - c0
         moved = translate_line(line, offset)
+        if skip:  # the first frame of this pass only initialises (an earlier pass wrote its row)
+            skip = False
+            continue
         area, d1, d2, prof = measure(to_gray(frame), moved, width=width, background=background)
         sink.write(number, offset, moved, area, d1, d2, prof, state.score, state.lost)
         if on_frame is not None:
