@@ -143,3 +143,13 @@ def test_xray_like_sequence_ncc_keeps_the_segment():
                     errs.append(e)
     assert np.mean(errs) <= 2.0, np.mean(errs)
     assert fails["ncc"] <= fails["ssd"]
+
+
+def test_particle_filter_mode_scores_particles_with_the_criterion():
+    """ssim-pf[cue=ncc]: the template criterion as a particle likelihood (D = (1 - NCC)/2, eq. 29)."""
+    scene = Scene(camouflage_scene(2, n_frames=40))
+    frames, gt = scene.frames(), scene.groundtruth(0)
+    t = pftrack.create_tracker("ssim-pf", seed=0, cue="ncc")
+    t.init(frames[0], tuple(gt[0]))
+    err = center_error(np.array([gt[0]] + [t.update(f).box for f in frames[1:]]), gt)
+    assert err.mean() < 2.0

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..cues import patch_histograms as ph
 from ..cues import ssim as S
+from ..cues import template as T
 from ..errors import ParameterError
 from ..filtering.loss import LossDetector, confidence
 from ..filtering.particles import ParticleSet
@@ -36,7 +37,7 @@ from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
 
-Cue = Literal["ssim", "color", "edges", "color+edges"]
+Cue = Literal["ssim", "color", "edges", "color+edges", "ncc", "morph_normed"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -47,7 +48,8 @@ class SSIMPFParams(Params):
     cue: Cue = param("ssim", doc=(
         "Likelihood cue on the particles' patches: 'ssim' (MSSIM, eq. 21), or the chapter's comparators "
         "'color' (Nummiaro RGB 8x8x8), 'edges' (gradient-orientation histogram), 'color+edges' (product); "
-        "all through eq. (29)."))
+        "or book ch. 14's template criteria 'ncc' and 'morph_normed' (D = (1 - score)/2: the template tracker's "
+        "particle-filter mode); all through eq. (29)."))
     statistics: Literal["local", "global"] = param("global", doc=(
         "SSIM statistics: 'local' is the chapter's MSSIM (11x11 Gaussian windows, Wang 2004); 'global' uses "
         "the whole region's mean, variance and covariance (eqs. 18-20, as in DSSIM): a wider peak, more "
@@ -141,6 +143,9 @@ class SSIMPF(Tracker):
                 S.ssim_global_stack(stack, self.template)
             return S.dissimilarity(s), s
         g = S.sample_patches(gray, sc, self.tshape)
+        if cue in ("ncc", "morph_normed"):
+            score = T.batch_scores(g, self.template, cue)
+            return (1.0 - score) / 2.0, None
         d2 = np.zeros(len(states))
         if "color" in cue:
             c = S.sample_patches(frame, sc, self.tshape)
