@@ -153,3 +153,15 @@ def test_particle_filter_mode_scores_particles_with_the_criterion():
     t.init(frames[0], tuple(gt[0]))
     err = center_error(np.array([gt[0]] + [t.update(f).box for f in frames[1:]]), gt)
     assert err.mean() < 2.0
+
+
+def test_synth_xray_writes_sequences_with_exact_truth(tmp_path):
+    from pftrack.cli import main
+    from pftrack.io.datasets import read_sequence
+
+    src = tmp_path / "frame.png"
+    cv2.imwrite(str(src), _vessels(4))
+    assert main(["synth", "xray", "--source", str(src), "--seeds", "0-1", "--out", str(tmp_path / "x")]) == 0
+    seq = read_sequence(tmp_path / "x" / "xray-001")
+    assert len(seq.frames) == 50 and np.all(np.isfinite(seq.groundtruth))
+    assert main(["synth", "xray", "--seeds", "0", "--out", str(tmp_path / "y")]) == 2  # no --source

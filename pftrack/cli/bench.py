@@ -107,7 +107,9 @@ def add_synth(sub) -> None:
     p = sub.add_parser("synth", help="write seeded synthetic scenes with exact ground truth as OTB folders",
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
-    p.add_argument("kind", choices=sorted(SCENES), help="scene generator")
+    p.add_argument("kind", choices=sorted(SCENES) + ["xray"],
+                   help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book ch. 14)")
+    p.add_argument("--source", help="xray: the grey image to warp (an angiography frame)")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.set_defaults(func=cmd_synth)
@@ -131,9 +133,26 @@ def cmd_synth(args) -> int:
     if not seeds:
         raise ParameterError("no seeds given")
     out = Path(args.out)
+    image = None
+    if args.kind == "xray":
+        from ..errors import SourceError
+        from ..io.sources import read_image
+
+        if not args.source:
+            raise ParameterError("xray scenes need --source IMAGE (the grey frame to warp)")
+        if not Path(args.source).is_file():
+            raise SourceError(f"{args.source}: no such file")
+        image = read_image(Path(args.source))
+        if image is None:
+            raise SourceError(f"{args.source}: not an image")
     prepare_output(out / "README.txt")
     for sd in seeds:
-        export_otb(SCENES[args.kind](sd), out / f"{args.kind}-{sd:03d}")
+        if image is not None:
+            from ..synth.xray import export_xray
+
+            export_xray(image, out / f"xray-{sd:03d}", sd)
+        else:
+            export_otb(SCENES[args.kind](sd), out / f"{args.kind}-{sd:03d}")
     (out / "README.txt").write_text(f"Synthetic '{args.kind}' scenes, seeds {args.seeds}, written by pftrack synth.\n",
                                     encoding="utf-8")
     print(f"wrote {len(seeds)} '{args.kind}' sequences to {out}", file=sys.stderr)

@@ -78,3 +78,23 @@ def structured_box(image: np.ndarray, size: int = 32, *, margin: int = 60) -> tu
         var[margin + size // 2:h - margin - size // 2, margin + size // 2:w - margin - size // 2]
     cy, cx = np.unravel_index(int(np.argmax(inner)), inner.shape)
     return (float(cx - size // 2), float(cy - size // 2), float(size), float(size))
+
+
+def export_xray(image: np.ndarray, folder, seed: int, *, n_frames: int = 50, amplitude: float = 20.0,
+                noise: float = 4.0, size: int = 32) -> None:
+    """Write a warped sequence as an OTB folder: ``img/``, ``groundtruth_rect.txt`` (the box of the most
+    structured ``size`` x ``size`` region, moved by the known motion) and ``meta.json``."""
+    import json
+    from pathlib import Path
+
+    folder = Path(folder)
+    (folder / "img").mkdir(parents=True, exist_ok=True)
+    frames, shifts = warped_sequence(image, seed, n_frames=n_frames, amplitude=amplitude, noise=noise)
+    box = structured_box(image, size)
+    for k, f in enumerate(frames):
+        cv2.imwrite(str(folder / "img" / f"{k + 1:04d}.png"), f)
+    rows = [f"{box[0] + dx:.3f},{box[1] + dy:.3f},{box[2]:.3f},{box[3]:.3f}" for dx, dy in shifts]
+    (folder / "groundtruth_rect.txt").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    meta = {"kind": "xray", "seed": seed, "hidden": [], "amplitude": amplitude, "noise": noise,
+            "shifts": [[round(float(a), 4), round(float(b), 4)] for a, b in shifts]}
+    (folder / "meta.json").write_text(json.dumps(meta) + "\n", encoding="utf-8")
