@@ -74,3 +74,14 @@ def test_a_returning_person_gets_their_identity_back():
     assert len(before) == 1 and after == before
     before0, after0 = _run(identify=False)
     assert len(before0) == 1 and after0 and after0 != before0  # without identification: a new identity
+
+
+def test_identification_rate_counts_detections_with_their_persons_identity():
+    from pftrack.eval.mot import accumulate, identification_rate
+
+    gt, hyp = [], []
+    for f in range(1, 11):
+        gt += [[f, 1, 10, 10, 20, 40], [f, 2, 100, 10, 20, 40]]
+        hyp += [[f, 7, 10, 10, 20, 40], [f, 8 if f <= 6 else 9, 100, 10, 20, 40]]  # person 2 changes id at f=7
+    rate = identification_rate(accumulate(np.array(gt, float), np.array(hyp, float)))
+    assert rate == (10 + 6) / 20

@@ -47,6 +47,7 @@ class MOTScores:
     precision: float
     recall: float
     hota: float | None = None
+    id_rate: float = float("nan")  # book ch. 1 Table 1: matched detections that carry their person's identity
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -74,6 +75,22 @@ def accumulate(gt: np.ndarray, hyp: np.ndarray, *, iou_threshold: float = 0.5, f
     return acc
 
 
+def identification_rate(acc) -> float:
+    """Book ch. 1, Table 1: the fraction of matched detections whose hypothesis identity is the one that
+    person carries most often (its "right" identity); NaN without matches."""
+    ev = acc.mot_events
+    ev = ev[(ev["Type"] != "RAW") & ev["OId"].notna() & ev["HId"].notna()]
+    if len(ev) == 0:
+        return float("nan")
+    pairs = ev[["OId", "HId"]].astype(float).to_numpy()
+    right = 0
+    for oid in np.unique(pairs[:, 0]):
+        hids = pairs[pairs[:, 0] == oid, 1]
+        _, counts = np.unique(hids, return_counts=True)
+        right += int(counts.max())
+    return right / len(pairs)
+
+
 def mot_scores(gt: np.ndarray, hyp: np.ndarray, *, iou_threshold: float = 0.5, frames=None) -> MOTScores:
     """MOT metrics of hypotheses against ground truth (MOTChallenge rows)."""
     mm = import_motmetrics()
@@ -97,4 +114,4 @@ def mot_scores(gt: np.ndarray, hyp: np.ndarray, *, iou_threshold: float = 0.5, f
                      mostly_lost=int(row["mostly_lost"]), num_false_positives=int(row["num_false_positives"]),
                      num_misses=int(row["num_misses"]), num_objects=int(row["num_objects"]),
                      num_unique_objects=int(row["num_unique_objects"]), precision=f("precision"),
-                     recall=f("recall"), hota=hota)
+                     recall=f("recall"), hota=hota, id_rate=identification_rate(acc))

@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import FormatError, ParameterError
 from .metrics import lost_detection, ope_scores, valid_gt
 
-RESULT_VERSION = 2  # 2: lost-flag detection metrics
+RESULT_VERSION = 3  # 2: lost-flag detection metrics; 3: identification rate (MOT)
 
 
 # ---------------------------------------------------------------------------------------------- specs
