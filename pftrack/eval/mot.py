@@ -79,7 +79,9 @@ def identification_rate(acc) -> float:
     """Book ch. 1, Table 1: the fraction of matched detections whose hypothesis identity is the one that
     person carries most often (its "right" identity); NaN without matches."""
     ev = acc.mot_events
-    ev = ev[(ev["Type"] != "RAW") & ev["OId"].notna() & ev["HId"].notna()]
+    # one row per matched detection: MATCH, or SWITCH (motmetrics adds TRANSFER/ASCEND/MIGRATE rows that
+    # describe the same switch again)
+    ev = ev[ev["Type"].isin(["MATCH", "SWITCH"]) & ev["OId"].notna() & ev["HId"].notna()]
     if len(ev) == 0:
         return float("nan")
     pairs = ev[["OId", "HId"]].astype(float).to_numpy()
