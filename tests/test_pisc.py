@@ -54,3 +54,16 @@ def test_pisc_tracker_follows_a_target_whose_light_changes():
         boxes = [gt[0]] + [t.update(f).box for f in frames[1:]]
         errs.append(center_error(np.array(boxes), gt).mean())
     assert np.mean(errs) < 4.0, errs
+
+
+def test_per_block_offsets_recover_a_shift():
+    import cv2
+
+    rng = np.random.default_rng(4)
+    g = cv2.GaussianBlur(rng.uniform(0, 255, (80, 90)), (0, 0), 1.5)
+    centres = np.array([[r, c] for r in range(25, 50, 9) for c in range(25, 60, 9)])
+    prev = P.dense_codes(g)[centres[:, 0], centres[:, 1]]
+    moved = np.roll(np.roll(g, -2, axis=0), 4, axis=1) ** 0.9  # shift (-2, 4) and a gamma change
+    off, corr = P.match_blocks(prev, P.dense_codes(moved), centres, 6)
+    assert abs(np.median(off[:, 0]) + 2) < 0.3 and abs(np.median(off[:, 1]) - 4) < 0.3
+    assert np.mean(np.all(np.abs(off - [-2, 4]) < 0.5, axis=1)) > 0.8  # a flat block may match elsewhere
