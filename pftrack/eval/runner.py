@@ -184,9 +184,16 @@ def build_jobs(sequences: Iterable, trackers: list[TrackerConfig], *, seeds: int
 # ---------------------------------------------------------------------------------------------- one run
 
 def _pin_threads(n: int) -> None:
+    """OpenCV's and Numba's parallel kernels get ``n`` threads: one run measures one core by default."""
     import cv2
 
     cv2.setNumThreads(int(n))
+    try:
+        import numba
+
+        numba.set_num_threads(max(1, min(int(n), numba.config.NUMBA_NUM_THREADS)))
+    except Exception:  # numba absent or its threading layer unavailable: the NumPy paths are single-threaded
+        pass
 
 
 def _finite_list(a) -> list:
