@@ -5,7 +5,9 @@ the previous frame is tiled into 9x9 blocks; each block's PISC code (Eqs. 7-8) s
 current frame (Eq. 9); a block *matches* when its correlation reaches ``match_fraction`` of its 81
 bits.  The box moves by the displacement with the largest summed correlation of its blocks, refined
 to sub-pixel precision (a detector-free form of ch01.md's "dense" mode; the chapter's own mode
-votes among the frame-differencing detector's blobs, which :mod:`pftrack.multi` provides).  When fewer than
+votes among the frame-differencing detector's blobs, which :mod:`pftrack.multi` provides).  As an
+extension (``anchor_radius``), the first frame's blocks are then matched near the new position and,
+when enough match, correct the drift that frame-to-frame matching accumulates.  When fewer than
 ``min_matched`` of the blocks match, "the matching process is repeated by enlarging the tracking
 area" (L489-490): the search radius is doubled; if it still fails the frame is unreliable, and
 ``lost_frames`` unreliable frames raise ``lost``.
@@ -43,6 +45,10 @@ class PISCParams(Params):
     median_smooth: int = param(3, ge=1, le=9, doc=(
         "Median filter (odd px) on the grey frame before coding (ch. 1's 3x3): fewer flipped bits from noise."))
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive unreliable frames before the target is declared lost.")
+    anchor_radius: int = param(3, ge=0, le=32, doc=(
+        "After the frame-to-frame step, the first frame's blocks are matched within this radius around the new "
+        "position; when enough of them match, their displacement corrects the drift that frame-to-frame "
+        "matching accumulates (an extension; 0 is the chapter's frame-to-frame matching only)."))
 
 
 class PISCTracker(Tracker):
@@ -85,6 +91,13 @@ class PISCTracker(Tracker):
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         self.box = np.array(box, dtype=np.float64)
         self.prev = self._prepare(frame)
+        centres = self._block_centres(self.box)
+        fh, fw = self._shape
+        ok = (centres[:, 0] >= 0) & (centres[:, 0] < fw) & (centres[:, 1] >= 0) & (centres[:, 1] < fh)
+        self.ref_offsets = centres[ok] - self.box[:2]  # block centres relative to the box corner
+        self.ref_codes = self._codes_at(self.prev, centres[ok])
+        # the codes describe the integer pixel below each centre: remember the fractional part
+        self.ref_frac = (centres[ok] - np.floor(centres[ok])).mean(axis=0) if ok.any() else np.zeros(2)
         self.miss = 0
         self.lost = False
         return TrackState(box=tuple(float(v) for v in box), score=1.0, lost=False, info={})
@@ -120,6 +133,17 @@ class PISCTracker(Tracker):
         if ok:  # d = (drow, dcol), the common displacement of the blocks
             self.box[0] = float(np.clip(self.box[0] + d[1], -self.box[2] + 1, fw - 1))
             self.box[1] = float(np.clip(self.box[1] + d[0], -self.box[3] + 1, fh - 1))
+            if p.anchor_radius > 0 and len(self.ref_codes):
+                anchors = self.box[:2] + self.ref_offsets
+                keep = (anchors[:, 0] >= 0) & (anchors[:, 0] < fw) & (anchors[:, 1] >= 0) & (anchors[:, 1] < fh)
+                if keep.mean() >= 0.5:
+                    da, ca = self._search(gray, anchors[keep], self.ref_codes[keep], p.anchor_radius)
+                    if (ca >= need).mean() >= p.min_matched:
+                        # codes live on integer pixels: the correction is the blocks' displacement minus the
+                        # fractional parts of the current and the first centres
+                        frac = (anchors[keep] - np.floor(anchors[keep])).mean(axis=0)
+                        self.box[0] += float(da[1] - frac[0] + self.ref_frac[0])
+                        self.box[1] += float(da[0] - frac[1] + self.ref_frac[1])
             self.miss = 0
             self.lost = False
         else:
