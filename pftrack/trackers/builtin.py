@@ -43,8 +43,8 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
      "Exhaustive template matching around the last position with one of six criteria (SSD, correlation, NCC, "
      "SAD, morphological correlation, mutual information), window enlarged on poor matches (book ch. 14)", {}),
     ("pisc", PISCTracker,
-     "Block matching on peripheral increment sign codes: 9x9 blocks, median motion of the matching blocks, "
-     "insensitive to monotonic brightness change (book ch. 1)", {}),
+     "Block matching on peripheral increment sign codes: 9x9 blocks, common sub-pixel displacement anchored to "
+     "the first frame's blocks, insensitive to monotonic brightness change (book ch. 1)", {}),
     ("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
      {"family": "baseline"}),
     ("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",
