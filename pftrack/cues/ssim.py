@@ -332,8 +332,12 @@ def _region_ssim_grad(gray, gx, gy, tmpl, cx, cy, s, c1, c2, want_grad):
             xx = cx + s * (c - (w - 1) / 2.0)
             vals[k] = _bilinear(gray, xx, yy)
             if want_grad:
-                dxs[k] = _bilinear(gx, xx, yy)
-                dys[k] = _bilinear(gy, xx, yy)
+                if gx.shape[0] == 0:  # no gradient images: central differences of the bilinear image
+                    dxs[k] = 0.5 * (_bilinear(gray, xx + 1.0, yy) - _bilinear(gray, xx - 1.0, yy))
+                    dys[k] = 0.5 * (_bilinear(gray, xx, yy + 1.0) - _bilinear(gray, xx, yy - 1.0))
+                else:
+                    dxs[k] = _bilinear(gx, xx, yy)
+                    dys[k] = _bilinear(gy, xx, yy)
             k += 1
     mi = 0.0
     mj = 0.0
@@ -396,13 +400,29 @@ def _ascent(gray, gx, gy, tmpl, cx, cy, s, max_iter, c1, c2):
     return cx, cy, s0, it
 
 
-def dssim_ascent(gray: np.ndarray, gx: np.ndarray, gy: np.ndarray, template: np.ndarray, center, *, scale: float = 1.0,
-                 max_iter: int = 20, c1: float = C1, c2: float = C2) -> tuple[float, float, float, int]:
-    """DSSIM (Table 3) from ``center``: returns ``(cx, cy, S, iterations)`` (global SSIM, eq. 21)."""
+def dssim_ascent(gray: np.ndarray, gx: np.ndarray | None, gy: np.ndarray | None, template: np.ndarray, center, *,
+                 scale: float = 1.0, max_iter: int = 20, c1: float = C1, c2: float = C2) -> tuple[float, float, float, int]:
+    """DSSIM (Table 3) from ``center``: returns ``(cx, cy, S, iterations)`` (global SSIM, eq. 21).
+
+    ``gx, gy`` are the image's gradient images; with ``None`` the gradient at each sampled point is the
+    central difference of the bilinear image there, which avoids computing gradient images when the
+    region is sampled sparsely (a large target compared at reduced resolution)."""
+    if gx is None or gy is None:
+        gx = gy = np.empty((0, 0), np.float32)
     cx, cy, s, it = _ascent(np.ascontiguousarray(gray, np.float32), np.ascontiguousarray(gx, np.float32),
                             np.ascontiguousarray(gy, np.float32), np.ascontiguousarray(template, np.float64),
                             float(center[0]), float(center[1]), float(scale), int(max_iter), float(c1), float(c2))
     return float(cx), float(cy), float(s), int(it)
+
+
+def region_ssim(gray: np.ndarray, template: np.ndarray, center, *, scale: float = 1.0, c1: float = C1,
+                c2: float = C2) -> float:
+    """Global SSIM (21) of the region at ``center`` and ``scale`` with the template (bilinear samples)."""
+    e = np.empty((0, 0), np.float32)
+    s, _, _ = _region_ssim_grad(np.ascontiguousarray(gray, np.float32), e, e,
+                                np.ascontiguousarray(template, np.float64), float(center[0]), float(center[1]),
+                                float(scale), float(c1), float(c2), False)
+    return float(s)
 
 
 @njit
