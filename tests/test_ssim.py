@@ -192,3 +192,16 @@ def test_registered_and_usable_from_the_cli(tmp_path, name):
     rows = read_track_csv(out)
     assert rows.shape[0] == 12 and np.all(np.isfinite(rows[:, 1:5]))
     assert name in [s.name for s in pftrack.list_trackers()]
+
+
+def test_region_ssim_and_sparse_gradients_agree_with_the_dense_ones():
+    rng = np.random.default_rng(9)
+    img = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)), (0, 0), 3).astype(np.float32)
+    tmpl = S.sample_patches(img, np.array([[80.0, 60.0, 2.0]]), (15, 20))[0].astype(np.float64)
+    assert S.region_ssim(img, tmpl, (80.0, 60.0), scale=2.0) == pytest.approx(1.0, abs=1e-9)
+    patch = S.sample_patches(img, np.array([[83.0, 57.0, 2.0]]), (15, 20))[0]
+    assert S.region_ssim(img, tmpl, (83.0, 57.0), scale=2.0) == pytest.approx(S.ssim_global(patch, tmpl), abs=1e-4)
+    gx, gy = S.image_gradients(img)
+    dense = S.dssim_ascent(img, gx, gy, tmpl, (84, 58), scale=2.0)
+    sparse = S.dssim_ascent(img, None, None, tmpl, (84, 58), scale=2.0)
+    assert dense[:2] == sparse[:2] == (80.0, 60.0)
