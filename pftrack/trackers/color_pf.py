@@ -19,10 +19,16 @@ Initialisation (§6) is manual (a box), automatic from a known histogram
 (:meth:`ColorPF.init_auto`; samples over the frame or at entry regions, tracking
 starts when more than ``b N`` samples satisfy the appearance condition
 ``rho > mu + 2 sigma`` of Eqs. 13–15), or by a detector callable
-(:meth:`ColorPF.init_detect`).  The same appearance condition marks the target
-lost when too few samples pass for ``lost_frames`` frames; the tracker then
-returns to initialisation mode, reports ``lost=True`` and re-acquires the target
-when it reappears.
+(:meth:`ColorPF.init_detect`).
+
+Loss detection (``loss_test``): by default the two-class test of
+:mod:`pftrack.filtering.loss` on the estimate's ``rho`` (the appearance condition's
+background statistics as its absent half, the target's own score history as the
+other, with hysteresis); ``loss_test="appearance"`` is the paper's test (fewer than
+``b N`` samples pass for ``lost_frames`` frames).  When lost, the tracker returns to
+initialisation mode, reports ``lost=True`` and re-acquires the target when it
+reappears.  On grey input the features are equalised intensity x gradient
+orientation (:mod:`pftrack.cues.intensity`, ``color_space="auto"``).
 
 Options from the book *Object Tracking*, ch. 4 (``shared/seeds/book-notes.md``):
 ``adaptive_sigma`` (``sigma^2 = d_min^2 / 2``), ``update_gate="lambda"``
