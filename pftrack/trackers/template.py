@@ -133,14 +133,17 @@ class TemplateTracker(Tracker):
         base = max(8.0, p.search_margin * max(self.size))
         margin = base * (p.enlarge if self.lost else 1.0)
         centre, peak = self._match(gray, margin)
+        surface = self._surface
         enlarged = False
         if (peak.on_border or not self._reliable(peak)) and p.enlarge > 1:
             # a wider window may hold the target (it moved further than the margin) or only clutter:
             # its peak replaces the first one only if it is reliable and better
             c2, pk2 = self._match(gray, margin * p.enlarge)
+            surface2 = self._surface
             enlarged = True
             if self._reliable(pk2) and not pk2.on_border and pk2.value > peak.value:
-                centre, peak = c2, pk2
+                centre, peak, surface = c2, pk2, surface2
+        self._surface = surface  # the surface of the chosen peak (for the sidelobe of the loss test)
         ok = self._reliable(peak) and not peak.on_border
         if p.metric in _BOUNDED:
             # the loss test of the colour trackers: the peak against the best clutter of the window (absent
