@@ -23,7 +23,6 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
-import cv2
 import numpy as np
 
 from ..cues import patch_histograms as ph
@@ -34,14 +33,20 @@ from ..filtering.loss import LossDetector, confidence
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import systematic
 from ..geometry import Box
-from ..params import Params, param
+from ..params import param
 from .base import Tracker, TrackState
+from .ssim_common import (
+    SSIMTemplateParams,
+    background_grid,
+    reference_shape,
+    smoothed_gray,
+)
 
 Cue = Literal["ssim", "color", "edges", "color+edges", "ncc", "morph_normed"]
 
 
 @dataclass(frozen=True, kw_only=True)
-class SSIMPFParams(Params):
+class SSIMPFParams(SSIMTemplateParams):
     """Parameters of ``ssim-pf`` (book ch. 2, Table 2; values the text leaves open are ch02.md §2's)."""
 
     n_particles: int = param(100, ge=1, le=100_000, doc="N (ch. 2: 100 in the speed test, 20 in the hybrid test).")
@@ -63,30 +68,6 @@ class SSIMPFParams(Params):
     angle_noise: float = param(2.0, ge=0, le=90, doc="sigma of the angle's random walk (degrees) with rotation.")
     resample_threshold: float = param(0.5, gt=0, le=1, doc="N_thr / N: resample when N_eff <= N_thr (Table 1).")
     d_floor: float = param(1e-3, gt=0, le=1, doc="Floor on D_min of eq. (29), so a perfect match gives no NaN.")
-    template_pixels: int = param(1000, ge=144, le=1_000_000, doc=(
-        "Speed bound: the reference patch keeps the box's aspect with at most this many pixels (larger boxes "
-        "are compared at reduced resolution). At least 12 px per side remain for the 11x11 window. 1000 and "
-        "2500 gave the same accuracy on the tune split (docs/ssim.md); the cost is linear in it."))
-    template_update: float = param(0.0, ge=0, le=1, doc=(
-        "Rate of the gated template update t <- (1 - a) t + a p_est while the loss test is confident; "
-        "0 keeps the chapter's fixed reference."))
-    min_scale: float = param(0.2, gt=0, le=1, doc="Smallest scale s relative to the initial box.")
-    max_scale: float = param(5.0, ge=1, le=100, doc="Largest scale s relative to the initial box.")
-    background_positions: int = param(60, ge=4, le=10_000, doc=(
-        "Background positions (a grid over the frame, away from the target) whose scores define the loss "
-        "test's absent hypothesis."))
-    background_interval: int = param(10, ge=1, le=10_000, doc="Recompute the background scores every this many frames.")
-    lost_frames: int = param(3, ge=1, le=1000, doc="Frames with LLR < 0 before lost (pftrack.filtering.loss).")
-    reacquire_margin: float = param(1.0, ge=0, le=20, doc="LLR that ends a loss (hysteresis).")
-    smooth: float = param(0.0, ge=0, le=10, doc=(
-        "sigma (px) of a Gaussian pre-smoothing of the grey frame (0: none, as in the chapter). Smoothing "
-        "widens the SSIM peak: more tolerant to noise and small deformations, less precise."))
-    history_prior_sd: float = param(0.25, gt=0, le=1, doc=(
-        "Spread of the loss test's prior on the target's score before any frame is learned: the template "
-        "scores 1 against itself, but a frame later a real target's SSIM is typically 0.6-0.9."))
-    score_sd_floor: float = param(0.05, gt=0, le=1, doc=(
-        "Floor on the spreads of the target's and the background's score distributions in the loss test. "
-        "A fixed template's SSIM varies more from frame to frame than a colour histogram's rho."))
     search_fraction: float = param(0.2, ge=0, le=1, doc=(
         "While lost, the filter keeps running and this share of its particles is re-drawn uniformly over the "
         "frame each frame to re-acquire the target."))
@@ -161,11 +142,8 @@ class SSIMPF(Tracker):
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
         x, y, w, h = box
-        area = w * h
-        f = min(1.0, math.sqrt(p.template_pixels / area)) if area > 0 else 1.0
-        tw, th = max(12, int(round(w * f))), max(12, int(round(h * f)))
-        self.tshape = (th, tw)
-        self.pix_scale = w / tw  # frame pixels per reference pixel at s = 1
+        # pix_scale: frame pixels per reference pixel at s = 1
+        self.tshape, self.pix_scale = reference_shape(w, h, p.template_pixels)
         self.size0 = (float(w), float(h))
         gray = self._gray(frame)
         centre = np.array([x + w / 2.0, y + h / 2.0, 1.0, 0.0][: self.dim])
@@ -185,15 +163,11 @@ class SSIMPF(Tracker):
 
     def _background(self, frame, gray) -> None:
         """Scores at background positions (a grid away from the target): the loss test's absent hypothesis."""
-        p = self.params
         fh, fw = self._shape
-        w, h = self.size0[0] * self.estimate[2], self.size0[1] * self.estimate[2]
-        nx = max(2, int(math.sqrt(p.background_positions * fw / fh)))
-        ny = max(2, int(math.ceil(p.background_positions / nx)))
-        gx, gy = np.meshgrid((np.arange(nx) + 0.5) * fw / nx, (np.arange(ny) + 0.5) * fh / ny)
-        far = (np.abs(gx - self.estimate[0]) >= w) | (np.abs(gy - self.estimate[1]) >= h)
-        st = np.zeros((int(far.sum()), self.dim))
-        st[:, 0], st[:, 1], st[:, 2] = gx[far], gy[far], self.estimate[2]
+        size = (self.size0[0] * self.estimate[2], self.size0[1] * self.estimate[2])
+        pos = background_grid(fw, fh, self.estimate[:2], size, self.params.background_positions)
+        st = np.zeros((len(pos), self.dim))
+        st[:, :2], st[:, 2] = pos, self.estimate[2]
         if len(st) >= 2:
             d, _ = self._distances(frame, gray, st)
             self.loss.set_background(1.0 - 2.0 * d)  # scores on S's scale: S = 1 - 2 D
@@ -269,11 +243,7 @@ class SSIMPF(Tracker):
 
     # ------------------------------------------------------------------ output
     def _gray(self, frame: np.ndarray) -> np.ndarray:
-        """Grey frame, pre-smoothed by ``smooth`` (a wider SSIM peak, less sensitive to noise and misalignment)."""
-        g = S.to_gray(frame)
-        if self.params.smooth > 0:
-            g = cv2.GaussianBlur(g, (0, 0), self.params.smooth)
-        return g
+        return smoothed_gray(frame, self.params.smooth)
 
     def _box(self, st: np.ndarray) -> tuple[float, float, float, float]:
         w, h = self.size0[0] * st[2], self.size0[1] * st[2]
