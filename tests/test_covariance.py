@@ -1,0 +1,163 @@
+"""Book ch. 6 §4: region covariance, SPD metrics and means, covariance search (ch06.md §5.1 tests 5-7)."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm, logm
+
+from pftrack.cues import covariance as cv
+from pftrack.cues import covariance_search as cs
+
+
+def _spd(rng, d=9, n=None):
+    shape = (d, d) if n is None else (n, d, d)
+    A = rng.normal(size=shape)
+    return A @ np.swapaxes(A, -1, -2) + 0.1 * np.eye(d)
+
+
+def test_integral_covariance_equals_np_cov_on_random_windows_and_masks():
+    rng = np.random.default_rng(0)
+    frame = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+    z = cv.covariance_features(frame, origin=(10, 20))
+    mask = (rng.random((60, 80)) < 0.7).astype(np.float64)
+    for weights in (None, mask):
+        ic = cv.IntegralCovariance(z, weights, origin=(10, 20))
+        for _ in range(50):
+            x0, y0 = int(rng.integers(0, 60)), int(rng.integers(0, 40))
+            x1, y1 = x0 + int(rng.integers(5, 80 - x0 + 1)), y0 + int(rng.integers(5, 60 - y0 + 1))
+            C, W = ic.cov(np.array([[x0 + 10, y0 + 20, x1 + 10, y1 + 20]]))
+            sub = z[y0:y1, x0:x1].reshape(-1, z.shape[-1])
+            if weights is None:
+                ref = np.cov(sub.T)
+                assert W[0] == sub.shape[0]
+            else:
+                m = mask[y0:y1, x0:x1].ravel() > 0
+                ref = np.cov(sub[m].T)
+            np.testing.assert_allclose(C[0], ref, rtol=1e-8, atol=1e-8 * np.abs(ref).max())
+
+
+def test_features_coordinates_and_grey_channels():
+    frame = np.zeros((5, 7, 3), np.uint8)
+    z = cv.covariance_features(frame, origin=(3, 4), pitch=2)
+    assert z.shape == (5, 7, 9)
+    assert z[0, 0, 0] == 3 and z[0, 6, 0] == 15 and z[4, 0, 1] == 12
+    assert cv.covariance_features(frame, gray=True).shape[-1] == 7
+    assert cv.covariance_features(frame, kind="first_order").shape[-1] == 7
+    assert cv.feature_names("first_order", gray=True) == ("x", "y", "I", "|Ix|", "|Iy|")
+
+
+def test_le_distance_matches_scipy_logm_and_is_a_metric():
+    rng = np.random.default_rng(1)
+    C, D = _spd(rng), _spd(rng)
+    ref = np.linalg.norm(logm(C).real - logm(D).real)
+    d = cv.le_distance(cv.spd_log(C), cv.spd_log(D))
+    assert d == pytest.approx(ref, rel=1e-9)
+    assert cv.le_distance(cv.spd_log(C), cv.spd_log(C)) == pytest.approx(0.0, abs=1e-12)
+    assert d == pytest.approx(cv.le_distance(cv.spd_log(D), cv.spd_log(C)), rel=1e-12)
+    np.testing.assert_allclose(cv.spd_exp(cv.spd_log(C)), C, rtol=1e-9, atol=1e-9)
+    A = rng.normal(size=(9, 9)) * 0.1
+    A = A + A.T
+    np.testing.assert_allclose(cv.spd_exp(A), expm(A), rtol=1e-9, atol=1e-12)
+
+
+def test_le_distance_is_similarity_invariant():
+    rng = np.random.default_rng(2)
+    C, D = _spd(rng), _spd(rng)
+    R, _ = np.linalg.qr(rng.normal(size=(9, 9)))
+    s = 3.7
+    d0 = cv.le_distance(cv.spd_log(C), cv.spd_log(D))
+    d1 = cv.le_distance(cv.spd_log(s * R @ C @ R.T), cv.spd_log(s * R @ D @ R.T))
+    assert d1 == pytest.approx(d0, abs=1e-10)
+
+
+def test_le_mean_properties():
+    rng = np.random.default_rng(3)
+    C = _spd(rng)
+    np.testing.assert_allclose(cv.le_mean(np.stack([C, np.linalg.inv(C)])), np.eye(9), atol=1e-10)
+    d1, d2 = np.diag(rng.uniform(0.5, 3, 9)), np.diag(rng.uniform(0.5, 3, 9))
+    np.testing.assert_allclose(cv.le_mean(np.stack([d1, d2])), np.sqrt(d1 @ d2), rtol=1e-10, atol=1e-12)
+    # weights: a weight of 1 on one matrix gives that matrix
+    np.testing.assert_allclose(cv.le_mean(np.stack([d1, d2]), np.array([1.0, 0.0])), d1, rtol=1e-10)
+
+
+def test_airm_distance_invariances_and_eq29_orientation():
+    rng = np.random.default_rng(4)
+    C, D = _spd(rng), _spd(rng)
+    A = rng.normal(size=(9, 9)) + 3 * np.eye(9)
+    assert cv.airm_distance(A @ C @ A.T, A @ D @ A.T) == pytest.approx(cv.airm_distance(C, D), rel=1e-8)
+    assert cv.airm_distance(C, 2 * C) == pytest.approx(3 * math.log(2), rel=1e-10)
+    # the literal Eq. 29 (pencil (C1, C1)) would give distance 0 for any pair
+    assert cv.airm_distance(C, D) > 0.1
+
+
+def test_airm_mean_is_a_fixed_point_and_commuting_case():
+    rng = np.random.default_rng(5)
+    Cs = _spd(rng, n=5)
+    M = cv.airm_mean(Cs, tol=1e-12, max_iter=500)
+    lam, U = np.linalg.eigh(M)
+    ih = (U / np.sqrt(lam)) @ U.T
+    grad = sum(cv.spd_log(ih @ c @ ih) for c in Cs)
+    assert np.linalg.norm(grad) < 1e-6
+    d1, d2 = np.diag(rng.uniform(0.5, 3, 9)), np.diag(rng.uniform(0.5, 3, 9))
+    np.testing.assert_allclose(cv.airm_mean(np.stack([d1, d2])), np.sqrt(d1 @ d2), rtol=1e-8)
+
+
+def test_parity_with_pyriemann():
+    pr = pytest.importorskip("pyriemann.utils.mean")
+    dist = pytest.importorskip("pyriemann.utils.distance")
+    rng = np.random.default_rng(6)
+    Cs = _spd(rng, n=6)
+    np.testing.assert_allclose(cv.le_mean(Cs), pr.mean_logeuclid(Cs), rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(cv.airm_mean(Cs, tol=1e-10), pr.mean_riemann(Cs, tol=1e-10), rtol=1e-6, atol=1e-8)
+    assert cv.le_distance(cv.spd_log(Cs[0]), cv.spd_log(Cs[1])) == pytest.approx(
+        dist.distance_logeuclid(Cs[0], Cs[1]), rel=1e-9)
+    assert cv.airm_distance(Cs[0], Cs[1]) == pytest.approx(dist.distance_riemann(Cs[0], Cs[1]), rel=1e-9)
+
+
+def _textured_frame(rng, h=480, w=640):
+    import cv2
+
+    noise = rng.integers(0, 256, (h // 8, w // 8, 3), dtype=np.uint8)
+    bg = cv2.resize(noise, (w, h), interpolation=cv2.INTER_CUBIC)
+    return cv2.GaussianBlur(bg, (0, 0), 2)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1.1])
+def test_global_search_finds_a_pasted_target(scale):
+    import cv2
+
+    rng = np.random.default_rng(7)
+    frame0 = _textured_frame(rng)
+    # the target: colour ramps across its width and height (a sub- or super-window has a different
+    # colour-coordinate covariance, so the scale is observable) and stripes the background lacks
+    tw, th = 48, 96
+    yy, xx = np.mgrid[0:th, 0:tw]
+    target = np.zeros((th, tw, 3), np.uint8)
+    target[..., 2] = (40 + 200 * xx / tw).astype(np.uint8)
+    target[..., 1] = (40 + 200 * yy / th).astype(np.uint8)
+    target[..., 0] = (60 + 60 * np.sin(yy / 3.0)).astype(np.uint8)
+    frame0[100:100 + th, 200:200 + tw] = target
+    scales = cs.frame_scales(frame0, kind="porikli9", gray=False)
+    L = cs.model_log(frame0, (200, 100, tw, th), kind="porikli9", gray=False, scales=scales)
+    frame1 = _textured_frame(rng)
+    sw, sh = int(round(tw * scale)), int(round(th * scale))
+    frame1[300:300 + sh, 450:450 + sw] = cv2.resize(target, (sw, sh), interpolation=cv2.INTER_LINEAR)
+    res = cs.search(frame1, L, (tw, th), kind="porikli9", gray=False,
+                    scales_full=cs.frame_scales(frame1, kind="porikli9", gray=False))
+    x, y, w, h = res.box
+    assert abs(x - 450) <= 1 and abs(y - 300) <= 1
+    assert w == pytest.approx(sw, abs=1) and h == pytest.approx(sh, abs=1)
+
+
+def test_particle_distances_rank_the_true_box_first():
+    rng = np.random.default_rng(8)
+    frame = _textured_frame(rng, 200, 200)
+    frame[50:110, 60:90] = (30, 200, 30)
+    frame[50:110, 75:90, 0] = 220
+    scales = cs.frame_scales(frame, kind="porikli9", gray=False)
+    L = cs.model_log(frame, (60, 50, 30, 60), kind="porikli9", gray=False, scales=scales)
+    boxes = np.array([[60, 50, 30, 60], [70, 55, 30, 60], [120, 100, 30, 60], [0, 0, 30, 60]], float)
+    d = cs.particle_distances(frame, boxes, L, kind="porikli9", gray=False, scales=scales)
+    assert np.argmin(d) == 0 and d[0] < 1e-6
+    assert np.all(np.diff(d[:2]) > 0)
