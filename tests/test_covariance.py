@@ -123,6 +123,14 @@ def _textured_frame(rng, h=480, w=640):
     return cv2.GaussianBlur(bg, (0, 0), 2)
 
 
+def test_derivative_scales_match_the_feature_image():
+    rng = np.random.default_rng(10)
+    frame = _textured_frame(rng, 120, 160)
+    z = cv.covariance_features(frame)
+    np.testing.assert_allclose(cs.derivative_scales(frame, kind="porikli9", gray=False),
+                               cv.feature_scales(z), rtol=1e-5)
+
+
 @pytest.mark.parametrize("scale", [1.0, 1.1])
 def test_global_search_finds_a_pasted_target(scale):
     import cv2
@@ -138,13 +146,12 @@ def test_global_search_finds_a_pasted_target(scale):
     target[..., 1] = (40 + 200 * yy / th).astype(np.uint8)
     target[..., 0] = (60 + 60 * np.sin(yy / 3.0)).astype(np.uint8)
     frame0[100:100 + th, 200:200 + tw] = target
-    scales = cs.frame_scales(frame0, kind="porikli9", gray=False)
-    L = cs.model_log(frame0, (200, 100, tw, th), kind="porikli9", gray=False, scales=scales)
+    lv0 = cs.Level.build(frame0, 1, kind="porikli9", gray=False)
+    L = cv.SPDModel(cs.window_covariance(lv0, (200, 100, tw, th), kind="porikli9", gray=False))
     frame1 = _textured_frame(rng)
     sw, sh = int(round(tw * scale)), int(round(th * scale))
     frame1[300:300 + sh, 450:450 + sw] = cv2.resize(target, (sw, sh), interpolation=cv2.INTER_LINEAR)
-    res = cs.search(frame1, L, (tw, th), kind="porikli9", gray=False,
-                    scales_full=cs.frame_scales(frame1, kind="porikli9", gray=False))
+    res = cs.search(frame1, L, (tw, th), kind="porikli9", gray=False)
     x, y, w, h = res.box
     assert abs(x - 450) <= 1 and abs(y - 300) <= 1
     assert w == pytest.approx(sw, abs=1) and h == pytest.approx(sh, abs=1)
@@ -155,9 +162,20 @@ def test_particle_distances_rank_the_true_box_first():
     frame = _textured_frame(rng, 200, 200)
     frame[50:110, 60:90] = (30, 200, 30)
     frame[50:110, 75:90, 0] = 220
-    scales = cs.frame_scales(frame, kind="porikli9", gray=False)
-    L = cs.model_log(frame, (60, 50, 30, 60), kind="porikli9", gray=False, scales=scales)
+    lv = cs.Level.build(frame, 1, kind="porikli9", gray=False)
+    L = cv.SPDModel(cs.window_covariance(lv, (60, 50, 30, 60), kind="porikli9", gray=False))
     boxes = np.array([[60, 50, 30, 60], [70, 55, 30, 60], [120, 100, 30, 60], [0, 0, 30, 60]], float)
-    d = cs.particle_distances(frame, boxes, L, kind="porikli9", gray=False, scales=scales)
+    d = cs.particle_distances(lv, boxes, L, kind="porikli9", gray=False)
     assert np.argmin(d) == 0 and d[0] < 1e-6
     assert np.all(np.diff(d[:2]) > 0)
+
+
+def test_spd_model_distances_match_the_pairwise_functions():
+    rng = np.random.default_rng(9)
+    M, Cs = _spd(rng), _spd(rng, n=4)
+    le = cv.SPDModel(M, "le").distance(Cs)
+    ai = cv.SPDModel(M, "airm").distance(Cs)
+    for k in range(4):
+        assert le[k] == pytest.approx(cv.le_distance(cv.spd_log(M), cv.spd_log(Cs[k])), rel=1e-10)
+        assert ai[k] == pytest.approx(cv.airm_distance(M, Cs[k]), rel=1e-8)
+    np.testing.assert_allclose(cv.SPDModel.from_log(cv.spd_log(M)).distance(Cs), le, rtol=1e-9)

@@ -152,10 +152,14 @@ class IntegralCovariance:
         chans[..., 0] = m
         chans[..., 1:1 + d] = zc * m[..., None]
         chans[..., 1 + d:] = zc[..., iu] * zc[..., ju] * m[..., None]
-        table = np.zeros((h + 1, w + 1, chans.shape[-1]))
-        np.cumsum(chans, axis=0, out=table[1:, 1:])
-        np.cumsum(table[1:, 1:], axis=1, out=table[1:, 1:])
-        self._table = table
+        if chans.shape[-1] <= 512:  # OpenCV's channel limit; its integral is ~5x faster than two cumsums
+            table = cv2.integral(chans, sdepth=cv2.CV_64F)
+            self._table = table.reshape(h + 1, w + 1, -1)
+        else:
+            table = np.zeros((h + 1, w + 1, chans.shape[-1]))
+            np.cumsum(chans, axis=0, out=table[1:, 1:])
+            np.cumsum(table[1:, 1:], axis=1, out=table[1:, 1:])
+            self._table = table
 
     def sums(self, boxes: np.ndarray) -> np.ndarray:
         """``(K, C)`` sums of every channel over windows ``(x0, y0, x1, y1)`` (frame integers,
@@ -244,3 +248,38 @@ def airm_mean(Cs: np.ndarray, weights: np.ndarray | None = None, *, tol: float =
         if np.linalg.norm(T) < tol:
             break
     return M
+
+
+class SPDModel:
+    """A covariance model to which windows are compared: Eq. 30 (``metric="le"``, the chapter's)
+    or Eq. 28 (``"airm"``, Porikli et al.'s) against a fixed matrix, batched over windows.
+
+    For the affine-invariant metric the model is whitened once, ``W = M^(-1/2)``, and
+    ``d(M, C) = ||log(W C W)||_F`` costs one symmetric eigen-decomposition per window, like Eq. 30.
+    """
+
+    def __init__(self, C: np.ndarray, metric: str = "le"):
+        if metric not in ("le", "airm"):
+            raise ValueError(f"unknown SPD metric {metric!r}; expected 'le' or 'airm'")
+        self.metric = metric
+        self.C = np.asarray(C, dtype=np.float64)
+        if metric == "le":
+            self.L = spd_log(self.C)
+        else:
+            lam, U = np.linalg.eigh(self.C)
+            self.W = (U / np.sqrt(lam)) @ U.T
+
+    @classmethod
+    def from_log(cls, L: np.ndarray) -> "SPDModel":
+        """A Log-Euclidean model from its logarithm (e.g. the mean of logs, Eq. 31 before exp)."""
+        m = cls.__new__(cls)
+        m.metric, m.L = "le", np.asarray(L, dtype=np.float64)
+        m.C = spd_exp(m.L)
+        return m
+
+    def distance(self, Cs: np.ndarray) -> np.ndarray:
+        """``(K,)`` distances of ``(K, d, d)`` SPD matrices to the model."""
+        if self.metric == "le":
+            return le_distance(spd_log(Cs), self.L)
+        lam = np.linalg.eigvalsh(self.W @ Cs @ self.W)
+        return np.sqrt(np.sum(np.log(np.maximum(lam, 1e-300)) ** 2, axis=-1))

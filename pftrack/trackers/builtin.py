@@ -15,6 +15,8 @@ from .local_motion_pf import LocalMotionPF
 from .meanshift import KalmanMeanShift, MeanShift
 from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
 from .ssim_pf import SSIMPF, HybridSSIMPF
+from .covariance_tracker import CovarianceTracker
+from .fs_meanshift import FSMeanShift
 from .template import TemplateTracker
 
 _DETECTOR = ("detector",)
@@ -45,6 +47,12 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
     ("pisc", PISCTracker,
      "Block matching on peripheral increment sign codes: 9x9 blocks, common sub-pixel displacement anchored to "
      "the first frame's blocks, insensitive to monotonic brightness change (book ch. 1)", {}),
+    ("fs-meanshift", FSMeanShift,
+     "Mean shift on the back-projection of the two most discriminative of 8 colour/orientation features, "
+     "reselected online by Collins' variance ratio, similarity-weighted model update (book ch. 6)", {}),
+    ("covariance", CovarianceTracker,
+     "Region-covariance matching over the whole frame (coarse to fine, 3 scales), Log-Euclidean distance and "
+     "mean model update (book ch. 6; Porikli, Tuzel & Meer)", {}),
     ("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
      {"family": "baseline"}),
     ("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",

@@ -1,0 +1,230 @@
+"""``fs-meanshift``: mean shift on the back-projection of the two most discriminative features,
+reselected online (book ch. 6 §3; Collins, Liu & Leordeanu 2005; Wang & Yagi 2008).
+
+Per frame (ch06.md §1.11, local mode):
+
+1. the two selected features are binned over the search region (the box x ``search_scale``);
+   the target model ``H_m`` divided by the region's histogram (Eq. 18) is back-projected;
+2. damped mean shift on that weight image (Eqs. 19-20), at most 15 iterations;
+3. the Bhattacharyya coefficient ``rho`` of the candidate's kernel histogram against ``H_m`` and
+   its distance ``d = sqrt(1 - rho)`` (Eqs. 13-14);
+4. if ``d`` is within ``mu + 3 sigma`` of the confident frames' distances (the online switching
+   threshold of ch06.md §1.10), the model is updated, ``H_m = (1 - s) H_i + s H_c`` (Eq. 21) with
+   ``s`` the NCC of the current and initial grey patches;
+5. every ``reselect_every`` frames the eight candidate features are re-ranked by their variance
+   ratio (Eq. 12) and only the second one is replaced (§3.3.2).
+
+``lost`` is raised after ``lost_frames`` consecutive frames above the threshold (the local tracker
+has no recovery: that is what ``switching`` adds).  The box size is fixed unless
+``scale_step > 0`` (the chapter has no scale step in local mode, P11).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import cv2
+import numpy as np
+
+from ..cues import feature_selection as fs
+from ..filtering.loss import RunningThreshold
+from ..geometry import Box
+from ..params import Params, param
+from .base import Tracker, TrackState
+
+
+@dataclass(frozen=True, kw_only=True)
+class FSMeanShiftParams(Params):
+    bins: int = param(12, ge=2, le=64, doc="m, bins per feature (ch. 6 L5504, L5541; orientation gets a 13th flat bin).")
+    n_features: int = param(2, ge=1, le=3, doc=(
+        "Features in the joint histogram (Eq. 16). The chapter uses 2; 1 or 3 'gave worse performances' (C6.4)."))
+    reselect_every: int = param(10, ge=0, le=1000, doc=(
+        "Frames between re-rankings by the variance ratio (Eq. 12); the chapter says 8-12. 0 never reselects."))
+    replace: Literal["second", "all"] = param("second", doc=(
+        "'second': only the second feature is replaced (§3.3.2, claim C6.5); 'all': take the new top pair."))
+    delta: float = param(1e-3, gt=0, lt=1, doc="delta_L, the floor of Eq. 11's ratio (Collins et al. 2005).")
+    llr_clip: float = param(1.0, gt=0, doc="The clamp of Eq. 11's log-likelihood ratio to [-1, 1].")
+    grad_threshold: float = param(64.0, ge=0, doc=(
+        "T_D of Eq. 6 in Scharr units (a unit ramp is 32): weaker gradients go to the flat orientation bin."))
+    search_scale: float = param(2.5, ge=1.2, le=6, doc="R_b of Eq. 17: the search region is the box times this.")
+    ring_inner: float = param(1.1, ge=1, le=3, doc="Background ring for Eq. 12: from the box times this ...")
+    ring_outer: float = param(2.0, ge=1.2, le=5, doc="... to the box times this (ch06.md §1.3, proposed).")
+    max_iterations: int = param(15, ge=1, le=100, doc="Mean-shift iterations (L5922: fewer than 15).")
+    epsilon: float = param(0.5, gt=0, doc="Stop when the damped step is below this many pixels.")
+    damping: float = param(0.5, gt=0, le=1, doc="Eq. 20: y1 <- y0 + damping (centroid - y0); the chapter's 1/2.")
+    model_update: Literal["weighted", "fixed", "pooled"] = param("weighted", doc=(
+        "'weighted': Eq. 21 H_m = (1 - s) H_i + s H_c with s = NCC(initial, current) (claim C6.6); 'fixed': H_m = "
+        "H_i; 'pooled': Collins' H_m = (H_i + H_c)/2."))
+    scale_step: float = param(0.0, ge=0, lt=0.5, doc=(
+        "0: fixed size (the chapter). > 0: also try sizes (1 +- step) and keep the best rho, smoothed with gamma 0.1 "
+        "(as meanshift)."))
+    threshold_window: int = param(30, ge=5, le=1000, doc="Confident frames in the online threshold's statistics.")
+    threshold_sigma: float = param(3.0, gt=0, doc="The threshold is mu + this x sigma of d (L6197: 3 sigma).")
+    threshold_floor: float = param(0.02, ge=0, doc="Floor on sigma of d.")
+    lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive frames above the threshold before lost is raised.")
+
+
+class FSMeanShift(Tracker):
+    """Local mode of the switching tracker: feature-selecting mean shift (deterministic)."""
+
+    name = "fs-meanshift"
+    Params = FSMeanShiftParams
+    stochastic = False
+
+    # -- initialisation ------------------------------------------------------------------------
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        p = self.params
+        x, y, w, h = box
+        self.c = np.array([x + w / 2.0, y + h / 2.0])
+        self.size = np.array([float(w), float(h)])
+        fh, fw = frame.shape[:2]
+        # the initial neighbourhood (object + ring), binned for every candidate feature, kept for H_i
+        reg = self._region(self.c, self.size * p.ring_outer, fw, fh)
+        x0, y0, x1, y1 = reg
+        self._init_bins = fs.bin_images(frame[y0:y1, x0:x1], fs.FEATURES, bins=p.bins, grad_threshold=p.grad_threshold)
+        self._init_origin = (x0, y0)
+        self._init_kernel = fs.epanechnikov(y1 - y0, x1 - x0, self.c[0] - x0, self.c[1] - y0, w / 2, h / 2)
+        obj, ring = fs.ring_masks((y1 - y0, x1 - x0), box, inner=p.ring_inner, outer=p.ring_outer, origin=(x0, y0))
+        ranking, self.vr = fs.rank_features(self._init_bins, obj, ring, fs.FEATURES, n=p.bins, delta=p.delta,
+                                            clip=p.llr_clip)
+        self.pair = fs.select_pair(None, ranking, k=p.n_features)
+        self._set_pair(self.pair, current=None)
+        g = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        self._tshape = _template_shape(w, h)
+        self._init_patch = self._patch(g, self.c, self.size)
+        self.thresh = RunningThreshold(window=p.threshold_window, k=p.threshold_sigma, sd_floor=p.threshold_floor)
+        self.miss = 0
+        self.lost = False
+        self.rho = 1.0
+        self.d = 0.0
+        self.iterations = 0
+        return TrackState(box=tuple(float(v) for v in box), score=1.0, lost=False, info={"pair": self.pair})
+
+    @staticmethod
+    def _region(c, extent, fw, fh) -> tuple[int, int, int, int]:
+        x0 = int(np.floor(c[0] - extent[0] / 2))
+        y0 = int(np.floor(c[1] - extent[1] / 2))
+        x1 = int(np.ceil(c[0] + extent[0] / 2))
+        y1 = int(np.ceil(c[1] + extent[1] / 2))
+        return max(x0, 0), max(y0, 0), min(max(x1, 1), fw), min(max(y1, 1), fh)
+
+    def _pair_index(self, pair) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        idx = tuple(fs.FEATURES.index(f) for f in pair)
+        sizes = tuple(fs.n_bins(f, self.params.bins) for f in pair)
+        return idx, sizes
+
+    def _set_pair(self, pair, current: np.ndarray | None) -> None:
+        """Select ``pair``: H_i from the stored initial crop; H_m from H_i and the current histogram."""
+        self.pair = tuple(pair)
+        idx, sizes = self._pair_index(pair)
+        self._sizes = sizes
+        self._n_joint = int(np.prod(sizes))
+        joint0 = fs.joint_index(self._init_bins, idx, sizes)
+        self.H_i = fs.joint_histogram(joint0, self._n_joint, self._init_kernel)
+        self.H_m = self.H_i.copy() if current is None else current
+
+    def _patch(self, gray: np.ndarray, c, size) -> np.ndarray:
+        w, h = size
+        x0, y0 = int(round(c[0] - w / 2)), int(round(c[1] - h / 2))
+        fh, fw = gray.shape
+        x1, y1 = min(max(x0 + int(round(w)), 1), fw), min(max(y0 + int(round(h)), 1), fh)
+        x0, y0 = min(max(x0, 0), x1 - 1), min(max(y0, 0), y1 - 1)
+        return cv2.resize(gray[y0:y1, x0:x1], self._tshape[::-1], interpolation=cv2.INTER_AREA).astype(np.float32)
+
+    # -- one local step ----------------------------------------------------------------------------
+    def _local(self, frame: np.ndarray, start: np.ndarray, size: np.ndarray):
+        """Mean shift from ``start`` at ``size``: returns ``(centre, rho, H_c, iterations, mass)``."""
+        p = self.params
+        fh, fw = frame.shape[:2]
+        x0, y0, x1, y1 = self._region(start, size * p.search_scale, fw, fh)
+        idx, sizes = self._pair_index(self.pair)
+        bins = fs.bin_images(frame[y0:y1, x0:x1], self.pair, bins=p.bins, grad_threshold=p.grad_threshold)
+        joint = fs.joint_index(bins, tuple(range(len(idx))), sizes)
+        zeta_b = fs.joint_histogram(joint, self._n_joint)
+        pw = fs.backproject(fs.division_histogram(self.H_m, zeta_b, delta=p.delta), joint)
+        c, it, mass = fs.weighted_meanshift(pw, start, size / 2, origin=(x0, y0), max_iter=p.max_iterations,
+                                            eps=p.epsilon, damping=p.damping)
+        H_c = self._kernel_hist(joint, (x0, y0), c, size)
+        rho = float(np.sum(np.sqrt(H_c * self.H_m)))
+        self._last_region = (joint, (x0, y0), pw)
+        return c, rho, H_c, it, mass
+
+    def _kernel_hist(self, joint, origin, c, size) -> np.ndarray:
+        k = fs.epanechnikov(joint.shape[0], joint.shape[1], c[0] - origin[0], c[1] - origin[1], size[0] / 2,
+                            size[1] / 2)
+        return fs.joint_histogram(joint, self._n_joint, k)
+
+    def _local_step(self, frame: np.ndarray):
+        p = self.params
+        best = self._local(frame, self.c, self.size)
+        size = self.size
+        if p.scale_step > 0:
+            for f in (1.0 - p.scale_step, 1.0 + p.scale_step):
+                cand = self._local(frame, self.c, self.size * f)
+                if cand[1] > best[1] + 1e-12:
+                    best, size = cand, self.size * f
+            size = 0.1 * size + 0.9 * self.size  # Comaniciu's gamma = 0.1, as meanshift
+        return best, size
+
+    def _update_model(self, frame: np.ndarray, H_c: np.ndarray) -> None:
+        p = self.params
+        if p.model_update == "fixed":
+            self.H_m = self.H_i
+        elif p.model_update == "pooled":
+            self.H_m = 0.5 * (self.H_i + H_c)
+        else:
+            g = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+            cur = self._patch(g, self.c, self.size)
+            s = float(cv2.matchTemplate(cur, self._init_patch, cv2.TM_CCOEFF_NORMED)[0, 0])
+            s = min(max(s if np.isfinite(s) else 0.0, 0.0), 1.0)
+            self.H_m = (1.0 - s) * self.H_i + s * H_c
+            self.similarity = s
+
+    def _reselect(self, frame: np.ndarray) -> None:
+        p = self.params
+        fh, fw = frame.shape[:2]
+        x0, y0, x1, y1 = self._region(self.c, self.size * p.ring_outer, fw, fh)
+        bins = fs.bin_images(frame[y0:y1, x0:x1], fs.FEATURES, bins=p.bins, grad_threshold=p.grad_threshold)
+        box = (self.c[0] - self.size[0] / 2, self.c[1] - self.size[1] / 2, self.size[0], self.size[1])
+        obj, ring = fs.ring_masks((y1 - y0, x1 - x0), box, inner=p.ring_inner, outer=p.ring_outer, origin=(x0, y0))
+        ranking, self.vr = fs.rank_features(bins, obj, ring, fs.FEATURES, n=p.bins, delta=p.delta, clip=p.llr_clip)
+        pair = fs.select_pair(self.pair, ranking, k=p.n_features, replace=p.replace)
+        if pair != self.pair:
+            idx, sizes = self._pair_index(pair)
+            joint = fs.joint_index(bins, idx, sizes)
+            self._set_pair(pair, current=None)
+            H_c = self._kernel_hist(joint, (x0, y0), self.c, self.size)
+            self._update_model(frame, H_c)
+
+    # -- protocol ----------------------------------------------------------------------------------
+    def _update(self, frame: np.ndarray) -> TrackState:
+        p = self.params
+        (c, rho, H_c, it, mass), size = self._local_step(frame)
+        self.c, self.size = c, np.asarray(size, dtype=np.float64)
+        self.rho, self.iterations = rho, it
+        self.d = float(np.sqrt(max(1.0 - rho, 0.0)))
+        occluded = self.thresh.exceeds(self.d)
+        self.miss = self.miss + 1 if occluded else 0
+        self.lost = self.miss >= p.lost_frames
+        if not occluded:
+            self.thresh.push(self.d)
+            self._update_model(frame, H_c)
+            if p.reselect_every and self.frame_index % p.reselect_every == 0:
+                self._reselect(frame)
+        return self._state(info={"pair": self.pair, "d": self.d, "iterations": it, "threshold": self.thresh.threshold})
+
+    def _state(self, *, info: dict, score: float | None = None) -> TrackState:
+        w, h = self.size
+        fh, fw = self._shape
+        cx = float(np.clip(self.c[0], 0, fw))
+        cy = float(np.clip(self.c[1], 0, fh))
+        box = (cx - w / 2, cy - h / 2, float(w), float(h))
+        return TrackState(box=box, score=float(np.clip(self.rho if score is None else score, 0, 1)), lost=self.lost,
+                          info=info)
+
+
+def _template_shape(w: float, h: float, pixels: int = 1024) -> tuple[int, int]:
+    """(rows, cols) of the NCC patch: the box's aspect with about ``pixels`` pixels (at most its own)."""
+    f = min(1.0, float(np.sqrt(pixels / max(w * h, 1.0))))
+    return max(4, int(round(h * f))), max(4, int(round(w * f)))
