@@ -93,7 +93,9 @@ def _coerce(name: str, value: Any, tp: Any) -> Any:
         inner = typing.get_args(base)
         elem = inner[0] if inner else float
         if isinstance(value, str):
-            parts = [p for p in value.replace(";", ",").split(",") if p.strip()]
+            # "," or ";" separate elements, and "/" too (inside a tracker spec such as
+            # ``fs-meanshift[candidates=R/G/Ieq]``, where "," and ";" separate parameters)
+            parts = [p for p in value.replace(";", ",").replace("/", ",").split(",") if p.strip()]
         elif isinstance(value, (list, tuple)):
             parts = list(value)
         else:

@@ -31,6 +31,9 @@ import cv2
 import numpy as np
 
 FEATURES = ("R", "G", "B", "H", "S", "r", "g", "orient")
+#: Candidates beyond the chapter's: "Ieq", the grey level after the frame's histogram equalisation (its
+#: rank in the frame), which a global monotonic lighting change leaves almost unchanged.
+EXTRA_FEATURES = ("Ieq",)
 
 
 def n_bins(name: str, bins: int = 12) -> int:
@@ -39,12 +42,13 @@ def n_bins(name: str, bins: int = 12) -> int:
 
 
 def bin_images(region: np.ndarray, names: tuple[str, ...] = FEATURES, *, bins: int = 12,
-               grad_threshold: float = 64.0) -> np.ndarray:
+               grad_threshold: float = 64.0, eq_lut: np.ndarray | None = None) -> np.ndarray:
     """``(H, W, len(names))`` uint8 bin indices of a BGR region, one channel per feature (§1.1).
 
     Hue uses OpenCV's 8-bit range 0-179; r and g are ``R/(R+G+B)``, ``G/(R+G+B)`` (1/3 on black
     pixels); the orientation is ``atan2(Dy, Dx) mod pi`` of Scharr derivatives (a unit ramp has
-    magnitude 32), with pixels below ``grad_threshold`` in bin ``bins``.
+    magnitude 32), with pixels below ``grad_threshold`` in bin ``bins``.  ``Ieq`` maps the grey level
+    through ``eq_lut`` (the frame's equalisation table, :func:`pftrack.cues.intensity.equalization_lut`).
     """
     h, w = region.shape[:2]
     out = np.empty((h, w, len(names)), dtype=np.uint8)
@@ -65,6 +69,10 @@ def bin_images(region: np.ndarray, names: tuple[str, ...] = FEATURES, *, bins: i
             ch = region[..., 2 if name == "r" else 1].astype(np.float32)
             frac = np.where(total > 0, ch / np.maximum(total, 1.0), 1.0 / 3.0)
             out[..., k] = np.minimum((frac * bins).astype(np.int32), bins - 1)
+        elif name == "Ieq":
+            g = cv2.cvtColor(region, cv2.COLOR_BGR2GRAY) if region.ndim == 3 else region
+            lut = np.arange(256, dtype=np.uint8) if eq_lut is None else eq_lut
+            out[..., k] = (lut[g].astype(np.uint16) * bins) >> 8
         elif name == "orient":
             g = cv2.cvtColor(region, cv2.COLOR_BGR2GRAY) if region.ndim == 3 else region
             dx = cv2.Scharr(g, cv2.CV_32F, 1, 0)
@@ -74,7 +82,7 @@ def bin_images(region: np.ndarray, names: tuple[str, ...] = FEATURES, *, bins: i
             ob = np.minimum((theta * (bins / np.pi)).astype(np.int32), bins - 1)
             out[..., k] = np.where(mag >= grad_threshold, ob, bins)
         else:
-            raise ValueError(f"unknown feature {name!r}; expected one of {FEATURES}")
+            raise ValueError(f"unknown feature {name!r}; expected one of {FEATURES + EXTRA_FEATURES}")
     return out
 
 

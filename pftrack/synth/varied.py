@@ -194,8 +194,47 @@ def camouflage_scene(seed: int = 0, n_frames: int = 150, **draw) -> SceneSpec:
                      illumination=(gain, gain, gain), kind="camouflage", nuisances=tuple(sorted(nz.items())))
 
 
+def teleport_scene(seed: int = 0, n_frames: int = 110, **draw) -> SceneSpec:
+    """Sudden motion and full occlusion (book ch. 6's switching claims; ch06.md §5.2).
+
+    The target moves smoothly, then at a drawn frame (30-45) jumps by 130-200 px (a "teleport":
+    a camera cut or a dropped run of frames); later it walks behind a full occluder for 8-14
+    frames; a distractor of similar hue wanders in the scene.  Nuisances (colours, texture,
+    lighting, grey frames) are drawn from the seed.  ``meta.json`` records the jump frame.
+    """
+    rng = np.random.default_rng([seed, 76])
+    nz = draw_nuisances(rng, distractors=(1, 1), **draw)
+    w, h = nz["size"]
+    jump_at = int(rng.integers(30, 46))
+    occluded_for = int(rng.integers(8, 15))
+    y0 = float(rng.uniform(h * 0.6 + 10, H - h * 0.6 - 10))
+    left = rng.random() < 0.5
+    x0 = float(rng.uniform(w + 5, 70)) if left else float(rng.uniform(W - 70, W - w - 5))
+    speed = float(rng.uniform(0.8, 1.6)) * (1.0 if left else -1.0)
+    x_jump = x0 + speed * (jump_at - 1)
+    dist = float(rng.uniform(130, 200))
+    x_land = float(np.clip(x_jump + (dist if left else -dist), w + 5, W - w - 5))
+    y_land = float(np.clip(y0 + rng.uniform(-40, 40), h * 0.6 + 5, H - h * 0.6 - 5))
+    # after landing it walks back towards the middle, behind an occluder
+    back = -1.0 if left else 1.0
+    t_occ = jump_at + int(rng.integers(12, 20))
+    v2 = float(rng.uniform(1.5, 2.5)) * back
+    x_occ = x_land + v2 * (t_occ - jump_at)
+    occ_w = w + abs(v2) * occluded_for
+    # centre the occluder on the run: the target enters at t_occ and leaves ~occluded_for frames later
+    cx = x_occ + back * occ_w / 2.0
+    occ = Occluder(box=(cx - occ_w / 2.0, y_land - h, occ_w, 2.0 * h), color=nz["occluder_color"],
+                   texture=nz["occluder_texture"])
+    x_end = float(np.clip(x_land + v2 * (n_frames - 1 - jump_at), w, W - w))
+    path = ((0, x0, y0), (jump_at - 1, x_jump, y0), (jump_at, x_land, y_land), (n_frames - 1, x_end, y_land))
+    tgt = Target(path=path, size=(w, h), colors=nz["colors"], texture=nz["texture"])
+    nz = {**nz, "jump_at": jump_at, "jump_px": abs(x_land - x_jump), "occluder_width": occ_w}
+    return _spec(seed, n_frames, "teleport", nz, [tgt, *_distractors(rng, nz, n_frames, avoid=(x0, y0))], [occ])
+
+
 VARIED_SCENES = {
     "camouflage": camouflage_scene,
+    "teleport": teleport_scene,
     "varied": varied_scene,
     "vanish": vanish_scene,
     "leave": leave_scene,

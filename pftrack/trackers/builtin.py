@@ -6,15 +6,19 @@ it and not the other way round.
 
 from __future__ import annotations
 
+from .aniso_meanshift import AnisoMeanShift
 from .block_matching import PISCTracker
 from .color_pf import ColorPF
 from .dssim import DSSIMTracker
 from .flow_pf import FlowPF
 from .fusion_pf import FusionPF
 from .local_motion_pf import LocalMotionPF
+from .keypoint_meanshift import KeypointAMS
 from .meanshift import KalmanMeanShift, MeanShift
 from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
+from .sift_ransac import SiftRansac
 from .ssim_pf import SSIMPF, HybridSSIMPF
+from .switching import Switching
 from .covariance_tracker import CovarianceTracker
 from .fs_meanshift import FSMeanShift
 from .template import TemplateTracker
@@ -50,6 +54,18 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
     ("fs-meanshift", FSMeanShift,
      "Mean shift on the back-projection of the two most discriminative of 8 colour/orientation features, "
      "reselected online by Collins' variance ratio, similarity-weighted model update (book ch. 6)", {}),
+    ("keypoint-ams", KeypointAMS,
+     "Hybrid of SIFT-RANSAC and anisotropic mean shift: the candidate (A, B or their rho-weighted mix) with the "
+     "highest Bhattacharyya coefficient, reference learned from the best stable frame every 25 (book ch. 5)", {}),
+    ("sift-ransac", SiftRansac,
+     "SIFT foreground/background point sets matched by ratio test, RANSAC similarity, weighted point maintenance "
+     "(book ch. 5, Tracker A)", {}),
+    ("anisotropic-meanshift", AnisoMeanShift,
+     "Mean shift with a full bandwidth matrix: location and Sigma steps, rotated box from its eigenvectors "
+     "(book ch. 5, Tracker B)", {}),
+    ("switching", Switching,
+     "fs-meanshift locally, switched to a global foreground-covariance search (Log-Euclidean) on occlusion, sudden "
+     "motion or distraction; lost when the global search finds nothing like the target (book ch. 6)", {}),
     ("covariance", CovarianceTracker,
      "Region-covariance matching over the whole frame (coarse to fine, 3 scales), Log-Euclidean distance and "
      "mean model update (book ch. 6; Porikli, Tuzel & Meer)", {}),

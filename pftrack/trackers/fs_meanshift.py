@@ -28,7 +28,8 @@ import cv2
 import numpy as np
 
 from ..cues import feature_selection as fs
-from ..filtering.loss import RunningThreshold
+from ..cues.intensity import equalization_lut
+from ..filtering.loss import LossDetector, RunningThreshold, confidence
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
@@ -36,6 +37,9 @@ from .base import Tracker, TrackState
 
 @dataclass(frozen=True, kw_only=True)
 class FSMeanShiftParams(Params):
+    candidates: tuple[str, ...] = param(fs.FEATURES, doc=(
+        "Candidate features (§1.1): the chapter's R, G, B, H, S, r, g, orient; 'Ieq' (equalised grey level, "
+        "robust to lighting changes) may be added."))
     bins: int = param(12, ge=2, le=64, doc="m, bins per feature (ch. 6 L5504, L5541; orientation gets a 13th flat bin).")
     n_features: int = param(2, ge=1, le=3, doc=(
         "Features in the joint histogram (Eq. 16). The chapter uses 2; 1 or 3 'gave worse performances' (C6.4)."))
@@ -59,6 +63,16 @@ class FSMeanShiftParams(Params):
     scale_step: float = param(0.0, ge=0, lt=0.5, doc=(
         "0: fixed size (the chapter). > 0: also try sizes (1 +- step) and keep the best rho, smoothed with gamma 0.1 "
         "(as meanshift)."))
+    occlusion_test: Literal["llr", "sigma"] = param("llr", doc=(
+        "When the local result counts as occluded (and the model is not updated). 'llr' (default): the two-class "
+        "test of pftrack.filtering.loss on rho, target history vs the rho of background windows around the box: the "
+        "online stand-in for the chapter's Gaussian fitted to occluded frames' similarities (L6195-6198). 'sigma': "
+        "d above mu + threshold_sigma x sigma of the confident frames' d (ch06.md §1.10 'online'); it deadlocks "
+        "when the target's appearance drifts (the model stops updating, d stays high)."))
+    background_offset: float = param(1.0, gt=0, le=5, doc=(
+        "'llr': background windows sit this many box sizes from the box, at the 8 compass points."))
+    reacquire_margin: float = param(1.0, ge=0, le=20, doc="'llr': LLR needed to count a frame as confident again.")
+    score_sd_floor: float = param(0.03, gt=0, le=1, doc="'llr': floor of the target and background rho spreads.")
     threshold_window: int = param(30, ge=5, le=1000, doc="Confident frames in the online threshold's statistics.")
     threshold_sigma: float = param(3.0, gt=0, doc="The threshold is mu + this x sigma of d (L6197: 3 sigma).")
     threshold_floor: float = param(0.02, ge=0, doc="Floor on sigma of d.")
@@ -79,14 +93,19 @@ class FSMeanShift(Tracker):
         self.c = np.array([x + w / 2.0, y + h / 2.0])
         self.size = np.array([float(w), float(h)])
         fh, fw = frame.shape[:2]
+        bad = [f for f in p.candidates if f not in fs.FEATURES + fs.EXTRA_FEATURES]
+        if bad or len(set(p.candidates)) < p.n_features:
+            raise ValueError(f"candidates: unknown or too few features {p.candidates!r}")
+        self.candidates = tuple(p.candidates)
+        self._new_frame(frame)
         # the initial neighbourhood (object + ring), binned for every candidate feature, kept for H_i
         reg = self._region(self.c, self.size * p.ring_outer, fw, fh)
         x0, y0, x1, y1 = reg
-        self._init_bins = fs.bin_images(frame[y0:y1, x0:x1], fs.FEATURES, bins=p.bins, grad_threshold=p.grad_threshold)
+        self._init_bins = self._bins(frame[y0:y1, x0:x1], self.candidates)
         self._init_origin = (x0, y0)
         self._init_kernel = fs.epanechnikov(y1 - y0, x1 - x0, self.c[0] - x0, self.c[1] - y0, w / 2, h / 2)
         obj, ring = fs.ring_masks((y1 - y0, x1 - x0), box, inner=p.ring_inner, outer=p.ring_outer, origin=(x0, y0))
-        ranking, self.vr = fs.rank_features(self._init_bins, obj, ring, fs.FEATURES, n=p.bins, delta=p.delta,
+        ranking, self.vr = fs.rank_features(self._init_bins, obj, ring, self.candidates, n=p.bins, delta=p.delta,
                                             clip=p.llr_clip)
         self.pair = fs.select_pair(None, ranking, k=p.n_features)
         self._set_pair(self.pair, current=None)
@@ -94,12 +113,21 @@ class FSMeanShift(Tracker):
         self._tshape = _template_shape(w, h)
         self._init_patch = self._patch(g, self.c, self.size)
         self.thresh = RunningThreshold(window=p.threshold_window, k=p.threshold_sigma, sd_floor=p.threshold_floor)
+        self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
+                                 sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor)
         self.miss = 0
         self.lost = False
         self.rho = 1.0
         self.d = 0.0
         self.iterations = 0
         return TrackState(box=tuple(float(v) for v in box), score=1.0, lost=False, info={"pair": self.pair})
+
+    def _new_frame(self, frame: np.ndarray) -> None:
+        self._eq_lut = equalization_lut(frame) if "Ieq" in self.candidates else None
+
+    def _bins(self, region: np.ndarray, names) -> np.ndarray:
+        p = self.params
+        return fs.bin_images(region, names, bins=p.bins, grad_threshold=p.grad_threshold, eq_lut=self._eq_lut)
 
     @staticmethod
     def _region(c, extent, fw, fh) -> tuple[int, int, int, int]:
@@ -110,7 +138,7 @@ class FSMeanShift(Tracker):
         return max(x0, 0), max(y0, 0), min(max(x1, 1), fw), min(max(y1, 1), fh)
 
     def _pair_index(self, pair) -> tuple[tuple[int, ...], tuple[int, ...]]:
-        idx = tuple(fs.FEATURES.index(f) for f in pair)
+        idx = tuple(self.candidates.index(f) for f in pair)
         sizes = tuple(fs.n_bins(f, self.params.bins) for f in pair)
         return idx, sizes
 
@@ -139,7 +167,7 @@ class FSMeanShift(Tracker):
         fh, fw = frame.shape[:2]
         x0, y0, x1, y1 = self._region(start, size * p.search_scale, fw, fh)
         idx, sizes = self._pair_index(self.pair)
-        bins = fs.bin_images(frame[y0:y1, x0:x1], self.pair, bins=p.bins, grad_threshold=p.grad_threshold)
+        bins = self._bins(frame[y0:y1, x0:x1], self.pair)
         joint = fs.joint_index(bins, tuple(range(len(idx))), sizes)
         zeta_b = fs.joint_histogram(joint, self._n_joint)
         pw = fs.backproject(fs.division_histogram(self.H_m, zeta_b, delta=p.delta), joint)
@@ -151,9 +179,51 @@ class FSMeanShift(Tracker):
         return c, rho, H_c, it, mass
 
     def _kernel_hist(self, joint, origin, c, size) -> np.ndarray:
-        k = fs.epanechnikov(joint.shape[0], joint.shape[1], c[0] - origin[0], c[1] - origin[1], size[0] / 2,
-                            size[1] / 2)
-        return fs.joint_histogram(joint, self._n_joint, k)
+        """Kernel-weighted joint histogram (Eq. 16) of the ellipse of ``size`` at ``c`` (pixels of ``joint``
+        only: a window partly outside the region uses its inside part)."""
+        h, w = joint.shape
+        lcx, lcy = c[0] - origin[0], c[1] - origin[1]
+        i0, i1 = max(int(lcx - size[0] / 2), 0), min(int(np.ceil(lcx + size[0] / 2)) + 1, w)
+        j0, j1 = max(int(lcy - size[1] / 2), 0), min(int(np.ceil(lcy + size[1] / 2)) + 1, h)
+        if i1 <= i0 or j1 <= j0:
+            return np.zeros(self._n_joint)
+        k = fs.epanechnikov(j1 - j0, i1 - i0, lcx - i0, lcy - j0, size[0] / 2, size[1] / 2)
+        return fs.joint_histogram(joint[j0:j1, i0:i1], self._n_joint, k)
+
+    def _background_rho(self, c, size) -> np.ndarray:
+        """rho of the model at the 8 windows ``background_offset`` box sizes around ``c`` (last region)."""
+        joint, origin, _ = self._last_region
+        off = self.params.background_offset
+        out = []
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                if dx or dy:
+                    cc = (c[0] + dx * off * size[0], c[1] + dy * off * size[1])
+                    hb = self._kernel_hist(joint, origin, cc, size)
+                    if hb.sum() > 0:
+                        out.append(float(np.sum(np.sqrt(hb * self.H_m))))
+        return np.array(out)
+
+    def _passes(self, rho: float) -> bool:
+        """Would a candidate with this rho count as the target (no state change)?"""
+        if self.params.occlusion_test == "sigma":
+            return not self.thresh.exceeds(float(np.sqrt(max(1.0 - rho, 0.0))))
+        return self.loss.evaluate(rho) > self.params.reacquire_margin
+
+    def _occlusion_test(self, rho: float, c, size) -> tuple[bool, bool, float]:
+        """``(occluded, confident, score)`` of the local result (see ``occlusion_test``)."""
+        p = self.params
+        d = float(np.sqrt(max(1.0 - rho, 0.0)))
+        if p.occlusion_test == "sigma":
+            bad = self.thresh.exceeds(d)
+            if not bad:
+                self.thresh.push(d)
+            return bad, not bad, rho
+        bg = self._background_rho(c, size)
+        if bg.size:
+            self.loss.set_background(bg)
+        self.loss.step(rho)
+        return self.loss.llr < 0.0, self.loss.confident(rho), confidence(self.loss.llr)
 
     def _local_step(self, frame: np.ndarray):
         p = self.params
@@ -185,10 +255,10 @@ class FSMeanShift(Tracker):
         p = self.params
         fh, fw = frame.shape[:2]
         x0, y0, x1, y1 = self._region(self.c, self.size * p.ring_outer, fw, fh)
-        bins = fs.bin_images(frame[y0:y1, x0:x1], fs.FEATURES, bins=p.bins, grad_threshold=p.grad_threshold)
+        bins = self._bins(frame[y0:y1, x0:x1], self.candidates)
         box = (self.c[0] - self.size[0] / 2, self.c[1] - self.size[1] / 2, self.size[0], self.size[1])
         obj, ring = fs.ring_masks((y1 - y0, x1 - x0), box, inner=p.ring_inner, outer=p.ring_outer, origin=(x0, y0))
-        ranking, self.vr = fs.rank_features(bins, obj, ring, fs.FEATURES, n=p.bins, delta=p.delta, clip=p.llr_clip)
+        ranking, self.vr = fs.rank_features(bins, obj, ring, self.candidates, n=p.bins, delta=p.delta, clip=p.llr_clip)
         pair = fs.select_pair(self.pair, ranking, k=p.n_features, replace=p.replace)
         if pair != self.pair:
             idx, sizes = self._pair_index(pair)
@@ -200,19 +270,20 @@ class FSMeanShift(Tracker):
     # -- protocol ----------------------------------------------------------------------------------
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
+        self._new_frame(frame)
         (c, rho, H_c, it, mass), size = self._local_step(frame)
         self.c, self.size = c, np.asarray(size, dtype=np.float64)
         self.rho, self.iterations = rho, it
         self.d = float(np.sqrt(max(1.0 - rho, 0.0)))
-        occluded = self.thresh.exceeds(self.d)
+        occluded, confident, score = self._occlusion_test(rho, c, self.size)
         self.miss = self.miss + 1 if occluded else 0
         self.lost = self.miss >= p.lost_frames
-        if not occluded:
-            self.thresh.push(self.d)
+        if confident:
             self._update_model(frame, H_c)
             if p.reselect_every and self.frame_index % p.reselect_every == 0:
                 self._reselect(frame)
-        return self._state(info={"pair": self.pair, "d": self.d, "iterations": it, "threshold": self.thresh.threshold})
+        return self._state(score=score, info={"pair": self.pair, "d": self.d, "rho": rho, "iterations": it,
+                                              "llr": self.loss.llr})
 
     def _state(self, *, info: dict, score: float | None = None) -> TrackState:
         w, h = self.size

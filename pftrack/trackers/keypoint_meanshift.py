@@ -1,0 +1,176 @@
+"""``keypoint-ams``: the hybrid of SIFT-RANSAC and anisotropic mean shift with online learning
+(book ch. 5; Khan & Gu 2010).  ``shared/book/ch05.md`` §1.4-1.5.
+
+Per frame:
+
+1. **Tracker A** (:class:`~pftrack.trackers.sift_ransac.SiftRansacCore`) moves its region by a RANSAC
+   similarity; it is re-initialised on the last output region when its corners jump by more than
+   ``T1`` or its ``rho < T2`` (Eqs. 3-4), or when too few points match.
+2. **Tracker B** (:class:`~pftrack.trackers.aniso_meanshift.AnisoCore`) starts from A's region when
+   A is reliable (Eq. 12: more than ``guide_points`` inliers and ``rho(1) > guide_rho``), else from its
+   own last region; re-initialised likewise (Eqs. 13-14).
+3. **The mix**: ``V3 = sum rho~_i V_i`` with ``rho~_i = rho_i / (rho_1 + rho_2)`` (Eqs. 20-21), over the
+   centre, sides (h >= w convention) and the doubled angle; renormalised when a tracker was
+   re-initialised (ch05.md P7).
+4. **Output** (Eqs. 22-23): the candidate of highest Bhattacharyya coefficient against the
+   reference; a re-initialised tracker competes as the last output re-scored on this frame.
+5. **Learning** (Eqs. 17-19, :class:`~pftrack.cues.reference.ReferenceLearner`): every 25 frames the
+   reference moves 10 % towards the best stable frame's histogram.
+
+``lost`` is raised when both A and B were re-initialised for ``lost_frames`` consecutive frames
+(design: the chapter has no loss state).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import cv2
+import numpy as np
+
+from ..cues import anisotropic as an
+from ..cues.reference import ReferenceLearner
+from ..geometry import Box
+from ..params import param
+from .aniso_meanshift import AnisoCore, AnisoMeanShiftParams
+from .base import Tracker, TrackState
+from .sift_ransac import ColorModel, RBox, SiftRansacCore, SiftRansacParams, corner_distance, hull
+
+
+@dataclass(frozen=True, kw_only=True)
+class KeypointAMSParams(SiftRansacParams):
+    gamma: float = param(0.33, ge=0, lt=1, doc="Tracker B: gamma of Eq. 8 (Table 2: 0.23-0.33).")
+    K: float = param(0.9, gt=0, le=2, doc="Tracker B: the box is the kernel ellipse scaled by K (L4327).")
+    k_mode: Literal["box", "kernel"] = param("box", doc="Tracker B: the reading of the K-scaling (ch05.md §1.0).")
+    ms_iterations: int = param(10, ge=1, le=100, doc="Tracker B: mean-shift iterations (L4993).")
+    t3_dist: float = param(15.0, gt=0, doc="'paper' thresholds: T(2)_3, B's corner jump (Table 2 median).")
+    t4_rho: float = param(0.975, ge=0, le=1, doc="'paper' thresholds: T(2)_4, B's rho (Table 2 median).")
+    guide_points: int = param(10, ge=0, le=10000, doc="Eq. 12: T(2)_1, A's inliers needed to start B from A (L4997).")
+    guide_rho: float = param(0.95, ge=0, le=1, doc=(
+        "Eq. 12: T(2)_2, A's rho needed to start B from A (L4999); with thresholds='auto' the mean of A's rho over "
+        "the first frames is used instead."))
+    learn: bool = param(True, doc="Online learning of the reference (Eqs. 17-19).")
+    learn_interval: int = param(25, ge=1, le=10000, doc="S: frames per learning interval (L4658).")
+    kappa: float = param(0.1, ge=0, le=1, doc="kappa of Eq. 18 (L4677).")
+    learn_dist: float = param(30.0, gt=0, doc="T1 of Eq. 17: a stable frame's corners move less (sum, px; Table 3).")
+    learn_rho: float = param(0.95, ge=0, le=1, doc=(
+        "T2 of Eq. 17 (Table 3); with thresholds='auto' the mean of the output's rho over the first frames minus "
+        "one spread is used instead."))
+
+
+class KeypointAMS(Tracker):
+    """The hybrid tracker (deterministic)."""
+
+    name = "keypoint-ams"
+    Params = KeypointAMSParams
+    stochastic = False
+
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        p = self.params
+        v = an.axis_box_to_rotated(box)
+        self.A = SiftRansacCore(p)
+        bp = AnisoMeanShiftParams(gamma=p.gamma, K=p.K, k_mode=p.k_mode, max_iterations=p.ms_iterations,
+                                  thresholds=p.thresholds, t3_dist=p.t3_dist, t4_rho=p.t4_rho,
+                                  auto_frames=p.auto_frames, color_space=p.color_space)
+        self.B = AnisoCore(bp, v)
+        self.color = ColorModel(p.color_space)
+        self.color.adapt(frame)
+        self.color.prepare(frame, self._roi(v))
+        q0 = self.color.hist(v)
+        self.learner = ReferenceLearner(q0, interval=p.learn_interval, kappa=p.kappa, t1_dist=p.learn_dist,
+                                        t2_rho=p.learn_rho)
+        self.q0 = q0
+        self.A.init(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), v)
+        self.v_obj = self.v1 = self.v2 = v
+        self._out_rho: list[float] = []
+        self.both_fail = 0
+        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.learner.q
+
+    def _roi(self, v: RBox) -> tuple[int, int, int, int]:
+        x, y, w, h = hull(v)
+        m = 0.75 * max(w, h)
+        return int(x - m), int(y - m), int(x + w + m), int(y + h + m)
+
+    def _rho(self, v: RBox) -> float:
+        return an.bhattacharyya(self.color.hist(v), self.q)
+
+    @staticmethod
+    def _mix(vs: list[RBox], ws: list[float]) -> RBox:
+        """Eq. 20 on the geometric part, h >= w, angles averaged on doubled angles."""
+        ws = np.asarray(ws, dtype=np.float64)
+        ws = ws / ws.sum()
+        cx = sum(w * v[0] for w, v in zip(ws, vs))
+        cy = sum(w * v[1] for w, v in zip(ws, vs))
+        h = sum(w * max(v[2], v[3]) for w, v in zip(ws, vs))
+        wd = sum(w * min(v[2], v[3]) for w, v in zip(ws, vs))
+        th = [v[4] if v[2] >= v[3] else v[4] + math.pi / 2 for v in vs]
+        s = sum(w * math.sin(2 * t) for w, t in zip(ws, th))
+        c = sum(w * math.cos(2 * t) for w, t in zip(ws, th))
+        return float(cx), float(cy), float(h), float(wd), 0.5 * math.atan2(s, c)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        p = self.params
+        prev = self.v_obj
+        self.color.prepare(frame, self._roi(prev))
+        gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        # --- Tracker A
+        res = self.A.step(gray, self._rho)
+        a_ok = not res["failed"]
+        if a_ok:
+            d1 = corner_distance(res["v"], self.v1)
+            self.A.auto.observe(res["rho"], d1)
+            a_ok = self.A.gate.test(res["rho"], d1, self.color.background(res["v"], self.q))
+        if a_ok:
+            self.A.maintain(res, frozen=p.freeze and res["rho"] <= self.A.freeze_level())
+            self.v1, rho1 = self.A.v, res["rho"]
+        else:
+            self.A.reinit(prev)
+            self.v1, rho1 = prev, 0.0
+        # --- Tracker B, guided by A when A is reliable (Eq. 12)
+        guide = p.guide_rho
+        if p.thresholds == "auto":
+            guide = float(np.mean(self.A.auto.rho)) if self.A.auto.rho else math.inf
+        start = self.v1 if (a_ok and res["n_inliers"] > p.guide_points and rho1 > guide) else self.v2
+        v2, rho2, it = self.B.step(self.color, self.q, start)
+        d2 = corner_distance(v2, self.v2)
+        self.B.auto.observe(rho2, d2)
+        b_ok = self.B.gate.test(rho2, d2, self.color.background(v2, self.q))
+        if b_ok:
+            self.v2 = v2
+        else:
+            self.v2, rho2 = prev, 0.0
+        # --- the mix (Eqs. 20-21) and the choice (Eqs. 22-23)
+        cands: list[tuple[str, RBox]] = []
+        ok = [(self.v1, rho1) if a_ok else None, (self.v2, rho2) if b_ok else None]
+        live = [c for c in ok if c is not None and c[1] > 0]
+        cands.append(("A", self.v1))
+        cands.append(("B", self.v2))
+        if live:
+            cands.append(("mix", self._mix([c[0] for c in live], [c[1] for c in live])))
+        scores = [self._rho(v) for _, v in cands]
+        k = int(np.argmax(scores))
+        chosen, self.v_obj = cands[k][0], cands[k][1]
+        rho_obj = scores[k]
+        if not a_ok and not b_ok:
+            chosen = "held"
+        # --- learning (Eqs. 17-19)
+        dist_obj = corner_distance(self.v_obj, prev)
+        if len(self._out_rho) < p.auto_frames:
+            self._out_rho.append(rho_obj)
+            if p.thresholds == "auto" and len(self._out_rho) == p.auto_frames:
+                r = np.array(self._out_rho)
+                self.learner.t2_rho = float(r.mean() - max(r.std(), 0.01))
+        if p.learn and (p.thresholds == "paper" or len(self._out_rho) >= p.auto_frames):
+            self.learner.observe(rho_obj, dist_obj, self.color.hist(self.v_obj))
+        self.both_fail = self.both_fail + 1 if (not a_ok and not b_ok) else 0
+        lost = self.both_fail >= p.lost_frames
+        return TrackState(box=hull(self.v_obj), score=float(np.clip(rho_obj, 0, 1)), lost=lost,
+                          info={"chosen": chosen, "rho1": rho1, "rho2": rho2, "rho": rho_obj, "inliers": res["n_inliers"],
+                                "a_reinit": not a_ok, "b_reinit": not b_ok, "theta": self.v_obj[4],
+                                "updates": self.learner.updates})

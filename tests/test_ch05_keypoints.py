@@ -1,0 +1,196 @@
+"""Book ch. 5: SIFT-RANSAC, anisotropic mean shift, the hybrid and its online learning (ch05.md §5.1)."""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.cues import anisotropic as an
+from pftrack.cues import keypoints as kp
+from pftrack.cues.reference import ReferenceLearner
+from pftrack.trackers.keypoint_meanshift import KeypointAMS
+
+
+def test_eq9_11_round_trip_and_conventions():
+    rng = np.random.default_rng(0)
+    for _ in range(1000):
+        w = rng.uniform(1, 50)
+        h = w + rng.uniform(0.5, 50)
+        th = rng.uniform(-math.pi / 2 + 1e-3, math.pi / 2)
+        h2, w2, th2 = an.box_from_sigma(an.sigma_from_box(h, w, th))
+        assert h2 == pytest.approx(h, abs=1e-9) and w2 == pytest.approx(w, abs=1e-9)
+        assert math.remainder(th2 - th, math.pi) == pytest.approx(0.0, abs=1e-9)
+    S = an.sigma_from_box(40, 10, 0.0)
+    assert S[0, 0] == pytest.approx(400) and S[1, 1] == pytest.approx(25)  # theta = 0: h along x
+    h, w, th = an.box_from_sigma(an.sigma_from_box(40, 10, 0.3, K=0.9), K=0.9)
+    assert (h, w, th) == pytest.approx((40, 10, 0.3))
+
+
+def _ellipse_scene(theta_deg=30.0):
+    H, W = 200, 220
+    A = an.sigma_from_box(60, 30, math.radians(theta_deg))  # object semi-axes 30 and 15
+    yy, xx = np.mgrid[0:H, 0:W] + 0.5
+    X, Y = xx - 100, yy - 80
+    inv = np.linalg.inv(A)
+    d = inv[0, 0] * X * X + 2 * inv[0, 1] * X * Y + inv[1, 1] * Y * Y
+    bins = np.where(d <= 1, 0, 1 + ((xx.astype(int) + yy.astype(int)) % 3)).astype(np.int64)
+    return bins, A, np.array([1.0, 0.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("start", [0.6, 1.3])
+def test_anisotropic_mean_shift_fixed_point(start):
+    """ch05.md §5.1-2: kernel semi-axes converge to (2 - gamma)/(2 (1 - gamma)) ^ 1/2 = 1.116 x the object."""
+    bins, A, q = _ellipse_scene()
+    y, S, _ = an.aniso_mean_shift(bins, (0, 0), q, (106, 76), start * A, gamma=0.33, max_iter=50,
+                                  shift_tol=1e-3, sigma_tol=1e-6)
+    h, w, th = an.box_from_sigma(S)
+    c_star = (2 - 0.33) / (2 * (1 - 0.33))
+    assert h / 60 == pytest.approx(math.sqrt(c_star), rel=0.03)
+    assert w / 30 == pytest.approx(math.sqrt(c_star), rel=0.03)
+    assert np.hypot(*(y - [100, 80])) < 0.5
+    assert abs(math.degrees(th) - 30) < 2
+    hb, wb, _ = an.box_from_sigma(S, K=0.9)
+    assert hb == pytest.approx(60, rel=0.03) and wb == pytest.approx(30, rel=0.03)
+
+
+def test_gamma_zero_leaves_the_size_unobservable():
+    bins, A, q = _ellipse_scene()
+    _, S, _ = an.aniso_mean_shift(bins, (0, 0), q, (100, 80), 1.3 * A, gamma=0.0, max_iter=50)
+    h, _, _ = an.box_from_sigma(S)
+    assert h / 60 < 0.95  # shrinks inside the object and stays there: gamma > 0 is needed
+
+
+def test_eq8_is_stationary_at_convergence():
+    bins, A, q = _ellipse_scene(10.0)
+    gamma = 0.33
+    y, S, _ = an.aniso_mean_shift(bins, (0, 0), q, (100, 80), A, gamma=gamma, max_iter=60, shift_tol=1e-4,
+                                  sigma_tol=1e-8)
+    yy, xx = np.mgrid[0:bins.shape[0], 0:bins.shape[1]] + 0.5
+    X, Y = xx - y[0], yy - y[1]
+    p = an.ellipse_histogram(bins, (0, 0), y, S, 4)
+    omega = np.where(q > 0, np.sqrt(q / np.maximum(p, 1e-300)), 0.0)[bins]
+
+    def F(Sig):
+        inv = np.linalg.inv(Sig)
+        d = inv[0, 0] * X * X + 2 * inv[0, 1] * X * Y + inv[1, 1] * Y * Y
+        k = np.where(d <= 1, 1 - d, 0.0)
+        return np.linalg.det(Sig) ** ((gamma - 1) / 2) * np.sum(omega * k)
+
+    eps = 1e-3 * np.abs(S).max()
+    grad = np.zeros((2, 2))
+    for i, j in ((0, 0), (1, 1), (0, 1)):
+        E = np.zeros((2, 2))
+        E[i, j] = E[j, i] = eps
+        grad[i, j] = grad[j, i] = (F(S + E) - F(S - E)) / (2 * eps)
+    assert np.linalg.norm(grad) * np.linalg.norm(S) / F(S) < 1e-2
+
+
+def test_ransac_recovers_a_similarity_with_outliers():
+    rng = np.random.default_rng(1)
+    M = kp.similarity_matrix(1.08, math.radians(7), 9.5, -6.25)
+    src = rng.uniform(0, 200, (100, 2))
+    dst = kp.transform_points(M, src) + rng.normal(0, 0.3, (100, 2))
+    out = rng.random(100) < 0.3
+    dst[out] = rng.uniform(0, 200, (out.sum(), 2))
+    Mh, inl = kp.ransac_similarity(src, dst)
+    beta, th, dx, dy = kp.similarity_params(Mh)
+    assert beta == pytest.approx(1.08, rel=0.005)
+    assert math.degrees(th) == pytest.approx(7, abs=0.3)
+    assert (dx, dy) == pytest.approx((9.5, -6.25), abs=0.3)
+    assert inl[~out].mean() > 0.95
+
+
+def test_sift_end_to_end_similarity():
+    rng = np.random.default_rng(2)
+    tex = cv2.GaussianBlur(rng.integers(0, 256, (240, 320)).astype(np.uint8), (0, 0), 2)
+    tex = cv2.normalize(tex, None, 0, 255, cv2.NORM_MINMAX)
+    M = kp.similarity_matrix(1.08, math.radians(7), 9.5, -6.25)
+    warped = cv2.warpAffine(tex, M, (320, 240), flags=cv2.INTER_LINEAR)
+    xy0, d0 = kp.detect(tex, (40, 40, 280, 200))
+    xy1, d1 = kp.detect(warped, (0, 0, 320, 240))
+    qi, ti = kp.match(d1, d0)
+    Mh, inl = kp.ransac_similarity(xy0[ti], xy1[qi])
+    beta, th, dx, dy = kp.similarity_params(Mh)
+    assert beta == pytest.approx(1.08, rel=0.01)
+    assert math.degrees(th) == pytest.approx(7, abs=0.5)
+    assert (dx, dy) == pytest.approx((9.5, -6.25), abs=0.5)
+
+
+def test_eq16_foreground_weights_and_cap():
+    wa, wb, wc = kp.update_foreground_weights(np.array([3.0, 0.0]), np.array([5.0]), 2)
+    np.testing.assert_array_equal(wa, [5, 2])
+    np.testing.assert_array_equal(wb, [4])
+    np.testing.assert_array_equal(wc, [4, 4])  # median{5, 2, 4}
+    ps = kp.PointSet(np.zeros((5, 2), np.float32), np.zeros((5, 128), np.float32),
+                     np.concatenate([wa, wb, wc]), np.array([3, 1, 2, 0, 0]))
+    kept = kp.keep_heaviest(ps, 3)
+    np.testing.assert_array_equal(np.sort(kept.weight), [4, 4, 5])
+    assert 2 in kept.age  # the older of the weight-4 points wins the tie
+
+
+def test_background_set_keeps_the_newest():
+    ps = kp.PointSet()
+    for frame in range(4):
+        ps.age = ps.age + 1
+        new = kp.PointSet(np.full((500, 2), frame, np.float32), np.zeros((500, 128), np.float32), np.zeros(500),
+                          np.zeros(500, np.int64))
+        ps = kp.keep_newest(kp.PointSet.concat(ps, new), 1500)
+    assert len(ps) == 1500
+    assert set(np.unique(ps.xy[:, 0])) == {1.0, 2.0, 3.0}
+
+
+def test_eq17_19_reference_learning():
+    q0 = np.array([0.5, 0.5, 0.0])
+    L = ReferenceLearner(q0, interval=3, kappa=0.1, t1_dist=30, t2_rho=0.9)
+    ps = [np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])]
+    # frame 2 has the highest rho but moves too much: not eligible; frame 3 is the best eligible
+    L.observe(0.92, 10, ps[0])
+    L.observe(0.99, 50, ps[1])
+    q1 = L.observe(0.95, 5, ps[2])
+    np.testing.assert_allclose(q1, 0.1 * ps[2] + 0.9 * q0)
+    # no eligible frame: unchanged, bit for bit
+    before = q1.copy()
+    for _ in range(3):
+        q2 = L.observe(0.5, 5, ps[0])
+    np.testing.assert_array_equal(q2, before)
+
+
+def test_eq20_21_mix():
+    v1 = (100.0, 50.0, 40.0, 20.0, 0.1)
+    v2 = (110.0, 60.0, 30.0, 10.0, 0.3)
+    m = KeypointAMS._mix([v1, v2], [0.9, 0.6])
+    assert m[:4] == pytest.approx((104.0, 54.0, 36.0, 16.0))
+    assert m[4] == pytest.approx(0.5 * math.atan2(0.6 * math.sin(0.2) + 0.4 * math.sin(0.6),
+                                                  0.6 * math.cos(0.2) + 0.4 * math.cos(0.6)))
+    assert KeypointAMS._mix([v2], [0.6]) == pytest.approx(v2)  # A re-initialised: V3 = V2
+
+
+def _textured_scene(n=25):
+    from pftrack.synth import Scene, varied_scene
+
+    spec = varied_scene(5, n_frames=n, gray=0.0, illumination=0.0)
+    return [(f, tr.boxes[0]) for f, tr in Scene(spec)]
+
+
+@pytest.mark.parametrize("name", ["keypoint-ams", "sift-ransac", "anisotropic-meanshift"])
+def test_deterministic_and_finite(name):
+    frames = _textured_scene()
+    runs = []
+    for _ in range(2):
+        t = pftrack.create_tracker(name)
+        t.init(frames[0][0], tuple(frames[0][1]))
+        runs.append([t.update(f).box for f, _ in frames[1:]])
+    assert runs[0] == runs[1]
+    assert np.all(np.isfinite(runs[0]))
+
+
+def test_trackers_accept_grey_frames():
+    frames = _textured_scene(8)
+    for name in ("keypoint-ams", "fs-meanshift", "switching", "covariance"):
+        t = pftrack.create_tracker(name)
+        g = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f, _ in frames]
+        t.init(g[0], tuple(frames[0][1]))
+        st = [t.update(f) for f in g[1:]]
+        assert all(np.all(np.isfinite(s.box)) for s in st)
