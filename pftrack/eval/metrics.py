@@ -162,3 +162,37 @@ def lost_detection(lost: np.ndarray, pred: np.ndarray, gt: np.ndarray, absent: n
                 reacq += 1
     return LostResult(recall=recall, false_rate=false_rate, absent_frames=int(absent.sum()),
                       covered_frames=int(covered.sum()), reappearances=events, reacquired=reacq)
+
+
+def corner_distance(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """Book ch. 5 Eq. 25, d1: the mean distance of the four corners of axis-aligned boxes, per frame
+    (NaN where the ground truth is missing)."""
+    pred, gt = _align(pred, gt)
+    ok = valid_gt(gt)
+    out = np.full(len(gt), np.nan)
+    p, g = _clean_pred(pred[ok]), gt[ok]
+    d = 0.0
+    for cx, cy in ((0, 0), (1, 0), (0, 1), (1, 1)):
+        d = d + np.hypot(p[:, 0] + cx * p[:, 2] - g[:, 0] - cx * g[:, 2], p[:, 1] + cy * p[:, 3] - g[:, 1] - cy * g[:, 3])
+    out[ok] = d / 4.0
+    return out
+
+
+def param_mae(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """Book ch. 5 Eq. 26 (printed "MSE" but a mean absolute error): ``(4,)`` mean |error| of the centre
+    x, y, width and height over the frames with ground truth (the angle is omitted: the ground truth is
+    axis-aligned)."""
+    pred, gt = _align(pred, gt)
+    ok = valid_gt(gt)
+    p, g = _clean_pred(pred[ok]), gt[ok]
+    pc = np.column_stack([p[:, 0] + p[:, 2] / 2, p[:, 1] + p[:, 3] / 2, p[:, 2], p[:, 3]])
+    gc = np.column_stack([g[:, 0] + g[:, 2] / 2, g[:, 1] + g[:, 3] / 2, g[:, 2], g[:, 3]])
+    return np.abs(pc - gc).mean(axis=0) if len(g) else np.full(4, np.nan)
+
+
+def tracking_percentage(pred: np.ndarray, gt: np.ndarray, threshold: float = 0.5) -> float:
+    """Book ch. 6 Table 1's undefined "tracking percentage", defined: the fraction of frames with
+    ground truth whose IoU is at least ``threshold`` (OTB success at 0.5)."""
+    ious = frame_ious(pred, gt)
+    ious = ious[np.isfinite(ious)]
+    return float(np.mean(ious >= threshold)) if ious.size else float("nan")

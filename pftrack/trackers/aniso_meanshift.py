@@ -34,6 +34,10 @@ class AnisoMeanShiftParams(Params):
     k_mode: Literal["box", "kernel"] = param("box", doc=(
         "'box': kernel = ellipse, box = K-scaled ellipse (ch05.md §1.0); 'kernel': kernel = K-scaled ellipse, box = "
         "ellipse / K (the alternative reading; boxes come out ~24 % larger)."))
+    safeguard: bool = param(False, doc=(
+        "Refuse or halve a bandwidth step (Eq. 8) that lowers the true objective |Sigma|^(gamma/2) rho (design: on "
+        "backgrounds sharing the target's colours the linearised step inflates the kernel). False is the literal "
+        "chapter."))
     max_iterations: int = param(10, ge=1, le=100, doc="Mean-shift iterations (L4993).")
     shift_tol: float = param(0.5, gt=0, doc="Stop when the shift is below this (px) ...")
     sigma_tol: float = param(1e-3, gt=0, doc="... and ||dSigma||/||Sigma|| below this (proposed).")
@@ -71,7 +75,7 @@ class AnisoCore:
         f = color.feats
         y, S, it = an.aniso_mean_shift(f.bins, (f.x0, f.y0), q, (start[0], start[1]), self.kernel_of(start),
                                        gamma=p.gamma, max_iter=p.max_iterations, shift_tol=p.shift_tol,
-                                       sigma_tol=p.sigma_tol)
+                                       sigma_tol=p.sigma_tol, safeguard=p.safeguard)
         v = self.box_of(S, y)
         return v, an.bhattacharyya(color.hist(v), q), it
 

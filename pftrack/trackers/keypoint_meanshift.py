@@ -44,6 +44,7 @@ class KeypointAMSParams(SiftRansacParams):
     gamma: float = param(0.33, ge=0, lt=1, doc="Tracker B: gamma of Eq. 8 (Table 2: 0.23-0.33).")
     K: float = param(0.9, gt=0, le=2, doc="Tracker B: the box is the kernel ellipse scaled by K (L4327).")
     k_mode: Literal["box", "kernel"] = param("box", doc="Tracker B: the reading of the K-scaling (ch05.md §1.0).")
+    safeguard: bool = param(False, doc="Tracker B: refuse bandwidth steps that lower the true objective (design).")
     ms_iterations: int = param(10, ge=1, le=100, doc="Tracker B: mean-shift iterations (L4993).")
     t3_dist: float = param(15.0, gt=0, doc="'paper' thresholds: T(2)_3, B's corner jump (Table 2 median).")
     t4_rho: float = param(0.975, ge=0, le=1, doc="'paper' thresholds: T(2)_4, B's rho (Table 2 median).")
@@ -72,6 +73,7 @@ class KeypointAMS(Tracker):
         v = an.axis_box_to_rotated(box)
         self.A = SiftRansacCore(p)
         bp = AnisoMeanShiftParams(gamma=p.gamma, K=p.K, k_mode=p.k_mode, max_iterations=p.ms_iterations,
+                                  safeguard=p.safeguard,
                                   thresholds=p.thresholds, t3_dist=p.t3_dist, t4_rho=p.t4_rho,
                                   auto_frames=p.auto_frames, color_space=p.color_space)
         self.B = AnisoCore(bp, v)
