@@ -4,19 +4,23 @@
 
 Columns: mean OTB AUC per group; lost recall and false-lost rate (means over the runs where each is defined);
 the fraction of reappearances re-acquired within 15 frames; the median update fps on the real sequences.
+A second table gives the tracking percentage (the fraction of frames with IoU > 0.5, book ch. 6 Table 1's
+measure, read from the ``runs/`` records beside results.csv).
 """
 
 from __future__ import annotations
 
 import csv
+import json
 import sys
+from pathlib import Path
 from collections import defaultdict
 
-GROUPS = ["real", "gray", "graylight", "varied", "vanish", "leave", "camouflage"]
+GROUPS = ["real", "gray", "graylight", "varied", "vanish", "leave", "camouflage", "teleport"]
 
 
 def group_of(sequence: str) -> str:
-    for g in ("vanish", "leave", "varied", "camouflage"):
+    for g in ("vanish", "leave", "varied", "camouflage", "teleport"):
         if sequence.startswith(g + "-"):
             return g
     if sequence.endswith("-gray-light"):
@@ -51,6 +55,20 @@ def main(path: str) -> None:
         fps = sorted(cells.get((t, "real"), {}).get("fps", []))
         med = fps[len(fps) // 2] if fps else float("nan")
         print(f"{t:40s} {aucs}   {recall:.3f}   {false:.3f}  {reacq / max(reapp, 1):.2f}  {med:.0f}")
+    runs = Path(path).parent / "runs"
+    if runs.is_dir():
+        tp: dict[tuple[str, str], list[float]] = defaultdict(list)
+        for f in sorted(runs.glob("ope__*.json")):
+            rec = json.loads(f.read_text())
+            curve = rec.get("success") or []
+            if len(curve) == 21:  # thresholds 0, 0.05, ..., 1: index 10 is IoU > 0.5
+                tp[(rec["tracker"], group_of(rec["sequence"]))].append(float(curve[10]))
+        print("\ntracking percentage (frames with IoU > 0.5)")
+        print(f"{'tracker':40s} " + " ".join(f"{g:>10s}" for g in GROUPS) + "        all")
+        for t in trackers:
+            vals = [tp.get((t, g), []) for g in GROUPS]
+            allv = [v for vs in vals for v in vs]
+            print(f"{t:40s} " + " ".join(f"{100 * _mean(v):10.1f}" for v in vals) + f" {100 * _mean(allv):10.1f}")
 
 
 if __name__ == "__main__":

@@ -194,3 +194,20 @@ def test_trackers_accept_grey_frames():
         t.init(g[0], tuple(frames[0][1]))
         st = [t.update(f) for f in g[1:]]
         assert all(np.all(np.isfinite(s.box)) for s in st)
+
+
+def test_registered_with_their_chapter_trackers():
+    names = {s.name for s in pftrack.list_trackers()}
+    assert {"sift-ransac", "anisotropic-meanshift", "keypoint-ams", "fs-meanshift", "covariance",
+            "switching"} <= names
+
+
+def test_chapter_metrics():
+    from pftrack.eval.metrics import corner_distance, param_mae, tracking_percentage
+
+    gt = np.array([[10, 10, 20, 40], [10, 10, 20, 40], [np.nan] * 4])
+    pred = np.array([[13, 14, 20, 40], [10, 10, 30, 40], [0, 0, 5, 5]])
+    d1 = corner_distance(pred, gt)
+    assert d1[0] == pytest.approx(5.0) and d1[1] == pytest.approx(5.0) and np.isnan(d1[2])
+    np.testing.assert_allclose(param_mae(pred, gt), [(3 + 5) / 2, 2, 5, 0])
+    assert tracking_percentage(pred, gt) == pytest.approx(1.0)  # IoUs 0.68 and 0.67; the NaN row skipped

@@ -79,6 +79,8 @@ def rotated_to_axis_box(cx: float, cy: float, h: float, w: float, theta: float) 
 def _support(bins_shape, origin, y, sigma):
     """Pixel grid of the ellipse's bounding rectangle: (xs, ys, offsets (n,2), d (n,), flat idx)."""
     hgt, wid = bins_shape
+    if not (np.all(np.isfinite(sigma)) and np.linalg.det(sigma) > 1e-9):
+        return None  # a degenerate kernel covers no pixel
     ex = math.sqrt(max(sigma[0, 0], 1e-12))
     ey = math.sqrt(max(sigma[1, 1], 1e-12))
     lx, ly = y[0] - origin[0], y[1] - origin[1]

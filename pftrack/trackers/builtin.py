@@ -52,7 +52,7 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
      "Block matching on peripheral increment sign codes: 9x9 blocks, common sub-pixel displacement anchored to "
      "the first frame's blocks, insensitive to monotonic brightness change (book ch. 1)", {}),
     ("fs-meanshift", FSMeanShift,
-     "Mean shift on the back-projection of the two most discriminative of 8 colour/orientation features, "
+     "Mean shift on the back-projection of the two most discriminative of 9 colour/orientation/grey features, "
      "reselected online by Collins' variance ratio, similarity-weighted model update (book ch. 6)", {}),
     ("keypoint-ams", KeypointAMS,
      "Hybrid of SIFT-RANSAC and anisotropic mean shift: the candidate (A, B or their rho-weighted mix) with the "

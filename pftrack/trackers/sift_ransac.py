@@ -242,6 +242,8 @@ class SiftRansacCore:
         if M is None or inl.sum() < min(p.min_matches, 3):
             return out
         beta, dtheta, _, _ = kp.similarity_params(M)
+        if not (np.all(np.isfinite(M)) and 0.5 <= beta <= 2.0):
+            return out  # a degenerate fit (collinear or coincident points): A fails this frame
         cx, cy = kp.transform_points(M, np.array([[self.v[0], self.v[1]]]))[0]
         vt: RBox = (float(cx), float(cy), self.v[2] * beta, self.v[3] * beta, self.v[4] + dtheta)
         inside = kp.points_in_rotated_box(xy[q_fg], *vt)
