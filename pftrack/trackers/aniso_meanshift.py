@@ -11,7 +11,6 @@ followed but flagged (``lost`` after ``lost_frames`` such frames).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Literal
 

@@ -98,12 +98,9 @@ class Switching(FSMeanShift):
         p = self.params
         if rescale:
             self.scales = cs.derivative_scales(frame, kind=p.features, gray=self.gray)
-        img = frame
-        w = weights
         if self.pitch > 1:
-            lv = cs.Level.build(frame, self.pitch, kind=p.features, gray=self.gray, weights=weights)
-            return lv
-        return cs.Level(img, 1, self.scales, None if w is None else w.astype(np.float32))
+            return cs.Level.build(frame, self.pitch, kind=p.features, gray=self.gray, weights=weights)
+        return cs.Level(frame, 1, self.scales, None if weights is None else weights.astype(np.float32))
 
     def _window_cov(self, frame, box, weights) -> np.ndarray | None:
         p = self.params
@@ -155,17 +152,6 @@ class Switching(FSMeanShift):
                             refine_pitch=self.pitch, refine_level=lv, scale_factors=tuple(p.scales),
                             coarse_side=p.coarse_side, coarse_stride=p.coarse_stride, refine_top=p.refine_top)
         return res
-
-    def _rho_at(self, frame: np.ndarray, c: np.ndarray, size: np.ndarray) -> tuple[float, np.ndarray]:
-        """rho of the model at a given box (one local histogram, no mean shift)."""
-        p = self.params
-        fh, fw = frame.shape[:2]
-        x0, y0, x1, y1 = self._region(c, size * 1.05, fw, fh)
-        idx, sizes = self._pair_index(self.pair)
-        bins = self._bins(frame[y0:y1, x0:x1], self.pair)
-        joint = fs.joint_index(bins, tuple(range(len(idx))), sizes)
-        H_c = self._kernel_hist(joint, (x0, y0), c, size)
-        return float(np.sum(np.sqrt(H_c * self.H_m))), H_c
 
     # -- the switching loop ------------------------------------------------------------------------
     def _accept(self, distance: float) -> bool:
