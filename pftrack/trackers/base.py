@@ -30,8 +30,10 @@ class TrackState:
 
     Attributes
     ----------
-    box : ``(x, y, w, h)``; while ``lost`` it is the last confident box (or the
-        best candidate before the first acquisition).  Always finite.
+    box : ``(x, y, w, h)``; while ``lost`` it is the last confident box for the particle
+        filters (or the best candidate before the first acquisition), and the current local
+        estimate for the deterministic mean-shift and keypoint trackers, which keep following
+        their mode.  Always finite.
     score : confidence in ``[0, 1]``. For the colour particle filters it is the loss
         test's posterior P(target | rho) (:mod:`pftrack.filtering.loss`): ``lost`` is raised
         when it stays below 0.5 for ``lost_frames`` frames; the Bhattacharyya coefficient of
