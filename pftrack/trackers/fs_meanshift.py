@@ -8,14 +8,17 @@ Per frame (ch06.md §1.11, local mode):
 2. damped mean shift on that weight image (Eqs. 19-20), at most 15 iterations;
 3. the Bhattacharyya coefficient ``rho`` of the candidate's kernel histogram against ``H_m`` and
    its distance ``d = sqrt(1 - rho)`` (Eqs. 13-14);
-4. if ``d`` is within ``mu + 3 sigma`` of the confident frames' distances (the online switching
-   threshold of ch06.md §1.10), the model is updated, ``H_m = (1 - s) H_i + s H_c`` (Eq. 21) with
-   ``s`` the NCC of the current and initial grey patches;
-5. every ``reselect_every`` frames the eight candidate features are re-ranked by their variance
+4. the occlusion test (``occlusion_test``): by default the project's two-class loss test on
+   ``rho`` (the target's history against the ``rho`` of 8 background windows around the box,
+   :mod:`pftrack.filtering.loss`), the online stand-in for the chapter's Gaussian fitted to
+   occluded frames; ``sigma`` is the spec's ``mu + 3 sigma`` of confident distances.  On
+   confident frames the model is updated, ``H_m = (1 - s) H_i + s H_c`` (Eq. 21) with ``s`` the
+   NCC of the current and initial grey patches;
+5. every ``reselect_every`` frames the candidate features are re-ranked by their variance
    ratio (Eq. 12) and only the second one is replaced (§3.3.2).
 
-``lost`` is raised after ``lost_frames`` consecutive frames above the threshold (the local tracker
-has no recovery: that is what ``switching`` adds).  The box size is fixed unless
+``lost`` is raised after ``lost_frames`` consecutive occluded frames; the tracker keeps following
+its mode (the local tracker has no recovery: that is what ``switching`` adds).  The box size is fixed unless
 ``scale_step > 0`` (the chapter has no scale step in local mode, P11).
 """
 
