@@ -13,7 +13,8 @@ given.  Ours (ch06.md §1.9, proposed):
    decimated above, so the cost does not grow with the target's area) on a lattice of step about
    a quarter of the coarse stride are scored, then the best one's neighbourhood at stride 1.
 
-All windows are scored by Eq. 30, ``||log C_window - log C_model||_F``, after the
+All windows are scored by the model's distance (:class:`~pftrack.cues.covariance.SPDModel`: Eq. 30,
+``||log C_window - log C_model||_F``, or Eq. 28 for an affine-invariant model), after the
 standardisation of :func:`pftrack.cues.covariance.standardize`.
 """
 
