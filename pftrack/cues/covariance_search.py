@@ -72,11 +72,16 @@ class Level:
 
     def to_level(self, box) -> tuple[int, int, int, int]:
         """Frame ``(x, y, w, h)`` -> level window ``(x0, y0, x1, y1)`` (integers, clipped)."""
-        x, y, w, h = (float(v) / self.pitch for v in box)
+        return tuple(int(v) for v in self.to_level_batch(np.asarray(box, dtype=np.float64).reshape(1, 4))[0])
+
+    def to_level_batch(self, boxes: np.ndarray) -> np.ndarray:
+        """:meth:`to_level` for ``(N, 4)`` frame boxes at once: ``(N, 4)`` int64 windows."""
+        b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4) / self.pitch
         hh, ww = self.image.shape[:2]
-        x0, y0 = int(round(x)), int(round(y))
-        x1, y1 = x0 + max(2, int(round(w))), y0 + max(2, int(round(h)))
-        return max(x0, 0), max(y0, 0), min(x1, ww), min(y1, hh)
+        x0, y0 = np.round(b[:, 0]).astype(np.int64), np.round(b[:, 1]).astype(np.int64)
+        x1 = x0 + np.maximum(2, np.round(b[:, 2]).astype(np.int64))
+        y1 = y0 + np.maximum(2, np.round(b[:, 3]).astype(np.int64))
+        return np.stack([np.maximum(x0, 0), np.maximum(y0, 0), np.minimum(x1, ww), np.minimum(y1, hh)], axis=1)
 
     def integral(self, region: tuple[int, int, int, int], *, kind: str, gray: bool,
                  margin: int = 2) -> IntegralCovariance:
@@ -255,7 +260,7 @@ def particle_distances(level: Level, boxes: np.ndarray, model: SPDModel, *, kind
     over the level region they reach, one batched eigen-decomposition — a likelihood other trackers
     can fuse (e.g. ``exp(-d^2 / (2 sigma^2))``)."""
     b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
-    win = np.array([level.to_level(bb) for bb in b], dtype=np.int64)
+    win = level.to_level_batch(b)
     x0, y0 = int(win[:, 0].min()), int(win[:, 1].min())
     x1, y1 = int(win[:, 2].max()), int(win[:, 3].max())
     if x1 - x0 < 2 or y1 - y0 < 2:

@@ -107,13 +107,12 @@ def match(query: np.ndarray, train: np.ndarray, *, ratio: float = 0.8) -> tuple[
     if not pairs:
         return np.empty(0, np.int64), np.empty(0, np.int64)
     arr = np.array(pairs, dtype=np.float64)
-    best: dict[int, tuple[float, int]] = {}
-    for qi, ti, dist in arr:
-        ti = int(ti)
-        if ti not in best or dist < best[ti][0]:
-            best[ti] = (dist, int(qi))
-    qi = np.array([v[1] for v in best.values()], dtype=np.int64)
-    ti = np.array(list(best.keys()), dtype=np.int64)
+    q, t, dist = arr[:, 0].astype(np.int64), arr[:, 1].astype(np.int64), arr[:, 2]
+    # one query per stored point: the closest (ties: the lower query index)
+    order = np.lexsort((q, dist, t))
+    _, first = np.unique(t[order], return_index=True)
+    keep = order[first]
+    qi, ti = q[keep], t[keep]
     order = np.lexsort((ti, qi))
     return qi[order], ti[order]
 

@@ -20,7 +20,7 @@ from ..cues import anisotropic as an
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
-from .sift_ransac import AutoThresholds, ColorModel, RBox, ReinitGate, corner_distance, hull
+from .sift_ransac import ColorModel, RBox, ReinitGate, colour_roi, corner_distance, hull
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -55,7 +55,6 @@ class AnisoCore:
 
     def __init__(self, p: AnisoMeanShiftParams, v0: RBox):
         self.p = p
-        self.auto = AutoThresholds(p.auto_frames)
         self.gate = ReinitGate(p.thresholds, t_rho=p.t4_rho, t_dist=p.t3_dist, size=0.5 * (v0[2] + v0[3]),
                                n_seed=p.auto_frames)
 
@@ -92,23 +91,16 @@ class AnisoMeanShift(Tracker):
         self.core = AnisoCore(p, self.v)
         self.color = ColorModel(p.color_space)
         self.color.adapt(frame)
-        self.color.prepare(frame, self._roi(self.v))
+        self.color.prepare(frame, colour_roi(self.v))
         self.q = self.color.hist(self.v)
         self.fail = 0
         return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
 
-    @staticmethod
-    def _roi(v: RBox) -> tuple[int, int, int, int]:
-        x, y, w, h = hull(v)
-        m = 0.75 * max(w, h)
-        return int(x - m), int(y - m), int(x + w + m), int(y + h + m)
-
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
-        self.color.prepare(frame, self._roi(self.v))
+        self.color.prepare(frame, colour_roi(self.v))
         v, rho, it = self.core.step(self.color, self.q, self.v)
         dist = corner_distance(v, self.v)
-        self.core.auto.observe(rho, dist)
         ok_rho, ok_jump = self.core.gate.check(rho, dist, self.color.background(v, self.q))
         # alone, a region failing the test is still the best estimate: it is followed and flagged (going back
         # to the previous region, the "re-initialisation" of a tracker on its own output, only deadlocks)

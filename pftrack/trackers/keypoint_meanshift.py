@@ -36,7 +36,7 @@ from ..geometry import Box
 from ..params import param
 from .aniso_meanshift import AnisoCore, AnisoMeanShiftParams
 from .base import Tracker, TrackState
-from .sift_ransac import ColorModel, RBox, SiftRansacCore, SiftRansacParams, corner_distance, hull
+from .sift_ransac import ColorModel, RBox, SiftRansacCore, SiftRansacParams, colour_roi, corner_distance, hull
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -79,7 +79,7 @@ class KeypointAMS(Tracker):
         self.B = AnisoCore(bp, v)
         self.color = ColorModel(p.color_space)
         self.color.adapt(frame)
-        self.color.prepare(frame, self._roi(v))
+        self.color.prepare(frame, colour_roi(v))
         q0 = self.color.hist(v)
         self.learner = ReferenceLearner(q0, interval=p.learn_interval, kappa=p.kappa, t1_dist=p.learn_dist,
                                         t2_rho=p.learn_rho)
@@ -93,11 +93,6 @@ class KeypointAMS(Tracker):
     @property
     def q(self) -> np.ndarray:
         return self.learner.q
-
-    def _roi(self, v: RBox) -> tuple[int, int, int, int]:
-        x, y, w, h = hull(v)
-        m = 0.75 * max(w, h)
-        return int(x - m), int(y - m), int(x + w + m), int(y + h + m)
 
     def _rho(self, v: RBox) -> float:
         return an.bhattacharyya(self.color.hist(v), self.q)
@@ -119,14 +114,14 @@ class KeypointAMS(Tracker):
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
         prev = self.v_obj
-        self.color.prepare(frame, self._roi(prev))
+        self.color.prepare(frame, colour_roi(prev))
         gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
         # --- Tracker A
         res = self.A.step(gray, self._rho)
         a_ok = not res["failed"]
         if a_ok:
             d1 = corner_distance(res["v"], self.v1)
-            self.A.auto.observe(res["rho"], d1)
+            self.A.observe(res["rho"])
             a_ok = self.A.gate.test(res["rho"], d1, self.color.background(res["v"], self.q))
         if a_ok:
             self.A.maintain(res, frozen=p.freeze and res["rho"] <= self.A.freeze_level())
@@ -137,11 +132,10 @@ class KeypointAMS(Tracker):
         # --- Tracker B, guided by A when A is reliable (Eq. 12)
         guide = p.guide_rho
         if p.thresholds == "auto":
-            guide = float(np.mean(self.A.auto.rho)) if self.A.auto.rho else math.inf
+            guide = float(np.mean(self.A.first_rho)) if self.A.first_rho else math.inf
         start = self.v1 if (a_ok and res["n_inliers"] > p.guide_points and rho1 > guide) else self.v2
         v2, rho2, it = self.B.step(self.color, self.q, start)
         d2 = corner_distance(v2, self.v2)
-        self.B.auto.observe(rho2, d2)
         b_ok = self.B.gate.test(rho2, d2, self.color.background(v2, self.q))
         if b_ok:
             self.v2 = v2

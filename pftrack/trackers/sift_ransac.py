@@ -71,24 +71,6 @@ class SiftRansacParams(Params):
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive failed frames before lost is raised.")
 
 
-class AutoThresholds:
-    """``mu -/+ 3 sigma`` of rho and dist over the first ``n`` frames (kept for reporting and guidance)."""
-
-    def __init__(self, n: int, *, rho_floor: float = 0.02, dist_floor: float = 4.0):
-        self.n, self.rho, self.dist = n, [], []
-        self.rho_floor, self.dist_floor = rho_floor, dist_floor
-        self.t_rho, self.t_dist = -math.inf, math.inf
-
-    def observe(self, rho: float, dist: float) -> None:
-        if len(self.rho) < self.n and math.isfinite(rho) and math.isfinite(dist):
-            self.rho.append(rho)
-            self.dist.append(dist)
-            if len(self.rho) == self.n:
-                r, d = np.array(self.rho), np.array(self.dist)
-                self.t_rho = float(r.mean() - 3 * max(r.std(), self.rho_floor))
-                self.t_dist = float(d.mean() + 3 * max(d.std(), self.dist_floor))
-
-
 class ReinitGate:
     """The re-initialisation test of Eqs. 3-4 / 13-14: is a tracker's new region acceptable?
 
@@ -141,6 +123,14 @@ def hull(v: RBox) -> tuple[float, float, float, float]:
     return an.rotated_to_axis_box(*v)
 
 
+def colour_roi(v: RBox) -> tuple[int, int, int, int]:
+    """The region quantised for the colour histograms: the region's hull widened by 0.75 of its
+    longer side (covers the search area, a mean-shift move and the background windows)."""
+    x, y, w, h = hull(v)
+    m = 0.75 * max(w, h)
+    return int(x - m), int(y - m), int(x + w + m), int(y + h + m)
+
+
 class ColorModel:
     """rho of rotated boxes against a reference histogram over one prepared region per frame (Eq. 6)."""
 
@@ -187,7 +177,11 @@ class SiftRansacCore:
 
     def __init__(self, p: SiftRansacParams):
         self.p = p
-        self.auto = AutoThresholds(p.auto_frames)
+        self.first_rho: list[float] = []  # rho of the first successful steps (keypoint-ams' guidance level)
+
+    def observe(self, rho: float) -> None:
+        if len(self.first_rho) < self.p.auto_frames and math.isfinite(rho):
+            self.first_rho.append(float(rho))
 
     def freeze_level(self) -> float:
         """T_F = (1 + T2)/2 (ch05.md §2): with 'auto', T2 is the loss test's rho at LLR = 0."""
@@ -327,27 +321,22 @@ class SiftRansac(Tracker):
         self.color = ColorModel(p.color_space)
         self.color.adapt(frame)
         v = an.axis_box_to_rotated(box)
-        self.color.prepare(frame, self._roi(v, frame.shape[:2]))
+        self.color.prepare(frame, colour_roi(v))
         self.q = self.color.hist(v)
         self.core.init(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), v)
         self.v = v
         self.fail = 0
         return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
 
-    def _roi(self, v: RBox, shape) -> tuple[int, int, int, int]:
-        x, y, w, h = hull(v)
-        m = 0.75 * max(w, h)
-        return int(x - m), int(y - m), int(x + w + m), int(y + h + m)
-
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
-        self.color.prepare(frame, self._roi(self.v, frame.shape[:2]))
+        self.color.prepare(frame, colour_roi(self.v))
         gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
         res = self.core.step(gray, lambda v: an.bhattacharyya(self.color.hist(v), self.q))
         ok_rho = ok_jump = not res["failed"]
         if not res["failed"]:
             dist = corner_distance(res["v"], self.v)
-            self.core.auto.observe(res["rho"], dist)
+            self.core.observe(res["rho"])
             ok_rho, ok_jump = self.core.gate.check(res["rho"], dist, self.color.background(res["v"], self.q))
         if not res["failed"]:
             # alone, a region failing the test is still the best estimate: it is followed and flagged (with
