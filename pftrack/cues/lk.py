@@ -1,0 +1,139 @@
+"""Lucas–Kanade velocities of points, with an honest validity flag (book ch. 7, Sect. 2.1).
+
+:func:`lk_flow` wraps ``cv2.calcOpticalFlowPyrLK`` (Eqs. 6–10: the weighted least-squares
+flow on a window, solved by iterated pyramidal LK) and fixes what it leaves to the caller:
+
+* a point whose window fails the eigenvalue test ``min(λ₁, λ₂) > λ_eig`` (L6385–6391) is
+  invalid (OpenCV's ``minEigThreshold``, normalised by the window area);
+* a point whose result lies outside the image is invalid (OpenCV reports it as found);
+* optionally, the forward–backward check: the point is tracked back to the previous
+  frame and rejected when it does not return within ``fb_threshold`` pixels.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+__all__ = ["LKConfig", "gray_of", "lk_flow", "strongest_corner"]
+
+
+def gray_of(frame: np.ndarray) -> np.ndarray:
+    """A uint8 grey image of a BGR or grey frame."""
+    if frame.ndim == 2:
+        return frame if frame.dtype == np.uint8 else np.clip(frame, 0, 255).astype(np.uint8)
+    if frame.shape[2] == 1:
+        return frame[:, :, 0]
+    return cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+
+
+class LKConfig:
+    """The LK options of ch07.md §2: 7×7 windows, ``levels`` pyramid levels (0 is the book's
+    plain LK), OpenCV's eigenvalue threshold and termination criteria."""
+
+    __slots__ = ("win", "levels", "min_eig", "criteria", "fb_check", "fb_threshold")
+
+    def __init__(self, win: int = 7, levels: int = 2, min_eig: float = 1e-4, iterations: int = 30,
+                 epsilon: float = 0.01, fb_check: bool = False, fb_threshold: float = 1.0):
+        if win < 3 or win % 2 == 0:
+            raise ValueError("the LK window must be odd and >= 3")
+        self.win, self.levels, self.min_eig = int(win), int(levels), float(min_eig)
+        self.criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, int(iterations), float(epsilon))
+        self.fb_check, self.fb_threshold = bool(fb_check), float(fb_threshold)
+
+
+def _call(prev: np.ndarray, cur: np.ndarray, pts: np.ndarray, cfg: LKConfig) -> tuple[np.ndarray, np.ndarray]:
+    p0 = np.ascontiguousarray(pts, dtype=np.float32).reshape(-1, 1, 2)
+    p1, status, _err = cv2.calcOpticalFlowPyrLK(
+        prev, cur, p0, None, winSize=(cfg.win, cfg.win), maxLevel=cfg.levels, criteria=cfg.criteria,
+        flags=cv2.OPTFLOW_LK_GET_MIN_EIGENVALS, minEigThreshold=cfg.min_eig)
+    return p1.reshape(-1, 2).astype(np.float64), status.reshape(-1).astype(bool)
+
+
+def lk_flow(prev_gray: np.ndarray, gray: np.ndarray, pts: np.ndarray, cfg: LKConfig | None = None
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """New positions ``(n, 2)`` of ``pts`` and a validity mask ``(n,)``.
+
+    Invalid points (status 0, eigenvalue test, outside the image, failed forward–backward
+    check) keep NaN positions, so no caller can use them by accident.
+    """
+    cfg = cfg or LKConfig()
+    pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+    if len(pts) == 0:
+        return np.zeros((0, 2)), np.zeros(0, dtype=bool)
+    h, w = gray.shape[:2]
+    inside0 = np.isfinite(pts).all(1) & (pts[:, 0] >= 0) & (pts[:, 0] <= w - 1) & (pts[:, 1] >= 0) & (pts[:, 1] <= h - 1)
+    safe = np.where(inside0[:, None], pts, 0.0)
+    new, ok = _call(prev_gray, gray, safe, cfg)
+    ok &= inside0 & np.isfinite(new).all(1)
+    ok &= (new[:, 0] >= 0) & (new[:, 0] <= w - 1) & (new[:, 1] >= 0) & (new[:, 1] <= h - 1)
+    if cfg.fb_check and ok.any():
+        back, ok_b = _call(gray, prev_gray, np.where(ok[:, None], new, 0.0), cfg)
+        ok &= ok_b & (np.hypot(*(back - safe).T) <= cfg.fb_threshold)
+    new[~ok] = np.nan
+    return new, ok
+
+
+def strongest_corner(gray: np.ndarray, box, *, block: int = 7, n: int = 1, min_distance: float = 1.0
+                     ) -> np.ndarray:
+    """The ``n`` pixels of largest min-eigenvalue inside ``box`` (ch07.md §1.1), as ``(m, 2)``, m ≤ n.
+
+    Falls back to the box centre when the box has no corner at all (a flat region).
+    """
+    x, y, bw, bh = (float(v) for v in box)
+    h, w = gray.shape[:2]
+    x0, y0 = max(0, int(np.floor(x))), max(0, int(np.floor(y)))
+    x1, y1 = min(w, int(np.ceil(x + bw))), min(h, int(np.ceil(y + bh)))
+    roi = gray[y0:y1, x0:x1]
+    pts = None
+    if roi.shape[0] >= block and roi.shape[1] >= block:
+        pts = cv2.goodFeaturesToTrack(roi, maxCorners=int(n), qualityLevel=0.01, minDistance=float(min_distance),
+                                      blockSize=int(block))
+    if pts is None or len(pts) == 0:
+        return np.array([[x + bw / 2.0, y + bh / 2.0]])
+    return pts.reshape(-1, 2).astype(np.float64) + (x0, y0)
+
+
+
+
+def _parabola(sm: float, s0: float, sp: float) -> float:
+    """Sub-pixel offset of a peak from three samples (clamped to ±0.5)."""
+    den = sm - 2.0 * s0 + sp
+    return 0.0 if den >= 0 else float(np.clip(0.5 * (sm - sp) / den, -0.5, 0.5))
+
+
+def reanchor(ref_gray: np.ndarray, gray: np.ndarray, ref_pts: np.ndarray, guess: np.ndarray, *, half: int = 7,
+             max_shift: float = 8.0, min_score: float = 0.7) -> tuple[np.ndarray, np.ndarray]:
+    """Correct drift by finding each point's pre-occlusion patch again near its current estimate.
+
+    The ``(2·half+1)²`` patch around ``ref_pts`` on ``ref_gray`` is matched by normalised
+    cross-correlation (``TM_CCOEFF_NORMED``: insensitive to gain and offset, which LK is not
+    over many frames) within ``max_shift`` pixels of ``guess`` on ``gray``, with parabolic
+    sub-pixel refinement.  Returns the positions and which points were corrected (peak
+    score at least ``min_score``).
+    """
+    ref_pts = np.asarray(ref_pts, dtype=np.float64).reshape(-1, 2)
+    guess = np.asarray(guess, dtype=np.float64).reshape(-1, 2)
+    out, ok = guess.copy(), np.zeros(len(guess), dtype=bool)
+    r = int(np.ceil(max_shift))
+    size = 2 * half + 1
+    ref_f, cur_f = ref_gray.astype(np.float32), gray.astype(np.float32)
+    h, w = gray.shape[:2]
+    for i, ((rx, ry), (gx, gy)) in enumerate(zip(ref_pts, guess)):
+        if not (np.isfinite([rx, ry, gx, gy]).all() and half <= gx <= w - 1 - half and half <= gy <= h - 1 - half):
+            continue
+        tmpl = cv2.getRectSubPix(ref_f, (size, size), (float(rx), float(ry)))
+        area = cv2.getRectSubPix(cur_f, (size + 2 * r, size + 2 * r), (float(gx), float(gy)))
+        if tmpl.std() < 1.0:
+            continue
+        score = cv2.matchTemplate(area, tmpl, cv2.TM_CCOEFF_NORMED)
+        _, best, _, (bx, by) = cv2.minMaxLoc(score)
+        if best < min_score:
+            continue
+        dx = _parabola(score[by, bx - 1], best, score[by, bx + 1]) if 0 < bx < score.shape[1] - 1 else 0.0
+        dy = _parabola(score[by - 1, bx], best, score[by + 1, bx]) if 0 < by < score.shape[0] - 1 else 0.0
+        shift = np.array([bx + dx - r, by + dy - r])
+        if np.hypot(*shift) <= max_shift:
+            out[i] = (gx, gy) + shift
+            ok[i] = True
+    return out, ok

@@ -1,0 +1,267 @@
+"""Points tracked by Lucas–Kanade through occlusions: the RLS gate and the fuzzy gain (book ch. 7).
+
+For each point and frame N (Sect. 2.3, L6826–6846):
+
+1. ``v^of_N``: the LK velocity (:func:`pftrack.cues.lk.lk_flow`);
+2. ``v^af_N``: the one-step RLS AR(p) prediction of each velocity component
+   (:class:`pftrack.filtering.rls.RLSAR`, from the previous step's coefficients);
+3. if ``ε_N = |v^of_N − v^af_N| < tol_N = k·|v_{N−1}|`` (Eq. 20) the flow is used,
+   otherwise the prediction; the chosen ``v_N`` updates the filter and moves the point.
+
+``k`` is fixed (0.75, L6896) or set every frame by the fuzzy controller of Sect. 3
+(:class:`pftrack.filtering.fuzzy.FuzzyGain`) from ``Δε_N = ε_N − ε_{N−1}`` and the
+previous frame's source ``qV``.  Proposed where the text is silent (ch07.md §1.3):
+an LK failure counts as ``ε = +∞`` (for ``Δε`` it is capped at twice the speed scale,
+so a failure reads as an error peak); ``|v_{N−1}|`` is floored at ``v_floor``; the gate
+uses the Euclidean norm of the 2-D velocity (``per_component`` gates each component as
+Fig. 2 does).  A point carried by prediction for more than ``max_predict`` frames, or
+leaving the image, is lost and stops.
+
+:class:`PointTracker` runs any number of points at once (every step is vectorised over
+points); the methods are ``lk`` (plain LK: a failed point is lost), ``rls`` (fixed k)
+and ``fuzzy``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..cues.lk import LKConfig, gray_of, lk_flow, reanchor
+from ..filtering.fuzzy import FuzzyGain
+from ..filtering.rls import RLSAR
+from ..params import Params, param
+
+__all__ = ["FLOW", "LOST", "PREDICTION", "SOURCES", "PointParams", "PointStep", "PointTracker", "gate"]
+
+FLOW, PREDICTION, LOST = 0, 1, 2
+SOURCES = ("flow", "prediction", "lost")
+
+
+@dataclass(frozen=True, kw_only=True)
+class PointParams(Params):
+    """LK point tracking with the RLS gate (ch07.md §2)."""
+
+    method: Literal["lk", "rls", "fuzzy"] = param(
+        "fuzzy", doc="lk: plain Lucas-Kanade; rls: the gate of Eq. 20 with fixed k; fuzzy: k from the controller "
+                     "of Sect. 3")
+    k: float = param(0.75, gt=0, doc="gate gain k of Eq. 20 for method=rls (0.75, L6896)")
+    win: int = param(7, ge=3, doc="LK window side in pixels (7x7 in every experiment, L6855)")
+    pyramid: int = param(2, ge=0, le=6, doc="LK pyramid levels; 0 is the book's plain LK (fails above ~3 px/frame)")
+    min_eig: float = param(1e-4, gt=0, doc="LK eigenvalue gate lambda_eig (OpenCV minEigThreshold, per window area)")
+    fb_check: bool = param(False, doc="forward-backward check: reject flow that does not return within fb_threshold")
+    fb_threshold: float = param(1.0, gt=0, doc="forward-backward tolerance in pixels")
+    order: int = param(2, ge=1, le=6, doc="AR order p of Eq. 11 (2)")
+    n_init: int = param(7, ge=3, doc="frames N_in used to initialise the RLS (7, L6901)")
+    forgetting: float = param(0.99, gt=0, le=1, doc="RLS forgetting factor lambda of Eq. 13 (0.99)")
+    ridge: float = param(10.0, ge=0, doc="ridge delta of the initial fit, times max(1, trace/p) (ch07.md P4): 1e-6 is "
+                                        "the book's plain fit; the default 10 makes the prior a strong starting "
+                                        "point that the data must outweigh (a noisy velocity otherwise fits an "
+                                        "oscillating or trending AR model)")
+    window: int | None = param(None, doc="refit on the last `window` samples instead of recursing (ch07.md P6)")
+    prior: Literal["zero", "hold", "mean"] = param(
+        "mean", doc="coefficients the initial ridge pulls towards (zero is Haykin's start; mean predicts the mean "
+                    "of the last p velocities, so noise in a near-constant velocity cannot make the AR fit wild)")
+    learn_gate: float = param(0.15, gt=0, doc="flow accepted with eps >= learn_gate * max(|v_{N-1}|, v_floor) moves "
+                                             "the point but the RLS learns the prediction instead (a half-covered "
+                                             "window at the obstacle's edge must not teach the filter a wrong "
+                                             "velocity); inf learns every accepted flow, as the book does")
+    reanchor: bool = param(True, doc="after an occlusion, once flow is back for reanchor_after frames, move the "
+                                     "point to where its pre-occlusion patch is (LK from that patch, proposed: the "
+                                     "prediction's drift and the edge frames' biased flow are undone)")
+    reanchor_after: int = param(3, ge=1, doc="consecutive flow frames after a prediction run before re-anchoring")
+    reanchor_max: float = param(12.0, gt=0, doc="largest correction in pixels")
+    stable: bool = param(True, doc="predict with the AR roots pulled into the unit circle (proposed: a hidden "
+                                   "point is extrapolated from its own predictions, which must not explode)")
+    v_floor: float = param(0.5, ge=0, doc="floor of |v_{N-1}| in px/frame, so tol never reaches 0")
+    per_component: bool = param(False, doc="gate vx and vy separately (Fig. 2) instead of the 2-D norm")
+    max_predict: int = param(30, ge=1, doc="frames a point may be carried by prediction before it is lost")
+    defuzz: Literal["cos", "coa", "mom", "ca"] = param("cos", doc="defuzzification (centre of sums, L7070)")
+    ei_units: Literal["relative", "px"] = param(
+        "relative", doc="error increment normalised by the speed (relative) or in px/frame (ch07.md §1.4)")
+    breakpoints: tuple[float, ...] = param((0.2, 0.6), doc="NB/M/PB crossovers of the error increment")
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.win % 2 == 0:
+            from ..errors import ParameterError
+
+            raise ParameterError("parameter 'win' must be odd")
+        if len(self.breakpoints) != 2 or not 0 <= self.breakpoints[0] < self.breakpoints[1]:
+            from ..errors import ParameterError
+
+            raise ParameterError("parameter 'breakpoints' must be two numbers 0 <= a < b")
+
+    def lk_config(self) -> LKConfig:
+        return LKConfig(self.win, self.pyramid, self.min_eig, fb_check=self.fb_check,
+                        fb_threshold=self.fb_threshold)
+
+    def fuzzy(self) -> FuzzyGain:
+        return FuzzyGain(breakpoints=tuple(self.breakpoints), defuzz=self.defuzz, v_floor=self.v_floor,
+                         units=self.ei_units)
+
+
+def gate(v_of: np.ndarray, v_af: np.ndarray, v_prev: np.ndarray, k, *, v_floor: float,
+         per_component: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 20 for ``n`` points: ``(use_flow (n,), eps (n,))``.
+
+    ``v_of`` holds NaN where LK failed (``ε = +∞``, so the prediction is used).  The
+    inequality is strict (ch07.md P9).
+    """
+    k = np.broadcast_to(np.asarray(k, dtype=np.float64), (len(v_of),))
+    with np.errstate(invalid="ignore"):
+        diff = np.abs(v_of - v_af)
+    diff = np.where(np.isfinite(diff), diff, np.inf)
+    if per_component:
+        tol = k[:, None] * np.maximum(np.abs(v_prev), v_floor)
+        return np.all(diff < tol, axis=1), np.hypot(diff[:, 0], diff[:, 1])
+    eps = np.hypot(diff[:, 0], diff[:, 1])
+    return eps < k * np.maximum(np.hypot(v_prev[:, 0], v_prev[:, 1]), v_floor), eps
+
+
+@dataclass
+class PointStep:
+    """One frame of the point tracker, everything per point (the diagnostics of ch07.md §4)."""
+
+    pos: np.ndarray      # (n, 2) positions after the step
+    source: np.ndarray   # (n,) FLOW / PREDICTION / LOST
+    v_of: np.ndarray     # (n, 2) LK velocity (NaN on failure)
+    v_af: np.ndarray     # (n, 2) RLS prediction
+    eps: np.ndarray      # (n,) |v_of - v_af| (inf on failure, NaN before the filter is ready)
+    delta_eps: np.ndarray
+    e: np.ndarray        # normalised increment fed to the fuzzy controller
+    qv: np.ndarray       # (n,) previous frame's source was flow (1) or prediction (0)
+    k: np.ndarray        # (n,) gain used this frame
+
+    def source_names(self) -> list[str]:
+        return [SOURCES[int(s)] for s in self.source]
+
+
+class PointTracker:
+    """Track ``n`` points through a sequence of frames with LK and the RLS / fuzzy gate."""
+
+    def __init__(self, params: PointParams | None = None):
+        self.params = params or PointParams()
+        self._lk = self.params.lk_config()
+        self._fuzzy = self.params.fuzzy()
+
+    def init(self, frame: np.ndarray, points) -> PointStep:
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        p = self.params
+        n = len(pts)
+        self.pos = pts.copy()
+        self.prev = gray_of(frame)
+        self.rls = RLSAR(2 * n, order=p.order, forgetting=p.forgetting, n_init=p.n_init, ridge=p.ridge,
+                         window=p.window, stable=p.stable, prior=p.prior)
+        self.v_prev = np.zeros((n, 2))
+        self.eps_prev = np.full(n, np.nan)
+        self.qv = np.ones(n, dtype=bool)
+        self.run = np.zeros(n, dtype=int)       # consecutive frames carried by prediction
+        self.lost = np.zeros(n, dtype=bool)
+        self.flow_run = np.zeros(n, dtype=int)  # consecutive frames on flow
+        self.hidden = np.zeros(n, dtype=bool)   # had a prediction run since the last re-anchoring
+        self._ring: list[tuple[np.ndarray, np.ndarray]] = [(self.prev, self.pos.copy())]  # (grey, points), oldest first
+        self.ref_frame: list[np.ndarray | None] = [None] * n   # the frame each point is re-anchored to
+        self.ref_pos = np.full((n, 2), np.nan)
+        self.frames = 0
+        nan2, nan = np.full((n, 2), np.nan), np.full(n, np.nan)
+        k0 = np.full(n, p.k if p.method == "rls" else np.nan)
+        return PointStep(self.pos.copy(), np.full(n, FLOW), nan2, nan2.copy(), nan, nan.copy(), nan.copy(),
+                         self.qv.astype(int), k0)
+
+    @property
+    def n(self) -> int:
+        return len(self.pos)
+
+    def step(self, frame: np.ndarray) -> PointStep:
+        p = self.params
+        gray = gray_of(frame)
+        h, w = gray.shape
+        active = ~self.lost
+        new, ok = lk_flow(self.prev, gray, np.where(active[:, None], self.pos, np.nan), self._lk)
+        v_of = new - self.pos
+        v_af = self.rls.predict().reshape(-1, 2)
+        n = self.n
+        eps = np.full(n, np.nan)
+        delta, e = np.full(n, np.nan), np.full(n, np.nan)
+        k = np.full(n, p.k if p.method == "rls" else np.nan)
+        qv_used = self.qv.astype(int)
+        if p.method == "lk":
+            use_flow = ok
+            v = np.where(ok[:, None], v_of, 0.0)
+            self.lost |= active & ~ok
+        elif not self.rls.ready:  # the first N_in frames: LK only, the filter learns (L6828)
+            use_flow = ok
+            v = np.where(ok[:, None], v_of, v_af)
+        else:
+            vnorm = np.maximum(np.hypot(self.v_prev[:, 0], self.v_prev[:, 1]), p.v_floor)
+            with np.errstate(invalid="ignore"):
+                raw = np.hypot(*np.abs(v_of - v_af).T)
+            eps = np.where(np.isfinite(raw), raw, np.inf)
+            if p.method == "fuzzy":
+                # an LK failure is no measurement: its increment is 0 and the next one is taken against
+                # the last measured error (else failure-then-zero-flow reads as an obstacle exit)
+                prev = np.where(np.isfinite(self.eps_prev), self.eps_prev, eps)
+                delta = np.where(np.isfinite(eps), eps - prev, 0.0)
+                e = self._fuzzy.normalise(delta, vnorm)
+                k = self._fuzzy.from_normalised(e, self.qv)
+            use_flow, _ = gate(np.where(ok[:, None], v_of, np.nan), v_af, self.v_prev, k, v_floor=p.v_floor,
+                               per_component=p.per_component)
+            use_flow &= ok
+            v = np.where(use_flow[:, None], v_of, v_af)
+            learn = np.where((use_flow & (eps < p.learn_gate * vnorm))[:, None], v_of, v_af)
+        if p.method == "lk" or not self.rls.ready:
+            learn = v
+        v = np.where(active[:, None], v, 0.0)
+        if p.method != "lk":
+            self.rls.push(np.where(active[:, None], learn, 0.0).reshape(-1))
+        self.pos = self.pos + v
+        outside = (self.pos[:, 0] < 0) | (self.pos[:, 0] > w - 1) | (self.pos[:, 1] < 0) | (self.pos[:, 1] > h - 1)
+        self.run = np.where(use_flow, 0, self.run + 1)
+        self.lost |= active & (outside | (self.run > p.max_predict))
+        self.pos = np.where(self.lost[:, None] & outside[:, None], np.clip(self.pos, 0, [w - 1, h - 1]), self.pos)
+        if p.reanchor and p.method != "lk":
+            self._anchor(gray, use_flow, active)
+        source = np.where(self.lost, LOST, np.where(use_flow, FLOW, PREDICTION))
+        self.v_prev = np.where(active[:, None], v, self.v_prev)
+        self.eps_prev = np.where(np.isfinite(eps), eps, self.eps_prev)
+        self.qv = use_flow.copy()
+        self.prev = gray
+        self.frames += 1
+        return PointStep(self.pos.copy(), source, v_of, v_af, eps, delta, e, qv_used, k)
+
+    def _anchor(self, gray: np.ndarray, use_flow: np.ndarray, active: np.ndarray) -> None:
+        """Remember each point as it was two frames before a prediction run; re-anchor to it after the run."""
+        p = self.params
+        starting = ~use_flow & (self.run == 1) & active & ~self.hidden
+        for i in np.flatnonzero(starting):
+            self.ref_frame[i], self.ref_pos[i] = self._ring[0][0], self._ring[0][1][i]
+        self.hidden |= starting
+        self.flow_run = np.where(use_flow, self.flow_run + 1, 0)
+        due = self.hidden & use_flow & (self.flow_run == p.reanchor_after) & active
+        for ref in {id(self.ref_frame[i]): self.ref_frame[i] for i in np.flatnonzero(due)}.values():
+            rows = np.array([i for i in np.flatnonzero(due) if self.ref_frame[i] is ref])
+            self.pos[rows], _ = reanchor(ref, gray, self.ref_pos[rows], self.pos[rows], half=p.win // 2 + 1,
+                                         max_shift=p.reanchor_max)
+        self.hidden &= ~due
+        for i in np.flatnonzero(due):
+            self.ref_frame[i] = None
+        self._ring.append((gray, self.pos.copy()))
+        if len(self._ring) > 3:
+            self._ring.pop(0)
+
+    def reseed(self, rows: np.ndarray, points: np.ndarray, history: np.ndarray | None) -> None:
+        """Replace the points ``rows`` by ``points``; their filters start from ``history`` (``(T, 2)``
+        velocities, T ≥ n_init, e.g. the object's) when the filter is already running."""
+        rows = np.asarray(rows)
+        self.pos[rows] = points
+        self.lost[rows], self.run[rows], self.qv[rows] = False, 0, True
+        self.flow_run[rows], self.hidden[rows] = 0, False
+        self.eps_prev[rows] = np.nan
+        if history is not None and self.rls.ready and len(history) >= self.params.n_init:
+            hist = np.asarray(history, dtype=np.float64)
+            idx = np.stack([2 * rows, 2 * rows + 1], axis=1).reshape(-1)
+            self.rls.prime(idx, np.tile(hist.T, (len(rows), 1)))
+            self.v_prev[rows] = hist[-1]
