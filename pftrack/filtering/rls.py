@@ -222,11 +222,16 @@ class JointRLSAR:
     """
 
     def __init__(self, channels: int = 2, *, order: int = 2, forgetting: float = 0.99, n_init: int = 7,
-                 ridge: float = 1e-6):
+                 ridge: float = 1e-6, prior: str = "zero"):
         if n_init < order + 1:
             raise ValueError(f"n_init must be > order ({order})")
         self.m, self.order, self.forgetting = int(channels), int(order), float(forgetting)
         self.n_init, self.ridge = int(n_init), float(ridge)
+        # the prior of each channel acts on its own lags only (interleaved rows j*m + channel)
+        own = _prior(prior, self.order)
+        self.prior = np.zeros((self.order * self.m, self.m))
+        for ch in range(self.m):
+            self.prior[ch::self.m, ch] = own
         self.reset()
 
     def reset(self) -> None:
@@ -262,8 +267,9 @@ class JointRLSAR:
             c, target = regressors(self._hist, self.order)
             lam = self.forgetting ** np.arange(c.shape[0] - 1, -1, -1, dtype=np.float64)
             g = c.T @ (lam[:, None] * c)
-            g = g + _init_ridge(g, self.ridge) * np.eye(g.shape[0])
+            delta = _init_ridge(g, self.ridge)
+            g = g + delta * np.eye(g.shape[0])
             self.P = np.linalg.inv(g)
-            self.coef = self.P @ (c.T @ (lam[:, None] * target))
+            self.coef = self.P @ (c.T @ (lam[:, None] * target) + delta * self.prior)
         if self.count >= self.n_init:
             self._hist = self._hist[-self.order:]

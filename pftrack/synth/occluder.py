@@ -216,13 +216,14 @@ def _render_layer(canvas: np.ndarray, tex: np.ndarray, *, Z: float, X0: float, Y
 
 def stereo_rail_scene(seed: int = 0, *, f: float | None = None, baseline: float | None = None,
                       depth: tuple[float, float] | None = None, n_points: int = 5, shape: tuple[int, int] = (240, 320),
-                      n_frames: int = 90, win: int = 7) -> StereoScene:
+                      n_frames: int | None = None, win: int = 7) -> StereoScene:
     """An object moving on a rail in 3-D behind a near vertical bar, seen by a rectified pair (E7.4).
 
     f ≈ 300 px, B ≈ 0.12 m and depths in [2, 5] m unless given; the object (0.25–0.4 m,
     textured) moves across the view while its depth changes linearly between two values
     drawn from ``depth``; the bar stands at 1.0–1.5 m and hides the object in both views
-    for several frames.
+    for several frames.  ``n_frames`` defaults to as many as keep the object inside both
+    views (at most 90).
     """
     rng = np.random.default_rng(seed)
     h, w = shape
@@ -232,8 +233,8 @@ def stereo_rail_scene(seed: int = 0, *, f: float | None = None, baseline: float 
     cx, cy = w / 2.0 + rng.uniform(-4, 4), h / 2.0 + rng.uniform(-4, 4)
     color = bool(rng.random() >= 0.4)
     Z0, Z1 = rng.uniform(zr[0], zr[1], 2)
-    Zt = np.linspace(Z0, Z1, n_frames)
     size = rng.uniform(0.25, 0.4)
+    speed_px = rng.uniform(2.0, 4.0)
     res = 90.0  # texture pixels per metre
     obj = texture(rng, int(size * res), int(size * res), blur=1.0, contrast=rng.uniform(45, 70),
                   mean=rng.uniform(90, 170), color=color)
@@ -243,15 +244,33 @@ def stereo_rail_scene(seed: int = 0, *, f: float | None = None, baseline: float 
     wall_res = 40.0
     wall_X0 = -(wall.shape[1] / wall_res) / 2.0
     wall_Y0 = -(wall.shape[0] / wall_res) / 2.0
-    # image-space speed 2–4 px/frame at the mean depth; the object crosses the bar's line of sight mid-sequence
-    speed_px = rng.uniform(2.0, 4.0)
+    # image-space speed 2–4 px/frame at the mean depth; the object crosses the bar's line of sight at t = 0,
+    # its depth changes by Z1 - Z0 over 80 frames; the sequence is the longest run around t = 0 (at most
+    # n_frames, or 90) that keeps the whole object inside both views
     Zm = 0.5 * (Z0 + Z1)
     vX = speed_px * Zm / f * rng.choice([-1, 1])
-    mid = n_frames // 2
     Zb = rng.uniform(1.0, 1.5)
     Xb_c = rng.uniform(-0.1, 0.1) * Zb  # bar centre, near the optical axis
-    # the object's centre is behind the bar's centre (as seen from the cyclopean eye) at frame `mid`
-    Xc = Xb_c * Zt[mid] / Zb + B / 2.0 * (1 - Zt[mid] / Zb) + vX * (np.arange(n_frames) - mid)
+    tt = np.arange(-75, 76, dtype=np.float64)
+    Zall = np.clip(Zm + (Z1 - Z0) * tt / 80.0, min(zr), max(zr))
+    Xall = Xb_c * Zm / Zb + B / 2.0 * (1 - Zm / Zb) + vX * tt
+    edges = [f * (Xall + sx * size / 2 - bx) / Zall + cx for sx in (-1, 1) for bx in (0.0, B)]
+    inside = np.all([(e >= 2) & (e <= w - 3) for e in edges], axis=0)
+    c0 = 75
+    lo, hi = c0, c0
+    cap = min(90, n_frames or 90)
+    while hi - lo + 1 < cap:
+        grow_lo = lo > 0 and inside[lo - 1]
+        grow_hi = hi < len(tt) - 1 and inside[hi + 1]
+        if not (grow_lo or grow_hi):
+            break
+        if grow_hi and (not grow_lo or (hi - c0) <= (c0 - lo)):
+            hi += 1
+        else:
+            lo -= 1
+    n_frames = hi - lo + 1
+    Zt, Xc = Zall[lo:hi + 1], Xall[lo:hi + 1]
+    Z0, Z1 = float(Zt[0]), float(Zt[-1])
     Yc = np.full(n_frames, rng.uniform(-0.25, 0.25) * h / 2.0 * Zm / f)
     bar_w = rng.uniform(0.10, 0.16)
     bar_tex_w = max(3, int(bar_w * res))

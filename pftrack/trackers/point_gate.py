@@ -34,7 +34,8 @@ from ..filtering.fuzzy import FuzzyGain
 from ..filtering.rls import RLSAR
 from ..params import Params, param
 
-__all__ = ["FLOW", "LOST", "PREDICTION", "SOURCES", "PointParams", "PointStep", "PointTracker", "gate"]
+__all__ = ["FLOW", "LOST", "PREDICTION", "SOURCES", "Anchor", "Decision", "PointParams", "PointStep", "PointTracker",
+           "decide", "gate"]
 
 FLOW, PREDICTION, LOST = 0, 1, 2
 SOURCES = ("flow", "prediction", "lost")
@@ -139,13 +140,105 @@ class PointStep:
         return [SOURCES[int(s)] for s in self.source]
 
 
+@dataclass
+class Decision:
+    """The gate's verdict for ``n`` points at one frame."""
+
+    use_flow: np.ndarray  # (n,) the flow velocity is used
+    learn: np.ndarray     # (n,) the flow velocity is also what the RLS learns
+    eps: np.ndarray       # (n,) |v_of - v_af| (inf on LK failure)
+    delta: np.ndarray     # (n,) eps increment (0 on failure; NaN unless fuzzy)
+    e: np.ndarray         # (n,) normalised increment
+    k: np.ndarray         # (n,) gain used
+
+
+def decide(v_of: np.ndarray, ok: np.ndarray, v_af: np.ndarray, v_prev: np.ndarray, eps_prev: np.ndarray,
+           qv: np.ndarray, params: PointParams, fuzzy: FuzzyGain | None) -> Decision:
+    """Steps 2–3 of Sect. 2.3 for ``n`` points once the filter is ready: ``k`` (fixed or fuzzy, Sect. 3),
+    Eq. 20, and whether the accepted flow is clean enough to learn (``learn_gate``).
+
+    ``v_of`` / ``v_af`` / ``v_prev`` are ``(n, d)`` velocities (d = 2 for an image point).
+    An LK failure (``ok`` False) is no measurement: its ε is +∞, its increment 0, and the
+    next increment is taken against the last measured ε (else failure-then-zero-flow would
+    read as an obstacle exit).
+    """
+    n = len(v_of)
+    vnorm = np.maximum(np.sqrt((v_prev ** 2).sum(1)), params.v_floor)
+    with np.errstate(invalid="ignore"):
+        raw = np.sqrt(((v_of - v_af) ** 2).sum(1))
+    eps = np.where(ok & np.isfinite(raw), raw, np.inf)
+    delta, e = np.full(n, np.nan), np.full(n, np.nan)
+    if fuzzy is not None:
+        prev = np.where(np.isfinite(eps_prev), eps_prev, eps)
+        delta = np.where(np.isfinite(eps), eps - prev, 0.0)
+        e = fuzzy.normalise(delta, vnorm)
+        k = fuzzy.from_normalised(e, qv)
+    else:
+        k = np.full(n, params.k)
+    if params.per_component and v_of.shape[1] == 2:
+        use_flow, _ = gate(np.where(ok[:, None], v_of, np.nan), v_af, v_prev, k, v_floor=params.v_floor,
+                           per_component=True)
+    else:
+        use_flow = eps < k * vnorm
+    use_flow &= ok
+    return Decision(use_flow, use_flow & (eps < params.learn_gate * vnorm), eps, delta, e, k)
+
+
+class Anchor:
+    """Re-anchoring of hidden points (proposed; ``PointParams.reanchor``).
+
+    Keeps the last three frames with the point positions on them.  When a point's
+    prediction run starts, the frame from two steps before becomes its reference; when
+    flow has been used ``reanchor_after`` frames in a row after the run, the point is
+    moved to where its reference patch is found again (:func:`pftrack.cues.lk.reanchor`).
+    """
+
+    def __init__(self, gray: np.ndarray, pos: np.ndarray, params: PointParams):
+        n = len(pos)
+        self.params = params
+        self.flow_run = np.zeros(n, dtype=int)
+        self.hidden = np.zeros(n, dtype=bool)
+        self.ring: list[tuple[np.ndarray, np.ndarray]] = [(gray, pos.copy())]
+        self.ref_frame: list[np.ndarray | None] = [None] * n
+        self.ref_pos = np.full((n, 2), np.nan)
+
+    def update(self, gray: np.ndarray, pos: np.ndarray, use_flow: np.ndarray, run: np.ndarray,
+               active: np.ndarray) -> np.ndarray:
+        """Positions after re-anchoring the points that are due (``pos`` is not modified)."""
+        p = self.params
+        pos = pos.copy()
+        starting = ~use_flow & (run == 1) & active & ~self.hidden
+        for i in np.flatnonzero(starting):
+            self.ref_frame[i], self.ref_pos[i] = self.ring[0][0], self.ring[0][1][i]
+        self.hidden |= starting
+        self.flow_run = np.where(use_flow, self.flow_run + 1, 0)
+        due = self.hidden & use_flow & (self.flow_run == p.reanchor_after) & active
+        rows_due = np.flatnonzero(due)
+        for ref in {id(self.ref_frame[i]): self.ref_frame[i] for i in rows_due}.values():
+            rows = np.array([i for i in rows_due if self.ref_frame[i] is ref])
+            pos[rows], _ = reanchor(ref, gray, self.ref_pos[rows], pos[rows], half=p.win // 2 + 1,
+                                    max_shift=p.reanchor_max)
+        self.hidden &= ~due
+        for i in rows_due:
+            self.ref_frame[i] = None
+        self.ring.append((gray, pos.copy()))
+        if len(self.ring) > 3:
+            self.ring.pop(0)
+        return pos
+
+    def forget(self, rows) -> None:
+        self.flow_run[rows], self.hidden[rows] = 0, False
+        for i in np.atleast_1d(rows):
+            self.ref_frame[int(i)] = None
+
+
 class PointTracker:
     """Track ``n`` points through a sequence of frames with LK and the RLS / fuzzy gate."""
 
     def __init__(self, params: PointParams | None = None):
         self.params = params or PointParams()
         self._lk = self.params.lk_config()
-        self._fuzzy = self.params.fuzzy()
+        self._fuzzy = self.params.fuzzy() if self.params.method == "fuzzy" else None
 
     def init(self, frame: np.ndarray, points) -> PointStep:
         pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
@@ -160,11 +253,7 @@ class PointTracker:
         self.qv = np.ones(n, dtype=bool)
         self.run = np.zeros(n, dtype=int)       # consecutive frames carried by prediction
         self.lost = np.zeros(n, dtype=bool)
-        self.flow_run = np.zeros(n, dtype=int)  # consecutive frames on flow
-        self.hidden = np.zeros(n, dtype=bool)   # had a prediction run since the last re-anchoring
-        self._ring: list[tuple[np.ndarray, np.ndarray]] = [(self.prev, self.pos.copy())]  # (grey, points), oldest first
-        self.ref_frame: list[np.ndarray | None] = [None] * n   # the frame each point is re-anchored to
-        self.ref_pos = np.full((n, 2), np.nan)
+        self.anchor = Anchor(self.prev, self.pos, p) if p.reanchor and p.method != "lk" else None
         self.frames = 0
         nan2, nan = np.full((n, 2), np.nan), np.full(n, np.nan)
         k0 = np.full(n, p.k if p.method == "rls" else np.nan)
@@ -179,78 +268,41 @@ class PointTracker:
         p = self.params
         gray = gray_of(frame)
         h, w = gray.shape
+        n = self.n
         active = ~self.lost
         new, ok = lk_flow(self.prev, gray, np.where(active[:, None], self.pos, np.nan), self._lk)
         v_of = new - self.pos
         v_af = self.rls.predict().reshape(-1, 2)
-        n = self.n
-        eps = np.full(n, np.nan)
-        delta, e = np.full(n, np.nan), np.full(n, np.nan)
-        k = np.full(n, p.k if p.method == "rls" else np.nan)
         qv_used = self.qv.astype(int)
-        if p.method == "lk":
-            use_flow = ok
-            v = np.where(ok[:, None], v_of, 0.0)
-            self.lost |= active & ~ok
-        elif not self.rls.ready:  # the first N_in frames: LK only, the filter learns (L6828)
-            use_flow = ok
-            v = np.where(ok[:, None], v_of, v_af)
-        else:
-            vnorm = np.maximum(np.hypot(self.v_prev[:, 0], self.v_prev[:, 1]), p.v_floor)
-            with np.errstate(invalid="ignore"):
-                raw = np.hypot(*np.abs(v_of - v_af).T)
-            eps = np.where(np.isfinite(raw), raw, np.inf)
-            if p.method == "fuzzy":
-                # an LK failure is no measurement: its increment is 0 and the next one is taken against
-                # the last measured error (else failure-then-zero-flow reads as an obstacle exit)
-                prev = np.where(np.isfinite(self.eps_prev), self.eps_prev, eps)
-                delta = np.where(np.isfinite(eps), eps - prev, 0.0)
-                e = self._fuzzy.normalise(delta, vnorm)
-                k = self._fuzzy.from_normalised(e, self.qv)
-            use_flow, _ = gate(np.where(ok[:, None], v_of, np.nan), v_af, self.v_prev, k, v_floor=p.v_floor,
-                               per_component=p.per_component)
-            use_flow &= ok
-            v = np.where(use_flow[:, None], v_of, v_af)
-            learn = np.where((use_flow & (eps < p.learn_gate * vnorm))[:, None], v_of, v_af)
         if p.method == "lk" or not self.rls.ready:
+            # plain LK, or the first N_in frames: LK only while the filter learns (L6828)
+            nan = np.full(n, np.nan)
+            d = Decision(ok, ok, nan, nan.copy(), nan.copy(), np.full(n, p.k if p.method == "rls" else np.nan))
+            v = np.where(ok[:, None], v_of, 0.0 if p.method == "lk" else v_af)
             learn = v
+            if p.method == "lk":
+                self.lost |= active & ~ok
+        else:
+            d = decide(v_of, ok, v_af, self.v_prev, self.eps_prev, self.qv, p, self._fuzzy)
+            v = np.where(d.use_flow[:, None], v_of, v_af)
+            learn = np.where(d.learn[:, None], v_of, v_af)
         v = np.where(active[:, None], v, 0.0)
         if p.method != "lk":
             self.rls.push(np.where(active[:, None], learn, 0.0).reshape(-1))
         self.pos = self.pos + v
         outside = (self.pos[:, 0] < 0) | (self.pos[:, 0] > w - 1) | (self.pos[:, 1] < 0) | (self.pos[:, 1] > h - 1)
-        self.run = np.where(use_flow, 0, self.run + 1)
+        self.run = np.where(d.use_flow, 0, self.run + 1)
         self.lost |= active & (outside | (self.run > p.max_predict))
         self.pos = np.where(self.lost[:, None] & outside[:, None], np.clip(self.pos, 0, [w - 1, h - 1]), self.pos)
-        if p.reanchor and p.method != "lk":
-            self._anchor(gray, use_flow, active)
-        source = np.where(self.lost, LOST, np.where(use_flow, FLOW, PREDICTION))
+        if self.anchor is not None:
+            self.pos = self.anchor.update(gray, self.pos, d.use_flow, self.run, active)
+        source = np.where(self.lost, LOST, np.where(d.use_flow, FLOW, PREDICTION))
         self.v_prev = np.where(active[:, None], v, self.v_prev)
-        self.eps_prev = np.where(np.isfinite(eps), eps, self.eps_prev)
-        self.qv = use_flow.copy()
+        self.eps_prev = np.where(np.isfinite(d.eps), d.eps, self.eps_prev)
+        self.qv = d.use_flow.copy()
         self.prev = gray
         self.frames += 1
-        return PointStep(self.pos.copy(), source, v_of, v_af, eps, delta, e, qv_used, k)
-
-    def _anchor(self, gray: np.ndarray, use_flow: np.ndarray, active: np.ndarray) -> None:
-        """Remember each point as it was two frames before a prediction run; re-anchor to it after the run."""
-        p = self.params
-        starting = ~use_flow & (self.run == 1) & active & ~self.hidden
-        for i in np.flatnonzero(starting):
-            self.ref_frame[i], self.ref_pos[i] = self._ring[0][0], self._ring[0][1][i]
-        self.hidden |= starting
-        self.flow_run = np.where(use_flow, self.flow_run + 1, 0)
-        due = self.hidden & use_flow & (self.flow_run == p.reanchor_after) & active
-        for ref in {id(self.ref_frame[i]): self.ref_frame[i] for i in np.flatnonzero(due)}.values():
-            rows = np.array([i for i in np.flatnonzero(due) if self.ref_frame[i] is ref])
-            self.pos[rows], _ = reanchor(ref, gray, self.ref_pos[rows], self.pos[rows], half=p.win // 2 + 1,
-                                         max_shift=p.reanchor_max)
-        self.hidden &= ~due
-        for i in np.flatnonzero(due):
-            self.ref_frame[i] = None
-        self._ring.append((gray, self.pos.copy()))
-        if len(self._ring) > 3:
-            self._ring.pop(0)
+        return PointStep(self.pos.copy(), source, v_of, v_af, d.eps, d.delta, d.e, qv_used, d.k)
 
     def reseed(self, rows: np.ndarray, points: np.ndarray, history: np.ndarray | None) -> None:
         """Replace the points ``rows`` by ``points``; their filters start from ``history`` (``(T, 2)``
@@ -258,8 +310,9 @@ class PointTracker:
         rows = np.asarray(rows)
         self.pos[rows] = points
         self.lost[rows], self.run[rows], self.qv[rows] = False, 0, True
-        self.flow_run[rows], self.hidden[rows] = 0, False
         self.eps_prev[rows] = np.nan
+        if self.anchor is not None:
+            self.anchor.forget(rows)
         if history is not None and self.rls.ready and len(history) >= self.params.n_init:
             hist = np.asarray(history, dtype=np.float64)
             idx = np.stack([2 * rows, 2 * rows + 1], axis=1).reshape(-1)
