@@ -15,7 +15,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["LKConfig", "gray_of", "lk_flow", "strongest_corner"]
+__all__ = ["LKConfig", "gray_of", "lk_flow", "ncc", "patches_at", "reanchor", "strongest_corner"]
 
 
 def gray_of(frame: np.ndarray) -> np.ndarray:
@@ -94,6 +94,28 @@ def strongest_corner(gray: np.ndarray, box, *, block: int = 7, n: int = 1, min_d
     return pts.reshape(-1, 2).astype(np.float64) + (x0, y0)
 
 
+
+
+def patches_at(gray: np.ndarray, pts: np.ndarray, half: int) -> np.ndarray:
+    """``(n, 2·half+1, 2·half+1)`` float32 patches centred (sub-pixel) on ``pts`` (NaN points give zeros)."""
+    pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
+    size = 2 * half + 1
+    src = gray if gray.dtype == np.float32 else gray.astype(np.float32)
+    out = np.zeros((len(pts), size, size), np.float32)
+    for i, (x, y) in enumerate(pts):
+        if np.isfinite(x) and np.isfinite(y):
+            out[i] = cv2.getRectSubPix(src, (size, size), (float(x), float(y)))
+    return out
+
+
+def ncc(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Zero-mean normalised cross-correlation of paired patches ``(n, s, s)`` (0 where one is flat)."""
+    a = a.reshape(len(a), -1).astype(np.float64)
+    b = b.reshape(len(b), -1).astype(np.float64)
+    a = a - a.mean(1, keepdims=True)
+    b = b - b.mean(1, keepdims=True)
+    den = np.sqrt((a * a).sum(1) * (b * b).sum(1))
+    return np.where(den > 1e-9, (a * b).sum(1) / np.where(den > 1e-9, den, 1.0), 0.0)
 
 
 def _parabola(sm: float, s0: float, sp: float) -> float:

@@ -119,7 +119,7 @@ class RLSAR:
     samples are collected and fitted in batch (Eq. 14 with the ridge), later ones run
     the recursion.  ``predict()`` is the a-priori one-step prediction ``c_{N+1}ᵀ a_N``.
     ``window`` (ch07.md P6) replaces the recursion by a batch refit on the last
-    ``window`` samples at every push.  ``stable`` predicts with :func:`stabilise`\ d
+    ``window`` samples at every push.  ``stable`` predicts with the :func:`stabilise`-projected
     coefficients (the fit itself is untouched).
     """
 

@@ -13,6 +13,7 @@ from .dssim import DSSIMTracker
 from .flow_pf import FlowPF
 from .fusion_pf import FusionPF
 from .local_motion_pf import LocalMotionPF
+from .lk_rls import LKRLS, LKRLSFuzzy
 from .keypoint_meanshift import KeypointAMS
 from .meanshift import KalmanMeanShift, MeanShift
 from .opencv import OPENCV_TRACKERS, CamShift, opencv_available
@@ -69,6 +70,11 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
     ("covariance", CovarianceTracker,
      "Region-covariance matching over the whole frame (coarse to fine, 3 scales), Log-Euclidean distance and "
      "mean model update (book ch. 6; Porikli, Tuzel & Meer)", {}),
+    ("lk-rls", LKRLS,
+     "Lucas-Kanade points whose velocity is gated against an RLS AR(2) prediction, so they are carried through "
+     "occlusions; box by median displacement and scale, lost when most points are predicted (book ch. 7)", {}),
+    ("lk-rls-fuzzy", LKRLSFuzzy,
+     "lk-rls with the gate gain k set every frame by the chapter's fuzzy controller (book ch. 7)", {}),
     ("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
      {"family": "baseline"}),
     ("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",

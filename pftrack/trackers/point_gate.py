@@ -29,7 +29,7 @@ from typing import Literal
 
 import numpy as np
 
-from ..cues.lk import LKConfig, gray_of, lk_flow, reanchor
+from ..cues.lk import LKConfig, gray_of, lk_flow, ncc, patches_at, reanchor
 from ..filtering.fuzzy import FuzzyGain
 from ..filtering.rls import RLSAR
 from ..params import Params, param
@@ -69,6 +69,11 @@ class PointParams(Params):
                                              "the point but the RLS learns the prediction instead (a half-covered "
                                              "window at the obstacle's edge must not teach the filter a wrong "
                                              "velocity); inf learns every accepted flow, as the book does")
+    verify: bool = param(True, doc="proposed: flow the gate rejects is still used (and learnt) when the patch it "
+                                   "lands on matches the point's last clean appearance (NCC >= verify_score): a "
+                                   "sudden turn is then not mistaken for an occlusion, which the book's gate cannot "
+                                   "tell apart")
+    verify_score: float = param(0.85, ge=-1, le=1, doc="NCC of the 9x9 patches that verifies a rejected flow")
     reanchor: bool = param(True, doc="after an occlusion, once flow is back for reanchor_after frames, move the "
                                      "point to where its pre-occlusion patch is (LK from that patch, proposed: the "
                                      "prediction's drift and the edge frames' biased flow are undone)")
@@ -254,6 +259,8 @@ class PointTracker:
         self.run = np.zeros(n, dtype=int)       # consecutive frames carried by prediction
         self.lost = np.zeros(n, dtype=bool)
         self.anchor = Anchor(self.prev, self.pos, p) if p.reanchor and p.method != "lk" else None
+        self._half = p.win // 2 + 1
+        self.ref_patch = patches_at(self.prev, self.pos, self._half) if p.verify and p.method != "lk" else None
         self.frames = 0
         nan2, nan = np.full((n, 2), np.nan), np.full(n, np.nan)
         k0 = np.full(n, p.k if p.method == "rls" else np.nan)
@@ -284,6 +291,12 @@ class PointTracker:
                 self.lost |= active & ~ok
         else:
             d = decide(v_of, ok, v_af, self.v_prev, self.eps_prev, self.qv, p, self._fuzzy)
+            if self.ref_patch is not None:
+                cand = np.flatnonzero(ok & ~d.use_flow & active)
+                if len(cand):
+                    good = ncc(patches_at(gray, new[cand], self._half), self.ref_patch[cand]) >= p.verify_score
+                    d.use_flow[cand[good]] = True
+                    d.learn[cand[good]] = True
             v = np.where(d.use_flow[:, None], v_of, v_af)
             learn = np.where(d.learn[:, None], v_of, v_af)
         v = np.where(active[:, None], v, 0.0)
@@ -296,6 +309,10 @@ class PointTracker:
         self.pos = np.where(self.lost[:, None] & outside[:, None], np.clip(self.pos, 0, [w - 1, h - 1]), self.pos)
         if self.anchor is not None:
             self.pos = self.anchor.update(gray, self.pos, d.use_flow, self.run, active)
+        if self.ref_patch is not None:
+            clean = np.flatnonzero(d.learn & d.use_flow & active)
+            if len(clean):
+                self.ref_patch[clean] = patches_at(gray, self.pos[clean], self._half)
         source = np.where(self.lost, LOST, np.where(d.use_flow, FLOW, PREDICTION))
         self.v_prev = np.where(active[:, None], v, self.v_prev)
         self.eps_prev = np.where(np.isfinite(d.eps), d.eps, self.eps_prev)
@@ -311,6 +328,8 @@ class PointTracker:
         self.pos[rows] = points
         self.lost[rows], self.run[rows], self.qv[rows] = False, 0, True
         self.eps_prev[rows] = np.nan
+        if self.ref_patch is not None:
+            self.ref_patch[rows] = patches_at(self.prev, self.pos[rows], self._half)
         if self.anchor is not None:
             self.anchor.forget(rows)
         if history is not None and self.rls.ready and len(history) >= self.params.n_init:
