@@ -1,7 +1,8 @@
 """The ``pftrack`` command line.  It only wires sources, trackers and sinks together.
 
 One module per command group: :mod:`.track` (track, demo), :mod:`.mot`,
-:mod:`.evaluate` (eval, list), :mod:`.bench` (bench, synth), :mod:`.densitometry` (book ch. 14).
+:mod:`.evaluate` (eval, list), :mod:`.bench` (bench, synth), :mod:`.densitometry` (book ch. 14),
+:mod:`.points` (points, stereo: book ch. 7).
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr, never a
 traceback), 130 interrupted by Ctrl-C or SIGTERM (everything computed so far is
@@ -23,6 +24,7 @@ from .common import DEFAULT_TRACKER, ArgumentParser
 from .densitometry import add_densitometry
 from .evaluate import add_eval, add_list
 from .mot import add_mot, run_mot
+from .points import add_points, add_stereo
 from .track import add_demo, add_track, demo_clip, run_track
 
 __all__ = ["DEFAULT_TRACKER", "build_parser", "demo_clip", "main", "run_mot", "run_track"]
@@ -41,6 +43,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_bench(sub)
     add_synth(sub)
     add_densitometry(sub)
+    add_points(sub)
+    add_stereo(sub)
     return parser
 
 

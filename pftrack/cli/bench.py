@@ -107,8 +107,10 @@ def add_synth(sub) -> None:
     p = sub.add_parser("synth", help="write seeded synthetic scenes with exact ground truth as OTB folders",
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
-    p.add_argument("kind", choices=sorted(SCENES) + ["xray"],
-                   help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book ch. 14)")
+    p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "xray"],
+                   help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
+                        "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
+                        "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7")
     p.add_argument("--source", help="xray: the grey image to warp (an angiography frame)")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
@@ -151,6 +153,14 @@ def cmd_synth(args) -> int:
             from ..synth.xray import export_xray
 
             export_xray(image, out / f"xray-{sd:03d}", sd)
+        elif args.kind == "occluder":
+            from ..synth.occluder import export_point_scene, occluder_scene
+
+            export_point_scene(occluder_scene(sd), out / f"occluder-{sd:03d}")
+        elif args.kind == "stereo-rail":
+            from ..synth.occluder import export_stereo_scene, stereo_rail_scene
+
+            export_stereo_scene(stereo_rail_scene(sd), out / f"stereo-rail-{sd:03d}")
         else:
             export_otb(SCENES[args.kind](sd), out / f"{args.kind}-{sd:03d}")
     (out / "README.txt").write_text(f"Synthetic '{args.kind}' scenes, seeds {args.seeds}, written by pftrack synth.\n",

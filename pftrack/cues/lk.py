@@ -31,7 +31,7 @@ class LKConfig:
     """The LK options of ch07.md §2: 7×7 windows, ``levels`` pyramid levels (0 is the book's
     plain LK), OpenCV's eigenvalue threshold and termination criteria."""
 
-    __slots__ = ("win", "levels", "min_eig", "criteria", "fb_check", "fb_threshold")
+    __slots__ = ("criteria", "fb_check", "fb_threshold", "levels", "min_eig", "win")
 
     def __init__(self, win: int = 7, levels: int = 2, min_eig: float = 1e-4, iterations: int = 30,
                  epsilon: float = 0.01, fb_check: bool = False, fb_threshold: float = 1.0):

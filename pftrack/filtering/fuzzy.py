@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DEFUZZ", "FuzzyGain", "RULES"]
+__all__ = ["DEFUZZ", "RULES", "FuzzyGain"]
 
 DEFUZZ = ("cos", "coa", "mom", "ca")
 

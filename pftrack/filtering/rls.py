@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["JointRLSAR", "RLSAR", "rls_batch", "regressors", "stabilise"]
+__all__ = ["RLSAR", "JointRLSAR", "regressors", "rls_batch", "stabilise"]
 
 
 def stabilise(coef: np.ndarray) -> np.ndarray:

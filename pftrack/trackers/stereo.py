@@ -24,7 +24,7 @@ import cv2
 import numpy as np
 
 from ..cues.lk import gray_of, lk_flow
-from ..filtering.rls import JointRLSAR, RLSAR, stabilise
+from ..filtering.rls import RLSAR, JointRLSAR, stabilise
 from ..params import param
 from .point_gate import FLOW, LOST, PREDICTION, Anchor, PointParams, decide
 
@@ -142,7 +142,7 @@ class StereoTracker:
             raise ValueError(f"point {i} ({pts[i, 0]:g},{pts[i, 1]:g}): no match in the right image "
                              f"for disparities {p.d_min:g}..{p.d_max:g}")
         self.xl, self.xr = pts.copy(), pts[:, 0] - d
-        kw = dict(order=p.order, forgetting=p.forgetting, n_init=p.n_init, ridge=p.ridge)
+        kw = {"order": p.order, "forgetting": p.forgetting, "n_init": p.n_init, "ridge": p.ridge}
         self.joint = [JointRLSAR(2, prior=p.prior, **kw) for _ in range(n)]
         self.rls_y = RLSAR(n, window=p.window, stable=p.stable, prior=p.prior, **kw)
         self.v_prev = np.zeros((n, 3))  # vLx, vRx, vy
@@ -241,7 +241,7 @@ class StereoTracker:
         return StereoStep(self.xl.copy(), self.xr.copy(), Z, X, Y, src_l, src_r, k_l, k_r)
 
 
-def _stable_joint(col: np.ndarray, order: int) -> np.ndarray:  # noqa: D401
+def _stable_joint(col: np.ndarray, order: int) -> np.ndarray:
     """A joint-model column used for prediction, with each channel's own-lag AR part kept stable.
 
     The interleaved column ``[a₁ᴸ, a₁ᴿ, a₂ᴸ, a₂ᴿ, …]`` mixes both channels' lags; the
