@@ -63,13 +63,30 @@ def lk_flow(prev_gray: np.ndarray, gray: np.ndarray, pts: np.ndarray, cfg: LKCon
         return np.zeros((0, 2)), np.zeros(0, dtype=bool)
     h, w = gray.shape[:2]
     inside0 = np.isfinite(pts).all(1) & (pts[:, 0] >= 0) & (pts[:, 0] <= w - 1) & (pts[:, 1] >= 0) & (pts[:, 1] <= h - 1)
-    safe = np.where(inside0[:, None], pts, 0.0)
+    if not inside0.any():
+        return np.full_like(pts, np.nan), np.zeros(len(pts), dtype=bool)
+    # LK only needs the pyramid around the points: crop both frames to their bounding box plus the
+    # reach of the coarsest level, on a grid aligned to that level so the pyramids are the full
+    # frame's (GUIDE §3: touch only the pixels the estimate can reach)
+    step = 2 ** cfg.levels
+    margin = (cfg.win // 2 + 2) * step * 2 + 16
+    lo = np.floor((pts[inside0].min(0) - margin) / step) * step
+    hi = np.ceil((pts[inside0].max(0) + margin) / step) * step
+    x0, y0 = (int(max(0, v)) for v in lo)
+    x1, y1 = int(min(w, hi[0])), int(min(h, hi[1]))
+    if (x1 - x0) * (y1 - y0) < 0.6 * w * h:
+        prev_gray, gray = prev_gray[y0:y1, x0:x1], gray[y0:y1, x0:x1]
+        off = np.array([x0, y0], dtype=np.float64)
+    else:
+        off = np.zeros(2)
+    safe = np.where(inside0[:, None], pts, off) - off
     new, ok = _call(prev_gray, gray, safe, cfg)
+    new += off
     ok &= inside0 & np.isfinite(new).all(1)
     ok &= (new[:, 0] >= 0) & (new[:, 0] <= w - 1) & (new[:, 1] >= 0) & (new[:, 1] <= h - 1)
     if cfg.fb_check and ok.any():
-        back, ok_b = _call(gray, prev_gray, np.where(ok[:, None], new, 0.0), cfg)
-        ok &= ok_b & (np.hypot(*(back - safe).T) <= cfg.fb_threshold)
+        back, ok_b = _call(gray, prev_gray, np.where(ok[:, None], new, off) - off, cfg)
+        ok &= ok_b & (np.hypot(*(back + off - pts).T) <= cfg.fb_threshold)
     new[~ok] = np.nan
     return new, ok
 

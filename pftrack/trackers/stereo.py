@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 
 from ..cues.lk import gray_of, lk_flow
+from ..errors import FrameError
 from ..filtering.rls import RLSAR, JointRLSAR, stabilise
 from ..params import param
 from .point_gate import FLOW, LOST, PREDICTION, Anchor, PointParams, decide
@@ -173,6 +174,9 @@ class StereoTracker:
     def step(self, left: np.ndarray, right: np.ndarray) -> StereoStep:
         p = self.params
         gl, gr = gray_of(left), gray_of(right)
+        if gl.shape != self.prev_l.shape or gr.shape != self.prev_l.shape:
+            raise FrameError(f"stereo frames must keep the first frame's size {self.prev_l.shape[1]}x"
+                             f"{self.prev_l.shape[0]}")
         h, w = gl.shape
         n = len(self.xl)
         active = ~self.lost
