@@ -84,6 +84,9 @@ class PointParams(Params):
                                              "the point but the RLS learns the prediction instead (a half-covered "
                                              "window at the obstacle's edge must not teach the filter a wrong "
                                              "velocity); a huge value (1e9) learns every accepted flow, as the book does")
+    learn_after: int = param(3, ge=1, doc="flow accepted but kept from learning this many frames in a row is learnt "
+                                          "from then on: an edge biases one or two frames, a real change of "
+                                          "velocity persists and the filter must follow it")
     verify: bool = param(True, doc="proposed: flow the gate rejects is still used (and learnt) when the patch it "
                                    "lands on matches the point's last clean appearance (NCC >= verify_score): a "
                                    "sudden turn is then not mistaken for an occlusion, which the book's gate cannot "
@@ -173,9 +176,12 @@ class Decision:
 
 
 def decide(v_of: np.ndarray, ok: np.ndarray, v_af: np.ndarray, v_prev: np.ndarray, eps_prev: np.ndarray,
-           qv: np.ndarray, params: PointParams, fuzzy: FuzzyGain | None) -> Decision:
+           qv: np.ndarray, params: PointParams, fuzzy: FuzzyGain | None, trusted: np.ndarray | None = None
+           ) -> Decision:
     """Steps 2–3 of Sect. 2.3 for ``n`` points once the filter is ready: ``k`` (fixed or fuzzy, Sect. 3),
-    Eq. 20, and whether the accepted flow is clean enough to learn (``learn_gate``).
+    Eq. 20, and whether the accepted flow is clean enough to learn (``learn_gate``, or
+    ``trusted``: the points whose accepted flow was kept from learning ``learn_after``
+    frames in a row, i.e. a persistent change rather than an edge).
 
     ``v_of`` / ``v_af`` / ``v_prev`` are ``(n, d)`` velocities (d = 2 for an image point).
     An LK failure (``ok`` False) is no measurement: its ε is +∞, its increment 0, and the
@@ -202,7 +208,10 @@ def decide(v_of: np.ndarray, ok: np.ndarray, v_af: np.ndarray, v_prev: np.ndarra
     else:
         use_flow = eps < k * vnorm
     use_flow &= ok
-    return Decision(use_flow, use_flow & (eps < params.learn_gate * vnorm), eps, delta, e, k)
+    clean = eps < params.learn_gate * vnorm
+    if trusted is not None:
+        clean |= trusted
+    return Decision(use_flow, use_flow & clean, eps, delta, e, k)
 
 
 class Anchor:
@@ -273,6 +282,7 @@ class PointTracker:
         self.eps_prev = np.full(n, np.nan)
         self.qv = np.ones(n, dtype=bool)
         self.run = np.zeros(n, dtype=int)       # consecutive frames carried by prediction
+        self.unlearnt = np.zeros(n, dtype=int)  # consecutive frames of flow used but not learnt
         self.lost = np.zeros(n, dtype=bool)
         self.anchor = Anchor(self.prev, self.pos, p) if p.reanchor and p.method != "lk" else None
         self._half = p.win // 2 + 1
@@ -309,7 +319,8 @@ class PointTracker:
             if p.method == "lk":
                 self.lost |= active & ~ok
         else:
-            d = decide(v_of, ok, v_af, self.v_prev, self.eps_prev, self.qv, p, self._fuzzy)
+            d = decide(v_of, ok, v_af, self.v_prev, self.eps_prev, self.qv, p, self._fuzzy,
+                       trusted=self.unlearnt >= p.learn_after)
             if self.ref_patch is not None:
                 cand = np.flatnonzero(ok & ~d.use_flow & active)
                 if len(cand):
@@ -324,6 +335,7 @@ class PointTracker:
         self.pos = self.pos + v
         outside = (self.pos[:, 0] < 0) | (self.pos[:, 0] > w - 1) | (self.pos[:, 1] < 0) | (self.pos[:, 1] > h - 1)
         self.run = np.where(d.use_flow, 0, self.run + 1)
+        self.unlearnt = np.where(d.use_flow & ~d.learn, self.unlearnt + 1, 0)
         self.lost |= active & (outside | (self.run > p.max_predict))
         self.pos = np.where(self.lost[:, None] & outside[:, None], np.clip(self.pos, 0, [w - 1, h - 1]), self.pos)
         if self.anchor is not None:
@@ -346,6 +358,7 @@ class PointTracker:
         rows = np.asarray(rows)
         self.pos[rows] = points
         self.lost[rows], self.run[rows], self.qv[rows] = False, 0, True
+        self.unlearnt[rows] = 0
         self.eps_prev[rows] = np.nan
         if self.ref_patch is not None:
             self.ref_patch[rows] = patches_at(self.prev, self.pos[rows], self._half)

@@ -150,6 +150,7 @@ class StereoTracker:
         self.eps_prev = np.full((2, n), np.nan)
         self.qv = np.ones((2, n), dtype=bool)
         self.run = np.zeros((2, n), dtype=int)  # consecutive predicted frames per view
+        self.unlearnt = np.zeros((2, n), dtype=int)  # consecutive frames of flow used but not learnt, per view
         self.good_r = np.zeros(n, dtype=int)    # consecutive confident disparities while the right view predicts
         self.lost = np.zeros(n, dtype=bool)
         self.anchor = Anchor(self.prev_l, self.xl, p) if p.reanchor and p.method != "lk" else None
@@ -196,10 +197,11 @@ class StereoTracker:
             if p.method == "lk":
                 self.lost |= active & ~ok_r
         else:
+            trusted = self.unlearnt >= p.learn_after
             dl = decide(v_of[:, [0, 2]], ok_l, v_af[:, [0, 2]], self.v_prev[:, [0, 2]], self.eps_prev[0],
-                        self.qv[0], p, self._fuzzy)
+                        self.qv[0], p, self._fuzzy, trusted=trusted[0])
             dr = decide(v_of[:, [1, 2]], ok_r, v_af[:, [1, 2]], self.v_prev[:, [1, 2]], self.eps_prev[1],
-                        self.qv[1], p, self._fuzzy)
+                        self.qv[1], p, self._fuzzy, trusted=trusted[1])
             use_l, use_r = dl.use_flow, dr.use_flow & dl.use_flow
             learn_l, learn_r = dl.learn, dr.learn & use_r
             k_l, k_r = dl.k, dr.k
@@ -222,6 +224,7 @@ class StereoTracker:
             self.xr = np.where(back, self.xl[:, 0] - np.nan_to_num(d), self.xr)
             use_r = use_r | back
         self.run = np.where(np.stack([use_l, use_r]), 0, self.run + 1)
+        self.unlearnt = np.where(np.stack([use_l & ~learn_l, use_r & ~learn_r]), self.unlearnt + 1, 0)
         outside = (self.xl[:, 0] < 0) | (self.xl[:, 0] > w - 1) | (self.xl[:, 1] < 0) | (self.xl[:, 1] > h - 1)
         self.lost |= active & (outside | (self.run.max(0) > p.max_predict))
         if self.anchor is not None:
