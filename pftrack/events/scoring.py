@@ -1,0 +1,74 @@
+"""The pure maths of the trackerless tripwire (book ch. 10, Eqs. 4–7), arrays in, arrays out."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+__all__ = ["bhattacharyya_distance", "colour_bins", "patch_similarity", "ssd_motion"]
+
+
+def colour_bins(bgr: np.ndarray, bits: int = 3) -> np.ndarray:
+    """Bin index of every pixel in an RGB histogram with ``2**bits`` levels per channel (512 for 3 bits)."""
+    shift = 8 - bits
+    q = (bgr >> shift).astype(np.int32)
+    return (q[..., 2] << (2 * bits)) | (q[..., 1] << bits) | q[..., 0]
+
+
+def bhattacharyya_distance(h: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """``D_B = √(1 − Σ√(h·H))`` of one normalised histogram ``h`` against each row of ``H``.
+
+    The text writes D as the Bhattacharyya *coefficient* (L9219–9225); as a distance it must
+    be ``√(1 − BC)`` (Comaniciu et al. 2003; ch10.md P1).
+    """
+    bc = np.sqrt(np.asarray(H, dtype=np.float64)) @ np.sqrt(np.asarray(h, dtype=np.float64))
+    return np.sqrt(np.clip(1.0 - bc, 0.0, 1.0))
+
+
+def patch_similarity(h_o: np.ndarray, v_o: np.ndarray, H: np.ndarray, V: np.ndarray, *, alpha_c: float,
+                     alpha_m: float, colour: str = "db") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eqs. 5–7 for one new appearance ``(h_o, v_o)`` against history entries ``(H, V)``.
+
+    ``S_m`` is the cosine of the two motion vectors (Eq. 5; 0 when either is zero), ``S_c`` is
+    ``1 − D_B`` where ``S_m > 0`` and 0 elsewhere (Eq. 6; ``colour="bc"`` uses the coefficient
+    itself, the other reading of P1), and ``S = α_c S_c + α_m S_m`` (the argument of the max of
+    Eq. 7).  Returns ``(S, S_c, S_m)`` per entry.
+    """
+    V = np.asarray(V, dtype=np.float64).reshape(-1, 2)
+    v_o = np.asarray(v_o, dtype=np.float64)
+    nv = np.hypot(V[:, 0], V[:, 1]) * np.hypot(*v_o)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s_m = np.where(nv > 1e-12, (V @ v_o) / nv, 0.0)
+    if colour == "bc":
+        sim = np.sqrt(np.asarray(H, dtype=np.float64)) @ np.sqrt(np.asarray(h_o, dtype=np.float64))
+    else:
+        sim = 1.0 - bhattacharyya_distance(h_o, H)
+    s_c = np.where(s_m > 0, sim, 0.0)
+    return alpha_c * s_c + alpha_m * s_m, s_c, s_m
+
+
+def _parabola(sm: float, s0: float, sp: float) -> float:
+    """Sub-pixel offset of a minimum from three samples (clamped to ±0.5)."""
+    den = sm - 2.0 * s0 + sp
+    return 0.0 if den <= 0 else float(np.clip(0.5 * (sm - sp) / den, -0.5, 0.5))
+
+
+def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int) -> tuple[np.ndarray, float]:
+    """Motion of the ``(2·half+1)²`` square around ``centre`` from ``prev`` to ``cur`` by SSD block
+    matching over ±``search`` px (``TM_SQDIFF``, parabolic sub-pixel refinement; ch10.md §1.3).
+    Returns ``(v, ssd_per_pixel)``; ``v`` is ``(0, 0)`` with infinite cost when the square does not fit."""
+    h, w = prev.shape[:2]
+    cx, cy = (int(round(float(c))) for c in centre)
+    x0, y0, x1, y1 = cx - half, cy - half, cx + half + 1, cy + half + 1
+    sx0, sy0 = max(0, x0 - search), max(0, y0 - search)
+    sx1, sy1 = min(w, x1 + search), min(h, y1 + search)
+    if x0 < 0 or y0 < 0 or x1 > w or y1 > h or sx1 - sx0 < x1 - x0 or sy1 - sy0 < y1 - y0:
+        return np.zeros(2), float("inf")
+    tmpl = prev[y0:y1, x0:x1].astype(np.float32)
+    area = cur[sy0:sy1, sx0:sx1].astype(np.float32)
+    cost = cv2.matchTemplate(area, tmpl, cv2.TM_SQDIFF)
+    _, _, (bx, by), _ = cv2.minMaxLoc(cost)
+    dx = _parabola(cost[by, bx - 1], cost[by, bx], cost[by, bx + 1]) if 0 < bx < cost.shape[1] - 1 else 0.0
+    dy = _parabola(cost[by - 1, bx], cost[by, bx], cost[by + 1, bx]) if 0 < by < cost.shape[0] - 1 else 0.0
+    v = np.array([sx0 + bx + dx - x0, sy0 + by + dy - y0])
+    return v, float(cost[by, bx]) / tmpl.size

@@ -1,0 +1,358 @@
+"""The trackerless tripwire ("NTT") of book ch. 10: crossings counted without tracking anything.
+
+Ground patches of radius ``r`` lie on both sides of a polyline (:func:`~.geometry.build_patches`).
+Per frame (ch10.md §1.3–1.4):
+
+1. a background subtractor (MOG2 with shadows as background, 3×3 opening; or three-frame
+   differencing) runs on the wire's neighbourhood only;
+2. a patch whose disc is at least ``fg_ratio`` foreground takes a colour histogram of its
+   foreground pixels; it is appended to the patch's history when it differs from the last
+   entry (``D_B > novelty``) or the patch was background since that entry, and the patch's
+   motion is then measured by SSD block matching;
+3. a new appearance on an outer patch whose motion leaves the wire (Eq. 4) is compared with
+   every inner history entry old enough (``t_th``) and, unless ``faithful``, fresh enough
+   (``t_max``): ``S = α_c S_c + α_m S_m`` (Eqs. 5–7); ``max S > threshold`` is a positive
+   crossing.  Negative crossings swap the sides.
+
+Proposed additions, each off with ``faithful=True`` (ch10.md §1.4, P9, P13): entries keep a
+first-seen and a last-seen time (T_th on the first, T_max on the last); a matched entry is
+consumed; an outer patch fires once until it is background again; an event where a
+recent one's motion has taken its object is merged into it (``group``); only patches of
+the other side within ``max_lateral``·r of arc are compared; C_d asks for a motion of at
+least ``min_motion`` pointing within ``away_angle`` of straight away from the wire.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import cv2
+import numpy as np
+
+from ..params import Params, param
+from .geometry import PatchLayout, build_patches
+from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
+
+__all__ = ["CrossingEvent", "TrackerlessTripwire", "TripwireParams", "estimate_radius"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class TripwireParams(Params):
+    """Options of the trackerless tripwire (ch10.md §2; the text gives no values for any of them)."""
+
+    radius: float = param(12.0, gt=0, doc="patch radius r = envelope half-width in pixels (Eq. 1)")
+    spacing: float | None = param(None, doc="arc-length spacing of the patches (default r: 50 % overlap)")
+    direction: Literal["positive", "negative", "both"] = param("both", doc="crossings to detect")
+    bgs: Literal["mog2", "diff"] = param("mog2", doc="foreground: MOG2 (shadows as background) or 3-frame difference")
+    bgs_history: int = param(500, ge=2, doc="MOG2 history in frames")
+    bgs_threshold: float = param(16.0, gt=0, doc="MOG2 varThreshold")
+    diff_threshold: int = param(25, ge=1, le=255, doc="grey-level threshold of the frame difference")
+    fg_ratio: float = param(0.3, gt=0, le=1, doc="foreground fraction of a disc that makes the patch foreground")
+    contact: Literal["any", "bottom"] = param("any", doc=(
+        "any: the text's reading, a patch is foreground when enough of its disc is; bottom: only where an "
+        "object's lower edge is (the disc moved down by 1.5 r is mostly background), so that an upright object "
+        "crosses when its foot point does (a walker's head crosses the image of a horizontal wire long before "
+        "the walker does); on the PETS tune frames it traded recall for precision"))
+    hist_pixels: Literal["fg", "all"] = param("fg", doc="histogram of the disc's foreground pixels, or of all of them")
+    novelty: float = param(0.3, gt=0, le=1, doc="D_B to the last entry above which a new entry is appended")
+    alpha_c: float = param(0.7, ge=0, doc="weight of the colour similarity (alpha_c > alpha_m, L9309)")
+    alpha_m: float = param(0.3, ge=0, doc="weight of the motion consistency")
+    threshold: float = param(0.75, doc="theta_S: a crossing when max S exceeds it (Eq. 7)")
+    t_th: float = param(0.1, ge=0, doc="T_th in seconds: an inner appearance must be at least this old")
+    t_max: float = param(3.0, gt=0, doc="T_max in seconds: history entries last seen longer ago are ignored")
+    max_entries: int = param(32, ge=1, doc="history entries kept per patch")
+    v_max: float = param(600.0, gt=0, doc="largest speed in px/s, for the SSD search range")
+    colour: Literal["db", "bc"] = param("db", doc="S_c = 1 - D_B (restored) or the coefficient itself (ch10.md P1)")
+    away_angle: float = param(60.0, gt=0, le=90, doc="C_d (Eq. 4) made strict: the motion must point within this "
+                                                     "angle of straight away from the wire (90 is the text's "
+                                                     "v.w < 0); walkers moving along the wire do not cross it")
+    min_motion: float = param(0.5, ge=0, doc="C_d also needs at least this motion in px per processed frame (the "
+                                             "direction of a smaller SSD motion is noise)")
+    max_lateral: float = param(3.0, gt=0, doc="compare only patches of the other side within this many r of arc "
+                                              "length (ch10.md P9; an object crosses, it does not jump along the "
+                                              "wire)")
+    fresh_time: float = param(1.0, ge=0, doc="a crossing brings an appearance new to its side: if a patch of the "
+                                             "same side within max_lateral r saw a matching appearance (S above "
+                                             "the threshold) in the last fresh_time seconds, the object was "
+                                             "already there (walking along the wire, or counted); 0 turns it off")
+    faithful: bool = param(False, doc="the text as written: no t_max, no consumption, no refractory, no grouping")
+    group: bool = param(True, doc="merge events of one object: an event where an emitted one of the same direction "
+                                  "would be by now (its position moved by its motion, within 2r) in the last "
+                                  "group_time seconds")
+    group_time: float = param(2.0, gt=0, doc="how long an emitted event can absorb later ones, in seconds")
+
+
+@dataclass
+class CrossingEvent:
+    """One detected crossing."""
+
+    frame: int
+    time_s: float
+    direction: int          # +1 positive (inner -> outer), -1 negative
+    to_patch: int           # the patch where the object arrived
+    from_patch: int         # the patch of the matched earlier appearance
+    tau_frame: int          # frame of that appearance (first seen)
+    score: float
+    s_color: float
+    s_motion: float
+    x: float
+    y: float
+    vx: float
+    vy: float
+
+
+@dataclass
+class _Entry:
+    hist: np.ndarray
+    v: np.ndarray
+    first: float
+    last: float
+    frame: int
+    used: bool = False
+
+
+@dataclass
+class _Patch:
+    entries: list[_Entry] = field(default_factory=list)
+    fg: bool = False
+    gap: bool = True        # background since the last append
+    armed: bool = True      # may fire (refractory)
+
+
+class TrackerlessTripwire:
+    """``process(frame, frame_number)`` → the crossings found on that frame.
+
+    ``fps`` converts frame numbers to seconds (T_th, T_max, the SSD range); with a frame
+    stride the caller passes the original frame numbers and ``fps``.
+    """
+
+    def __init__(self, polyline: np.ndarray, shape: tuple[int, int], fps: float, params: TripwireParams | None = None,
+                 stride: int = 1):
+        self.params = p = params or TripwireParams()
+        self.polyline = np.asarray(polyline, dtype=np.float64)
+        self.fps, self.stride = float(fps), int(stride)
+        self.layout: PatchLayout = build_patches(self.polyline, r=p.radius, spacing=p.spacing)
+        h, w = shape
+        r = p.radius
+        self.search = int(max(np.ceil(r), np.ceil(p.v_max * stride / self.fps)))
+        half = int(np.ceil(r))
+        pad = half + self.search + int(np.ceil(1.5 * r)) + 2
+        lo = np.floor(self.layout.centres.min(0) - pad).astype(int)
+        hi = np.ceil(self.layout.centres.max(0) + pad).astype(int)
+        self.x0, self.y0 = max(0, lo[0]), max(0, lo[1])
+        self.x1, self.y1 = min(w, hi[0]), min(h, hi[1])
+        rw, rh = self.x1 - self.x0, self.y1 - self.y0
+        if rw <= 0 or rh <= 0:
+            raise ValueError("the tripwire lies outside the frame")
+        dy, dx = np.mgrid[-half:half + 1, -half:half + 1]
+        disc = (dx ** 2 + dy ** 2) <= r * r
+        dx, dy = dx[disc], dy[disc]
+        c = np.round(self.layout.centres).astype(int) - [self.x0, self.y0]
+        xs = np.clip(c[:, 0:1] + dx[None], 0, rw - 1)
+        ys = np.clip(c[:, 1:2] + dy[None], 0, rh - 1)
+        self._disc = ys * rw + xs                      # (m, D) flat ROI indices of each disc
+        below = np.clip(c[:, 1:2] + dy[None] + int(round(1.5 * r)), 0, rh - 1)
+        self._below = below * rw + xs                  # the same discs 1.5 r lower
+        self.half = half
+        self.patches = [_Patch() for _ in range(len(self.layout.centres))]
+        if p.bgs == "mog2":
+            self._bgs = cv2.createBackgroundSubtractorMOG2(history=p.bgs_history, varThreshold=p.bgs_threshold,
+                                                           detectShadows=True)
+        self._prev_gray: np.ndarray | None = None
+        self._prev2_gray: np.ndarray | None = None
+        self._kernel = np.ones((3, 3), np.uint8)
+        self._recent: list[CrossingEvent] = []
+        self.frames = 0
+
+    # -- per frame ------------------------------------------------------------------------------
+    def foreground(self, roi: np.ndarray, gray: np.ndarray) -> np.ndarray:
+        p = self.params
+        if p.bgs == "mog2":
+            m = self._bgs.apply(roi)
+            fg = (m == 255).astype(np.uint8)
+        else:
+            if self._prev_gray is None or self._prev2_gray is None:
+                fg = np.zeros(gray.shape, np.uint8)
+            else:
+                a = cv2.absdiff(gray, self._prev_gray) > p.diff_threshold
+                b = cv2.absdiff(self._prev_gray, self._prev2_gray) > p.diff_threshold
+                fg = (a | b).astype(np.uint8)
+        return cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._kernel)
+
+    def process(self, frame: np.ndarray, number: int) -> list[CrossingEvent]:
+        p = self.params
+        roi = frame[self.y0:self.y1, self.x0:self.x1]
+        if roi.ndim == 2:
+            roi = cv2.cvtColor(roi, cv2.COLOR_GRAY2BGR)
+        gray = cv2.cvtColor(roi, cv2.COLOR_BGR2GRAY)
+        fg = self.foreground(roi, gray).ravel()
+        t = number / self.fps
+        frac = fg[self._disc].mean(1)
+        is_fg = frac >= p.fg_ratio
+        if p.contact == "bottom":
+            is_fg &= fg[self._below].mean(1) < p.fg_ratio
+        events: list[CrossingEvent] = []
+        new_app = np.zeros(len(self.patches), dtype=bool)
+        rows = np.flatnonzero(is_fg)
+        if len(rows) and self._prev_gray is not None:
+            bins = colour_bins(roi).ravel()
+            pix = self._disc[rows]                                    # (k, D)
+            wts = fg[pix].astype(np.float64) if p.hist_pixels == "fg" else np.ones(pix.shape)
+            ids = (np.arange(len(rows))[:, None] * 512 + bins[pix]).ravel()
+            hists = np.bincount(ids, weights=wts.ravel(), minlength=len(rows) * 512).reshape(len(rows), 512)
+            hists /= np.maximum(hists.sum(1, keepdims=True), 1e-12)
+            for k, i in enumerate(rows):
+                if self._update_history(i, hists[k], t, number, gray):
+                    new_app[i] = True
+        for i, patch in enumerate(self.patches):
+            if not is_fg[i]:
+                patch.gap = True
+                patch.armed = True
+            patch.fg = bool(is_fg[i])
+        for i in np.flatnonzero(new_app):
+            ev = self._test(i, t, number)
+            if ev is not None:
+                events.append(ev)
+        self._prev2_gray, self._prev_gray = self._prev_gray, gray
+        self.frames += 1
+        return events
+
+    def _update_history(self, i: int, hist: np.ndarray, t: float, number: int, gray: np.ndarray) -> bool:
+        p = self.params
+        patch = self.patches[i]
+        last = patch.entries[-1] if patch.entries else None
+        if last is not None and not patch.gap and float(bhattacharyya_distance(hist, last.hist[None])[0]) <= p.novelty:
+            last.last = t  # the same object is still there (P13)
+            return False
+        c = self.layout.centres[i] - [self.x0, self.y0]
+        v, _ = ssd_motion(self._prev_gray, gray, c, self.half, self.search)
+        patch.entries.append(_Entry(hist, v, t, t, number))
+        if len(patch.entries) > p.max_entries:
+            patch.entries.pop(0)
+        patch.gap = False
+        return True
+
+    def _test(self, i: int, t: float, number: int) -> CrossingEvent | None:
+        """Eqs. 4–7 for the new appearance on patch ``i`` against the other side's histories."""
+        p = self.params
+        side = int(self.layout.side[i])
+        direction = 1 if side == 1 else -1
+        if p.direction == "positive" and direction < 0 or p.direction == "negative" and direction > 0:
+            return None
+        patch = self.patches[i]
+        if not p.faithful and not patch.armed:
+            return None
+        new = patch.entries[-1]
+        speed = float(np.hypot(*new.v))
+        if float(new.v @ self.layout.w[i]) >= 0:  # C_d: must move away from the wire (Eq. 4)
+            return None
+        if not p.faithful and (speed < p.min_motion or
+                               -float(new.v @ self.layout.w[i]) < np.cos(np.radians(p.away_angle)) * speed):
+            return None
+        arc = self.layout.arc
+        if not p.faithful and p.fresh_time > 0 and self._seen_on_side(i, new, t):
+            return None
+        cand = []
+        for j in self.layout.of_side(-side):
+            if not p.faithful and abs(arc[j] - arc[i]) > p.max_lateral * p.radius:
+                continue
+            for e in self.patches[j].entries:
+                if e.first > t - p.t_th or e.used and not p.faithful:
+                    continue
+                if not p.faithful and e.last < t - p.t_max:
+                    continue
+                cand.append((j, e))
+        if not cand:
+            return None
+        H = np.stack([e.hist for _, e in cand])
+        V = np.stack([e.v for _, e in cand])
+        S, s_c, s_m = patch_similarity(new.hist, new.v, H, V, alpha_c=p.alpha_c, alpha_m=p.alpha_m, colour=p.colour)
+        k = int(np.argmax(S))
+        if S[k] <= p.threshold:
+            return None
+        j, entry = cand[k]
+        c = self.layout.centres[i]
+        ev = CrossingEvent(number, t, direction, int(i), int(j), int(entry.frame), float(S[k]), float(s_c[k]),
+                           float(s_m[k]), float(c[0]), float(c[1]), float(new.v[0]), float(new.v[1]))
+        if not p.faithful:
+            entry.used = True
+            for q in self._run_of(i):  # one object, one event: its whole foreground run waits for background
+                self.patches[q].armed = False
+            if p.group and self._duplicate(ev):
+                return None
+            self._recent = [e for e in self._recent if t - e.time_s <= p.group_time] + [ev]
+        return ev
+
+    def _seen_on_side(self, i: int, new: _Entry, t: float) -> bool:
+        """Did a nearby patch of ``i``'s own side see this appearance in the last ``fresh_time`` seconds?"""
+        p = self.params
+        arc = self.layout.arc
+        H, V = [], []
+        for j in self.layout.of_side(int(self.layout.side[i])):
+            if abs(arc[j] - arc[i]) > p.max_lateral * p.radius:
+                continue
+            for e in self.patches[j].entries:
+                if e is new or e.first >= t or e.last < t - p.fresh_time:
+                    continue
+                H.append(e.hist)
+                V.append(e.v)
+        if not H:
+            return False
+        S, _, _ = patch_similarity(new.hist, new.v, np.stack(H), np.stack(V), alpha_c=p.alpha_c, alpha_m=p.alpha_m,
+                                   colour=p.colour)
+        return bool(S.max() > p.threshold)
+
+    def _run_of(self, i: int) -> list[int]:
+        """The contiguous run of foreground patches on ``i``'s side that contains ``i`` (by arc length)."""
+        same = self.layout.of_side(int(self.layout.side[i]))
+        same = same[np.argsort(self.layout.arc[same])]
+        pos = int(np.flatnonzero(same == i)[0])
+        gap = 1.5 * (self.params.spacing or self.params.radius)
+        run = [i]
+        for step in (-1, 1):
+            k = pos
+            while 0 <= k + step < len(same):
+                nxt = same[k + step]
+                if not self.patches[nxt].fg or abs(self.layout.arc[nxt] - self.layout.arc[same[k]]) > gap:
+                    break
+                run.append(int(nxt))
+                k += step
+        return run
+
+    def _duplicate(self, ev: CrossingEvent) -> bool:
+        """Is ``ev`` the object of a recent event, seen again where that event's motion has taken it?"""
+        r = self.params.radius
+        for e in self._recent:
+            if e.direction != ev.direction or ev.time_s - e.time_s > self.params.group_time:
+                continue
+            steps = (ev.frame - e.frame) / self.stride
+            guess = np.array([e.x + e.vx * steps, e.y + e.vy * steps])
+            slack = 2.0 * r + 0.5 * np.hypot(e.vx, e.vy) * steps
+            if np.hypot(*(guess - [ev.x, ev.y])) <= slack:
+                return True
+        return False
+
+def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_area: int = 60,
+                    default: float = 12.0) -> float:
+    """``--radius auto`` (ch10.md §1.2, proposed): half the median short side of the foreground blobs whose
+    centroids lie within ``near`` px of the wire, over the given frames (e.g. the first 10 s)."""
+    from .geometry import polyline_project
+
+    pts = np.asarray(polyline, dtype=np.float64)
+    bgs = cv2.createBackgroundSubtractorMOG2(history=500, varThreshold=16, detectShadows=True)
+    kernel = np.ones((3, 3), np.uint8)
+    sides = []
+    for frame in frames:
+        fg = cv2.morphologyEx((bgs.apply(frame) == 255).astype(np.uint8), cv2.MORPH_OPEN, kernel)
+        n, _, stats, cent = cv2.connectedComponentsWithStats(fg)
+        if n <= 1:
+            continue
+        ok = stats[1:, cv2.CC_STAT_AREA] >= min_area
+        if not ok.any():
+            continue
+        c = cent[1:][ok]
+        d = polyline_project(c, pts)[0]
+        st = stats[1:][ok][d <= near]
+        sides += np.minimum(st[:, cv2.CC_STAT_WIDTH], st[:, cv2.CC_STAT_HEIGHT]).tolist()
+    return float(0.5 * np.median(sides)) if len(sides) >= 5 else float(default)
