@@ -107,10 +107,11 @@ def add_synth(sub) -> None:
     p = sub.add_parser("synth", help="write seeded synthetic scenes with exact ground truth as OTB folders",
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
-    p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "xray"],
+    p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse", "xray"],
                    help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
                         "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
-                        "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7")
+                        "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7; 'traffic-sparse' and "
+                        "'traffic-dense' (MOTChallenge folders with wire.txt) are the tripwire scenes of book ch. 10")
     p.add_argument("--source", help="xray: the grey image to warp (an angiography frame)")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
@@ -157,6 +158,10 @@ def cmd_synth(args) -> int:
             from ..synth.occluder import export_point_scene, occluder_scene
 
             export_point_scene(occluder_scene(sd), out / f"occluder-{sd:03d}")
+        elif args.kind.startswith("traffic-"):
+            from ..synth.traffic import export_traffic, traffic_scene
+
+            export_traffic(traffic_scene(sd, kind=args.kind.split("-", 1)[1]), out / f"{args.kind}-{sd:03d}")
         elif args.kind == "stereo-rail":
             from ..synth.occluder import export_stereo_scene, stereo_rail_scene
 

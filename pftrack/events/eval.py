@@ -22,9 +22,10 @@ __all__ = ["EventScore", "match_events", "track_crossings"]
 
 
 def track_crossings(mot_rows: np.ndarray, polyline: np.ndarray, *, hysteresis: float = 5.0, min_frames: int = 3,
-                    stride: int = 1) -> list[Crossing]:
-    """Crossings of every track of MOT rows ``frame,id,x,y,w,h,...`` (foot points); with ``stride`` only
-    frames ``1, 1+stride, …`` are seen (a lower frame rate)."""
+                    stride: int = 1, point: str = "foot") -> list[Crossing]:
+    """Crossings of every track of MOT rows ``frame,id,x,y,w,h,...``: of the boxes' foot points (bottom
+    centre; people and vehicles seen obliquely) or centres (``point="centre"``; top-down views).  With
+    ``stride`` only frames ``1, 1+stride, …`` are seen (a lower frame rate)."""
     rows = np.asarray(mot_rows, dtype=np.float64)
     out: list[Crossing] = []
     if len(rows) == 0:
@@ -36,7 +37,8 @@ def track_crossings(mot_rows: np.ndarray, polyline: np.ndarray, *, hysteresis: f
         r = r[np.argsort(r[:, 0])]
         if len(r) < min_frames:
             continue
-        foot = np.stack([r[:, 2] + r[:, 4] / 2.0, r[:, 3] + r[:, 5]], axis=1)
+        bottom = r[:, 3] + (r[:, 5] if point == "foot" else r[:, 5] / 2.0)
+        foot = np.stack([r[:, 2] + r[:, 4] / 2.0, bottom], axis=1)
         out += crossings_of_track(r[:, 0], foot, polyline, hysteresis=hysteresis, track=int(tid))
     return sorted(out, key=lambda c: c.frame)
 

@@ -53,10 +53,16 @@ def _parabola(sm: float, s0: float, sp: float) -> float:
     return 0.0 if den <= 0 else float(np.clip(0.5 * (sm - sp) / den, -0.5, 0.5))
 
 
-def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int) -> tuple[np.ndarray, float]:
+def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int,
+               mask: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Motion of the ``(2·half+1)²`` square around ``centre`` from ``prev`` to ``cur`` by SSD block
     matching over ±``search`` px (``TM_SQDIFF``, parabolic sub-pixel refinement; ch10.md §1.3).
-    Returns ``(v, ssd_per_pixel)``; ``v`` is ``(0, 0)`` with infinite cost when the square does not fit."""
+
+    With ``mask`` (the foreground of ``cur``, full image size) the square of ``cur`` is matched
+    back into ``prev`` on its foreground pixels only: an object that has just entered a patch
+    is mostly background there, and unmasked SSD would report the background's zero motion.
+    Returns ``(v, ssd_per_pixel)``; ``v`` is ``(0, 0)`` with infinite cost when the square does not fit.
+    """
     h, w = prev.shape[:2]
     cx, cy = (int(round(float(c))) for c in centre)
     x0, y0, x1, y1 = cx - half, cy - half, cx + half + 1, cy + half + 1
@@ -64,11 +70,22 @@ def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int
     sx1, sy1 = min(w, x1 + search), min(h, y1 + search)
     if x0 < 0 or y0 < 0 or x1 > w or y1 > h or sx1 - sx0 < x1 - x0 or sy1 - sy0 < y1 - y0:
         return np.zeros(2), float("inf")
-    tmpl = prev[y0:y1, x0:x1].astype(np.float32)
-    area = cur[sy0:sy1, sx0:sx1].astype(np.float32)
-    cost = cv2.matchTemplate(area, tmpl, cv2.TM_SQDIFF)
+    m = None
+    if mask is not None:
+        m = mask[y0:y1, x0:x1].astype(np.float32)
+        if m.sum() < 0.2 * m.size:
+            m = None
+    if m is None:
+        tmpl, area, sign = prev[y0:y1, x0:x1].astype(np.float32), cur[sy0:sy1, sx0:sx1].astype(np.float32), 1.0
+        cost = cv2.matchTemplate(area, tmpl, cv2.TM_SQDIFF)
+        n_pix = tmpl.size
+    else:  # match the current foreground back into the previous frame
+        tmpl, area, sign = cur[y0:y1, x0:x1].astype(np.float32), prev[sy0:sy1, sx0:sx1].astype(np.float32), -1.0
+        cost = cv2.matchTemplate(area, tmpl, cv2.TM_SQDIFF, mask=m)
+        n_pix = float(m.sum())
     _, _, (bx, by), _ = cv2.minMaxLoc(cost)
-    dx = _parabola(cost[by, bx - 1], cost[by, bx], cost[by, bx + 1]) if 0 < bx < cost.shape[1] - 1 else 0.0
-    dy = _parabola(cost[by - 1, bx], cost[by, bx], cost[by + 1, bx]) if 0 < by < cost.shape[0] - 1 else 0.0
-    v = np.array([sx0 + bx + dx - x0, sy0 + by + dy - y0])
-    return v, float(cost[by, bx]) / tmpl.size
+    exact = cost[by, bx] <= 1e-6 * n_pix
+    dx = _parabola(cost[by, bx - 1], cost[by, bx], cost[by, bx + 1]) if 0 < bx < cost.shape[1] - 1 and not exact else 0.0
+    dy = _parabola(cost[by - 1, bx], cost[by, bx], cost[by + 1, bx]) if 0 < by < cost.shape[0] - 1 and not exact else 0.0
+    v = sign * np.array([sx0 + bx + dx - x0, sy0 + by + dy - y0])
+    return v, float(cost[by, bx]) / n_pix

@@ -186,7 +186,9 @@ class TrackerlessTripwire:
         if roi.ndim == 2:
             roi = cv2.cvtColor(roi, cv2.COLOR_GRAY2BGR)
         gray = cv2.cvtColor(roi, cv2.COLOR_BGR2GRAY)
-        fg = self.foreground(roi, gray).ravel()
+        fg2d = self.foreground(roi, gray)
+        self._fg = fg2d
+        fg = fg2d.ravel()
         t = number / self.fps
         frac = fg[self._disc].mean(1)
         is_fg = frac >= p.fg_ratio
@@ -226,7 +228,7 @@ class TrackerlessTripwire:
             last.last = t  # the same object is still there (P13)
             return False
         c = self.layout.centres[i] - [self.x0, self.y0]
-        v, _ = ssd_motion(self._prev_gray, gray, c, self.half, self.search)
+        v, _ = ssd_motion(self._prev_gray, gray, c, self.half, self.search, mask=self._fg)
         patch.entries.append(_Entry(hist, v, t, t, number))
         if len(patch.entries) > p.max_entries:
             patch.entries.pop(0)

@@ -1,0 +1,193 @@
+"""Book ch. 10: the trackerless tripwire, crossings of tracks, event scoring, the command (ch10.md §5)."""
+
+import numpy as np
+import pytest
+
+from pftrack.cli import main
+from pftrack.events.eval import match_events, track_crossings
+from pftrack.events.geometry import build_patches, crossings_of_track, parse_polyline, polyline_project
+from pftrack.events.scoring import bhattacharyya_distance, patch_similarity, ssd_motion
+from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams
+from pftrack.synth.traffic import export_traffic, traffic_scene
+
+WIRE = np.array([[100.0, 200.0], [300.0, 200.0]])
+
+
+def test_patches_of_a_straight_wire():
+    lay = build_patches(WIRE, r=10, spacing=10)
+    inner, outer = lay.of_side(-1), lay.of_side(1)
+    assert len(inner) == len(outer) == 21
+    np.testing.assert_allclose(lay.centres[inner, 1], 190.0)
+    np.testing.assert_allclose(lay.centres[outer, 1], 210.0)
+    np.testing.assert_allclose(lay.w[inner], np.tile([0.0, 1.0], (21, 1)), atol=1e-12)
+    np.testing.assert_allclose(lay.w[outer], np.tile([0.0, -1.0], (21, 1)), atol=1e-12)
+    rev = build_patches(WIRE[::-1], r=10, spacing=10)  # reversed vertex order swaps the sides
+    np.testing.assert_allclose(rev.centres[rev.of_side(-1), 1], 210.0)
+
+
+def test_patches_of_an_l_shaped_wire():
+    pts = np.array([[100.0, 100.0], [200.0, 100.0], [200.0, 200.0]])
+    lay = build_patches(pts, r=10)
+    dist = polyline_project(lay.centres, pts)[0]
+    np.testing.assert_allclose(dist, 10.0, atol=1e-9)
+    assert len(lay.of_side(-1)) != len(lay.of_side(1))
+    with pytest.raises(ValueError):
+        parse_polyline("1,2")
+    with pytest.raises(ValueError):
+        parse_polyline("1,2;1,2")
+    np.testing.assert_array_equal(parse_polyline("1,2; 3,4;5,6"), [[1, 2], [3, 4], [5, 6]])
+
+
+def test_signed_side_matches_the_issue_convention():
+    # s(P) = (x2-x1)(Py-y1) - (y2-y1)(Px-x1) > 0 is the outer (positive) side
+    p = np.array([[150.0, 230.0], [150.0, 170.0]])
+    s_issue = (300 - 100) * (p[:, 1] - 200) - 0 * (p[:, 0] - 100)
+    signed = polyline_project(p, WIRE)[4]
+    np.testing.assert_array_equal(np.sign(signed), np.sign(s_issue))
+
+
+def test_state_machine_counts_once_and_ignores_hovering():
+    f = np.arange(30)
+    down = np.stack([np.full(30, 150.0), np.linspace(170, 230, 30)], 1)
+    c = crossings_of_track(f, down, WIRE, hysteresis=5)
+    assert len(c) == 1 and c[0].direction == 1 and abs(c[0].frame - 14.5) < 0.6
+    up = down[::-1]
+    assert [x.direction for x in crossings_of_track(f, up, WIRE, hysteresis=5)] == [-1]
+    hover = np.stack([np.full(60, 150.0), 200 + 3 * np.sin(np.arange(60))], 1)
+    assert crossings_of_track(np.arange(60), hover, WIRE, hysteresis=5) == []
+    beyond = down + [250.0, 0.0]  # passes beside the wire's end
+    assert crossings_of_track(f, beyond, WIRE, hysteresis=5) == []
+    # back and forth across the line: one crossing each way, never more
+    y = np.interp(np.arange(90), [0, 30, 60, 89], [170, 230, 170, 230])
+    zig = np.stack([np.full(90, 150.0), y], 1)
+    dirs = [x.direction for x in crossings_of_track(np.arange(90), zig, WIRE, hysteresis=5)]
+    assert dirs == [1, -1, 1]
+
+
+def test_unconfirmed_tracks_are_ignored_and_each_track_counts_alone():
+    rows = []
+    for tid, x in ((1, 140.0), (2, 180.0)):
+        for k, y in enumerate(np.linspace(150, 240, 20)):
+            rows.append([k + 1, tid, x, y - 40, 20, 40, 1, -1, -1, -1])
+    rows += [[5, 9, 200, 150, 20, 40, 1, -1, -1, -1], [6, 9, 200, 230, 20, 40, 1, -1, -1, -1]]  # 2 frames only
+    c = track_crossings(np.array(rows), WIRE, hysteresis=5, min_frames=3)
+    assert sorted(x.track for x in c) == [1, 2]
+
+
+def test_bhattacharyya_distance_and_similarity():
+    rng = np.random.default_rng(0)
+    h = rng.random(512)
+    h /= h.sum()
+    a = np.zeros(512)
+    a[:10] = 0.1
+    b = np.zeros(512)
+    b[20:30] = 0.1
+    assert bhattacharyya_distance(h, h[None])[0] == pytest.approx(0.0, abs=1e-7)
+    assert bhattacharyya_distance(a, b[None])[0] == pytest.approx(1.0)
+    assert bhattacharyya_distance(a, h[None])[0] == pytest.approx(bhattacharyya_distance(h, a[None])[0])
+    V = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 2.0]])
+    S, s_c, s_m = patch_similarity(a, [2.0, 0.0], np.stack([a, a, a]), V, alpha_c=0.7, alpha_m=0.3)
+    np.testing.assert_allclose(s_m, [1.0, -1.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(s_c, [1.0, 0.0, 0.0], atol=1e-7)  # S_c = 0 where S_m <= 0 (Eq. 6)
+    np.testing.assert_allclose(S, [1.0, -0.3, 0.0], atol=1e-7)
+
+
+def test_ssd_motion():
+    rng = np.random.default_rng(1)
+    import cv2
+
+    img = np.clip(cv2.GaussianBlur(rng.normal(128, 50, (80, 80)), (0, 0), 1.5), 0, 255).astype(np.uint8)
+    moved = np.roll(np.roll(img, 3, axis=1), -2, axis=0)
+    v, _ = ssd_motion(img, moved, (40, 40), 8, 6)
+    np.testing.assert_allclose(v, [3.0, -2.0], atol=1e-9)
+    half = cv2.warpAffine(img, np.float32([[1, 0, 2.5], [0, 1, 0]]), (80, 80), flags=cv2.INTER_LINEAR)
+    v, _ = ssd_motion(img, half, (40, 40), 8, 6)
+    assert abs(v[0] - 2.5) <= 0.2 and abs(v[1]) <= 0.2
+
+
+def test_event_matching():
+    s = match_events([(10, 1), (50, 1), (90, -1)], [(12, 1), (49, -1), (95, -1), (200, 1)], tol=10)
+    assert (s.gt, s.detected, s.tp) == (4, 3, 2)
+    assert s.accuracy == pytest.approx(0.5) and s.precision == pytest.approx(2 / 3)
+    assert match_events([(10, 1), (11, 1)], [(10, 1)], tol=5).tp == 1  # one-to-one
+
+
+def _movers(positions, shape=(160, 240), colours=((40, 40, 220), (220, 60, 40))):
+    """Frames of textured discs moving along the given (T, k, 2) paths over textured ground."""
+    import cv2
+
+    rng = np.random.default_rng(3)
+    bg = np.clip(rng.normal(100, 8, (*shape, 3)), 0, 255).astype(np.uint8)
+    frames = []
+    for t in range(positions.shape[0]):
+        f = bg.copy()
+        for k, (x, y) in enumerate(positions[t]):
+            cv2.circle(f, (int(round(x)), int(round(y))), 14, colours[k % len(colours)], -1)
+            cv2.circle(f, (int(round(x)) - 4, int(round(y)) - 3), 4, (255, 255, 255), -1)
+        frames.append(f)
+    return frames
+
+
+def test_trackerless_tripwire_direction_and_count_once():
+    wire = np.array([[20.0, 80.0], [220.0, 80.0]])
+    T = 90
+    down = np.stack([np.full(T, 70.0), np.clip(10 + 2.0 * np.arange(T), None, 150)], 1)       # one crossing, +
+    up = np.stack([np.full(T, 170.0), np.clip(160 - 2.0 * np.arange(T), 10, None)], 1)        # one crossing, -
+    pos = np.stack([down, up], 1)
+    frames = _movers(pos)
+    tw = TrackerlessTripwire(wire, frames[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50))
+    ev = []
+    for n, f in enumerate(frames, 1):
+        ev += tw.process(f, n)
+    dirs = sorted(e.direction for e in ev)
+    assert dirs == [-1, 1], [(e.frame, e.direction, e.x) for e in ev]
+    pos_ev = [e for e in ev if e.direction > 0][0]
+    assert pos_ev.x < 120 and 30 <= pos_ev.frame <= 50  # the disc going down crosses y = 80 near frame 35
+
+
+def test_trackerless_tripwire_ignores_a_mover_hovering_on_the_line():
+    wire = np.array([[20.0, 80.0], [220.0, 80.0]])
+    T = 120
+    hover = np.stack([60 + 0.8 * np.arange(T), 80 + 6 * np.sin(np.arange(T) / 3.0)], 1)[:, None, :]
+    frames = _movers(hover)
+    tw = TrackerlessTripwire(wire, frames[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50))
+    ev = []
+    for n, f in enumerate(frames, 1):
+        ev += tw.process(f, n)
+    assert len(ev) <= 1
+
+
+def test_synthetic_sparse_traffic_is_counted():
+    gt = det = tp = 0
+    for seed in (8, 10):
+        sc = traffic_scene(seed, kind="sparse", n_vehicles=10)
+        truth = [(c.frame, c.direction) for c in track_crossings(sc.tracks, sc.wire, hysteresis=3, point="centre")]
+        assert len(truth) == 10
+        tw = TrackerlessTripwire(sc.wire, sc.frames[0].shape[:2], sc.fps, TripwireParams())
+        ev = []
+        for n, f in enumerate(sc.frames, 1):
+            ev += tw.process(f, n)
+        s = match_events([(e.frame, e.direction) for e in ev], truth, tol=30)
+        gt, det, tp = gt + s.gt, det + s.detected, tp + s.tp
+    assert tp / gt >= 0.65 and tp / det >= 0.7, (gt, det, tp)
+
+
+def test_tripwire_cli(tmp_path):
+    sc = traffic_scene(8, kind="sparse", n_vehicles=4)
+    export_traffic(sc, tmp_path / "road")
+    wire = (tmp_path / "road" / "wire.txt").read_text().strip()
+    out = tmp_path / "ev.csv"
+    assert main(["tripwire", str(tmp_path / "road"), "--line", wire, "--radius", "12", "--out", str(out),
+                 "--quiet"]) == 0
+    rows = out.read_text().splitlines()
+    assert rows[0].startswith("frame,direction")
+    assert all(r.split(",")[1] in ("positive", "negative") for r in rows[1:])
+    gt = tmp_path / "gt.csv"
+    assert main(["tripwire", "--from-tracks", str(tmp_path / "road" / "gt" / "gt.txt"), "--line", wire,
+                 "--point", "centre", "--out", str(gt)]) == 0
+    assert len(gt.read_text().splitlines()) == 1 + 4
+    assert main(["tripwire", str(tmp_path / "road"), "--line", "10,10", "--out", str(out), "--quiet"]) == 2
+    assert main(["tripwire", "--from-tracks", str(tmp_path / "none.txt"), "--line", wire, "--out", str(out)]) == 2
+    bad = tmp_path / "bad.txt"
+    bad.write_text("not,a,track\n")
+    assert main(["tripwire", "--from-tracks", str(bad), "--line", wire, "--out", str(out)]) == 2
