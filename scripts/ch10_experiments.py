@@ -82,8 +82,9 @@ def pets(data: Path) -> dict:
         tracks, mot_fps = mot_tracks(sub, numbers)
         acc: dict = {}
         fps_ntt = []
-        for text in PETS_LINES:
+        for li, text in enumerate(PETS_LINES):
             line = parse_polyline(text)
+            orient = "vertical lines" if li < 2 else "horizontal lines"
             r = estimate_radius(sub[:max(1, 70 // stride)], line)
             truth = track_crossings(seq.mot_gt, line, hysteresis=5)
             cft = [(c.frame, c.direction) for c in track_crossings(tracks, line, hysteresis=5)]
@@ -94,8 +95,10 @@ def pets(data: Path) -> dict:
                 det = [(e.frame, e.direction) for e in ev]
                 for half, (lo, hi) in (("tune 1-200", (1, 200)), ("report 201-400", (201, 400))):
                     add(acc, f"{name} | {half}", score(det, truth, lo, hi))
+                    add(acc, f"{name} | {half} | {orient}", score(det, truth, lo, hi))
             for half, (lo, hi) in (("tune 1-200", (1, 200)), ("report 201-400", (201, 400))):
                 add(acc, f"cft (pftrack mot) | {half}", score(cft, truth, lo, hi))
+                add(acc, f"cft (pftrack mot) | {half} | {orient}", score(cft, truth, lo, hi))
         res[f"stride {stride}"] = {"scores": summarise(acc), "ntt_fps_per_line": float(np.median(fps_ntt)),
                                    "ntt_fps_4_lines": float(1.0 / sum(1.0 / f for f in fps_ntt)),
                                    "mot_fps": mot_fps}

@@ -5,7 +5,12 @@ import pytest
 
 from pftrack.cli import main
 from pftrack.events.eval import match_events, track_crossings
-from pftrack.events.geometry import build_patches, crossings_of_track, parse_polyline, polyline_project
+from pftrack.events.geometry import (
+    build_patches,
+    crossings_of_track,
+    parse_polyline,
+    polyline_project,
+)
 from pftrack.events.scoring import bhattacharyya_distance, patch_similarity, ssd_motion
 from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams
 from pftrack.synth.traffic import export_traffic, traffic_scene

@@ -151,7 +151,7 @@ def cmd_tripwire(args) -> int:
                 cv2.polylines(canvas, [pts], False, (255, 255, 255), 2, cv2.LINE_AA)
                 for k, c in enumerate(tw.layout.centres):
                     col = (0, 0, 255) if tw.patches[k].fg else ((255, 160, 0) if tw.layout.side[k] < 0 else (0, 200, 0))
-                    cv2.circle(canvas, (int(round(c[0])), int(round(c[1]))), int(round(tw.params.radius)), col, 1)
+                    cv2.circle(canvas, (round(float(c[0])), round(float(c[1]))), round(tw.params.radius), col, 1)
                 for item in flash:
                     e = item[0]
                     cv2.circle(canvas, (int(e.x), int(e.y)), int(2 * tw.params.radius), (0, 255, 255), 3)

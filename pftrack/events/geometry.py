@@ -147,16 +147,12 @@ def crossings_of_track(frames: np.ndarray, points: np.ndarray, pts: np.ndarray, 
     points = np.asarray(points, dtype=np.float64)
     if len(points) == 0:
         return []
-    dist, _, seg, arc, signed = polyline_project(points, pts)
-    _, _, _, _, length, cum = _segments(pts)
-    total = cum[-1]
-    # the projection must fall on the wire, not beyond its ends
-    on = np.ones(len(points), dtype=bool)
+    _, _, seg, _, signed = polyline_project(points, pts)
     a, _b, u, _n, _l, _c = _segments(pts)
+    # the projection must fall on the wire, not beyond its ends
     t0 = np.einsum("nc,c->n", points - a[0], u[0])
     t1 = np.einsum("nc,c->n", points - pts[-1], u[-1])
-    on &= ~((seg == 0) & (t0 < 0)) & ~((seg == len(a) - 1) & (t1 > 0))
-    on &= (arc >= 0) & (arc <= total)
+    on = ~((seg == 0) & (t0 < 0)) & ~((seg == len(a) - 1) & (t1 > 0))
     out: list[Crossing] = []
     state = 0
     last_i = -1
