@@ -2,7 +2,8 @@
 
 One module per command group: :mod:`.track` (track, demo), :mod:`.mot`,
 :mod:`.evaluate` (eval, list), :mod:`.bench` (bench, synth), :mod:`.densitometry` (book ch. 14),
-:mod:`.points` (points, stereo: book ch. 7), :mod:`.events` (tripwire: book ch. 10).
+:mod:`.points` (points, stereo: book ch. 7), :mod:`.events` (tripwire: book ch. 10),
+:mod:`.multicam` (handover: book ch. 11).
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr, never a
 traceback), 130 interrupted by Ctrl-C or SIGTERM (everything computed so far is
@@ -24,6 +25,7 @@ from .common import DEFAULT_TRACKER, ArgumentParser
 from .densitometry import add_densitometry
 from .evaluate import add_eval, add_list
 from .events import add_tripwire
+from .multicam import add_handover
 from .mot import add_mot, run_mot
 from .points import add_points, add_stereo
 from .track import add_demo, add_track, demo_clip, run_track
@@ -47,6 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_points(sub)
     add_stereo(sub)
     add_tripwire(sub)
+    add_handover(sub)
     return parser
 
 

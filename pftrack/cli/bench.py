@@ -107,12 +107,16 @@ def add_synth(sub) -> None:
     p = sub.add_parser("synth", help="write seeded synthetic scenes with exact ground truth as OTB folders",
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
-    p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse", "xray"],
+    p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse",
+                                                             "twocam", "xray"],
                    help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
                         "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
                         "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7; 'traffic-sparse' and "
-                        "'traffic-dense' (MOTChallenge folders with wire.txt) are the tripwire scenes of book ch. 10")
-    p.add_argument("--source", help="xray: the grey image to warp (an angiography frame)")
+                        "'traffic-dense' (MOTChallenge folders with wire.txt) are the tripwire scenes of book ch. 10; 'twocam' "
+                        "cuts the MOTChallenge sequence given with --source into two cameras with disjoint views "
+                        "and a seeded colour response (cam_a/, cam_b/, identity.csv; book ch. 11)")
+    p.add_argument("--source", help="xray: the grey image to warp (an angiography frame); twocam: a MOTChallenge "
+                                    "sequence folder")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.set_defaults(func=cmd_synth)
@@ -137,6 +141,14 @@ def cmd_synth(args) -> int:
         raise ParameterError("no seeds given")
     out = Path(args.out)
     image = None
+    if args.kind == "twocam":
+        from ..errors import SourceError
+        from ..io.datasets import detect_layout
+
+        if not args.source:
+            raise ParameterError("twocam scenes need --source SEQUENCE (a MOTChallenge folder with ground truth)")
+        if detect_layout(Path(args.source)) != "mot":
+            raise SourceError(f"{args.source}: not a MOTChallenge folder")
     if args.kind == "xray":
         from ..errors import SourceError
         from ..io.sources import read_image
@@ -158,6 +170,10 @@ def cmd_synth(args) -> int:
             from ..synth.occluder import export_point_scene, occluder_scene
 
             export_point_scene(occluder_scene(sd), out / f"occluder-{sd:03d}")
+        elif args.kind == "twocam":
+            from ..synth.twocam import export_twocam, twocam_scene
+
+            export_twocam(twocam_scene(args.source, sd), out / f"twocam-{sd:03d}")
         elif args.kind.startswith("traffic-"):
             from ..synth.traffic import export_traffic, traffic_scene
 

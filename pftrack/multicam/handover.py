@@ -1,0 +1,177 @@
+"""Hand-over of people between two cameras with disjoint views (book ch. 11, Sect. 5–6).
+
+1. Every track of each camera gets an appearance: the mean of its per-frame region
+   histograms (:mod:`.appearance`), and the raw counts of its whole-foreground histogram
+   (for the BTF).
+2. A BTF from camera A to camera B is fitted on known correspondences (``pairs``): MBTF
+   (mean of the per-pair BTFs, Eq. 21) or CBTF (BTF of the accumulated histograms, Eq. 22),
+   or none.
+3. Camera A's appearances are brought into camera B's colours (push-forward, Eqs. 25–26)
+   and compared with camera B's (Eqs. 23–24).  Eq. 2 under the one-to-one constraint is a
+   linear assignment (``scipy.optimize.linear_sum_assignment``) on −log similarity, with a
+   "new person" option of cost −log τ_new per track, τ_new the threshold that best separates
+   the training set's genuine and impostor pairs (proposed; the text gives no rule).  Only pairs whose
+   tracks follow each other in time (one ends before the other starts) can be linked.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from .appearance import region_histograms, similarity_matrix
+from .btf import apply_btf_hist, cbtf, identity_btf, mbtf
+
+__all__ = ["TrackAppearance", "describe_tracks", "fit_btf", "link_tracks", "new_threshold"]
+
+
+@dataclass
+class TrackAppearance:
+    track: int
+    first: int
+    last: int
+    hist: np.ndarray                      # (regions, 3, 256) mean normalised histogram
+    raw: np.ndarray                       # (3, 256) whole-foreground pixel counts
+    samples: int = 0
+    _acc: list = field(default_factory=list, repr=False)
+
+
+def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray, feature: str, *,
+                    fg: Callable[[int], np.ndarray | None] | None = None, every: int = 2,
+                    numbers: list[int] | None = None) -> dict[int, TrackAppearance]:
+    """Appearances of every track of MOT rows ``frame,id,x,y,w,h,...``; ``frames(n)`` gives frame n
+    (``fg(n)`` its foreground mask); every ``every``-th frame of a track is sampled."""
+    rows = np.asarray(rows, dtype=np.float64)
+    out: dict[int, TrackAppearance] = {}
+    by_frame: dict[int, list] = {}
+    for tid in np.unique(rows[:, 1]).astype(int):
+        r = rows[rows[:, 1] == tid]
+        r = r[np.argsort(r[:, 0])]
+        out[int(tid)] = TrackAppearance(int(tid), int(r[0, 0]), int(r[-1, 0]), np.zeros(0), np.zeros((3, 256)))
+        for k, row in enumerate(r):
+            if k % every == 0 or k == len(r) - 1:
+                by_frame.setdefault(int(row[0]), []).append((int(tid), row[2:6]))
+    for n in sorted(by_frame) if numbers is None else [n for n in numbers if n in by_frame]:
+        img = frames(n)
+        if img is None:
+            continue
+        mask = fg(n) if fg is not None else None
+        for tid, box in by_frame[n]:
+            if box[2] < 4 or box[3] < 4:
+                continue
+            a = out[tid]
+            a._acc.append(region_histograms(img, box, feature, fg=mask))
+            a.raw += region_histograms(img, box, "whole", fg=mask, raw=True)[0]
+            a.samples += 1
+    for a in out.values():
+        a.hist = np.mean(a._acc, axis=0) if a._acc else np.full((1, 3, 256), 1.0 / 256)
+        a._acc = []
+    return out
+
+
+def fit_btf(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppearance], pairs, method: str) -> np.ndarray:
+    """``(3, 256)`` BTF from camera A to camera B fitted on the ``pairs`` (track_a, track_b)."""
+    if method == "none" or not pairs:
+        return identity_btf()
+    src = [app_a[a].raw for a, _ in pairs]
+    dst = [app_b[b].raw for _, b in pairs]
+    if method == "mbtf":
+        return mbtf(src, dst, [(k, k) for k in range(len(pairs))])
+    if method == "cbtf":
+        return cbtf(src, dst)
+    raise ValueError("btf must be none, mbtf or cbtf")
+
+
+def _similarities(app_a, app_b, lut) -> tuple[list[int], list[int], np.ndarray]:
+    ka, kb = sorted(app_a), sorted(app_b)
+    A = np.stack([apply_btf_hist(app_a[k].hist, lut) for k in ka]) if ka else np.zeros((0, 1, 3, 256))
+    B = np.stack([app_b[k].hist for k in kb]) if kb else np.zeros((0, 1, 3, 256))
+    S = similarity_matrix(A, B) if len(A) and len(B) else np.zeros((len(ka), len(kb)))
+    return ka, kb, S
+
+
+def new_threshold(app_a, app_b, pairs, method: str) -> float:
+    """τ_new from the training tracks (proposed; the text gives no rule): the similarity threshold with the
+    fewest errors between genuine pairs (the training correspondences) and impostor pairs (a training track
+    of one camera against another person's training track in the other camera), ties to the lowest.
+
+    A genuine pair is scored with the BTF fitted *without* it (leave one pair out): the BTF fitted on a
+    pair makes that pair look more alike than any unseen person will, and a threshold taken from such
+    similarities rejects the true links of new people.  0 (no "new person" decision) without pairs.
+    """
+    if not pairs:
+        return 0.0
+    a_ids = sorted({a for a, _ in pairs})
+    b_ids = sorted({b for _, b in pairs})
+    lut = fit_btf(app_a, app_b, pairs, method)
+    ka, kb, S = _similarities({a: app_a[a] for a in a_ids}, {b: app_b[b] for b in b_ids}, lut)
+    same = set(pairs)
+    genuine = []
+    for a, b in pairs:
+        rest = [(x, y) for x, y in pairs if x != a and y != b]
+        lut_k = fit_btf(app_a, app_b, rest, method) if rest else identity_btf()
+        _, _, s_k = _similarities({a: app_a[a]}, {b: app_b[b]}, lut_k)
+        genuine.append(float(s_k[0, 0]))
+    partners = {a: {y for x, y in same if x == a} for a in a_ids}
+    impostor = []
+    for i, a in enumerate(ka):
+        for j, b in enumerate(kb):
+            related = any(b in partners[x] for x in a_ids if partners[x] & partners[a])
+            if not related:
+                impostor.append(S[i, j])
+    g, im = np.asarray(genuine), np.asarray(impostor)
+    if len(im) == 0:
+        return float(g.min()) * 0.9
+    cands = np.unique(np.concatenate([g, im, [0.0]]))
+    errs = [np.mean(g < t) + np.mean(im >= t) for t in cands]
+    return float(cands[int(np.argmin(errs))])
+
+
+def link_tracks(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppearance], lut: np.ndarray, *,
+                tau_new: float = 0.0, exclude_a=(), exclude_b=()) -> list[tuple[int, int, float]]:
+    """One-to-one links ``(track_a, track_b, similarity)``.
+
+    A track that has ended in one camera is in the gallery; a track that starts later in the
+    other camera is a probe for it.  Every probe takes at most one gallery track and every
+    gallery track serves at most one probe (Eq. 2 as an assignment); a probe whose best
+    affordable match is below ``tau_new`` is a new person (no link).
+    """
+    a_ids = {k: v for k, v in app_a.items() if k not in set(exclude_a)}
+    b_ids = {k: v for k, v in app_b.items() if k not in set(exclude_b)}
+    ka, kb, S = _similarities(a_ids, b_ids, lut)
+    if not ka or not kb:
+        return []
+    tracks = [("a", k) for k in ka] + [("b", k) for k in kb]
+    first = {("a", k): a_ids[k].first for k in ka} | {("b", k): b_ids[k].first for k in kb}
+    last = {("a", k): a_ids[k].last for k in ka} | {("b", k): b_ids[k].last for k in kb}
+
+    def sim(p, g):
+        a, b = (p, g) if p[0] == "a" else (g, p)
+        return S[ka.index(a[1]), kb.index(b[1])]
+
+    probes = [p for p in tracks if any(g[0] != p[0] and last[g] < first[p] for g in tracks)]
+    if not probes:
+        return []
+    gallery = [g for g in tracks if any(p[0] != g[0] and last[g] < first[p] for p in probes)]
+    big = 1e6
+    cost = np.full((len(probes), len(gallery)), big)
+    for i, p in enumerate(probes):
+        for j, g in enumerate(gallery):
+            if g[0] != p[0] and last[g] < first[p]:
+                cost[i, j] = -np.log(max(sim(p, g), 1e-9))
+    new_cost = -np.log(max(tau_new, 1e-9)) if tau_new > 0 else big / 2
+    full = np.hstack([cost, np.full((len(probes), len(probes)), big)])
+    full[np.arange(len(probes)), len(gallery) + np.arange(len(probes))] = new_cost
+    ri, ci = linear_sum_assignment(full)
+    links = []
+    for r, c in zip(ri, ci):
+        if c < len(gallery) and cost[r, c] < big:
+            p, g = probes[r], gallery[c]
+            sv = float(sim(p, g))
+            if sv >= tau_new:
+                a, b = (p, g) if p[0] == "a" else (g, p)
+                links.append((a[1], b[1], sv))
+    return links

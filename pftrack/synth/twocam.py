@@ -1,0 +1,137 @@
+"""Two cameras with disjoint views cut from one real sequence, for hand-over experiments (book ch. 11).
+
+Camera A sees the left part of each frame, camera B the right part; the strip between
+them is seen by neither (people vanish there).  Camera B's pixels go through a seeded,
+nonlinear, per-channel colour response ``v' = 255·clip(g·(v/255)^γ + o)`` that the
+hand-over method does not know (γ ∈ [0.55, 1.8], gain g ∈ [0.7, 1.25], offset o ∈
+[−0.1, 0.1] per channel).  Each camera's tracks are the annotated boxes lying fully inside
+its view, split where a person leaves it; ``identity`` maps ``(camera, track)`` to the
+person.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+__all__ = ["TwoCamScene", "export_twocam", "twocam_scene"]
+
+
+@dataclass
+class TwoCamScene:
+    frames: list[Path]            # source frames (1-based numbers index frames[n - 1])
+    split: tuple[int, int]        # camera A: x < split[0]; camera B: x >= split[1]
+    response: np.ndarray          # (3, 256) RGB tables of camera B
+    tracks_a: np.ndarray          # MOT rows in camera A's coordinates
+    tracks_b: np.ndarray
+    identity: dict                # ("a"|"b", track) -> person
+    numbers: tuple[int, int]      # frame range used
+    meta: dict
+
+    def frame_a(self, n: int) -> np.ndarray | None:
+        img = cv2.imread(str(self.frames[n - 1]))
+        return None if img is None else np.ascontiguousarray(img[:, :self.split[0]])
+
+    def frame_b(self, n: int) -> np.ndarray | None:
+        img = cv2.imread(str(self.frames[n - 1]))
+        if img is None:
+            return None
+        from ..multicam.btf import apply_btf_image
+
+        return apply_btf_image(np.ascontiguousarray(img[:, self.split[1]:]), self.response)
+
+    def handovers(self) -> list[tuple[int, int]]:
+        """Consecutive (track_a, track_b) of one person in the other camera, in either order of time."""
+        out = []
+        for person in sorted(set(self.identity.values())):
+            ta = [t for (c, t), p in self.identity.items() if c == "a" and p == person]
+            tb = [t for (c, t), p in self.identity.items() if c == "b" and p == person]
+            span = {("a", t): _span(self.tracks_a, t) for t in ta} | {("b", t): _span(self.tracks_b, t) for t in tb}
+            order = sorted(span, key=lambda k: span[k][0])
+            for k0, k1 in zip(order[:-1], order[1:]):
+                if k0[0] != k1[0]:
+                    out.append((k0[1], k1[1]) if k0[0] == "a" else (k1[1], k0[1]))
+        return out
+
+
+def _span(rows: np.ndarray, tid: int) -> tuple[int, int]:
+    f = rows[rows[:, 1] == tid, 0]
+    return int(f.min()), int(f.max())
+
+
+def colour_response(rng: np.random.Generator) -> np.ndarray:
+    v = np.arange(256) / 255.0
+    out = []
+    for _ in range(3):
+        g, gamma, o = rng.uniform(0.7, 1.25), rng.uniform(0.55, 1.8), rng.uniform(-0.1, 0.1)
+        out.append(255.0 * np.clip(g * v ** gamma + o, 0.0, 1.0))
+    return np.maximum.accumulate(np.stack(out), axis=1)
+
+
+def _tracks(gt: np.ndarray, inside, shift: float, cam: str, min_len: int, identity: dict) -> np.ndarray:
+    rows = []
+    next_id = 1
+    for pid in np.unique(gt[:, 1]).astype(int):
+        r = gt[gt[:, 1] == pid]
+        r = r[np.argsort(r[:, 0])]
+        ok = np.array([inside(b) for b in r[:, 2:6]])
+        idx = np.flatnonzero(ok)
+        if len(idx) == 0:
+            continue
+        runs = np.split(idx, np.flatnonzero(np.diff(r[idx, 0]) > 1) + 1)
+        for run in runs:
+            if len(run) < min_len:
+                continue
+            for row in r[run]:
+                rows.append([row[0], next_id, row[2] - shift, row[3], row[4], row[5], 1, -1, -1, -1])
+            identity[(cam, next_id)] = int(pid)
+            next_id += 1
+    return np.asarray(rows, dtype=np.float64).reshape(-1, 10)
+
+
+def twocam_scene(sequence_dir, seed: int = 0, *, numbers: tuple[int, int] = (1, 400),
+                 split: tuple[int, int] = (340, 430), min_len: int = 5) -> TwoCamScene:
+    """Cut a MOTChallenge sequence (frames and ground truth) into two disjoint cameras."""
+    from ..io.datasets import read_sequence
+
+    seq = read_sequence(sequence_dir)
+    if seq.mot_gt is None:
+        raise ValueError(f"{sequence_dir}: needs MOTChallenge ground truth")
+    gt = seq.mot_gt[(seq.mot_gt[:, 0] >= numbers[0]) & (seq.mot_gt[:, 0] <= numbers[1])]
+    w = seq.size[0] if seq.size else cv2.imread(str(seq.frames[0])).shape[1]
+    rng = np.random.default_rng(seed)
+    identity: dict = {}
+    ta = _tracks(gt, lambda b: b[0] >= 2 and b[0] + b[2] <= split[0] - 2, 0.0, "a", min_len, identity)
+    tb = _tracks(gt, lambda b: b[0] >= split[1] + 2 and b[0] + b[2] <= w - 2, float(split[1]), "b", min_len,
+                 identity)
+    resp = colour_response(rng)
+    meta = {"seed": seed, "frames": list(numbers), "split": list(split), "source": str(sequence_dir)}
+    return TwoCamScene(list(seq.frames), split, resp, ta, tb, identity, numbers, meta)
+
+
+def export_twocam(scene: TwoCamScene, folder) -> None:
+    """``cam_a/`` and ``cam_b/`` MOTChallenge folders (img1, gt/gt.txt, seqinfo.ini) and ``identity.csv``
+    (``camera,track,person``); frames are renumbered from 1."""
+    folder = Path(folder)
+    off = scene.numbers[0] - 1
+    for cam, rows, get in (("a", scene.tracks_a, scene.frame_a), ("b", scene.tracks_b, scene.frame_b)):
+        d = folder / f"cam_{cam}"
+        (d / "img1").mkdir(parents=True, exist_ok=True)
+        (d / "gt").mkdir(parents=True, exist_ok=True)
+        size = None
+        for n in range(scene.numbers[0], scene.numbers[1] + 1):
+            img = get(n)
+            size = img.shape[:2]
+            cv2.imwrite(str(d / "img1" / f"{n - off:06d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 95])
+        shifted = rows.copy()
+        shifted[:, 0] -= off
+        lines = [",".join(f"{v:.2f}" if i in (2, 3, 4, 5) else f"{int(v)}" for i, v in enumerate(r)) for r in shifted]
+        (d / "gt" / "gt.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        (d / "seqinfo.ini").write_text(
+            f"[Sequence]\nname=cam_{cam}\nimDir=img1\nframeRate=7\nseqLength={scene.numbers[1] - off}\n"
+            f"imWidth={size[1]}\nimHeight={size[0]}\nimExt=.jpg\n", encoding="utf-8")
+    rows = ["camera,track,person"] + [f"{c},{t},{p}" for (c, t), p in sorted(scene.identity.items())]
+    (folder / "identity.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")

@@ -1,0 +1,138 @@
+"""Book ch. 11: brightness transfer functions, appearance partitions, hand-over linking, the command."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pftrack.cli import main
+from pftrack.multicam.appearance import region_histograms, region_labels, similarity, similarity_matrix
+from pftrack.multicam.btf import apply_btf_hist, apply_btf_image, btf_from_hists, cbtf, cum_hist, mbtf
+from pftrack.multicam.handover import TrackAppearance, link_tracks
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "pets09_s2l1_dev"
+
+
+def _monotone(rng):
+    v = np.arange(256) / 255.0
+    return np.stack([np.floor(255 * np.clip(rng.uniform(0.7, 1.2) * v ** rng.uniform(0.5, 2.0), 0, 1))
+                     for _ in range(3)])
+
+
+def test_btf_recovery_is_exact_on_occupied_bins():
+    rng = np.random.default_rng(0)
+    f = _monotone(rng).astype(int)  # monotone with ties
+    pix = rng.integers(0, 256, (3, 5000))
+    h1 = np.stack([np.bincount(pix[c], minlength=256) for c in range(3)]).astype(float)
+    h2 = np.stack([np.bincount(f[c][pix[c]], minlength=256) for c in range(3)]).astype(float)
+    lut = btf_from_hists(h1, h2)
+    for c in range(3):
+        occ = h1[c] > 0
+        np.testing.assert_array_equal(lut[c][occ], f[c][occ])
+    # pushing the histogram through the BTF gives the destination histogram
+    np.testing.assert_allclose(apply_btf_hist(h1[None], lut)[0], h2)
+    np.testing.assert_allclose(cum_hist(h2)[:, -1], 1.0)
+
+
+def test_cbtf_beats_mbtf_on_sparse_training():
+    rng = np.random.default_rng(1)
+    f = _monotone(rng)
+    src, dst = [], []
+    for _ in range(12):  # twelve small patches: each histogram has few pixels
+        base = rng.normal(rng.uniform(60, 200), 25, (3, 40)).clip(0, 255).astype(int)
+        src.append(np.stack([np.bincount(base[c], minlength=256) for c in range(3)]).astype(float))
+        dst.append(np.stack([np.bincount(f[c].astype(int)[base[c]], minlength=256) for c in range(3)]).astype(float))
+    occ = np.sum(src, axis=0) > 0
+    err_m = np.abs(mbtf(src, dst, [(k, k) for k in range(12)]) - f)[occ].mean()
+    err_c = np.abs(cbtf(src, dst) - f)[occ].mean()
+    assert err_c < err_m
+
+
+def test_btf_on_images_matches_the_histogram_push_forward():
+    rng = np.random.default_rng(2)
+    img = rng.integers(0, 256, (20, 30, 3)).astype(np.uint8)
+    lut = _monotone(rng)
+    out = apply_btf_image(img, lut)
+    box = (0, 0, 30, 20)
+    h_img = region_histograms(out, box, "whole", raw=True)
+    h_push = apply_btf_hist(region_histograms(img, box, "whole", raw=True), lut)
+    np.testing.assert_allclose(h_img, h_push)
+
+
+@pytest.mark.parametrize("shape", [(80, 30), (61, 23), (40, 40)])
+def test_positional_partition_covers_every_pixel_once(shape):
+    lab, n = region_labels(*shape, "positional", n_rings=2, n_sectors=4)
+    assert n == 8
+    assert lab.min() >= 0 and lab.max() == 7
+    assert set(np.unique(lab)) == set(range(8))
+    for feature in ("ellipse1", "ellipse2"):
+        lab_e, n_e = region_labels(*shape, feature)
+        assert lab_e.max() == n_e - 1 and (lab_e >= 0).mean() > 0.4
+
+
+def test_similarity_is_one_for_identical_and_symmetric():
+    rng = np.random.default_rng(3)
+    img = rng.integers(0, 256, (60, 30, 3)).astype(np.uint8)
+    a = region_histograms(img, (0, 0, 30, 60), "positional")
+    b = region_histograms(img[::-1], (0, 0, 30, 60), "positional")
+    assert similarity(a, a) == pytest.approx(1.0)
+    assert similarity(a, b) == pytest.approx(similarity(b, a))
+    assert similarity(a, b) < 1.0
+    np.testing.assert_allclose(np.sum(a, axis=(0, 2)), 1.0)
+    assert similarity_matrix(np.stack([a, b]), np.stack([a])).shape == (2, 1)
+
+
+def _app(tid, first, last, colour):
+    h = np.zeros((1, 3, 256))
+    for c in range(3):
+        h[0, c, colour[c]] = 1.0
+    return TrackAppearance(tid, first, last, h, h[0] * 100)
+
+
+def test_linking_is_one_to_one_in_time_order_with_new_people():
+    lut = np.tile(np.arange(256.0), (3, 1))
+    a = {1: _app(1, 1, 10, (200, 10, 10)), 2: _app(2, 5, 20, (10, 200, 10))}
+    b = {7: _app(7, 30, 40, (10, 200, 10)), 8: _app(8, 25, 35, (200, 10, 10)), 9: _app(9, 50, 60, (10, 10, 200))}
+    links = link_tracks(a, b, lut, tau_new=0.5)
+    assert sorted((x, y) for x, y, _ in links) == [(1, 8), (2, 7)]  # 9 matches nobody: a new person
+    # a track cannot be linked to one that overlaps it in time
+    b2 = {7: _app(7, 15, 40, (10, 200, 10))}
+    assert link_tracks({2: a[2]}, b2, lut, tau_new=0.0) == []
+
+
+@pytest.mark.shared_data
+@pytest.mark.skipif(not DATA.is_dir(), reason="shared data absent")
+def test_handover_cli_on_a_pets_two_camera_scene(tmp_path):
+    from pftrack.synth.twocam import export_twocam, twocam_scene
+
+    sc = twocam_scene(DATA, 3, numbers=(201, 400))
+    export_twocam(sc, tmp_path / "tc")
+    ho = sc.handovers()
+    assert ho
+    pairs = tmp_path / "pairs.csv"
+    pairs.write_text("track_a,track_b\n" + f"{ho[0][0]},{ho[0][1]}\n")
+    out = tmp_path / "links.csv"
+    cam_a, cam_b = tmp_path / "tc" / "cam_a", tmp_path / "tc" / "cam_b"
+    args = ["handover", str(cam_a), str(cam_b), "--tracks-a", str(cam_a / "gt" / "gt.txt"), "--tracks-b",
+            str(cam_b / "gt" / "gt.txt"), "--out", str(out), "--quiet"]
+    assert main(args + ["--train-pairs", str(pairs)]) == 0
+    rows = out.read_text().splitlines()
+    assert rows[0] == "track_a,track_b,similarity"
+    links = [tuple(int(v) for v in r.split(",")[:2]) for r in rows[1:]]
+    assert links
+    # each track has at most one predecessor and one successor (ch11.md §1.1)
+    span_a = {t: (sc.tracks_a[sc.tracks_a[:, 1] == t, 0].min(), sc.tracks_a[sc.tracks_a[:, 1] == t, 0].max())
+              for t in np.unique(sc.tracks_a[:, 1]).astype(int)}
+    span_b = {t: (sc.tracks_b[sc.tracks_b[:, 1] == t, 0].min(), sc.tracks_b[sc.tracks_b[:, 1] == t, 0].max())
+              for t in np.unique(sc.tracks_b[:, 1]).astype(int)}
+    pred, succ = [], []
+    for a, b in links:
+        first, second = (("a", a), ("b", b)) if span_a[a][1] < span_b[b][0] else (("b", b), ("a", a))
+        pred.append(first)
+        succ.append(second)
+    assert len(set(pred)) == len(pred) and len(set(succ)) == len(succ)
+    assert ho[0] not in links  # training pairs are not linked again
+    assert main(args[:4] + [str(tmp_path / "none.txt")] + args[5:]) == 2
+    bad = tmp_path / "bad.csv"
+    bad.write_text("999,1\n")
+    assert main(args + ["--train-pairs", str(bad)]) == 2
