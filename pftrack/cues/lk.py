@@ -15,7 +15,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["LKConfig", "gray_of", "lk_flow", "ncc", "patches_at", "reanchor", "strongest_corner"]
+__all__ = ["LKConfig", "gray_of", "lk_flow", "ncc", "parabola_peak", "patches_at", "reanchor"]
 
 
 def gray_of(frame: np.ndarray) -> np.ndarray:
@@ -91,28 +91,6 @@ def lk_flow(prev_gray: np.ndarray, gray: np.ndarray, pts: np.ndarray, cfg: LKCon
     return new, ok
 
 
-def strongest_corner(gray: np.ndarray, box, *, block: int = 7, n: int = 1, min_distance: float = 1.0
-                     ) -> np.ndarray:
-    """The ``n`` pixels of largest min-eigenvalue inside ``box`` (ch07.md §1.1), as ``(m, 2)``, m ≤ n.
-
-    Falls back to the box centre when the box has no corner at all (a flat region).
-    """
-    x, y, bw, bh = (float(v) for v in box)
-    h, w = gray.shape[:2]
-    x0, y0 = max(0, int(np.floor(x))), max(0, int(np.floor(y)))
-    x1, y1 = min(w, int(np.ceil(x + bw))), min(h, int(np.ceil(y + bh)))
-    roi = gray[y0:y1, x0:x1]
-    pts = None
-    if roi.shape[0] >= block and roi.shape[1] >= block:
-        pts = cv2.goodFeaturesToTrack(roi, maxCorners=int(n), qualityLevel=0.01, minDistance=float(min_distance),
-                                      blockSize=int(block))
-    if pts is None or len(pts) == 0:
-        return np.array([[x + bw / 2.0, y + bh / 2.0]])
-    return pts.reshape(-1, 2).astype(np.float64) + (x0, y0)
-
-
-
-
 def patches_at(gray: np.ndarray, pts: np.ndarray, half: int) -> np.ndarray:
     """``(n, 2·half+1, 2·half+1)`` float32 patches centred (sub-pixel) on ``pts`` (NaN points give zeros)."""
     pts = np.asarray(pts, dtype=np.float64).reshape(-1, 2)
@@ -135,8 +113,8 @@ def ncc(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(den > 1e-9, (a * b).sum(1) / np.where(den > 1e-9, den, 1.0), 0.0)
 
 
-def _parabola(sm: float, s0: float, sp: float) -> float:
-    """Sub-pixel offset of a peak from three samples (clamped to ±0.5)."""
+def parabola_peak(sm: float, s0: float, sp: float) -> float:
+    """Sub-pixel offset of a maximum from three samples (clamped to ±0.5)."""
     den = sm - 2.0 * s0 + sp
     return 0.0 if den >= 0 else float(np.clip(0.5 * (sm - sp) / den, -0.5, 0.5))
 
@@ -169,8 +147,8 @@ def reanchor(ref_gray: np.ndarray, gray: np.ndarray, ref_pts: np.ndarray, guess:
         _, best, _, (bx, by) = cv2.minMaxLoc(score)
         if best < min_score:
             continue
-        dx = _parabola(score[by, bx - 1], best, score[by, bx + 1]) if 0 < bx < score.shape[1] - 1 else 0.0
-        dy = _parabola(score[by - 1, bx], best, score[by + 1, bx]) if 0 < by < score.shape[0] - 1 else 0.0
+        dx = parabola_peak(score[by, bx - 1], best, score[by, bx + 1]) if 0 < bx < score.shape[1] - 1 else 0.0
+        dy = parabola_peak(score[by - 1, bx], best, score[by + 1, bx]) if 0 < by < score.shape[0] - 1 else 0.0
         shift = np.array([bx + dx - r, by + dy - r])
         if np.hypot(*shift) <= max_shift:
             out[i] = (gx, gy) + shift

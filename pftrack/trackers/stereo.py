@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..cues.lk import gray_of, lk_flow
+from ..cues.lk import gray_of, lk_flow, parabola_peak
 from ..errors import FrameError
 from ..filtering.rls import RLSAR, JointRLSAR, stabilise
 from ..params import param
@@ -38,11 +38,6 @@ def triangulate(x1, y1, d, *, f: float, B: float, cx: float, cy: float):
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.where(d > 0, B / d, np.nan)
     return (x1 - cx) * s, (y1 - cy) * s, f * s
-
-
-def _parabola(sm: float, s0: float, sp: float) -> float:
-    den = sm - 2.0 * s0 + sp
-    return 0.0 if den >= 0 else float(np.clip(0.5 * (sm - sp) / den, -0.5, 0.5))
 
 
 def disparity_search(left: np.ndarray, right: np.ndarray, pts: np.ndarray, d_lo, d_hi, *, win: int = 7,
@@ -78,7 +73,7 @@ def disparity_search(left: np.ndarray, right: np.ndarray, pts: np.ndarray, d_lo,
         strip = cv2.getRectSubPix(rf, (span + win, win), (float(centre), float(y)))
         score = cv2.matchTemplate(strip, tmpl, cv2.TM_CCOEFF_NORMED)[0]
         j = int(np.argmax(score))
-        dj = _parabola(score[j - 1], score[j], score[j + 1]) if subpixel and 0 < j < len(score) - 1 else 0.0
+        dj = parabola_peak(score[j - 1], score[j], score[j + 1]) if subpixel and 0 < j < len(score) - 1 else 0.0
         d_out[i], s_out[i] = b - (j + dj), float(score[j])
     return d_out, s_out
 
