@@ -55,9 +55,10 @@ def stratified(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return _search(c, r)
 
 
-def systematic(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def systematic(weights: np.ndarray, rng: np.random.Generator, n: int | None = None) -> np.ndarray:
+    """``n`` indices (default: as many as weights) with one uniform offset shared by all strata."""
     c = _cumulative(weights)
-    n = c.size
+    n = c.size if n is None else int(n)
     r = (np.arange(n) + rng.random()) / n
     return _search(c, r)
 
