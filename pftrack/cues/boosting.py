@@ -1,0 +1,157 @@
+"""Per-pixel colour and texture features and online real AdaBoost (book ch. 3, §3.1–3.2).
+
+Features (ch03.md §1.1): 4 colour channels (R, G, B and grey Y, each quantised into
+``colour_blocks`` equal-width blocks) and 9 cross-channel local ternary patterns (LTP_{8,1},
+Tan & Triggs 2010, restored): for the channel pair (centre c, neighbour n), with
+``x = g_u − g_c``, the upper code sets bit u where ``x ≥ t`` and the lower code where
+``x ≤ −t``; neighbours u = 0…7 run clockwise from the right-hand one.  Each code is mapped
+to its rotation-invariant uniform class (``riu2``: the number of set bits if the code has at
+most two circular 0/1 transitions, else 9), and the feature value is the block
+``10·riu2(U) + riu2(L)`` ∈ [0, 100) (a design choice, ch03.md §1.1).
+
+Online real AdaBoost (Algorithm 1, restored as in Oza & Russell 2001 and Grabner & Bischof
+2006): ``N`` selectors, each holding one weak learner per feature (a per-block log-odds
+table); a labelled pixel updates every selector in turn with importance λ, the selector
+keeps its least erroneous learner (voting weight ``α = ln((1 − e)/e)``), λ is divided by
+``2(1 − e)`` or ``2e``, and the worst learner is reset.  ``confidence(x) = Σ α_n h_n(x)``.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .._numba import njit
+
+__all__ = ["LTP_PAIRS", "OnlineRealBoost", "colour_features", "ltp_codes", "pixel_features", "riu2_table"]
+
+#: (centre channel, neighbour channel) of the nine LTP features, RGB indices (L2119–2121)
+LTP_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1))
+#: the 8 neighbours, clockwise from the right-hand one (row, column offsets)
+_NEIGHBOURS = ((0, 1), (1, 1), (1, 0), (1, -1), (0, -1), (-1, -1), (-1, 0), (-1, 1))
+
+
+def riu2_table() -> np.ndarray:
+    """``(256,)`` rotation-invariant uniform class (0…9) of every 8-bit code."""
+    out = np.zeros(256, dtype=np.int64)
+    for code in range(256):
+        bits = [(code >> u) & 1 for u in range(8)]
+        transitions = sum(bits[u] != bits[(u + 1) % 8] for u in range(8))
+        out[code] = sum(bits) if transitions <= 2 else 9
+    return out
+
+
+_RIU2 = riu2_table()
+
+
+def ltp_codes(centre: np.ndarray, neighbour: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+    """Upper and lower LTP codes (uint8) of every pixel; borders use replicated pixels."""
+    c = centre.astype(np.int32)
+    n = cv2.copyMakeBorder(neighbour.astype(np.int32), 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+    h, w = c.shape
+    up = np.zeros((h, w), np.int32)
+    lo = np.zeros((h, w), np.int32)
+    for u, (dy, dx) in enumerate(_NEIGHBOURS):
+        x = n[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] - c
+        up |= (x >= t).astype(np.int32) << u
+        lo |= (x <= -t).astype(np.int32) << u
+    return up.astype(np.uint8), lo.astype(np.uint8)
+
+
+def colour_features(bgr: np.ndarray, blocks: int = 32) -> np.ndarray:
+    """``(H, W, 4)`` block indices of R, G, B and grey Y."""
+    rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+    y = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
+    chans = np.dstack([rgb, y[..., None]]).astype(np.int64)
+    return np.minimum(chans * blocks // 256, blocks - 1)
+
+
+def pixel_features(bgr: np.ndarray, *, t: float = 5.0, colour_blocks: int = 32) -> tuple[np.ndarray, np.ndarray]:
+    """Colour group ``(H, W, 4)`` and texture group ``(H, W, 9)`` block indices (ch03.md §1.1)."""
+    rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+    tex = np.empty(bgr.shape[:2] + (9,), dtype=np.int64)
+    for k, (ci, ni) in enumerate(LTP_PAIRS):
+        up, lo = ltp_codes(rgb[..., ci], rgb[..., ni], t)
+        tex[..., k] = 10 * _RIU2[up] + _RIU2[lo]
+    return colour_features(bgr, colour_blocks), tex
+
+
+@njit
+def _update(w, corr, wrong, sel, alpha, x, y, eps, count_errors):
+    """Algorithm 1 for one sample ``x`` (M,) with label ``y`` ∈ {+1, −1}; ``w`` is (N, M, B, 2)."""
+    n_sel, m_feat = w.shape[0], w.shape[1]
+    yi = 0 if y > 0 else 1
+    lam = 1.0
+    for n in range(n_sel):
+        best, worst = 0, 0
+        e_best, e_worst = 2.0, -1.0
+        for m in range(m_feat):
+            b = x[m]
+            w[n, m, b, yi] += lam
+            h = 0.5 * np.log((w[n, m, b, 0] + eps) / (w[n, m, b, 1] + eps))
+            inc = lam if count_errors else lam * abs(h)
+            if h * y >= 0:
+                corr[n, m] += inc
+            else:
+                wrong[n, m] += inc
+            e = wrong[n, m] / (wrong[n, m] + corr[n, m])
+            if e < e_best:
+                e_best, best = e, m
+            if e > e_worst:
+                e_worst, worst = e, m
+        sel[n] = best
+        if e_best <= 0.0 or e_best > 0.5:
+            # (the text: stop this sample here; earlier votes stay)
+            break
+        alpha[n] = np.log((1.0 - e_best) / e_best)
+        b = x[best]
+        h = 0.5 * np.log((w[n, best, b, 0] + eps) / (w[n, best, b, 1] + eps))
+        if h * y >= 0:
+            lam = lam / (2.0 * (1.0 - e_best))
+        else:
+            lam = lam / (2.0 * e_best)
+        if worst != best:  # replace the worst weak learner (L2248-2259)
+            w[n, worst, :, :] = 0.0
+            corr[n, worst] = 1.0
+            wrong[n, worst] = 1.0
+
+
+class OnlineRealBoost:
+    """Online real AdaBoost over ``n_features`` block-valued features (one feature group)."""
+
+    def __init__(self, n_features: int, n_blocks: int, *, n_selectors: int = 30, eps: float = 0.01,
+                 error_weighting: str = "confidence"):
+        if error_weighting not in ("confidence", "count"):
+            raise ValueError("error_weighting must be 'confidence' or 'count'")
+        self.m, self.b = int(n_features), int(n_blocks)
+        self.n = int(n_selectors)
+        self.eps = float(eps)
+        self.count_errors = error_weighting == "count"
+        self.w = np.zeros((self.n, self.m, self.b, 2))
+        self.corr = np.ones((self.n, self.m))
+        self.wrong = np.ones((self.n, self.m))
+        self.sel = np.zeros(self.n, dtype=np.int64)
+        self.alpha = np.zeros(self.n)
+
+    def update(self, x: np.ndarray, y) -> None:
+        """Learn labelled samples in order: ``x`` ``(S, M)`` block indices, ``y`` ``(S,)`` in {+1, −1}."""
+        x = np.atleast_2d(np.asarray(x, dtype=np.int64))
+        y = np.broadcast_to(np.asarray(y, dtype=np.float64), (len(x),))
+        if x.size and (x.min() < 0 or x.max() >= self.b):
+            raise ValueError(f"block indices must lie in [0, {self.b})")
+        for k in range(len(x)):
+            _update(self.w, self.corr, self.wrong, self.sel, self.alpha, x[k], float(y[k]), self.eps,
+                    self.count_errors)
+
+    def confidence(self, x: np.ndarray) -> np.ndarray:
+        """``Σ_n α_n h_n(x)`` for ``(..., M)`` block indices (vectorised over pixels)."""
+        x = np.asarray(x, dtype=np.int64)
+        flat = x.reshape(-1, self.m)
+        conf = np.zeros(len(flat))
+        for n in range(self.n):
+            if self.alpha[n] == 0.0:
+                continue
+            m = self.sel[n]
+            wb = self.w[n, m][flat[:, m]]
+            conf += self.alpha[n] * 0.5 * np.log((wb[:, 0] + self.eps) / (wb[:, 1] + self.eps))
+        return conf.reshape(x.shape[:-1])

@@ -1,0 +1,73 @@
+"""Book ch. 3 §3.1–3.2: LTP codes and online real AdaBoost (ch03.md §5.1, tests 1, 2 and 4)."""
+
+import numpy as np
+import pytest
+
+from pftrack.cues.boosting import OnlineRealBoost, ltp_codes, pixel_features, riu2_table
+
+# neighbour u = 0..7 clockwise from the right: (0,1) (1,1) (1,0) (1,-1) (0,-1) (-1,-1) (-1,0) (-1,1)
+_POS = [(1, 2), (2, 2), (2, 1), (2, 0), (1, 0), (0, 0), (0, 1), (0, 2)]
+
+
+def _patch(centre, neigh):
+    p = np.zeros((3, 3), np.uint8)
+    p[1, 1] = centre
+    for (r, c), v in zip(_POS, neigh):
+        p[r, c] = v
+    return p
+
+
+def test_ltp_codes_on_hand_computed_patches():
+    riu2 = riu2_table()
+    p = _patch(100, [110, 100, 90, 104, 96, 120, 80, 100])
+    up, lo = ltp_codes(p, p, 5)
+    assert (int(up[1, 1]), int(lo[1, 1])) == (33, 68)
+    assert 10 * riu2[33] + riu2[68] == 99
+    p = _patch(100, [110, 110, 110, 100, 100, 90, 90, 100])
+    up, lo = ltp_codes(p, p, 5)
+    assert (int(up[1, 1]), int(lo[1, 1])) == (7, 96)
+    assert 10 * riu2[7] + riu2[96] == 32
+    # cross-channel: the centre from one channel, the neighbours from another
+    centre = np.full((3, 3), 100, np.uint8)
+    up, lo = ltp_codes(centre, p, 5)
+    assert (int(up[1, 1]), int(lo[1, 1])) == (7, 96)
+    up2, lo2 = ltp_codes(p, centre, 5)  # swapped: neighbours all equal the centre value 100 of channel 1
+    assert int(up2[1, 1]) == 0 and int(lo2[1, 1]) == 0
+    flat = np.full((8, 8), 77, np.uint8)
+    u, low = ltp_codes(flat, flat, 5)
+    assert not u.any() and not low.any()
+
+
+def test_pixel_features_shapes_and_ranges():
+    img = np.random.default_rng(0).integers(0, 256, (20, 30, 3)).astype(np.uint8)
+    col, tex = pixel_features(img)
+    assert col.shape == (20, 30, 4) and tex.shape == (20, 30, 9)
+    assert col.min() >= 0 and col.max() < 32 and tex.min() >= 0 and tex.max() < 100
+
+
+def test_weak_learner_value():
+    b = OnlineRealBoost(1, 4, n_selectors=1, eps=1.0)
+    b.w[0, 0, 2] = (30.0, 10.0)
+    b.alpha[0], b.sel[0] = 1.0, 0
+    assert b.confidence(np.array([[2]]))[0] == pytest.approx(0.5 * np.log(31 / 11), abs=1e-12)
+
+
+def test_online_boosting_learns_a_planted_rule():
+    rng = np.random.default_rng(1)
+
+    def sample(n):
+        pos = rng.random(n) < 0.5
+        r = np.where(pos, rng.integers(200, 256, n), rng.integers(0, 101, n))
+        g, bl = rng.integers(0, 256, n), rng.integers(0, 256, n)
+        x = np.stack([r, g, bl, (r + g + bl) // 3], axis=1) * 32 // 256
+        return x, np.where(pos, 1.0, -1.0)
+
+    boost = OnlineRealBoost(4, 32, n_selectors=10)
+    x, y = sample(500)
+    boost.update(x, y)
+    xt, yt = sample(2000)
+    acc = np.mean(np.sign(boost.confidence(xt)) == yt)
+    assert acc >= 0.99
+    assert np.sum(boost.sel == 0) >= 8  # at least 8 of the 10 selectors vote with R
+    with pytest.raises(ValueError):
+        boost.update(np.array([[40, 0, 0, 0]]), [1.0])
