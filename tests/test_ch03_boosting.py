@@ -71,3 +71,37 @@ def test_online_boosting_learns_a_planted_rule():
     assert np.sum(boost.sel == 0) >= 8  # at least 8 of the 10 selectors vote with R
     with pytest.raises(ValueError):
         boost.update(np.array([[40, 0, 0, 0]]), [1.0])
+
+
+def test_fusion_rule_and_best_blob():
+    from pftrack.cues.cotrain import best_blob, fuse
+
+    c = np.array([2.0, 2.0, -2.0])
+    t = np.array([3.0, -1.0, -1.0])
+    np.testing.assert_array_equal(fuse(c, t), [3.0, -2.0, -2.0])  # both negative stays negative (|.| restored)
+    m = np.full((20, 30), -1.0)
+    m[2:5, 2:5] = 1.0       # small blob, mass 9
+    m[8:18, 10:20] = 0.5    # large blob, mass 50
+    b = best_blob(m)
+    assert b.mass == pytest.approx(50.0) and b.mask[12, 15] and not b.mask[3, 3]
+    np.testing.assert_allclose(b.centre, [14.5, 12.5])
+    assert best_blob(np.full((5, 5), -1.0)) is None
+
+
+def test_cotrainer_separates_a_coloured_textured_target():
+    from pftrack.cues.cotrain import CoTrainer
+
+    rng = np.random.default_rng(4)
+    img = np.clip(rng.normal(110, 10, (60, 80, 3)), 0, 255).astype(np.uint8)
+    img[20:40, 30:50] = np.clip(rng.normal((40, 60, 200), 40, (20, 20, 3)), 0, 255).astype(np.uint8)
+    co = CoTrainer(n_selectors=10, rng=rng)
+    feats = co.features(img)
+    pos = np.zeros((60, 80), bool)
+    pos[22:38, 32:48] = True
+    neg = np.ones((60, 80), bool)
+    neg[16:44, 26:54] = False
+    for _ in range(2):
+        co.learn(feats, pos, neg, max_each=300)
+    cc, ct, fu = co.maps(feats, opening=1)
+    assert (cc[pos] > 0).mean() > 0.8 and (cc[neg] > 0).mean() < 0.2
+    assert (fu[pos] > 0).mean() > (fu[neg] > 0).mean() + 0.3

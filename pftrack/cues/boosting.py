@@ -13,7 +13,9 @@ Online real AdaBoost (Algorithm 1, restored as in Oza & Russell 2001 and Grabner
 2006): ``N`` selectors, each holding one weak learner per feature (a per-block log-odds
 table); a labelled pixel updates every selector in turn with importance λ, the selector
 keeps its least erroneous learner (voting weight ``α = ln((1 − e)/e)``), λ is divided by
-``2(1 − e)`` or ``2e``, and the worst learner is reset.  ``confidence(x) = Σ α_n h_n(x)``.
+``2(1 − e)`` or ``2e``.  The worst learner of each selector is reset once per ``update`` call
+(a frame's samples; ``replace="sample"`` is the text's per-sample rule, ch03.md §1.2).
+``confidence(x) = Σ α_n h_n(x)``.
 """
 
 from __future__ import annotations
@@ -77,7 +79,7 @@ def pixel_features(bgr: np.ndarray, *, t: float = 5.0, colour_blocks: int = 32) 
 
 
 @njit
-def _update(w, corr, wrong, sel, alpha, x, y, eps, count_errors):
+def _update(w, corr, wrong, sel, alpha, x, y, eps, count_errors, replace):
     """Algorithm 1 for one sample ``x`` (M,) with label ``y`` ∈ {+1, −1}; ``w`` is (N, M, B, 2)."""
     n_sel, m_feat = w.shape[0], w.shape[1]
     yi = 0 if y > 0 else 1
@@ -110,7 +112,7 @@ def _update(w, corr, wrong, sel, alpha, x, y, eps, count_errors):
             lam = lam / (2.0 * (1.0 - e_best))
         else:
             lam = lam / (2.0 * e_best)
-        if worst != best:  # replace the worst weak learner (L2248-2259)
+        if replace and worst != best:  # replace the worst weak learner (L2248-2259, the literal rule)
             w[n, worst, :, :] = 0.0
             corr[n, worst] = 1.0
             wrong[n, worst] = 1.0
@@ -120,9 +122,12 @@ class OnlineRealBoost:
     """Online real AdaBoost over ``n_features`` block-valued features (one feature group)."""
 
     def __init__(self, n_features: int, n_blocks: int, *, n_selectors: int = 30, eps: float = 0.01,
-                 error_weighting: str = "confidence"):
+                 error_weighting: str = "confidence", replace: str = "update"):
         if error_weighting not in ("confidence", "count"):
             raise ValueError("error_weighting must be 'confidence' or 'count'")
+        if replace not in ("update", "sample"):
+            raise ValueError("replace must be 'update' (once per update call, e.g. per frame) or 'sample'")
+        self.replace = replace
         self.m, self.b = int(n_features), int(n_blocks)
         self.n = int(n_selectors)
         self.eps = float(eps)
@@ -139,9 +144,23 @@ class OnlineRealBoost:
         y = np.broadcast_to(np.asarray(y, dtype=np.float64), (len(x),))
         if x.size and (x.min() < 0 or x.max() >= self.b):
             raise ValueError(f"block indices must lie in [0, {self.b})")
+        per_sample = self.replace == "sample"
         for k in range(len(x)):
             _update(self.w, self.corr, self.wrong, self.sel, self.alpha, x[k], float(y[k]), self.eps,
-                    self.count_errors)
+                    self.count_errors, per_sample)
+        if not per_sample and len(x):
+            self._replace_worst()
+
+    def _replace_worst(self) -> None:
+        """Reset each selector's most erroneous weak learner unless it is the selected one (once per
+        update call: ch03.md's repair of the per-sample rule, which wipes a learner at every pixel)."""
+        e = self.wrong / (self.wrong + self.corr)
+        worst = np.argmax(e, axis=1)
+        for n in range(self.n):
+            if worst[n] != self.sel[n]:
+                self.w[n, worst[n]] = 0.0
+                self.corr[n, worst[n]] = 1.0
+                self.wrong[n, worst[n]] = 1.0
 
     def confidence(self, x: np.ndarray) -> np.ndarray:
         """``Σ_n α_n h_n(x)`` for ``(..., M)`` block indices (vectorised over pixels)."""
