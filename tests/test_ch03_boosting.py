@@ -105,3 +105,21 @@ def test_cotrainer_separates_a_coloured_textured_target():
     cc, ct, fu = co.maps(feats, opening=1)
     assert (cc[pos] > 0).mean() > 0.8 and (cc[neg] > 0).mean() < 0.2
     assert (fu[pos] > 0).mean() > (fu[neg] > 0).mean() + 0.3
+
+
+def test_cotrainer_cross_labels_teach_each_view_separately():
+    from pftrack.cues.cotrain import CoTrainer
+
+    rng = np.random.default_rng(5)
+    img = np.clip(rng.normal(110, 10, (40, 40, 3)), 0, 255).astype(np.uint8)
+    co = CoTrainer(n_selectors=5, rng=rng)
+    feats = co.features(img)
+    pos_c = np.zeros((40, 40), bool)
+    pos_c[5:15, 5:15] = True
+    pos_t = np.zeros((40, 40), bool)
+    pos_t[25:35, 25:35] = True
+    neg = np.zeros((40, 40), bool)
+    neg[:, 18:22] = True
+    n = co.learn(feats, pos_c, neg, pos_texture=pos_t, max_each=50)
+    assert n == 4 * 50  # each classifier saw its own 50 positives and 50 negatives
+    assert co.colour.alpha.any() and co.texture.alpha.any()

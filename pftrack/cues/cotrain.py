@@ -74,9 +74,18 @@ class CoTrainer:
         conf_t = cv2.morphologyEx(self.texture.confidence(tex).astype(np.float32), cv2.MORPH_OPEN, k)
         return conf_c, conf_t, fuse(conf_c, conf_t)
 
-    def learn(self, feats, pos: np.ndarray, neg: np.ndarray, *, max_each: int = 200) -> int:
-        """Train both classifiers on positive and negative pixel masks (interleaved in random order)."""
-        col, tex = feats
+    def learn(self, feats, pos: np.ndarray, neg: np.ndarray, *, max_each: int = 200,
+              pos_texture: np.ndarray | None = None) -> int:
+        """Train both classifiers on positive and negative pixel masks (each in a random interleaved order).
+
+        ``pos_texture`` gives the texture classifier its own positives (co-training across views, where
+        each classifier is taught by the other's most confident pixels); by default both get ``pos``."""
+        n = self._learn_one(self.colour, feats[0], pos, neg, max_each)
+        return n + self._learn_one(self.texture, feats[1], pos if pos_texture is None else pos_texture, neg,
+                                   max_each)
+
+    def _learn_one(self, clf: OnlineRealBoost, feat: np.ndarray, pos: np.ndarray, neg: np.ndarray,
+                   max_each: int) -> int:
         py, px = np.nonzero(pos)
         ny, nx = np.nonzero(neg)
         if len(py) > max_each:
@@ -88,7 +97,5 @@ class CoTrainer:
         ys, xs = np.concatenate([py, ny]), np.concatenate([px, nx])
         lab = np.concatenate([np.ones(len(py)), -np.ones(len(ny))])
         order = self.rng.permutation(len(lab))
-        ys, xs, lab = ys[order], xs[order], lab[order]
-        self.colour.update(col[ys, xs], lab)
-        self.texture.update(tex[ys, xs], lab)
+        clf.update(feat[ys[order], xs[order]], lab[order])
         return len(lab)
