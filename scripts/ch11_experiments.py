@@ -23,7 +23,12 @@ import numpy as np
 
 from pftrack.multicam.appearance import FEATURES, similarity_matrix
 from pftrack.multicam.btf import apply_btf_hist
-from pftrack.multicam.handover import describe_tracks, fit_btf, link_tracks, new_threshold
+from pftrack.multicam.handover import (
+    describe_tracks,
+    fit_btf,
+    link_tracks,
+    new_threshold,
+)
 from pftrack.synth.twocam import twocam_scene
 
 SPLITS = ((300, 390), (340, 430), (380, 470))

@@ -102,7 +102,7 @@ def test_cotrainer_separates_a_coloured_textured_target():
     neg[16:44, 26:54] = False
     for _ in range(2):
         co.learn(feats, pos, neg, max_each=300)
-    cc, ct, fu = co.maps(feats, opening=1)
+    cc, _ct, fu = co.maps(feats, opening=1)
     assert (cc[pos] > 0).mean() > 0.8 and (cc[neg] > 0).mean() < 0.2
     assert (fu[pos] > 0).mean() > (fu[neg] > 0).mean() + 0.3
 

@@ -35,7 +35,7 @@ def test_seir_is_reproducible_and_stops_when_the_ess_is_high():
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[1], b[1])
     flat = np.zeros(100)  # equal weights: ESS = N, no loop
-    xs, lls, info = seir(x, flat, _ll, np.random.default_rng(1))
+    xs, _lls, info = seir(x, flat, _ll, np.random.default_rng(1))
     assert info.loops == 0 and len(info.ess) == 1 and abs(info.ess[0] - 100.0) < 1e-9
     np.testing.assert_array_equal(xs, x)
     _, _, capped = seir(x, _ll(x), _ll, np.random.default_rng(2), n_target=101, max_loops=3)

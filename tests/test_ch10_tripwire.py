@@ -146,7 +146,7 @@ def test_trackerless_tripwire_direction_and_count_once():
         ev += tw.process(f, n)
     dirs = sorted(e.direction for e in ev)
     assert dirs == [-1, 1], [(e.frame, e.direction, e.x) for e in ev]
-    pos_ev = [e for e in ev if e.direction > 0][0]
+    pos_ev = next(e for e in ev if e.direction > 0)
     assert pos_ev.x < 120 and 30 <= pos_ev.frame <= 50  # the disc going down crosses y = 80 near frame 35
 
 

@@ -6,8 +6,20 @@ import numpy as np
 import pytest
 
 from pftrack.cli import main
-from pftrack.multicam.appearance import region_histograms, region_labels, similarity, similarity_matrix
-from pftrack.multicam.btf import apply_btf_hist, apply_btf_image, btf_from_hists, cbtf, cum_hist, mbtf
+from pftrack.multicam.appearance import (
+    region_histograms,
+    region_labels,
+    similarity,
+    similarity_matrix,
+)
+from pftrack.multicam.btf import (
+    apply_btf_hist,
+    apply_btf_image,
+    btf_from_hists,
+    cbtf,
+    cum_hist,
+    mbtf,
+)
 from pftrack.multicam.handover import TrackAppearance, link_tracks
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "pets09_s2l1_dev"

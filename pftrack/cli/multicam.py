@@ -67,8 +67,9 @@ class _Forward:
 
 
 def read_pairs(path: str) -> list[tuple[int, int]]:
-    from ..errors import FormatError, SourceError
     from pathlib import Path
+
+    from ..errors import FormatError, SourceError
 
     p = Path(path)
     if not p.is_file():

@@ -21,7 +21,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["FEATURES", "region_labels", "region_histograms", "similarity", "similarity_matrix"]
+__all__ = ["FEATURES", "region_histograms", "region_labels", "similarity", "similarity_matrix"]
 
 FEATURES = ("whole", "ellipse1", "ellipse2", "positional")
 
