@@ -175,3 +175,11 @@ def ellipse_mask(shape: tuple[int, int], ellipse) -> np.ndarray:
     ys = np.arange(h) + 0.5 - cy
     xs = np.arange(w) + 0.5 - cx
     return (xs[None, :] ** 2) / (hx * hx) + (ys[:, None] ** 2) / (hy * hy) <= 1.0
+
+
+def parabola_peak(a: float, b: float, c: float) -> float:
+    """Sub-pixel offset of a maximum at ``b`` from three equally spaced samples ``a, b, c`` (the vertex of
+    the parabola through them), clamped to ±0.5; 0 when the samples do not curve downwards.  For a
+    minimum, pass the negated samples."""
+    den = a - 2.0 * b + c
+    return 0.0 if den >= 0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))

@@ -15,7 +15,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["LKConfig", "gray_of", "lk_flow", "ncc", "parabola_peak", "patches_at", "reanchor"]
+from ..geometry import parabola_peak
+
+__all__ = ["LKConfig", "gray_of", "lk_flow", "ncc", "patches_at", "reanchor"]
 
 
 def gray_of(frame: np.ndarray) -> np.ndarray:
@@ -111,12 +113,6 @@ def ncc(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     b = b - b.mean(1, keepdims=True)
     den = np.sqrt((a * a).sum(1) * (b * b).sum(1))
     return np.where(den > 1e-9, (a * b).sum(1) / np.where(den > 1e-9, den, 1.0), 0.0)
-
-
-def parabola_peak(sm: float, s0: float, sp: float) -> float:
-    """Sub-pixel offset of a maximum from three samples (clamped to ±0.5)."""
-    den = sm - 2.0 * s0 + sp
-    return 0.0 if den >= 0 else float(np.clip(0.5 * (sm - sp) / den, -0.5, 0.5))
 
 
 def reanchor(ref_gray: np.ndarray, gray: np.ndarray, ref_pts: np.ndarray, guess: np.ndarray, *, half: int = 7,

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geometry import parabola_peak
+
 BLOCK = 9
 
 
@@ -123,10 +125,6 @@ def region_offset(prev_codes: np.ndarray, codes: np.ndarray, centres: np.ndarray
     total = corr.sum(axis=0).reshape(side, side).astype(np.float64)
     i, j = np.unravel_index(int(np.argmax(total)), total.shape)
 
-    def parabola(a, b, c):
-        den = a - 2.0 * b + c
-        return 0.0 if den >= 0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
-
-    di = parabola(total[i - 1, j], total[i, j], total[i + 1, j]) if 0 < i < side - 1 else 0.0
-    dj = parabola(total[i, j - 1], total[i, j], total[i, j + 1]) if 0 < j < side - 1 else 0.0
+    di = parabola_peak(total[i - 1, j], total[i, j], total[i + 1, j]) if 0 < i < side - 1 else 0.0
+    dj = parabola_peak(total[i, j - 1], total[i, j], total[i, j + 1]) if 0 < j < side - 1 else 0.0
     return np.array([i - radius + di, j - radius + dj]), corr[:, i * side + j]

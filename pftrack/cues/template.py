@@ -30,6 +30,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled, prange
+from ..geometry import parabola_peak
 
 METHODS = ("ssd", "ccorr", "ncc", "ncc_uncentred", "sad", "morph", "morph_normed", "mi", "nmi")
 _OPENCV = {"ssd": cv2.TM_SQDIFF, "ccorr": cv2.TM_CCORR, "ncc": cv2.TM_CCOEFF_NORMED,
@@ -211,18 +212,13 @@ class Peak:
     psr: float  # peak-to-sidelobe ratio
 
 
-def _parabola(a: float, b: float, c: float) -> float:
-    den = a - 2.0 * b + c
-    return 0.0 if den >= 0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
-
-
 def best_offset(surface: np.ndarray, *, exclude: int = 5) -> Peak:
     """Peak of a higher-is-better score map, refined by a parabola through its 4-neighbours."""
     s = np.asarray(surface, dtype=np.float64)
     k, l = np.unravel_index(int(np.argmax(s)), s.shape)
     h, w = s.shape
-    dk = _parabola(s[k - 1, l], s[k, l], s[k + 1, l]) if 0 < k < h - 1 else 0.0
-    dl = _parabola(s[k, l - 1], s[k, l], s[k, l + 1]) if 0 < l < w - 1 else 0.0
+    dk = parabola_peak(s[k - 1, l], s[k, l], s[k + 1, l]) if 0 < k < h - 1 else 0.0
+    dl = parabola_peak(s[k, l - 1], s[k, l], s[k, l + 1]) if 0 < l < w - 1 else 0.0
     border = (k == 0 or l == 0 or k == h - 1 or l == w - 1) and (h > 1 and w > 1)
     return Peak(k + dk, l + dl, float(s[k, l]), bool(border), peak_to_sidelobe(s, (int(k), int(l)), exclude=exclude))
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ..geometry import parabola_peak
+
 __all__ = ["bhattacharyya_distance", "colour_bins", "patch_similarity", "ssd_motion"]
 
 
@@ -47,12 +49,6 @@ def patch_similarity(h_o: np.ndarray, v_o: np.ndarray, H: np.ndarray, V: np.ndar
     return alpha_c * s_c + alpha_m * s_m, s_c, s_m
 
 
-def _parabola(sm: float, s0: float, sp: float) -> float:
-    """Sub-pixel offset of a minimum from three samples (clamped to ±0.5)."""
-    den = sm - 2.0 * s0 + sp
-    return 0.0 if den <= 0 else float(np.clip(0.5 * (sm - sp) / den, -0.5, 0.5))
-
-
 def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int,
                mask: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Motion of the ``(2·half+1)²`` square around ``centre`` from ``prev`` to ``cur`` by SSD block
@@ -85,7 +81,7 @@ def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int
         n_pix = float(m.sum())
     _, _, (bx, by), _ = cv2.minMaxLoc(cost)
     exact = cost[by, bx] <= 1e-6 * n_pix
-    dx = _parabola(cost[by, bx - 1], cost[by, bx], cost[by, bx + 1]) if 0 < bx < cost.shape[1] - 1 and not exact else 0.0
-    dy = _parabola(cost[by - 1, bx], cost[by, bx], cost[by + 1, bx]) if 0 < by < cost.shape[0] - 1 and not exact else 0.0
+    dx = parabola_peak(-cost[by, bx - 1], -cost[by, bx], -cost[by, bx + 1]) if 0 < bx < cost.shape[1] - 1 and not exact else 0.0
+    dy = parabola_peak(-cost[by - 1, bx], -cost[by, bx], -cost[by + 1, bx]) if 0 < by < cost.shape[0] - 1 and not exact else 0.0
     v = sign * np.array([sx0 + bx + dx - x0, sy0 + by + dy - y0])
     return v, float(cost[by, bx]) / n_pix

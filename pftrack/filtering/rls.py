@@ -162,7 +162,8 @@ class RLSAR:
         return np.einsum("np,np->n", self._regressor(), coef)
 
     def _fit_batch(self, samples: np.ndarray) -> None:
-        c = np.stack([regressors(s, self.order)[0] for s in samples])  # (n, T-p, p)
+        t, p = samples.shape[1], self.order
+        c = np.stack([samples[:, p - j - 1:t - j - 1] for j in range(p)], axis=2)  # (n, T-p, p): Eq. 12's rows
         target = samples[:, self.order:]
         lam = self.forgetting ** np.arange(c.shape[1] - 1, -1, -1, dtype=np.float64)
         g = np.einsum("ntp,t,ntq->npq", c, lam, c)

@@ -23,7 +23,7 @@ import cv2
 import numpy as np
 
 __all__ = ["PointScene", "StereoScene", "export_point_scene", "export_stereo_scene", "occluder_scene",
-           "stereo_rail_scene", "texture"]
+           "paste_sprite", "stereo_rail_scene", "texture"]
 
 
 def texture(rng: np.random.Generator, h: int, w: int, *, blur: float = 1.2, contrast: float = 60.0,
@@ -63,7 +63,7 @@ class PointScene:
         return out
 
 
-def _paste(canvas: np.ndarray, sprite: np.ndarray, x0: float, y0: float) -> None:
+def paste_sprite(canvas: np.ndarray, sprite: np.ndarray, x0: float, y0: float) -> None:
     """Draw ``sprite`` with its top-left corner at sub-pixel ``(x0, y0)`` (bilinear, anti-aliased edges)."""
     h, w = canvas.shape[:2]
     sh, sw = sprite.shape[:2]
@@ -159,7 +159,7 @@ def occluder_scene(seed: int = 0, *, trajectory: str | None = None, vel: float |
     frames = []
     for t in range(total):
         canvas = bg.copy()
-        _paste(canvas, sprite, corner[t, 0], corner[t, 1])
+        paste_sprite(canvas, sprite, corner[t, 0], corner[t, 1])
         x0 = int(np.floor(bar_x0))
         frac = bar_x0 - x0
         bw = int(np.ceil(bar_w + frac))

@@ -20,6 +20,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from .occluder import paste_sprite
+
 __all__ = ["TrafficScene", "export_traffic", "traffic_scene"]
 
 
@@ -141,10 +143,7 @@ def traffic_scene(seed: int = 0, *, kind: str = "sparse", n_vehicles: int | None
             cx = lanes_x[v["lane"]] + lane_w / 2
             x0, y0 = cx - v["wid"] / 2, v["y"] - v["len"] / 2
             sprite = v["sprite"] if v["dir"] > 0 else v["sprite"][::-1]
-            m = np.float32([[1, 0, x0], [0, 1, y0]])
-            img = cv2.warpAffine(sprite, m, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
-            mask = cv2.warpAffine(np.ones(sprite.shape[:2], np.float32), m, (w, h), flags=cv2.INTER_LINEAR)[..., None]
-            canvas = canvas * (1 - mask) + img * mask
+            paste_sprite(canvas, np.ascontiguousarray(sprite), x0, y0)
             bx0, by0 = max(0.0, x0), max(0.0, y0)
             bx1, by1 = min(float(w), x0 + v["wid"]), min(float(h), y0 + v["len"])
             if bx1 - bx0 >= 2 and by1 - by0 >= 2:

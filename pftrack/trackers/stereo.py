@@ -23,9 +23,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..cues.lk import gray_of, lk_flow, parabola_peak
+from ..cues.lk import gray_of, lk_flow
 from ..errors import FrameError
 from ..filtering.rls import RLSAR, JointRLSAR, stabilise
+from ..geometry import parabola_peak
 from ..params import param
 from .point_gate import FLOW, LOST, PREDICTION, Anchor, PointParams, decide
 
