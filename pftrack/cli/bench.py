@@ -108,13 +108,15 @@ def add_synth(sub) -> None:
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
     p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse",
-                                                             "twocam", "xray"],
+                                                             "twocam", "xray", "deform"],
                    help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
                         "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
                         "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7; 'traffic-sparse' and "
                         "'traffic-dense' (MOTChallenge folders with wire.txt) are the tripwire scenes of book ch. 10; 'twocam' "
                         "cuts the MOTChallenge sequence given with --source into two cameras with disjoint views "
-                        "and a seeded colour response (cam_a/, cam_b/, identity.csv; book ch. 11)")
+                        "and a seeded colour response (cam_a/, cam_b/, identity.csv; book ch. 11); 'deform' is a deforming "
+                        "textured sheet under changing shading (img/, mesh_gt.csv of a 7x7 mesh, shading_gt.csv, "
+                        "box.txt; book ch. 13)")
     p.add_argument("--source", help="xray: the grey image to warp (an angiography frame); twocam: a MOTChallenge "
                                     "sequence folder")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
@@ -178,6 +180,10 @@ def cmd_synth(args) -> int:
             from ..synth.traffic import export_traffic, traffic_scene
 
             export_traffic(traffic_scene(sd, kind=args.kind.split("-", 1)[1]), out / f"{args.kind}-{sd:03d}")
+        elif args.kind == "deform":
+            from ..synth.deform import deform_scene, export_deform
+
+            export_deform(deform_scene(sd), out / f"deform-{sd:03d}")
         elif args.kind == "stereo-rail":
             from ..synth.occluder import export_stereo_scene, stereo_rail_scene
 

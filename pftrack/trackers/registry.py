@@ -99,3 +99,14 @@ def _ensure_loaded() -> None:
 
     for name, cls, summary, options in BUILTIN:
         register(name, cls, summary, **options)
+    # Trackers of the application packages (layer 5) register themselves through a module-level
+    # ``REGISTRY_ENTRIES`` list; they are imported by name so that this layer never imports them statically.
+    import importlib
+
+    for module in APPLICATION_TRACKERS:
+        for name, cls, summary, options in importlib.import_module(module).REGISTRY_ENTRIES:
+            register(name, cls, summary, **options)
+
+
+#: Modules of the application packages that contribute trackers to the registry.
+APPLICATION_TRACKERS: tuple[str, ...] = ("pftrack.surfaces.tracker",)

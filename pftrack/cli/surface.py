@@ -1,0 +1,123 @@
+"""``pftrack surface``: track a deforming textured surface with a mesh (book ch. 13)."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from ..errors import Interrupted
+from .common import close_all, progress
+
+
+def add_surface(sub) -> None:
+    p = sub.add_parser("surface", help="track a deforming textured surface (cloth, paper) with a 2-D mesh and a "
+                                       "shading warp (book ch. 13)",
+                       description="The box of the first frame is the model; every frame, robust Gauss-Newton "
+                                   "finds the mesh's vertex positions (and a multiplicative shading on a coarser "
+                                   "mesh) that map it onto the frame. Writes frame,x0,y0,x1,y1,... (vertices "
+                                   "row-major, top row first) from frame 1, flushed per frame.")
+    p.add_argument("source", help="video file, frame folder, OTB/VOT folder or camera index")
+    p.add_argument("--box", required=True, help="X,Y,W,H of the surface in the first frame")
+    p.add_argument("--mesh", default="7x7", help="vertices COLSxROWS spanning the box (default 7x7; at least 2x2)")
+    p.add_argument("--no-photometric", action="store_true", help="no shading warp (classical optical flow)")
+    p.add_argument("--lambda", dest="lam", type=float, help="smoothness weight (default 0.005, see docs/surfaces.md)")
+    p.add_argument("--model", choices=["affine", "bilinear"], default="affine", help="warp per mesh cell")
+    p.add_argument("--out", default="mesh.csv", help="CSV output (default mesh.csv)")
+    p.add_argument("--video-out", help="video with the mesh drawn (red while lost)")
+    p.add_argument("--texture", help="with --video-out: an image painted onto the surface, shaded (virtual mirror)")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=cmd_surface)
+
+
+def cmd_surface(args) -> int:
+    import cv2
+
+    from ..errors import BoxError, ParameterError, SourceError
+    from ..geometry import parse_box
+    from ..io.sinks import VideoSink, _TextSink, prepare_output
+    from ..io.sources import open_source, read_image
+    from ..pipeline import interrupt_on_sigterm
+    from ..surfaces.mesh import parse_mesh
+    from ..surfaces.render import draw_mesh, retexture
+    from ..surfaces.tracker import DeformableMesh, MeshParams
+
+    try:
+        rows, cols = parse_mesh(args.mesh)
+    except ValueError as exc:
+        raise ParameterError(f"--mesh: {exc}") from None
+    box = parse_box(args.box)
+    kw = {"rows": rows, "cols": cols, "photometric": not args.no_photometric, "model": args.model}
+    if args.lam is not None:
+        kw["lam"] = args.lam
+    params = MeshParams.from_mapping(kw)
+    texture = None
+    if args.texture:
+        from pathlib import Path
+
+        if not Path(args.texture).is_file():
+            raise SourceError(f"{args.texture}: no such file")
+        texture = read_image(Path(args.texture))
+        if texture is None:
+            raise SourceError(f"{args.texture}: not an image")
+    prepare_output(args.out)
+    if args.video_out:
+        prepare_output(args.video_out)
+    source = open_source(args.source)
+    frames = source.numbered()
+    try:
+        number, frame = next(frames)
+    except StopIteration:
+        source.close()
+        raise SourceError(f"{args.source}: no frames") from None
+    H, W = frame.shape[:2]
+    x, y, w, h = box
+    if x < 0 or y < 0 or x + w > W or y + h > H or w < 8 or h < 8:
+        source.close()
+        raise BoxError(f"box {args.box} is not inside the {W}x{H} image with at least 8x8 pixels")
+    tracker = DeformableMesh(params)
+    sinks: list = []
+    bar = None
+    done = lost_frames = 0
+    try:
+        out = _TextSink(args.out)
+        K = rows * cols
+        out._write("frame," + ",".join(f"x{k},y{k}" for k in range(K)))
+        sinks.append(out)
+        video = VideoSink(args.video_out, fps=source.fps) if args.video_out else None
+        if video:
+            sinks.append(video)
+        bar = progress(source.length, "surface", args.quiet)
+
+        def emit(num, img, state) -> None:
+            V = state.info["mesh"]
+            out._write(f"{num}," + ",".join(f"{v:.3f}" for v in V.ravel()))
+            if video:
+                canvas = img
+                if texture is not None and not state.lost:
+                    canvas = retexture(img, texture, box, tracker.V0, V, tracker.grid.triangles(),
+                                       tracker.rho, tracker.pgrid, params.model)
+                video.write(draw_mesh(canvas, V, tracker.grid, lost=state.lost))
+            bar.update(1)
+
+        with interrupt_on_sigterm() as stop:
+            emit(number, frame, tracker.init(frame, box))
+            done = 1
+            for number, frame in frames:
+                st = tracker.update(frame)
+                lost_frames += st.lost
+                emit(number, frame, st)
+                done += 1
+                stop.check()
+    except KeyboardInterrupt:
+        raise Interrupted(f"interrupted; rows so far are in {args.out}") from None
+    finally:
+        close_all(bar, sinks, source)
+    print(f"mesh {cols}x{rows} through {done} frames ({lost_frames} lost) -> {args.out}", file=sys.stderr)
+    return 0
+
+
+def read_mesh_csv(path) -> tuple[np.ndarray, np.ndarray]:
+    """``(frames, vertices (T, K, 2))`` of a mesh CSV written by ``pftrack surface``."""
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return data[:, 0].astype(int), data[:, 1:].reshape(len(data), -1, 2)

@@ -1,0 +1,15 @@
+"""Deformable-surface tracking (book ch. 13): mesh warps, a multiplicative photometric warp, robust
+Gauss-Newton with Laplacian smoothness, coarse to fine; rendering for analysis by synthesis.
+
+- :mod:`.mesh` — regular meshes, barycentric/bilinear weights, Laplacians (Eqs. 8-11, 22-24);
+- :mod:`.solver` — Huber IRLS normal equations (Eqs. 25-38), coarse-to-fine solve, fold check;
+- :mod:`.render` — frame-coordinate synthesis, RMSE, re-texturing, mesh drawing.
+
+The tracker on top is ``deformable-mesh`` (:mod:`pftrack.trackers.deformable_mesh`).
+"""
+
+from .mesh import Grid, directional_laplacian, interp_weights, parse_mesh, umbrella_laplacian, weights_matrix
+from .solver import MeshSolver, SolverSettings, huber_rho, huber_weights
+
+__all__ = ["Grid", "MeshSolver", "SolverSettings", "directional_laplacian", "huber_rho", "huber_weights",
+           "interp_weights", "parse_mesh", "umbrella_laplacian", "weights_matrix"]

@@ -1,0 +1,114 @@
+"""``deformable-mesh``: a textured surface tracked as a 2-D mesh with a photometric warp (book ch. 13).
+
+Book *Object Tracking*, ch. 13 (``shared/book/ch13.md``): the box of the first frame becomes the model
+image ``I_0`` with a regular mesh over it.  Every frame, the vertex displacements ``d`` and the shading
+ratios ``rho`` (on a coarser mesh) that map ``I_0`` onto the frame are found by Huber-robust Gauss-Newton
+with Laplacian smoothness, coarse to fine (:mod:`.solver`).  Because the warp always
+starts from ``I_0`` it is the chapter's analysis by synthesis: errors do not accumulate from frame to
+frame.  The box reported is the bounding box of the deformed mesh; ``info["mesh"]`` holds the vertices
+(row-major) and ``info["shading"]`` the photometric ratios.
+
+``lost`` is raised while the robust residual RMS stays above ``lost_rms`` (occlusion, the surface left
+the frame) or a mesh triangle folds; the last good mesh is kept meanwhile.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import cv2
+import numpy as np
+
+from ..geometry import Box
+from ..params import Params, param
+from ..trackers.base import Tracker, TrackState
+from .mesh import Grid
+from .solver import MeshSolver, SolverSettings
+
+
+@dataclass(frozen=True, kw_only=True)
+class MeshParams(Params):
+    """Parameters of ``deformable-mesh`` (ch. 13; ch13.md §2).  ``lam`` was chosen by the L-curve on the tune
+    seeds of the synthetic sheets (docs/surfaces.md); the chapter's 0.5 belongs to another normalisation."""
+
+    cols: int = param(7, ge=2, le=64, doc="Mesh vertices across the box (the box's corners are vertices).")
+    rows: int = param(7, ge=2, le=64, doc="Mesh vertices down the box.")
+    photo_cols: int = param(4, ge=2, le=64, doc="Vertices across of the coarser photometric mesh (Eq. 4).")
+    photo_rows: int = param(4, ge=2, le=64, doc="Vertices down of the photometric mesh.")
+    model: Literal["affine", "bilinear"] = param("affine", doc="Warp per cell: affine triangles (Eqs. 8-10) or bilinear quads (Eq. 11).")
+    photometric: bool = param(True, doc="Estimate the multiplicative photometric warp (Eq. 2); off = classical optical flow.")
+    lam: float = param(0.005, ge=0, le=1e4, doc=(
+        "Smoothness weight lambda of Eq. (25), with E_D the mean Huber residual on [0, 1] intensities and E_S the mean "
+        "squared directional-Laplacian row (displacements in pixels)."))
+    lam_p: float = param(10.0, ge=0, le=1e6, doc="Relative smoothness of the shading ratios, lambda_p of Eq. (38).")
+    levels: int = param(4, ge=1, le=8, doc="Pyramid levels (the chapter: 4); fewer when the box is small.")
+    max_iter: int = param(10, ge=1, le=100, doc="IRLS iterations per level at most.")
+    tol: float = param(0.01, gt=0, le=10, doc="Stop a level when no vertex moves more than this (pixels of that level).")
+    huber_k: float = param(1.345, gt=0, le=100, doc="Huber threshold v_H = k * 1.4826 MAD(r) (Eq. 29-30).")
+    lost_rms: float = param(0.12, gt=0, le=1, doc=(
+        "Residual RMS (intensities in [0, 1]) above which the frame is judged not to show the surface."))
+    velocity: bool = param(False, doc="Start each frame from a constant-velocity prediction of d instead of the last d.")
+
+
+def gray01(frame: np.ndarray) -> np.ndarray:
+    g = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) if frame.ndim == 3 else frame
+    return g.astype(np.float32) / 255.0
+
+
+class DeformableMesh(Tracker):
+    name = "deformable-mesh"
+    Params = MeshParams
+    stochastic = False
+
+    def _settings(self, box) -> SolverSettings:
+        p = self.params
+        levels = max(1, min(p.levels, int(np.floor(np.log2(max(min(box[2], box[3]), 16) / 16))) + 1))
+        return SolverSettings(lam=p.lam, lam_p=p.lam_p, levels=levels, max_iter=p.max_iter, tol=p.tol,
+                              huber_k=p.huber_k, photometric=p.photometric, model=p.model)
+
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        p = self.params
+        self.I0 = gray01(frame)
+        self.grid = Grid.for_box(box, p.rows, p.cols)
+        self.pgrid = Grid.for_box(box, p.photo_rows, p.photo_cols)
+        self.solver = MeshSolver(self.I0, self.grid, self.pgrid, self._settings(box))
+        self.V0 = self.grid.vertices()
+        self.d = np.zeros_like(self.V0)
+        self.d_prev = self.d.copy()
+        self.rho = np.ones(self.pgrid.K)
+        self.last = {"rms": 0.0, "iterations": 0, "folded": False, "valid_fraction": 1.0}
+        return self._state(False)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        p = self.params
+        start = self.d + (self.d - self.d_prev) if p.velocity else self.d
+        d, rho, info = self.solver.solve(gray01(frame), start, self.rho)
+        lost = bool(info["folded"] or info["rms"] > p.lost_rms or info["valid_fraction"] < 0.3
+                    or not np.all(np.isfinite(d)))
+        if not lost:
+            self.d_prev, self.d, self.rho = self.d, d, rho
+        self.last = info
+        return self._state(lost)
+
+    def mesh(self) -> np.ndarray:
+        """Current vertex positions (K, 2), row-major."""
+        return self.V0 + self.d
+
+    def _state(self, lost: bool) -> TrackState:
+        V = self.mesh()
+        lo, hi = V.min(0), V.max(0)
+        box = (float(lo[0]), float(lo[1]), float(max(hi[0] - lo[0], 1.0)), float(max(hi[1] - lo[1], 1.0)))
+        score = float(np.clip(1.0 - self.last["rms"] / self.params.lost_rms, 0.0, 1.0))
+        return TrackState(box=box, score=score, lost=lost, info={
+            "mesh": V.copy(), "shading": self.rho.copy(), "rms": float(self.last["rms"]),
+            "iterations": int(self.last["iterations"]), "folded": bool(self.last["folded"])})
+
+
+#: Registry entry, read by :mod:`pftrack.trackers.registry` (applications register their trackers this way,
+#: so the tracker layer never imports the application layer).
+REGISTRY_ENTRIES = [
+    ("deformable-mesh", DeformableMesh,
+     "A textured, deforming surface as a 2-D mesh with a multiplicative shading warp, robust Gauss-Newton with "
+     "Laplacian smoothness, coarse to fine, always from the first frame (book ch. 13)", {}),
+]

@@ -1,0 +1,139 @@
+"""Seeded deforming textured sheets with exact mesh ground truth (book ch. 13, ch13.md §5.2).
+
+Frame ``n`` satisfies ``I_n(x + D_n(x)) = s_n(x) I_0(x)`` for every model point ``x``: ``D_n`` is a smooth
+displacement (a sum of Gaussian RBF bumps plus a slow global drift, zero at frame 0), ``s_n`` a
+multiplicative shading field (1 at frame 0), plus Gaussian noise.  Frames are rendered by inverting
+``x + D_n(x)`` with a fixed-point iteration.  The truth of a mesh vertex ``v`` is ``v + D_n(v)`` and
+``rho = s_n(v)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+
+def band_limited_texture(rng, size=(360, 480), scales=(2.0, 5.0, 12.0)) -> np.ndarray:
+    """Noise summed over a few Gaussian scales, stretched to [0.1, 0.9]."""
+    h, w = size
+    img = np.zeros((h, w), np.float64)
+    for s in scales:
+        n = cv2.GaussianBlur(rng.standard_normal((h, w)), (0, 0), s)
+        img += n / n.std()
+    img = (img - img.min()) / (np.ptp(img) + 1e-12)
+    return 0.1 + 0.8 * img
+
+
+def _bilinear(a: np.ndarray, fx: np.ndarray, fy: np.ndarray) -> np.ndarray:
+    """``a`` sampled at fractional (row fy, column fx) grid coordinates, separably."""
+    x0 = np.clip(np.floor(fx).astype(int), 0, a.shape[1] - 2)
+    y0 = np.clip(np.floor(fy).astype(int), 0, a.shape[0] - 2)
+    tx, ty = fx - x0, fy - y0
+    rows = a[y0] * (1 - ty)[:, None] + a[y0 + 1] * ty[:, None]
+    return rows[:, x0] * (1 - tx)[None] + rows[:, x0 + 1] * tx[None]
+
+
+@dataclass
+class DeformScene:
+    frames: list[np.ndarray]        # BGR uint8
+    box: tuple[float, float, float, float]
+    centers: np.ndarray             # (B, 2) RBF centres
+    sigmas: np.ndarray              # (B,)
+    amps: np.ndarray                # (n_frames, B, 2)
+    drift: np.ndarray               # (n_frames, 2)
+    shade: list                     # per frame (a, phase, b)
+    size: tuple[int, int]
+
+    def displacement(self, n: int, pts: np.ndarray) -> np.ndarray:
+        pts = np.asarray(pts, np.float64)
+        d2 = np.sum((pts[:, None, :] - self.centers[None]) ** 2, -1)
+        g = np.exp(-0.5 * d2 / self.sigmas[None] ** 2)
+        return g @ self.amps[n] + self.drift[n]
+
+    def shading(self, n: int, pts: np.ndarray) -> np.ndarray:
+        a, ph, b = self.shade[n]
+        h, w = self.size
+        x, y = pts[:, 0], pts[:, 1]
+        s = 1 + a * np.sin(2 * np.pi * x / 300 + ph) * np.cos(2 * np.pi * y / 250) + b * (x / w - 0.5)
+        return np.clip(s, 0.6, 1.3)
+
+    def truth(self, n: int, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """True vertex positions and shading ratios in frame ``n`` of model vertices ``V``."""
+        return V + self.displacement(n, V), self.shading(n, V)
+
+
+def deform_scene(seed: int, n_frames: int = 60, size=(360, 480), amplitude: float = 12.0, shading: bool = True,
+                 noise: float = 0.01, texture: np.ndarray | None = None, jpeg: int | None = None) -> DeformScene:
+    """A sequence of ``n_frames`` (the first is the model) of a sheet deforming by up to ~``amplitude`` px
+    with shading in [0.6, 1.3] (``shading=False``: constant brightness)."""
+    rng = np.random.default_rng(seed)
+    h, w = size
+    tex = band_limited_texture(rng, size) if texture is None else cv2.resize(texture.astype(np.float64), (w, h))
+    box = (w * 0.25, h * 0.22, w * 0.5, h * 0.56)
+    B = 4
+    centers = np.c_[rng.uniform(box[0], box[0] + box[2], B), rng.uniform(box[1], box[1] + box[3], B)]
+    sigmas = rng.uniform(0.18, 0.3, B) * min(box[2], box[3])
+    t = np.arange(n_frames)
+    omega = rng.uniform(2 * np.pi / 80, 2 * np.pi / 30, (B, 2))
+    phase = rng.uniform(0, 2 * np.pi, (B, 2))
+    A = rng.uniform(0.4, 1.0, (B, 2)) * amplitude * rng.choice([-1, 1], (B, 2)) * 0.5
+    amps = A[None] * (np.sin(omega[None] * t[:, None, None] + phase[None]) - np.sin(phase)[None])
+    dr_w = rng.uniform(2 * np.pi / 120, 2 * np.pi / 60, 2)
+    drift = amplitude * 0.5 * np.sin(dr_w[None] * t[:, None]) * rng.choice([-1, 1], 2)
+    ramp = np.minimum(t / 15.0, 1.0)
+    a0, b0 = rng.uniform(0.15, 0.3), rng.uniform(-0.3, 0.3)
+    shade = [(a0 * ramp[n] if shading else 0.0, 0.05 * n, b0 * ramp[n] if shading else 0.0) for n in t]
+    sc = DeformScene([], box, centers, sigmas, amps, drift, shade, size)
+    step = 2                                     # D is smooth: invert on a coarse grid, then interpolate
+    ys, xs = np.mgrid[0:h + step:step, 0:w + step:step].astype(np.float64)
+    grid = np.stack([xs.ravel(), ys.ravel()], 1)
+    for n in t:
+        x = grid.copy()
+        for _ in range(50):                      # x + D(x) = y  =>  x = y - D(x)
+            x_new = grid - sc.displacement(n, x)
+            done = np.max(np.abs(x_new - x)) < 1e-6
+            x = x_new
+            if done:
+                break
+        cx = x.reshape(*xs.shape, 2)
+        fy = (np.arange(h) / step)
+        fx = (np.arange(w) / step)
+        mx = _bilinear(cx[..., 0], fx, fy).astype(np.float32)
+        my = _bilinear(cx[..., 1], fx, fy).astype(np.float32)
+        img = cv2.remap(tex.astype(np.float32), mx, my, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+        pts = np.stack([mx.ravel(), my.ravel()], 1)
+        img = img * sc.shading(n, pts).reshape(h, w) + rng.normal(0, noise, (h, w))
+        u8 = np.clip(img * 255 + 0.5, 0, 255).astype(np.uint8)
+        if jpeg:
+            u8 = cv2.imdecode(cv2.imencode(".jpg", u8, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg)])[1], cv2.IMREAD_GRAYSCALE)
+        sc.frames.append(cv2.cvtColor(u8, cv2.COLOR_GRAY2BGR))
+    return sc
+
+
+def export_deform(sc: DeformScene, out, mesh: tuple[int, int] = (7, 7)) -> None:
+    """An OTB-like folder: ``img/0001.png``..., ``groundtruth_rect.txt`` (bounding box of the true mesh),
+    ``mesh_gt.csv`` (``frame,x0,y0,...`` of a ``rows x cols`` mesh over the first box, frame from 1),
+    ``shading_gt.csv`` (the true shading ratio at those vertices) and ``box.txt`` (the initial box)."""
+    from pathlib import Path
+
+    from ..surfaces.mesh import Grid
+
+    out = Path(out)
+    (out / "img").mkdir(parents=True, exist_ok=True)
+    grid = Grid.for_box(sc.box, *mesh)
+    V0 = grid.vertices()
+    head = "frame," + ",".join(f"x{k},y{k}" for k in range(len(V0)))
+    rows, shades, boxes = [head], ["frame," + ",".join(f"s{k}" for k in range(len(V0)))], []
+    for n, frame in enumerate(sc.frames):
+        cv2.imwrite(str(out / "img" / f"{n + 1:04d}.png"), frame)
+        V, s = sc.truth(n, V0)
+        rows.append(f"{n + 1}," + ",".join(f"{v:.4f}" for v in V.ravel()))
+        shades.append(f"{n + 1}," + ",".join(f"{v:.4f}" for v in s))
+        lo, hi = V.min(0), V.max(0)
+        boxes.append(f"{lo[0]:.2f},{lo[1]:.2f},{hi[0] - lo[0]:.2f},{hi[1] - lo[1]:.2f}")
+    (out / "mesh_gt.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    (out / "shading_gt.csv").write_text("\n".join(shades) + "\n", encoding="utf-8")
+    (out / "groundtruth_rect.txt").write_text("\n".join(boxes) + "\n", encoding="utf-8")
+    (out / "box.txt").write_text(",".join(f"{v:.2f}" for v in sc.box) + "\n", encoding="utf-8")
