@@ -148,12 +148,42 @@ class LevelModel:
         return np.bincount(idx.ravel(), (c[:, None] * w).ravel(), K)
 
 
+@njit(cache=True)
+def _bilinear_kernel(img, x, y, out):  # pragma: no cover - compiled
+    h, w = img.shape
+    for i in range(x.shape[0]):
+        xi, yi = x[i], y[i]
+        if not (xi >= 0.0 and yi >= 0.0 and xi <= w - 1 and yi <= h - 1):
+            out[i] = np.nan
+            continue
+        x0 = min(int(xi), w - 2) if w > 1 else 0
+        y0 = min(int(yi), h - 2) if h > 1 else 0
+        tx, ty = xi - x0, yi - y0
+        out[i] = ((1 - ty) * ((1 - tx) * img[y0, x0] + tx * img[y0, x0 + 1])
+                  + ty * ((1 - tx) * img[y0 + 1, x0] + tx * img[y0 + 1, x0 + 1]))
+
+
+def _bilinear_numpy(img, x, y):
+    h, w = img.shape
+    ok = (x >= 0) & (y >= 0) & (x <= w - 1) & (y <= h - 1)
+    x0 = np.clip(np.floor(x).astype(np.int64), 0, w - 2)
+    y0 = np.clip(np.floor(y).astype(np.int64), 0, h - 2)
+    tx, ty = x - x0, y - y0
+    v = ((1 - ty) * ((1 - tx) * img[y0, x0] + tx * img[y0, x0 + 1])
+         + ty * ((1 - tx) * img[y0 + 1, x0] + tx * img[y0 + 1, x0 + 1]))
+    return np.where(ok, v, np.nan)
+
+
 def _sample(img: np.ndarray, pts: np.ndarray, shape=None) -> np.ndarray:
-    """Bilinear samples at ``pts`` (NaN outside the image); ``shape`` lays the points out as an image
-    (remap's maps must stay under 32767 per side)."""
-    m = pts.astype(np.float32).reshape(*(shape if shape is not None else (1, -1)), 2)
-    return cv2.remap(img, m[..., 0], m[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                     borderValue=np.nan).ravel().astype(np.float64)
+    """Exact bilinear samples at ``pts`` (NaN outside the image).  ``cv2.remap`` quantises coordinates to
+    1/32 pixel, which would floor the registration's accuracy and break its derivatives."""
+    x = np.ascontiguousarray(pts[:, 0], dtype=np.float64)
+    y = np.ascontiguousarray(pts[:, 1], dtype=np.float64)
+    if numba_enabled():
+        out = np.empty(len(x))
+        _bilinear_kernel(img, x, y, out)
+        return out
+    return _bilinear_numpy(img, x, y)
 
 
 def gradients(img: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -295,3 +325,15 @@ class MeshSolver:
         folded = not np.all(np.sign(signed_areas(self.V0 + d, self.tris)) == np.sign(self.area0))
         return d, rho, {"rms": rms, "iterations": iters, "fold_halvings": folds, "folded": folded,
                         "valid_fraction": float(ok.mean())}
+
+
+def dense_jacobian(solver: MeshSolver, level: int, img, gx, gy, d) -> np.ndarray:
+    """The explicit ``p x N`` Jacobian of Eq. (36) in the §1.8 form (for tests and small problems)."""
+    lv = solver.levels[level]
+    warped = lv.pts + lv.displacement(d) * lv.f
+    Gx = np.nan_to_num(_sample(gx, warped, lv.shape)) * (-lv.f)
+    Gy = np.nan_to_num(_sample(gy, warped, lv.shape)) * (-lv.f)
+    cols = [lv.Bg.multiply(Gx[:, None]).toarray(), lv.Bg.multiply(Gy[:, None]).toarray()]
+    if solver.s.photometric:
+        cols.append(lv.Bp.multiply(lv.I0[:, None]).toarray())
+    return np.hstack(cols)
