@@ -23,7 +23,13 @@ import numpy as np
 
 from pftrack.calibration import sim
 from pftrack.calibration.camcal import calibrate, image_to_ground, nine_points
-from pftrack.calibration.pipeline import EstimateParams, estimate, score, simulate, summary
+from pftrack.calibration.pipeline import (
+    EstimateParams,
+    estimate,
+    score,
+    simulate,
+    summary,
+)
 from pftrack.calibration.scene import random_scene
 
 

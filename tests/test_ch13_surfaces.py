@@ -8,10 +8,24 @@ import pytest
 
 from pftrack._numba import set_numba_enabled
 from pftrack.cli import main
-from pftrack.surfaces.mesh import (Grid, directional_laplacian, interp_weights, parse_mesh, signed_areas,
-                                   umbrella_laplacian, weights_matrix)
-from pftrack.surfaces.solver import (MeshSolver, SolverSettings, dense_jacobian, gradients, huber_rho,
-                                     huber_weights, pyramid)
+from pftrack.surfaces.mesh import (
+    Grid,
+    directional_laplacian,
+    interp_weights,
+    parse_mesh,
+    signed_areas,
+    umbrella_laplacian,
+    weights_matrix,
+)
+from pftrack.surfaces.solver import (
+    MeshSolver,
+    SolverSettings,
+    dense_jacobian,
+    gradients,
+    huber_rho,
+    huber_weights,
+    pyramid,
+)
 from pftrack.synth.deform import band_limited_texture, deform_scene
 
 
@@ -134,7 +148,7 @@ def test_normal_equations_equal_the_stacked_least_squares_form():
     gx, gy = gradients(In)
     d = rng.uniform(-1, 1, (g.K, 2))
     rho = rng.uniform(0.9, 1.1, gp.K)
-    A, b, r, ok, vH, _ = S.normal_equations(S.levels[0], In, gx, gy, d, rho, vH=1e9)
+    A, b, r, ok, _, _ = S.normal_equations(S.levels[0], In, gx, gy, d, rho, vH=1e9)
     J = dense_jacobian(S, 0, In, gx, gy, d)[ok]
     N = ok.sum()
     from pftrack.surfaces.mesh import directional_laplacian as DL
@@ -175,7 +189,7 @@ def test_solver_recovers_affine_warp_and_smooth_warp():
     V = g.vertices()
     A, t = np.array([[1.04, 0.05], [-0.03, 0.97]]), np.array([6.0, -4.0])
     c = np.array([160.0, 120.0])
-    aff = lambda x: (x - c) @ A.T + c + t   # noqa: E731
+    aff = lambda x: (x - c) @ A.T + c + t
     In = _warp_image(tex, aff)
     S = MeshSolver(tex, g, gp, SolverSettings(lam=0.005, levels=3, max_iter=20, tol=1e-4))
     d, rho, info = S.solve(In, np.zeros((g.K, 2)), np.ones(gp.K))

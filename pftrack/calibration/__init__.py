@@ -12,7 +12,15 @@
 from .camcal import calibrate, dlt, image_to_ground
 from .ekf import EkfParams, TagUnicycleEKF, run_ekf
 from .lrf import LrfParams, LrfTracker, object_center
-from .pipeline import EstimateParams, estimate, result_json, run, score, simulate, summary
+from .pipeline import (
+           EstimateParams,
+           estimate,
+           result_json,
+           run,
+           score,
+           simulate,
+           summary,
+)
 from .rigid2d import fit_rigid_2d, lmeds_rigid_2d
 from .scene import Scene, default_scene, load_scene, random_scene, scene_from_dict
 

@@ -103,7 +103,7 @@ def calibrate(X: np.ndarray, uv: np.ndarray, size: tuple[int, int], *, estimate_
     zs = X[:, 2]
     planar = float(np.ptp(zs)) < 1e-9
     if not planar:
-        K0, R0, t0 = decompose(dlt(X, uv))
+        K0, _, _ = decompose(dlt(X, uv))
         f0 = (K0[0, 0] + K0[1, 1]) / 2
         K0 = np.array([[f0, 0, K0[0, 2]], [0, f0, K0[1, 2]], [0, 0, 1.0]])
         rms, K, dist, rv, tv = cv2.calibrateCamera(

@@ -51,7 +51,7 @@ def estimate(scene: Scene, m: Measurements, params: EstimateParams = EstimatePar
     dt = float(t[1] - t[0])
     ekf_p = EkfParams(sigma_v=max(scene.noise.odometry, 1e-4), sigma_w=max(2.5 * scene.noise.odometry, 1e-4),
                       sigma_z=max(scene.noise.ultrasound, 1e-3), tag_offset=scene.robot.tag_offset)
-    X, P = run_ekf(t, m.odo, m.tag_idx, m.tag, scene.robot.start, ekf_p)
+    X, _ = run_ekf(t, m.odo, m.tag_idx, m.tag, scene.robot.start, ekf_p)
     ok_t = t >= params.settle_s
     rng = np.random.default_rng(seed + 7)
     out = {"lrfs": [], "cameras": [], "ekf_path": X}
@@ -65,7 +65,7 @@ def estimate(scene: Scene, m: Measurements, params: EstimateParams = EstimatePar
             world[bad] = world[rng.permutation(np.flatnonzero(bad))] if bad.sum() > 1 else world[bad]
             W, H = scene.room
             world[bad] = rng.uniform((-W / 2, -H / 2), (W / 2, H / 2), (int(bad.sum()), 2))
-        entry = {"pairs": int(len(steps))}
+        entry = {"pairs": len(steps)}
         if len(steps) < 2:
             entry.update(x=None, y=None, theta=None, error="the robot was not tracked by this scanner")
         else:
@@ -88,7 +88,7 @@ def estimate(scene: Scene, m: Measurements, params: EstimateParams = EstimatePar
             est = calibrate(Xw, uv, (cam.width, cam.height))
             out["cameras"].append(est)
         except (DegenerateError, Exception) as exc:  # noqa: BLE001 - OpenCV raises cv2.error on hopeless input
-            out["cameras"].append({"error": str(exc).splitlines()[0][:200], "points": int(len(Xw))})
+            out["cameras"].append({"error": str(exc).splitlines()[0][:200], "points": len(Xw)})
     return out
 
 

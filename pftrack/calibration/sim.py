@@ -56,7 +56,7 @@ def drive(scene: Scene, waypoints: np.ndarray | None = None) -> Trajectory:
     """Steer the robot from its start pose through the waypoints (cyclically) for ``duration_s``."""
     r = scene.robot
     dt = 1.0 / r.rate_hz
-    n = int(round(r.duration_s * r.rate_hz)) + 1
+    n = round(r.duration_s * r.rate_hz) + 1
     wp = coverage_waypoints(scene.room) if waypoints is None else np.asarray(waypoints, float)
     # start at the waypoint nearest to the start position
     k = int(np.argmin(np.linalg.norm(wp - np.asarray(r.start[:2]), axis=1)))
@@ -83,7 +83,7 @@ def odometry(traj: Trajectory, sigma_v: float, sigma_w: float, rng) -> np.ndarra
 
 def ultrasound(traj: Trajectory, tag_offset: float, sigma: float, rng, rate_hz: float = ULTRASOUND_HZ):
     """Eq. (9): tag positions ``(x + L cos th, y + L sin th) + noise`` at ``rate_hz``; returns (indices, z)."""
-    step = max(1, int(round((1.0 / rate_hz) / (traj.t[1] - traj.t[0]))))
+    step = max(1, round((1.0 / rate_hz) / (traj.t[1] - traj.t[0])))
     idx = np.arange(0, len(traj.t), step)
     p = traj.pose[idx]
     z = p[:, :2] + tag_offset * np.stack([np.cos(p[:, 2]), np.sin(p[:, 2])], 1)

@@ -31,7 +31,6 @@ def add_surface(sub) -> None:
 
 
 def cmd_surface(args) -> int:
-    import cv2
 
     from ..errors import BoxError, ParameterError, SourceError
     from ..geometry import parse_box

@@ -8,7 +8,14 @@ Gauss-Newton with Laplacian smoothness, coarse to fine; rendering for analysis b
 The tracker on top is ``deformable-mesh`` (:mod:`pftrack.trackers.deformable_mesh`).
 """
 
-from .mesh import Grid, directional_laplacian, interp_weights, parse_mesh, umbrella_laplacian, weights_matrix
+from .mesh import (
+           Grid,
+           directional_laplacian,
+           interp_weights,
+           parse_mesh,
+           umbrella_laplacian,
+           weights_matrix,
+)
 from .solver import MeshSolver, SolverSettings, huber_rho, huber_weights
 
 __all__ = ["Grid", "MeshSolver", "SolverSettings", "directional_laplacian", "huber_rho", "huber_weights",

@@ -24,7 +24,7 @@ class Grid:
     cols: int
 
     @classmethod
-    def for_box(cls, box, rows: int, cols: int) -> "Grid":
+    def for_box(cls, box, rows: int, cols: int) -> Grid:
         x, y, w, h = map(float, box)
         if rows < 2 or cols < 2:
             raise ValueError("a mesh needs at least 2 x 2 vertices")
@@ -34,7 +34,7 @@ class Grid:
     def K(self) -> int:
         return self.rows * self.cols
 
-    def scaled(self, f: float) -> "Grid":
+    def scaled(self, f: float) -> Grid:
         return Grid(self.x0 * f, self.y0 * f, self.sx * f, self.sy * f, self.rows, self.cols)
 
     def vertices(self) -> np.ndarray:

@@ -25,7 +25,13 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
-from .mesh import Grid, directional_laplacian, interp_weights, signed_areas, weights_matrix
+from .mesh import (
+    Grid,
+    directional_laplacian,
+    interp_weights,
+    signed_areas,
+    weights_matrix,
+)
 
 
 @njit(cache=True)
@@ -296,7 +302,7 @@ class MeshSolver:
             img = pyr[lvl]
             gx, gy = gradients(img)
             for _ in range(self.s.max_iter):
-                A, b, r, ok, vH, _ = self.normal_equations(lv, img, gx, gy, d, rho)
+                A, b, r, ok, _, _ = self.normal_equations(lv, img, gx, gy, d, rho)
                 if ok.sum() < 8:
                     break
                 A[np.diag_indices_from(A)] += 1e-10

@@ -109,6 +109,6 @@ class DeformableMesh(Tracker):
 #: so the tracker layer never imports the application layer).
 REGISTRY_ENTRIES = [
     ("deformable-mesh", DeformableMesh,
-     "A textured, deforming surface as a 2-D mesh with a multiplicative shading warp, robust Gauss-Newton with "
-     "Laplacian smoothness, coarse to fine, always from the first frame (book ch. 13)", {}),
+     ("A textured, deforming surface as a 2-D mesh with a multiplicative shading warp, robust Gauss-Newton with "
+      "Laplacian smoothness, coarse to fine, always from the first frame (book ch. 13)"), {}),
 ]

@@ -45,6 +45,7 @@ class DeformScene:
     drift: np.ndarray               # (n_frames, 2)
     shade: list                     # per frame (a, phase, b)
     size: tuple[int, int]
+    texture: np.ndarray | None = None   # the model texture in [0, 1]
 
     def displacement(self, n: int, pts: np.ndarray) -> np.ndarray:
         pts = np.asarray(pts, np.float64)
@@ -54,7 +55,7 @@ class DeformScene:
 
     def shading(self, n: int, pts: np.ndarray) -> np.ndarray:
         a, ph, b = self.shade[n]
-        h, w = self.size
+        w = self.size[1]
         x, y = pts[:, 0], pts[:, 1]
         s = 1 + a * np.sin(2 * np.pi * x / 300 + ph) * np.cos(2 * np.pi * y / 250) + b * (x / w - 0.5)
         return np.clip(s, 0.6, 1.3)
@@ -85,31 +86,39 @@ def deform_scene(seed: int, n_frames: int = 60, size=(360, 480), amplitude: floa
     ramp = np.minimum(t / 15.0, 1.0)
     a0, b0 = rng.uniform(0.15, 0.3), rng.uniform(-0.3, 0.3)
     shade = [(a0 * ramp[n] if shading else 0.0, 0.05 * n, b0 * ramp[n] if shading else 0.0) for n in t]
-    sc = DeformScene([], box, centers, sigmas, amps, drift, shade, size)
-    step = 2                                     # D is smooth: invert on a coarse grid, then interpolate
+    sc = DeformScene([], box, centers, sigmas, amps, drift, shade, size, tex)
+    sc.frames = render_frames(sc, rng, noise=noise, jpeg=jpeg)
+    return sc
+
+
+def render_frames(sc: DeformScene, rng, noise: float = 0.01, jpeg: int | None = None) -> list[np.ndarray]:
+    """Render every frame of ``sc`` from its texture: invert ``y = x + D_n(x)`` by fixed-point iteration on a
+    2-px grid (D is smooth), sample the texture there, multiply by the shading, add noise."""
+    h, w = sc.size
+    tex = sc.texture.astype(np.float32)
+    step = 2
     ys, xs = np.mgrid[0:h + step:step, 0:w + step:step].astype(np.float64)
     grid = np.stack([xs.ravel(), ys.ravel()], 1)
-    for n in t:
+    frames = []
+    for n in range(len(sc.amps)):
         x = grid.copy()
-        for _ in range(50):                      # x + D(x) = y  =>  x = y - D(x)
+        for _ in range(80):                      # x + D(x) = y  =>  x = y - D(x)
             x_new = grid - sc.displacement(n, x)
             done = np.max(np.abs(x_new - x)) < 1e-6
             x = x_new
             if done:
                 break
         cx = x.reshape(*xs.shape, 2)
-        fy = (np.arange(h) / step)
-        fx = (np.arange(w) / step)
-        mx = _bilinear(cx[..., 0], fx, fy).astype(np.float32)
-        my = _bilinear(cx[..., 1], fx, fy).astype(np.float32)
-        img = cv2.remap(tex.astype(np.float32), mx, my, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
+        mx = _bilinear(cx[..., 0], np.arange(w) / step, np.arange(h) / step).astype(np.float32)
+        my = _bilinear(cx[..., 1], np.arange(w) / step, np.arange(h) / step).astype(np.float32)
+        img = cv2.remap(tex, mx, my, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REFLECT)
         pts = np.stack([mx.ravel(), my.ravel()], 1)
         img = img * sc.shading(n, pts).reshape(h, w) + rng.normal(0, noise, (h, w))
         u8 = np.clip(img * 255 + 0.5, 0, 255).astype(np.uint8)
         if jpeg:
             u8 = cv2.imdecode(cv2.imencode(".jpg", u8, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg)])[1], cv2.IMREAD_GRAYSCALE)
-        sc.frames.append(cv2.cvtColor(u8, cv2.COLOR_GRAY2BGR))
-    return sc
+        frames.append(cv2.cvtColor(u8, cv2.COLOR_GRAY2BGR))
+    return frames
 
 
 def export_deform(sc: DeformScene, out, mesh: tuple[int, int] = (7, 7)) -> None:
