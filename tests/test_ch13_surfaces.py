@@ -83,7 +83,7 @@ def test_laplacians():
 def test_huber_weights_and_rho():
     r = np.linspace(-3, 3, 61)
     w = huber_weights(r, 1.0)
-    assert np.array_equal(w, np.where(np.abs(r) <= 1, 1.0, 1.0 / np.abs(r)))
+    assert np.array_equal(w, np.where(np.abs(r) <= 1, 1.0, 1.0 / np.maximum(np.abs(r), 1e-300)))
     rho = huber_rho(r, 1.0)
     assert np.allclose(rho, np.where(np.abs(r) <= 1, r * r / 2, np.abs(r) - 0.5))
     # w = rho'(r)/r (Eq. 28), checked numerically
