@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy.linalg import cho_factor, cho_solve
 
 from .._numba import njit, numba_enabled
 from .mesh import (
@@ -98,6 +99,7 @@ class SolverSettings:
     levels: int = 4
     max_iter: int = 10
     tol: float = 0.01
+    coarse_tol: float = 0.05      # coarser levels only need to land in the next level's capture range
     huber_k: float = 1.345
     photometric: bool = True
     model: str = "affine"
@@ -306,10 +308,13 @@ class MeshSolver:
                 if ok.sum() < 8:
                     break
                 A[np.diag_indices_from(A)] += 1e-10
-                try:
-                    delta = -np.linalg.solve(A, b)
+                try:                                             # A is symmetric positive definite
+                    delta = -cho_solve(cho_factor(A, check_finite=False), b, check_finite=False)
                 except np.linalg.LinAlgError:
-                    break
+                    try:
+                        delta = -np.linalg.solve(A, b)
+                    except np.linalg.LinAlgError:
+                        break
                 dd = np.stack([delta[:Kg], delta[Kg:2 * Kg]], 1)
                 dr = delta[2 * Kg:] if self.s.photometric else 0.0
                 step = 1.0
@@ -323,7 +328,7 @@ class MeshSolver:
                 if self.s.photometric:
                     rho = np.clip(rho + step * dr, self.s.rho_min, self.s.rho_max)
                 iters += 1
-                if np.max(np.abs(step * dd)) * lv.f < self.s.tol:
+                if np.max(np.abs(step * dd)) * lv.f < (self.s.tol if lvl == 0 else max(self.s.tol, self.s.coarse_tol)):
                     break
         r, _ = self.residual(self.levels[0], pyr[0], d, rho)
         ok = np.isfinite(r)
