@@ -4,7 +4,8 @@ One module per command group: :mod:`.track` (track, demo), :mod:`.mot`,
 :mod:`.evaluate` (eval, list), :mod:`.bench` (bench, synth), :mod:`.densitometry` (book ch. 14),
 :mod:`.points` (points, stereo: book ch. 7), :mod:`.events` (tripwire: book ch. 10),
 :mod:`.multicam` (handover: book ch. 11),
-:mod:`.calibration` (calibrate-sim: book ch. 12), :mod:`.surface` (surface: book ch. 13).
+:mod:`.calibration` (calibrate-sim: book ch. 12), :mod:`.surface` (surface: book ch. 13),
+:mod:`.segment` (segment: book ch. 9).
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr, never a
 traceback), 130 interrupted by Ctrl-C or SIGTERM (everything computed so far is
@@ -23,6 +24,7 @@ from .. import __version__
 from ..errors import Interrupted, PftrackError
 from .bench import add_bench, add_synth
 from .calibration import add_calibrate_sim
+from .segment import add_segment
 from .surface import add_surface
 from .common import DEFAULT_TRACKER, ArgumentParser
 from .densitometry import add_densitometry
@@ -55,6 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_handover(sub)
     add_calibrate_sim(sub)
     add_surface(sub)
+    add_segment(sub)
     return parser
 
 

@@ -109,4 +109,4 @@ def _ensure_loaded() -> None:
 
 
 #: Modules of the application packages that contribute trackers to the registry.
-APPLICATION_TRACKERS: tuple[str, ...] = ("pftrack.surfaces.tracker",)
+APPLICATION_TRACKERS: tuple[str, ...] = ("pftrack.surfaces.tracker", "pftrack.segmentation.tracker")

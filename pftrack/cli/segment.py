@@ -1,0 +1,111 @@
+"""``pftrack segment``: track an object as a segmentation mask with graph cuts (book ch. 9)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import Interrupted
+from .common import close_all, progress
+
+
+def add_segment(sub) -> None:
+    p = sub.add_parser("segment", help="track an object as a segmentation mask with graph cuts (book ch. 9)",
+                       description="Every frame, a graph cut of colour-histogram and contrast terms on a region "
+                                   "around the previous mask, seeded by its distance transform. Writes one 0/255 "
+                                   "PNG mask per frame (000001.png, ... by frame number from 1), as it goes.")
+    p.add_argument("source", help="video file, frame folder, OTB/VOT folder or camera index")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--box", help="X,Y,W,H of the object in the first frame (GrabCut finds the first mask)")
+    g.add_argument("--mask", help="first-frame mask (PNG, non-zero = object), the same size as the frames")
+    p.add_argument("--out-dir", default="masks", help="folder of the mask PNGs (default masks/)")
+    p.add_argument("--video-out", help="video with the mask's contour overlaid")
+    p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                   help="graphcut parameter (repeatable; see 'pftrack list graphcut')")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=cmd_segment)
+
+
+def cmd_segment(args) -> int:
+    import cv2
+
+    from ..errors import BoxError, InputError, ParameterError, SourceError
+    from ..geometry import parse_box, validate_box
+    from ..io.sinks import VideoSink, prepare_output
+    from ..io.sources import open_source, read_image
+    from ..params import parse_param_assignments
+    from ..pipeline import interrupt_on_sigterm
+    from ..segmentation.tracker import GraphCutParams, GraphCutTracker
+
+    if not args.box and not args.mask:
+        raise ParameterError("give the first frame's object with --box X,Y,W,H or --mask FIRST.png")
+    params = GraphCutParams.from_mapping(parse_param_assignments(args.param))
+    first_mask = None
+    if args.mask:
+        if not Path(args.mask).is_file():
+            raise SourceError(f"{args.mask}: no such file")
+        img = read_image(Path(args.mask))
+        if img is None:
+            raise SourceError(f"{args.mask}: not an image")
+        first_mask = (img if img.ndim == 2 else img.max(axis=2)) > 0
+        if not first_mask.any():
+            raise InputError(f"{args.mask}: the mask is empty")
+    out_dir = Path(args.out_dir)
+    prepare_output(out_dir / "000001.png")
+    if args.video_out:
+        prepare_output(args.video_out)
+    source = open_source(args.source)
+    frames = source.numbered()
+    try:
+        number, frame = next(frames)
+    except StopIteration:
+        source.close()
+        raise SourceError(f"{args.source}: no frames") from None
+    H, W = frame.shape[:2]
+    try:
+        if first_mask is not None and first_mask.shape != (H, W):
+            raise InputError(f"{args.mask}: mask size {first_mask.shape[1]}x{first_mask.shape[0]} differs from the "
+                             f"frames' {W}x{H}")
+        box = validate_box(parse_box(args.box), W, H) if args.box else None
+    except (InputError, BoxError):
+        source.close()
+        raise
+    tracker = GraphCutTracker(params)
+    sinks: list = []
+    bar = None
+    done = lost = 0
+    try:
+        video = VideoSink(args.video_out, fps=source.fps) if args.video_out else None
+        if video:
+            sinks.append(video)
+        bar = progress(source.length, "segment", args.quiet)
+
+        def emit(num, img, st) -> None:
+            m = st.info["mask"]
+            if not cv2.imwrite(str(out_dir / f"{num:06d}.png"), m.astype(np.uint8) * 255):
+                raise SourceError(f"{out_dir}: cannot write masks there")
+            if video:
+                canvas = img.copy()
+                cs, _ = cv2.findContours(m.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+                cv2.drawContours(canvas, cs, -1, (0, 0, 255) if st.lost else (0, 255, 0), 2, cv2.LINE_AA)
+                video.write(canvas)
+            bar.update(1)
+
+        with interrupt_on_sigterm() as stop:
+            st = tracker.init_mask(frame, first_mask) if first_mask is not None else tracker.init(frame, box)
+            emit(number, frame, st)
+            done = 1
+            for number, frame in frames:
+                st = tracker.update(frame)
+                lost += st.lost
+                emit(number, frame, st)
+                done += 1
+                stop.check()
+    except KeyboardInterrupt:
+        raise Interrupted(f"interrupted; masks so far are in {out_dir}") from None
+    finally:
+        close_all(bar, sinks, source)
+    print(f"{done} masks ({lost} frames lost) -> {out_dir}", file=sys.stderr)
+    return 0
