@@ -90,7 +90,7 @@ def run_grabcut(frames, gts, iters: int = 3):
 VARIANTS = {
     "graphcut (default)": {},
     "full resolution (max_pixels=0)": {"max_pixels": 0},
-    "boundary exp (Eq. 8)": {"boundary": "exp"},
+    "boundary bj (Boykov-Jolly)": {"boundary": "bj"},
     "model update alpha=0.05": {"alpha": 0.05},
     "one-sided seeding (bkg_distance=False)": {"bkg_distance": False},
     "hard temporal seeds": {"soft_seeds": False},
@@ -139,7 +139,7 @@ def part_speed(data: Path, out: dict):
                 H = G.color_hist(bins, prev)
                 Hb = G.color_hist(bins, ~prev)
                 Ro, Rb = G.regional(bins, H, Hb)
-                nl = G.nlink_weights(img, "bj")
+                nl = G.nlink_weights(img, "exp")
                 Do, Db = G.seed_maps(prev)
                 cs, ct = G.tlink_caps(Ro, Rb, 2.0, Do, Db)
                 t1 = time.perf_counter()

@@ -5,7 +5,8 @@ One module per command group: :mod:`.track` (track, demo), :mod:`.mot`,
 :mod:`.points` (points, stereo: book ch. 7), :mod:`.events` (tripwire: book ch. 10),
 :mod:`.multicam` (handover: book ch. 11),
 :mod:`.calibration` (calibrate-sim: book ch. 12), :mod:`.surface` (surface: book ch. 13),
-:mod:`.segment` (segment: book ch. 9).
+:mod:`.segment` (segment: book ch. 9),
+:mod:`.compressed` (activity: book ch. 8).
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr, never a
 traceback), 130 interrupted by Ctrl-C or SIGTERM (everything computed so far is
@@ -24,6 +25,7 @@ from .. import __version__
 from ..errors import Interrupted, PftrackError
 from .bench import add_bench, add_synth
 from .calibration import add_calibrate_sim
+from .compressed import add_activity
 from .segment import add_segment
 from .surface import add_surface
 from .common import DEFAULT_TRACKER, ArgumentParser
@@ -58,6 +60,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_calibrate_sim(sub)
     add_surface(sub)
     add_segment(sub)
+    add_activity(sub)
     return parser
 
 

@@ -35,7 +35,7 @@ class GraphCutParams(Params):
     sequence davis16_dog)."""
 
     lam: float = param(2.0, ge=0, le=1e4, doc="Weight lambda of the regional term in E = lam R + B (Eq. 3).")
-    boundary: Literal["exp", "linear", "bj"] = param("bj", doc=(
+    boundary: Literal["exp", "linear", "bj"] = param("exp", doc=(
         "n-link weight: exp(-|p-q|) (Eq. 8), 1-|p-q|/3 (Eq. 7), or Boykov-Jolly exp(-beta|p-q|^2)/dist."))
     bins: int = param(16, ge=2, le=64, doc="Colour histogram bins per RGB channel.")
     r_min: float = param(20.0, ge=1, le=500, doc=(

@@ -1,0 +1,185 @@
+"""Book ch. 8: motion vectors from a compressed stream, block groups, temporal refinement, labels, activity."""
+
+from __future__ import annotations
+
+import sys
+
+import cv2
+import numpy as np
+import pytest
+
+from pftrack.multi import compressed as C
+
+av = pytest.importorskip("av")
+needs_x264 = pytest.mark.skipif("libx264" not in av.codecs_available, reason="PyAV without libx264")
+
+
+def _texture(seed=0, size=(300, 520)):
+    rng = np.random.default_rng(seed)
+    t = cv2.GaussianBlur(rng.standard_normal(size), (0, 0), 2.0)
+    return ((t - t.min()) / np.ptp(t) * 255).astype(np.uint8)
+
+
+@needs_x264
+def test_reader_recovers_a_known_global_shift_and_exact_pseudo_residual(tmp_path):
+    from pftrack.io.motion_vectors import (
+        block_energy,
+        encode_h264,
+        iter_mv_frames,
+        mv_field,
+        pseudo_residual,
+    )
+
+    tex = _texture()
+    frames = [cv2.cvtColor(tex[30:270, 160 - 2 * i:160 - 2 * i + 320], cv2.COLOR_GRAY2BGR) for i in range(24)]
+    path = encode_h264(frames, tmp_path / "pan.mp4", qp=20, exact=True)
+    ok = n_p = 0
+    prev = None
+    for f in iter_mv_frames(path):
+        if f.number == 1:
+            assert f.pict_type == "I" and f.mvs is None
+        else:
+            assert f.pict_type == "P"
+            fwd, has = mv_field(f.mvs, f.y.shape)
+            n_p += 1
+            ok += bool(np.array_equal(np.median(fwd[has], axis=0), [2.0, 0.0]))
+            if f.number >= 6:      # content moves right by 2 px: the interior is predicted exactly
+                E = block_energy(pseudo_residual(f.y, prev.y, fwd))
+                assert np.mean(E[2:-2, 2:-2] == 0) >= 0.98
+        prev = f
+    assert n_p == 23 and ok >= 0.95 * n_p
+
+
+def test_grouping_positions_connectivity_direction_and_energy():
+    I, J = 20, 30
+    fg = np.zeros((I, J), bool)
+    fg[2:5, 3:6] = True          # blob 1
+    fg[5:8, 6:9] = True          # blob 2 touches blob 1 diagonally
+    fwd = np.zeros((I, J, 2), np.float32)
+    fwd[fg] = (2.0, 0.0)         # motion_x = -8 quarter-pel
+    E = np.zeros((I, J))
+    E[fg] = 100.0
+    p8 = C.CDParams(closing=0, n_min=1)
+    g = C.group_blocks(fg, fwd, E, p8)
+    assert len(g) == 1
+    assert g[0].box[:2] == (12.0, 8.0) and g[0].direction == 0.0 and g[0].energy == pytest.approx(1800.0, abs=1e-9)
+    # 4-connectivity would split them: check through two separated blobs
+    fg2 = fg.copy()
+    fg2[5:8, 6:9] = False
+    fg2[5:8, 7:10] = True
+    assert len(C.group_blocks(fg2, fwd, E, p8)) == 2
+    fwd[fg] = (0.0, -3.0)        # moving up: 270 degrees in image axes
+    assert C.group_blocks(fg, fwd, E, p8)[0].direction == 270.0
+
+
+def _g(x, y, w=16, h=16, d=0.0, e=1e4, shape=(60, 80)):
+    m = np.zeros(shape, bool)
+    m[int(y) // 4:int(y + h) // 4, int(x) // 4:int(x + w) // 4] = True
+    return C.Group((float(x), float(y), float(w), float(h)), m, d, e, (1.0, 0.0), int(m.sum()))
+
+
+def test_temporal_refinement_removes_flicker_and_fills_a_gap():
+    ref = C.TemporalRefiner()
+    out = []
+    seq = [[_g(40, 40)], [_g(44, 40), _g(200, 150)], [], [_g(52, 40), _g(200, 150)], [_g(56, 40)], [_g(60, 40)],
+           [_g(64, 40)]]
+    for n, gs in enumerate(seq, start=1):
+        out += ref.push(n, gs)
+    out += ref.flush()
+    by = dict(out)
+    assert 3 in by and len(by[3]) == 1                          # the missing frame is filled ...
+    assert by[3][0].box[0] == pytest.approx(np.mean([40, 44, 52, 56]))   # ... with the mean position
+    assert all(not any(g.box[0] == 200 for g in by[k]) for k in by)     # 2-of-5 flicker removed
+
+
+def test_labels_survive_an_occlusion_by_direction_and_energy():
+    """A (0 deg, e = 1e4) and B (180 deg, e = 1e6) approach, merge into one group for 10 frames, split and
+    swap sides: both labels come back (ch08.md §5.1), in both similarity modes."""
+    for mode in ("default", "faithful"):
+        trk = C.CDTracker((320, 240), C.CDParams(similarity=mode))
+        before = {}
+        for t in range(32):
+            if t < 12:
+                objs = trk.step([_g(60 + 4 * t, 100, d=0.0, e=1e4), _g(172 - 4 * t, 100, d=180.0, e=1e6)])
+                before = {o.group.direction: o.label for o in objs}
+            elif t < 22:
+                objs = trk.step([_g(108 + (t - 12), 100, w=40, d=90.0, e=1e6)])
+                assert len(objs) == 1 and objs[0].status == 1
+            else:
+                objs = trk.step([_g(110 - 4 * (t - 22), 100, d=180.0, e=1e6), _g(150 + 4 * (t - 22), 100, d=0.0, e=1e4)])
+                assert {o.group.direction: o.label for o in objs} == before, mode
+
+
+def test_statuses_entering_and_leaving():
+    trk = C.CDTracker((320, 240), C.CDParams())
+    objs = trk.step([_g(2, 100)])
+    assert objs[0].status == 4                  # into frame at the border
+    objs = trk.step([_g(100, 100)])
+    lab = objs[0].label
+    assert trk.step([]) == [] and trk.waiting[lab].status == 3     # gone in the interior: stopped, kept
+    objs = trk.step([_g(104, 100)])
+    assert objs[0].label == lab                                     # ... and it resumes with its label
+    trk.step([_g(300, 100)])
+    assert trk.step([]) == [] and all(o.status != 2 for o in trk.waiting.values())   # out of frame: forgotten
+
+
+def test_activity_levels_and_weights():
+    assert C.intensity_level([0.5, 3.9, 10.0, 17.0, 20.0, 40.0]).tolist() == [1, 2, 2, 3, 4, 5]
+    w = C.partition_weights([16, 8, 16, 8], [16, 8, 8, 4], np.arange(4), n_mb=300, penalty=False)
+    assert np.allclose(w, [1.0, 4.0, np.sqrt(2.0), np.sqrt(8.0)])
+    # the penalty damps the n-th partition of a class more than the first
+    wp = C.partition_weights([8] * 5, [8] * 5, np.arange(5), n_mb=20, penalty=True)
+    assert np.all(np.diff(wp) < 0)
+    dt = np.dtype([("source", "i4"), ("w", "u1"), ("h", "u1"), ("src_x", "i2"), ("src_y", "i2"), ("dst_x", "i2"),
+                   ("dst_y", "i2"), ("flags", "u8"), ("motion_x", "i4"), ("motion_y", "i4"), ("motion_scale", "u2")])
+    mvs = np.zeros(300, dt)
+    mvs["source"], mvs["w"], mvs["h"], mvs["motion_scale"] = -1, 16, 16, 4
+    mvs["dst_x"] = (np.arange(300) % 20) * 16 + 8
+    mvs["dst_y"] = (np.arange(300) // 20) * 16 + 8
+    small = np.zeros(12, dt)
+    small["source"], small["w"], small["h"], small["motion_scale"] = -1, 8, 8, 4
+    small["motion_x"] = -24          # 6 px
+    m = np.concatenate([mvs, small])
+    s0 = C.motion_sigma(m, 320, 240, weighted=False, mv_scale=1.0)
+    s1 = C.motion_sigma(m, 320, 240, weighted=True, penalty=False, mv_scale=1.0)
+    assert s1 > s0 and C.intensity_level(s0) == 1 and C.intensity_level(s1) > 1
+
+
+def test_missing_pyav_names_the_extra(monkeypatch):
+    from pftrack.errors import ParameterError
+    from pftrack.io import motion_vectors as M
+
+    monkeypatch.setitem(sys.modules, "av", None)
+    with pytest.raises(ParameterError, match=r"pftrack\[mv\]"):
+        M.require_av()
+
+
+@needs_x264
+def test_cli_mot_mv_cd_and_activity(tmp_path, capsys):
+    from pftrack.cli import main
+    from pftrack.io.motion_vectors import encode_h264
+
+    bg = _texture(3, (240, 320))
+    obj = _texture(4, (40, 40))
+    frames = []
+    rng = np.random.default_rng(5)
+    for t in range(30):       # a textured square with per-frame noise (sigma 4) inside, moving 6 px/frame
+        f = bg.copy()
+        x = 40 + 6 * t
+        f[100:140, x:x + 40] = np.clip(obj + rng.normal(0, 4, obj.shape), 0, 255).astype(np.uint8)
+        frames.append(cv2.cvtColor(f, cv2.COLOR_GRAY2BGR))
+    path = encode_h264(frames, tmp_path / "obj.mp4", qp=20, exact=True)
+    args = ["--param", "n_min=4", "--param", "tau_r=64"]
+    assert main(["mot", str(path), "--detector", "mv", "--out", str(tmp_path / "mv.txt"), "--quiet", *args]) == 0
+    assert main(["mot", str(path), "--tracker", "cd", "--out", str(tmp_path / "cd.txt"), "--quiet", *args]) == 0
+    rows = np.loadtxt(tmp_path / "cd.txt", delimiter=",", ndmin=2)
+    assert len(np.unique(rows[:, 1])) == 1 and len(rows) >= 20        # one label throughout
+    f20 = rows[rows[:, 0] == 20][0]
+    assert abs(f20[2] - (40 + 6 * 19)) <= 12 and abs(f20[3] - 100) <= 12     # 16x16 vectors, 4 px blocks
+    assert main(["activity", str(path), "--out", str(tmp_path / "a.csv"), "--plot", str(tmp_path / "a.png"),
+                 "--weighting", "auto", "--quiet"]) == 0
+    a = np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)
+    assert len(a) == 30 and set(np.unique(a[:, 1])) <= {1, 2, 3, 4, 5}
+    assert main(["activity", str(tmp_path / "missing.mp4")]) == 2
+    assert main(["mot", str(tmp_path / "missing.mp4"), "--detector", "mv"]) == 2
+    assert "error" in capsys.readouterr().err
