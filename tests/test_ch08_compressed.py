@@ -183,3 +183,17 @@ def test_cli_mot_mv_cd_and_activity(tmp_path, capsys):
     assert main(["activity", str(tmp_path / "missing.mp4")]) == 2
     assert main(["mot", str(tmp_path / "missing.mp4"), "--detector", "mv"]) == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_block_energy_at_matches_the_full_pseudo_residual():
+    from pftrack.io.motion_vectors import block_energy, block_energy_at, pseudo_residual
+
+    rng = np.random.default_rng(0)
+    a = rng.integers(0, 255, (48, 64)).astype(np.uint8)
+    b = rng.integers(0, 255, (48, 64)).astype(np.uint8)
+    fwd = rng.uniform(-3, 3, (12, 16, 2)).astype(np.float32)
+    mask = rng.random((12, 16)) < 0.4
+    mask[0, :] = mask[-1, :] = mask[:, 0] = mask[:, -1] = False     # away from the replicated border
+    full = block_energy(pseudo_residual(a, b, fwd))
+    # cv2.remap (the full path) quantises coordinates to 1/32 px; the block path samples exactly
+    assert np.allclose(block_energy_at(a, b, fwd, mask)[mask], full[mask], rtol=0.05)

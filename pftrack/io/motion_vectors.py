@@ -124,7 +124,7 @@ class MVSource:
         return self._len
 
     def numbered(self):
-        for f in iter_mv_frames(self.name, bgr=True):
+        for f in iter_mv_frames(self.name, bgr=True, threads=True):
             self.current = f
             if self.size is None:
                 self.size = (f.y.shape[1], f.y.shape[0])
@@ -187,6 +187,30 @@ def block_energy(R: np.ndarray) -> np.ndarray:
     P = np.zeros((I * BLOCK, J * BLOCK), np.float64)
     P[:h, :w] = R.astype(np.float64) ** 2
     return P.reshape(I, BLOCK, J, BLOCK).sum(axis=(1, 3))
+
+
+def block_energy_at(y_cur: np.ndarray, y_prev: np.ndarray, fwd: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+    """:func:`block_energy` of the pseudo-residual, computed only for the blocks in the (I, J) mask ``blocks``
+    (the others are 0): only blocks with motion can be foreground, so this is all the detector needs."""
+    I, J = blocks.shape
+    E = np.zeros((I, J), np.float64)
+    bi, bj = np.nonzero(blocks)
+    if len(bi) == 0:
+        return E
+    h, w = y_cur.shape
+    oy, ox = np.meshgrid(np.arange(BLOCK), np.arange(BLOCK), indexing="ij")
+    ys = (bi[:, None] * BLOCK + oy.ravel()[None]).clip(0, h - 1)
+    xs = (bj[:, None] * BLOCK + ox.ravel()[None]).clip(0, w - 1)
+    cur = y_cur[ys, xs].astype(np.float64)
+    px = np.clip(xs - fwd[bi, bj, 0][:, None], 0, w - 1)
+    py = np.clip(ys - fwd[bi, bj, 1][:, None], 0, h - 1)
+    x0 = np.minimum(np.floor(px).astype(np.int64), w - 2)
+    y0 = np.minimum(np.floor(py).astype(np.int64), h - 2)
+    tx, ty = px - x0, py - y0
+    yp = y_prev.astype(np.float64)
+    ref = ((1 - ty) * ((1 - tx) * yp[y0, x0] + tx * yp[y0, x0 + 1]) + ty * ((1 - tx) * yp[y0 + 1, x0] + tx * yp[y0 + 1, x0 + 1]))
+    E[bi, bj] = np.sum((cur - ref) ** 2, axis=1)
+    return E
 
 
 def encode_h264(frames, path, *, fps: float = 25.0, crf: int | None = 23, qp: int | None = None,

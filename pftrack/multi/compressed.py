@@ -22,7 +22,7 @@ import numpy as np
 from scipy.ndimage import binary_fill_holes
 from scipy.optimize import linear_sum_assignment
 
-from ..io.motion_vectors import BLOCK, block_energy, mv_field, pseudo_residual
+from ..io.motion_vectors import BLOCK, block_energy_at, mv_field
 from ..params import Params, param
 
 
@@ -104,7 +104,8 @@ class BlockAnalyser:
             self.prev_y = y
             self.fg = np.zeros(has.shape, bool)
             return []
-        E = block_energy(pseudo_residual(y, self.prev_y, fwd))
+        moving = has & (np.hypot(fwd[..., 0], fwd[..., 1]) >= self.p.min_speed)
+        E = block_energy_at(y, self.prev_y, fwd, moving)       # only blocks with motion can be foreground
         self.prev_y = y
         self.fg = foreground_blocks(fwd, has, E, self.p.tau_r, self.p.min_speed)
         return group_blocks(self.fg, fwd, E, self.p)
