@@ -48,3 +48,21 @@ def reproduce_command(drop: tuple[str, ...] = ()) -> str | None:
             continue
         args.append(a)
     return "pftrack " + shlex.join(args)
+
+
+def follow_frames(first_number, first_frame, frames, init, step, emit) -> tuple[int, int]:
+    """The loop shared by the per-frame commands: emit ``init(first frame)``, then ``step(frame)`` for every
+    other frame, stopping cleanly on SIGTERM.  Returns (frames done, frames whose state was lost)."""
+    from ..pipeline import interrupt_on_sigterm
+
+    done = lost = 0
+    with interrupt_on_sigterm() as stop:
+        emit(first_number, first_frame, init(first_frame))
+        done = 1
+        for number, frame in frames:
+            st = step(frame)
+            lost += bool(getattr(st, "lost", False))
+            emit(number, frame, st)
+            done += 1
+            stop.check()
+    return done, lost

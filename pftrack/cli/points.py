@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, progress
+from .common import close_all, follow_frames, progress
 
 POINTS_HEADER = "frame,point,x,y,source"
 DIAG_HEADER = "frame,point,x,y,vx_of,vy_of,vx_af,vy_af,eps,delta_eps,e,qv,k,source"
@@ -101,7 +101,6 @@ def cmd_points(args) -> int:
     from ..io.sinks import VideoSink, _TextSink, prepare_output
     from ..io.sources import open_source
     from ..params import parse_param_assignments
-    from ..pipeline import interrupt_on_sigterm
     from ..trackers.point_gate import SOURCES, PointParams, PointTracker
 
     params = PointParams.from_mapping({"method": args.method, **parse_param_assignments(args.param)})
@@ -157,13 +156,7 @@ def cmd_points(args) -> int:
                 video.write(canvas)
             bar.update(1)
 
-        with interrupt_on_sigterm() as stop:
-            emit(number, frame, tracker.init(frame, pts))
-            done = 1
-            for number, frame in frames:
-                emit(number, frame, tracker.step(frame))
-                done += 1
-                stop.check()
+        done, _ = follow_frames(number, frame, frames, lambda f: tracker.init(f, pts), tracker.step, emit)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; rows so far are in {args.out}") from None
     finally:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, progress
+from .common import close_all, follow_frames, progress
 
 
 def add_segment(sub) -> None:
@@ -36,7 +36,6 @@ def cmd_segment(args) -> int:
     from ..io.sinks import VideoSink, prepare_output
     from ..io.sources import open_source, read_image
     from ..params import parse_param_assignments
-    from ..pipeline import interrupt_on_sigterm
     from ..segmentation.tracker import GraphCutParams, GraphCutTracker
 
     if not args.box and not args.mask:
@@ -93,16 +92,10 @@ def cmd_segment(args) -> int:
                 video.write(canvas)
             bar.update(1)
 
-        with interrupt_on_sigterm() as stop:
-            st = tracker.init_mask(frame, first_mask) if first_mask is not None else tracker.init(frame, box)
-            emit(number, frame, st)
-            done = 1
-            for number, frame in frames:
-                st = tracker.update(frame)
-                lost += st.lost
-                emit(number, frame, st)
-                done += 1
-                stop.check()
+        done, lost = follow_frames(
+            number, frame, frames,
+            lambda f: tracker.init_mask(f, first_mask) if first_mask is not None else tracker.init(f, box),
+            tracker.update, emit)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; masks so far are in {out_dir}") from None
     finally:

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, progress
+from .common import close_all, follow_frames, progress
 
 
 def add_surface(sub) -> None:
@@ -36,7 +36,6 @@ def cmd_surface(args) -> int:
     from ..geometry import parse_box
     from ..io.sinks import VideoSink, _TextSink, prepare_output
     from ..io.sources import open_source, read_image
-    from ..pipeline import interrupt_on_sigterm
     from ..surfaces.mesh import parse_mesh
     from ..surfaces.render import draw_mesh, retexture
     from ..surfaces.tracker import DeformableMesh, MeshParams
@@ -99,15 +98,7 @@ def cmd_surface(args) -> int:
                 video.write(draw_mesh(canvas, V, tracker.grid, lost=state.lost))
             bar.update(1)
 
-        with interrupt_on_sigterm() as stop:
-            emit(number, frame, tracker.init(frame, box))
-            done = 1
-            for number, frame in frames:
-                st = tracker.update(frame)
-                lost_frames += st.lost
-                emit(number, frame, st)
-                done += 1
-                stop.check()
+        done, lost_frames = follow_frames(number, frame, frames, lambda f: tracker.init(f, box), tracker.update, emit)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; rows so far are in {args.out}") from None
     finally:
