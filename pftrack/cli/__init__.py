@@ -25,16 +25,16 @@ from .. import __version__
 from ..errors import Interrupted, PftrackError
 from .bench import add_bench, add_synth
 from .calibration import add_calibrate_sim
-from .compressed import add_activity
-from .segment import add_segment
-from .surface import add_surface
 from .common import DEFAULT_TRACKER, ArgumentParser
+from .compressed import add_activity
 from .densitometry import add_densitometry
 from .evaluate import add_eval, add_list
 from .events import add_tripwire
-from .multicam import add_handover
 from .mot import add_mot, run_mot
+from .multicam import add_handover
 from .points import add_points, add_stereo
+from .segment import add_segment
+from .surface import add_surface
 from .track import add_demo, add_track, demo_clip, run_track
 
 __all__ = ["DEFAULT_TRACKER", "build_parser", "demo_clip", "main", "run_mot", "run_track"]
