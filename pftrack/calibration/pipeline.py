@@ -60,9 +60,8 @@ def estimate(scene: Scene, m: Measurements, params: EstimateParams = EstimatePar
         keep = ok_t[steps] if len(steps) else np.zeros(0, bool)
         steps, local = steps[keep], local[keep]
         world = X[steps, :2].copy()
-        if params.mismatch > 0 and len(world):
+        if params.mismatch > 0 and len(world):     # mis-associated pairs: world points anywhere in the room
             bad = rng.random(len(world)) < params.mismatch
-            world[bad] = world[rng.permutation(np.flatnonzero(bad))] if bad.sum() > 1 else world[bad]
             W, H = scene.room
             world[bad] = rng.uniform((-W / 2, -H / 2), (W / 2, H / 2), (int(bad.sum()), 2))
         entry = {"pairs": len(steps)}
