@@ -112,6 +112,29 @@ def test_linking_is_one_to_one_in_time_order_with_new_people():
     assert link_tracks({2: a[2]}, b2, lut, tau_new=0.0) == []
 
 
+def test_transit_time_breaks_a_tie_between_look_alikes():
+    from pftrack.multicam.handover import fit_transit
+
+    lut = np.tile(np.arange(256.0), (3, 1))
+    # training: two people crossing the blind zone in about 20 frames
+    a = {1: _app(1, 1, 10, (200, 10, 10)), 2: _app(2, 5, 15, (10, 200, 10)),
+         3: _app(3, 100, 110, (50, 50, 50))}
+    b = {11: _app(11, 30, 40, (200, 10, 10)), 12: _app(12, 36, 50, (10, 200, 10)),
+         13: _app(13, 112, 130, (50, 50, 52)), 14: _app(14, 131, 140, (50, 50, 50))}
+    tr = fit_transit(a, b, [(1, 11), (2, 12)])
+    assert tr is not None and tr[0] == pytest.approx(np.log(20.5), abs=0.1)
+    # appearance alone prefers the exact colour match arriving after 21 frames (14) ...
+    plain = link_tracks(a, b, lut, exclude_a=[1, 2], exclude_b=[11, 12])
+    assert [(x, y) for x, y, _ in plain] == [(3, 14)]
+    # ... with the transit model, the near-identical one arriving after 2 frames (13) loses too: 14 stays
+    assert [(x, y) for x, y, _ in link_tracks(a, b, lut, exclude_a=[1, 2], exclude_b=[11, 12], transit=tr)] == [(3, 14)]
+    # a look-alike arriving at the usual time wins over an identical one arriving far too late
+    b[14] = _app(14, 400, 410, (50, 50, 50))
+    b[13] = _app(13, 130, 140, (50, 50, 56))
+    assert [(x, y) for x, y, _ in link_tracks(a, b, lut, exclude_a=[1, 2], exclude_b=[11, 12])] == [(3, 14)]
+    assert [(x, y) for x, y, _ in link_tracks(a, b, lut, exclude_a=[1, 2], exclude_b=[11, 12], transit=tr)] == [(3, 13)]
+
+
 @pytest.mark.shared_data
 @pytest.mark.skipif(not DATA.is_dir(), reason="shared data absent")
 def test_handover_cli_on_a_pets_two_camera_scene(tmp_path):

@@ -28,6 +28,10 @@ def add_handover(sub) -> None:
     p.add_argument("--new-threshold", default="auto",
                    help="similarity below which a probe is a new person: a number, 'auto' (from the training "
                         "pairs) or 'none'")
+    p.add_argument("--transit", action="store_true",
+                   help="also weigh each candidate by a log-normal transit-time model fitted on the training pairs "
+                        "(helps where people cross the blind zone at a steady pace; it hurt on the PETS two-camera "
+                        "scenes, whose walkers wander: see docs/handover.md)")
     p.add_argument("--out", default="links.csv", help="CSV output (default links.csv)")
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_handover)
@@ -95,7 +99,7 @@ def cmd_handover(args) -> int:
     from ..io.datasets import read_mot_txt
     from ..io.sinks import _TextSink, prepare_output
     from ..io.sources import open_source
-    from ..multicam.handover import describe_tracks, fit_btf, link_tracks, new_threshold
+    from ..multicam.handover import describe_tracks, fit_btf, fit_transit, link_tracks, new_threshold
 
     rows_a, rows_b = read_mot_txt(args.tracks_a), read_mot_txt(args.tracks_b)
     if len(rows_a) == 0 or len(rows_b) == 0:
@@ -128,8 +132,11 @@ def cmd_handover(args) -> int:
             tau = float(args.new_threshold)
         except ValueError:
             raise ParameterError(f"--new-threshold must be a number, 'auto' or 'none', got {args.new_threshold!r}") from None
+    transit = fit_transit(app_a, app_b, pairs) if args.transit else None
+    if args.transit and transit is None:
+        raise ParameterError("--transit needs training pairs (--train-pairs) whose tracks follow each other in time")
     links = link_tracks(app_a, app_b, lut, tau_new=tau, exclude_a=[a for a, _ in pairs],
-                        exclude_b=[b for _, b in pairs])
+                        exclude_b=[b for _, b in pairs], transit=transit)
     with _TextSink(args.out) as out:
         out._write("track_a,track_b,similarity")
         for a, b, s in links:

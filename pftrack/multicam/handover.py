@@ -25,7 +25,7 @@ from scipy.optimize import linear_sum_assignment
 from .appearance import region_histograms, similarity_matrix
 from .btf import apply_btf_hist, cbtf, identity_btf, mbtf
 
-__all__ = ["TrackAppearance", "describe_tracks", "fit_btf", "link_tracks", "new_threshold"]
+__all__ = ["TrackAppearance", "describe_tracks", "fit_btf", "fit_transit", "link_tracks", "new_threshold"]
 
 
 @dataclass
@@ -130,14 +130,34 @@ def new_threshold(app_a, app_b, pairs, method: str) -> float:
     return float(cands[int(np.argmin(errs))])
 
 
+def fit_transit(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppearance], pairs,
+                min_sigma: float = 1.0) -> tuple[float, float] | None:
+    """A log-normal model of the transit time between the cameras from the training pairs (the optional
+    transit-time cue of the chapter's hand-over, after Javed et al.): ``(mean, std)`` of ``log(gap)``, gap in
+    frames from the end of one track to the start of the other; the spread is at least ``min_sigma``
+    (a factor e either way), since a handful of pairs under-estimates it.  None without a usable pair."""
+    gaps = []
+    for a, b in pairs:
+        ta, tb = app_a[a], app_b[b]
+        g = tb.first - ta.last if ta.last < tb.first else ta.first - tb.last
+        if g > 0:
+            gaps.append(np.log(g))
+    if not gaps:
+        return None
+    return float(np.mean(gaps)), float(max(np.std(gaps), min_sigma))
+
+
 def link_tracks(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppearance], lut: np.ndarray, *,
-                tau_new: float = 0.0, exclude_a=(), exclude_b=()) -> list[tuple[int, int, float]]:
+                tau_new: float = 0.0, exclude_a=(), exclude_b=(),
+                transit: tuple[float, float] | None = None) -> list[tuple[int, int, float]]:
     """One-to-one links ``(track_a, track_b, similarity)``.
 
     A track that has ended in one camera is in the gallery; a track that starts later in the
     other camera is a probe for it.  Every probe takes at most one gallery track and every
     gallery track serves at most one probe (Eq. 2 as an assignment); a probe whose best
-    affordable match is below ``tau_new`` is a new person (no link).
+    affordable match is below ``tau_new`` is a new person (no link).  With ``transit``
+    (:func:`fit_transit`) a candidate's cost also carries ``z^2/2`` of its log transit time, so that
+    a look-alike who arrives far too early or too late loses to the right person.
     """
     a_ids = {k: v for k, v in app_a.items() if k not in set(exclude_a)}
     b_ids = {k: v for k, v in app_b.items() if k not in set(exclude_b)}
@@ -157,11 +177,15 @@ def link_tracks(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppeara
         return []
     gallery = [g for g in tracks if any(p[0] != g[0] and last[g] < first[p] for p in probes)]
     big = 1e6
+    span = max(np.log(max(max(first.values()) - min(last.values()), 2)), 1.0)
     cost = np.full((len(probes), len(gallery)), big)
     for i, p in enumerate(probes):
         for j, g in enumerate(gallery):
             if g[0] != p[0] and last[g] < first[p]:
                 cost[i, j] = -np.log(max(sim(p, g), 1e-9))
+                if transit is not None:   # -log of the likelihood ratio against log-gaps uniform over [0, log span]
+                    z = (np.log(first[p] - last[g]) - transit[0]) / transit[1]
+                    cost[i, j] += 0.5 * z * z + np.log(transit[1] * np.sqrt(2 * np.pi)) - np.log(span)
     new_cost = -np.log(max(tau_new, 1e-9)) if tau_new > 0 else big / 2
     full = np.hstack([cost, np.full((len(probes), len(probes)), big)])
     full[np.arange(len(probes)), len(gallery) + np.arange(len(probes))] = new_cost
