@@ -99,7 +99,13 @@ def cmd_handover(args) -> int:
     from ..io.datasets import read_mot_txt
     from ..io.sinks import _TextSink, prepare_output
     from ..io.sources import open_source
-    from ..multicam.handover import describe_tracks, fit_btf, fit_transit, link_tracks, new_threshold
+    from ..multicam.handover import (
+        describe_tracks,
+        fit_btf,
+        fit_transit,
+        link_tracks,
+        new_threshold,
+    )
 
     rows_a, rows_b = read_mot_txt(args.tracks_a), read_mot_txt(args.tracks_b)
     if len(rows_a) == 0 or len(rows_b) == 0:
