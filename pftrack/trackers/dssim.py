@@ -109,6 +109,8 @@ class DSSIMTracker(Tracker):
         p = self.params
         if self.mode == "searching":
             gray = self._gray(frame)
+            if self.pix > 1.5:  # sparse samples: central differences at the samples, no gradient images
+                return self._search(gray, None, None)
             return self._search(gray, *S.image_gradients(gray))
         # only the region the ascent can reach: the box at the largest scale tried, plus max_iter steps
         fh, fw = self._shape
@@ -160,6 +162,8 @@ class DSSIMTracker(Tracker):
         coarse_states[:, 2] *= 2.0
         coarse = S.ssim_global_stack(S.sample_stack(gray, coarse_states, half.shape), half)
         top = np.argsort(-coarse)[:5]
+        if gx is None:
+            gx = gy = np.empty((0, 0), np.float32)
         res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts[top], max_iter=self.params.max_iter)
         k = int(np.argmax(res[:, 2]))
         if self.loss.acquire(float(res[k, 2])):
