@@ -105,6 +105,7 @@ class SolverSettings:
     model: str = "affine"
     rho_min: float = 0.2
     rho_max: float = 5.0
+    max_pixels: int = 0           # per level; 0 = every pixel
 
 
 class _Pairs:
@@ -124,13 +125,16 @@ class _Pairs:
 class LevelModel:
     """The model pixels of one pyramid level with their constant interpolation weights."""
 
-    def __init__(self, I0: np.ndarray, grid_g: Grid, grid_p: Grid, level: int, model: str):
+    def __init__(self, I0: np.ndarray, grid_g: Grid, grid_p: Grid, level: int, model: str, max_pixels: int = 0):
         f = 0.5 ** level
         self.level, self.f = level, f
         gg = grid_g.scaled(f)
         x1, y1 = gg.x0 + gg.sx * (gg.cols - 1), gg.y0 + gg.sy * (gg.rows - 1)
         xs = np.arange(max(int(np.ceil(gg.x0)), 0), min(int(np.floor(x1)), I0.shape[1] - 1) + 1)
         ys = np.arange(max(int(np.ceil(gg.y0)), 0), min(int(np.floor(y1)), I0.shape[0] - 1) + 1)
+        if max_pixels and len(xs) * len(ys) > max_pixels:   # speed bound: a regular subset of the region's pixels
+            step = int(np.ceil(np.sqrt(len(xs) * len(ys) / max_pixels)))
+            xs, ys = xs[step // 2::step], ys[step // 2::step]
         X, Y = np.meshgrid(xs, ys)
         self.pts = np.stack([X.ravel(), Y.ravel()], 1).astype(np.float64)
         self.shape = X.shape
@@ -218,7 +222,8 @@ class MeshSolver:
         self.tris = grid_g.triangles()
         self.area0 = signed_areas(self.V0, self.tris)
         pyr = pyramid(I0, settings.levels)
-        self.levels = [LevelModel(p, grid_g, grid_p, lvl, settings.model) for lvl, p in enumerate(pyr)]
+        self.levels = [LevelModel(p, grid_g, grid_p, lvl, settings.model, settings.max_pixels)
+                       for lvl, p in enumerate(pyr)]
         Lg = directional_laplacian(grid_g.rows, grid_g.cols)
         Lp = directional_laplacian(grid_p.rows, grid_p.cols)
         self.LtL_g = (Lg.T @ Lg).toarray()

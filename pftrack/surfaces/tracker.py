@@ -49,6 +49,9 @@ class MeshParams(Params):
     lost_rms: float = param(0.12, gt=0, le=1, doc=(
         "Residual RMS (intensities in [0, 1]) above which the frame is judged not to show the surface."))
     velocity: bool = param(False, doc="Start each frame from a constant-velocity prediction of d instead of the last d.")
+    max_pixels: int = param(60000, ge=0, le=100_000_000, doc=(
+        "Speed bound: on a pyramid level whose region has more pixels, a regular subset of about this many is used "
+        "(0: every pixel). The 480x360 sheets of docs/surfaces.md (about 48 000 pixels) stay under it."))
 
 
 def gray01(frame: np.ndarray) -> np.ndarray:
@@ -65,7 +68,7 @@ class DeformableMesh(Tracker):
         p = self.params
         levels = max(1, min(p.levels, int(np.floor(np.log2(max(min(box[2], box[3]), 16) / 16))) + 1))
         return SolverSettings(lam=p.lam, lam_p=p.lam_p, levels=levels, max_iter=p.max_iter, tol=p.tol,
-                              huber_k=p.huber_k, photometric=p.photometric, model=p.model)
+                              huber_k=p.huber_k, photometric=p.photometric, model=p.model, max_pixels=p.max_pixels)
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
