@@ -171,7 +171,16 @@ def test_cli_mot_mv_cd_and_activity(tmp_path, capsys):
     path = encode_h264(frames, tmp_path / "obj.mp4", qp=20, exact=True)
     args = ["--param", "n_min=4", "--param", "tau_r=64"]
     assert main(["mot", str(path), "--detector", "mv", "--out", str(tmp_path / "mv.txt"), "--quiet", *args]) == 0
-    assert main(["mot", str(path), "--tracker", "cd", "--out", str(tmp_path / "cd.txt"), "--quiet", *args]) == 0
+    assert main(["mot", str(path), "--tracker", "cd", "--out", str(tmp_path / "cd.txt"), "--quiet",
+                 "--mpeg7", str(tmp_path / "cd.xml"), *args]) == 0
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(tmp_path / "cd.xml").getroot()                      # well formed, one trajectory per label
+    ns = "{urn:mpeg:mpeg7:schema:2001}"
+    assert root.tag == ns + "Mpeg7" and len(root.findall(f".//{ns}MotionTrajectory")) == 1
+    xs = root.find(f".//{ns}KeyValue[@dim='x']").text.split()
+    assert len(xs) == len(root.findall(f".//{ns}CoordKeyPoints/{ns}MediaTimePoint")) > 10
+    assert main(["mot", str(path), "--out", str(tmp_path / "x.txt"), "--mpeg7", str(tmp_path / "x.xml")]) == 2
     rows = np.loadtxt(tmp_path / "cd.txt", delimiter=",", ndmin=2)
     assert len(np.unique(rows[:, 1])) == 1 and len(rows) >= 20        # one label throughout
     f20 = rows[rows[:, 0] == 20][0]

@@ -24,6 +24,8 @@ def add_mot(sub) -> None:
     p.add_argument("--video-out", help="annotated video output")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="multi-pf parameter (repeatable)")
+    p.add_argument("--mpeg7", help="with --tracker cd: also write an MPEG-7 XML description (a trajectory per label, "
+                                    "segments of high motion activity)")
     p.add_argument("--identify", action="store_true",
                    help="book ch. 1 identification: give a returning person their old identity (colour and spatial "
                         "features of the upper and lower body)")
@@ -33,10 +35,14 @@ def add_mot(sub) -> None:
 
 
 def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params=None, skip_bad_frames=False,
-            quiet=False, tracker_name: str = "multi-pf") -> dict:
+            quiet=False, tracker_name: str = "multi-pf", mpeg7: str | None = None) -> dict:
     """The work behind ``pftrack mot``."""
     if tracker_name == "cd":
-        return run_cd(source_spec, out=out, video_out=video_out, params=params, quiet=quiet)
+        return run_cd(source_spec, out=out, video_out=video_out, params=params, quiet=quiet, mpeg7=mpeg7)
+    if mpeg7:
+        from ..errors import ParameterError
+
+        raise ParameterError("--mpeg7 needs --tracker cd")
     import time as _time
 
     from ..io.sinks import MotSink, VideoSink, prepare_output
@@ -99,14 +105,23 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
             "end_to_end_fps": frames / total if total > 0 else 0.0, "source": source}
 
 
-def run_cd(source_spec, *, out, video_out=None, params=None, quiet=False) -> dict:
+def run_cd(source_spec, *, out, video_out=None, params=None, quiet=False, mpeg7: str | None = None) -> dict:
     """``pftrack mot --tracker cd``: the chapter's compressed-domain labelling, rows delayed by 2 frames
     (the temporal refinement needs f+1 and f+2) but written with their own frame numbers."""
     import time as _time
 
+    import numpy as np
+
     from ..io.motion_vectors import iter_mv_frames
     from ..io.sinks import MotSink, VideoSink, prepare_output
-    from ..multi.compressed import BlockAnalyser, CDParams, CDTracker, TemporalRefiner
+    from ..multi.compressed import (
+        BlockAnalyser,
+        CDParams,
+        CDTracker,
+        TemporalRefiner,
+        intensity_level,
+        motion_sigma,
+    )
     from ..pipeline import interrupt_on_sigterm
     from ..viz.draw import color_for, draw_box
 
@@ -114,6 +129,13 @@ def run_cd(source_spec, *, out, video_out=None, params=None, quiet=False) -> dic
     prepare_output(out)
     if video_out:
         prepare_output(video_out)
+    if mpeg7:
+        prepare_output(mpeg7)
+    trajectories: dict[int, list] = {}
+    sigmas: list[tuple[int, float]] = []
+    from ..io.motion_vectors import MVSource
+
+    fps = MVSource(source_spec).fps or 25.0
     analyser, refiner, labeler = BlockAnalyser(p), TemporalRefiner(), None
     frames = rows = 0
     ids: set[int] = set()
@@ -133,6 +155,8 @@ def run_cd(source_spec, *, out, video_out=None, params=None, quiet=False) -> dic
             objs = labeler.step(groups)
             for o in objs:
                 sink.write(number, o.label, o.group.box, 1.0)
+                x, y, w, h = o.group.box
+                trajectories.setdefault(o.label, []).append((number, x + w / 2, y + h / 2))
                 ids.add(o.label)
                 rows += 1
             if video is not None:
@@ -146,15 +170,25 @@ def run_cd(source_spec, *, out, video_out=None, params=None, quiet=False) -> dic
             for mvf in iter_mv_frames(source_spec, bgr=bool(video_out)):
                 size = (mvf.y.shape[1], mvf.y.shape[0])
                 if video_out and video is None:
-                    video = VideoSink(video_out, fps=25.0)
+                    video = VideoSink(video_out, fps=fps)
                     sinks.append(video)
                 if video_out:
                     images[mvf.number] = mvf.bgr
                 emit(refiner.push(mvf.number, analyser(mvf)))
+                if mpeg7:
+                    sigmas.append((mvf.number, motion_sigma(mvf.mvs, size[0], size[1])))
                 frames += 1
                 bar.update(1)
                 stop.check()
             emit(refiner.flush())
+        if mpeg7:
+            from scipy.ndimage import median_filter
+
+            from ..io.mpeg7 import write_mpeg7
+
+            sig = median_filter(np.array([v for _, v in sigmas]), size=5, mode="nearest") if sigmas else []
+            levels = [(n, int(lv)) for (n, _), lv in zip(sigmas, intensity_level(sig))]
+            write_mpeg7(trajectories, levels, mpeg7, fps=fps)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted after {frames} frames; rows so far are in {out}") from None
     finally:
@@ -173,7 +207,8 @@ def cmd_mot(args) -> int:
     if args.identify:
         params["identify"] = True
     res = run_mot(args.source, out=args.out, detector=args.detector, video_out=args.video_out, seed=args.seed,
-                  params=params, skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, tracker_name=args.tracker)
+                  params=params, skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, tracker_name=args.tracker,
+                  mpeg7=args.mpeg7)
     print(f"{res['frames']} frames, {res['identities']} identities, {res['rows']} boxes: {res['update_fps']:.0f} fps "
           f"(detection + tracking), {res['end_to_end_fps']:.0f} fps end to end -> {args.out}", file=sys.stderr)
     return 0
