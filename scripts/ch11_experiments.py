@@ -22,7 +22,12 @@ import cv2
 import numpy as np
 
 from pftrack.multicam.appearance import FEATURES, similarity_matrix
-from pftrack.multicam.btf import apply_btf_hist
+from pftrack.multicam.btf import (
+    apply_btf_hist,
+    btf_from_hists,
+    btf_subspace_loglik,
+    fit_btf_subspace,
+)
 from pftrack.multicam.handover import (
     describe_tracks,
     fit_btf,
@@ -64,6 +69,23 @@ def scene_scores(sc, repeats: int, seed: int) -> dict:
             if not test:
                 continue
             ex_a, ex_b = [a for a, _ in pairs], [b for _, b in pairs]
+            if feat == FEATURES[0] and len(pairs) >= 2:
+                # the BTF-subspace extension (Javed et al.): rank-1 by the PPCA likelihood of the BTF between
+                # the probe and each candidate (whole-foreground raw histograms, so once per scene and split)
+                model = fit_btf_subspace(np.stack([btf_from_hists(app_a[a].raw, app_b[b].raw) for a, b in pairs]))
+                r1s = 0
+                for a, b in test:
+                    if app_a[a].last < app_b[b].first:
+                        cands = [k for k in app_a if k not in ex_a and app_a[k].last < app_b[b].first]
+                        ll = [btf_subspace_loglik(model, btf_from_hists(app_a[k].raw, app_b[b].raw)) for k in cands]
+                        r1s += cands[int(np.argmax(ll))] == a
+                    else:
+                        cands = [k for k in app_b if k not in ex_b and app_b[k].last < app_a[a].first]
+                        ll = [btf_subspace_loglik(model, btf_from_hists(app_a[a].raw, app_b[k].raw)) for k in cands]
+                        r1s += cands[int(np.argmax(ll))] == b
+                acc_s = out.setdefault("BTF subspace (PPCA) rank-1 only", [0, 0, 0])
+                acc_s[1] += r1s
+                acc_s[2] += len(test)
             for method in ("none", "mbtf", "cbtf"):
                 lut = fit_btf(app_a, app_b, pairs, method)
                 tau = new_threshold(app_a, app_b, pairs, method)

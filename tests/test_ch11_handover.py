@@ -171,3 +171,31 @@ def test_handover_cli_on_a_pets_two_camera_scene(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("999,1\n")
     assert main(args + ["--train-pairs", str(bad)]) == 2
+
+
+def test_btf_subspace_loglik_matches_the_gaussian_and_ranks_in_family_btfs_higher():
+    from scipy.stats import multivariate_normal
+
+    from pftrack.multicam.btf import (
+        btf_from_hists,
+        btf_subspace_loglik,
+        fit_btf_subspace,
+    )
+
+    rng = np.random.default_rng(0)
+    small = rng.normal(0, 3, (12, 1, 8)) + np.linspace(0, 70, 8)
+    m = fit_btf_subspace(small, q=2)
+    cov = m["W"] @ m["W"].T + m["sigma2"] * np.eye(8)
+    x = small[0].ravel() + 1.0
+    assert btf_subspace_loglik(m, x) == pytest.approx(multivariate_normal(m["mean"], cov).logpdf(x) / 8, rel=1e-9)
+    # BTFs of a gamma family (one camera pair) vs an inverted response
+    v = np.arange(256.0)
+
+    def gamma_lut(g):
+        return np.stack([255 * (v / 255) ** (g * k) for k in (1.0, 1.1, 0.9)])
+
+    train = np.stack([gamma_lut(g) + rng.normal(0, 1, (3, 256)) for g in rng.uniform(0.6, 0.9, 15)])
+    model = fit_btf_subspace(train)
+    assert btf_subspace_loglik(model, gamma_lut(0.75)) > btf_subspace_loglik(model, 255 - gamma_lut(0.75))
+    h = np.tile(np.bincount(rng.integers(0, 256, 5000), minlength=256), (3, 1)).astype(float)
+    assert btf_from_hists(h, h).shape == (3, 256)

@@ -79,3 +79,38 @@ def apply_btf_image(img: np.ndarray, lut: np.ndarray) -> np.ndarray:
     tables = np.clip(np.round(lut), 0, 255).astype(np.uint8)
     b, g, r = cv2.split(img)
     return cv2.merge([cv2.LUT(b, tables[2]), cv2.LUT(g, tables[1]), cv2.LUT(r, tables[0])])
+
+
+# -- BTF subspace (Javed et al. 2005; ch11.md §1.2 "restored, optional": the chapter mentions it, L9674-9676) --
+
+
+def fit_btf_subspace(luts: np.ndarray, q: int | None = None) -> dict:
+    """Probabilistic PCA of per-pair BTFs ``luts`` (n, 3, 256): the BTFs of one camera pair lie near a
+    low-dimensional subspace.  ``q`` principal directions (default ``min(n - 1, 5)``), the rest isotropic noise
+    ``sigma^2`` (the mean of the discarded eigenvalues, floored).  Returns ``mean, W, sigma2, d``."""
+    F = np.asarray(luts, np.float64).reshape(len(luts), -1)
+    n, d = F.shape
+    mean = F.mean(0)
+    if n < 2:
+        return {"mean": mean, "W": np.zeros((d, 0)), "sigma2": 25.0, "d": d}
+    q = min(n - 1, 5) if q is None else int(q)
+    X = (F - mean) / np.sqrt(n - 1)
+    _, s, Vt = np.linalg.svd(X, full_matrices=False)
+    ev = s ** 2
+    rest = ev[q:]
+    sigma2 = float(max(rest.sum() / max(d - q, 1), 1.0))       # floor: 1 grey level^2 per bin
+    W = Vt[:q].T * np.sqrt(np.maximum(ev[:q] - sigma2, 0.0))
+    return {"mean": mean, "W": W, "sigma2": sigma2, "d": d}
+
+
+def btf_subspace_loglik(model: dict, lut: np.ndarray) -> float:
+    """``log p(f)`` under the PPCA model, ``p(f) = N(mean, W W^T + sigma^2 I)`` (ch11.md §1.2), per dimension,
+    computed through the Woodbury identity (no d x d matrix)."""
+    f = np.asarray(lut, np.float64).ravel() - model["mean"]
+    W, s2, d = model["W"], model["sigma2"], model["d"]
+    q = W.shape[1]
+    M = np.eye(q) * s2 + W.T @ W                      # q x q
+    Wf = W.T @ f
+    quad = (f @ f - Wf @ np.linalg.solve(M, Wf)) / s2
+    logdet = (d - q) * np.log(s2) + np.linalg.slogdet(M)[1]
+    return float(-0.5 * (quad + logdet + d * np.log(2 * np.pi)) / d)
