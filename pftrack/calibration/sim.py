@@ -35,6 +35,7 @@ def unicycle_step(state: np.ndarray, v: float, w: float, dt: float) -> np.ndarra
 def coverage_waypoints(room, margin: float = 0.6, n: int = 120) -> np.ndarray:
     """A 3:2 Lissajous figure inside the room: it crosses every part of the floor (ch12.md pitfall 10)."""
     W, H = room
+    margin = min(margin, 0.25 * min(W, H))
     t = np.linspace(0, 2 * np.pi, n, endpoint=False)
     return np.stack([(W / 2 - margin) * np.sin(3 * t + np.pi / 4), (H / 2 - margin) * np.sin(2 * t)], 1)
 
@@ -65,7 +66,9 @@ def drive(scene: Scene, waypoints: np.ndarray | None = None) -> Trajectory:
     pose[0] = r.start
     for i in range(n - 1):
         x, y, th = pose[i]
-        while np.hypot(*(wp[k] - (x, y))) < 0.25:
+        for _ in range(len(wp)):                # next waypoint not yet reached (bounded: a tiny room has all close)
+            if np.hypot(*(wp[k] - (x, y))) >= 0.25:
+                break
             k = (k + 1) % len(wp)
         err = wrap(np.arctan2(wp[k, 1] - y, wp[k, 0] - x) - th)
         w = float(np.clip(1.5 * err, -1.0, 1.0))
