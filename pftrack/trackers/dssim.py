@@ -118,7 +118,7 @@ class DSSIMTracker(Tracker):
         hw = 0.5 * self.size0[0] * self.s * (1 + p.scale_step) + m
         hh = 0.5 * self.size0[1] * self.s * (1 + p.scale_step) + m
         x0, y0 = max(int(self.c[0] - hw), 0), max(int(self.c[1] - hh), 0)
-        x1, y1 = min(int(math.ceil(self.c[0] + hw)) + 1, fw), min(int(math.ceil(self.c[1] + hh)) + 1, fh)
+        x1, y1 = min(math.ceil(self.c[0] + hw) + 1, fw), min(math.ceil(self.c[1] + hh) + 1, fh)
         if x1 - x0 < 3 or y1 - y0 < 3:
             x0, y0, x1, y1 = 0, 0, fw, fh
         roi = self._gray(frame[y0:y1, x0:x1])  # grey conversion of the reachable region only

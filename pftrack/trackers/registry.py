@@ -9,8 +9,9 @@ Unknown names raise :class:`~pftrack.errors.ParameterError` with suggestions.
 from __future__ import annotations
 
 import difflib
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping
+from typing import Any
 
 import numpy as np
 
