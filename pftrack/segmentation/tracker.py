@@ -229,11 +229,24 @@ class GraphCutTracker(Tracker):
         return self._state(frame, bins)
 
     def _reacquire(self, frame, bins) -> TrackState:
+        """While lost: cut the whole frame without temporal seeds, on a grid of at most a quarter of ``max_pixels``
+        (without seeds the max flow is several times slower per node, and a coarse blob is enough to resume),
+        and resume on a large enough component with enough colour support."""
         p = self.params
-        Ro, Rb = G.regional(bins, self.H_obj, self.H_bkg)
-        nl = G.nlink_weights(frame, p.boundary)
+        h, w = frame.shape[:2]
+        img, b = frame, bins
+        budget = p.max_pixels // 4
+        f = np.sqrt(budget / (h * w)) if (budget and h * w > budget) else 1.0
+        if f < 1.0:
+            img = cv2.resize(frame, (max(round(w * f), 4), max(round(h * f), 4)), interpolation=cv2.INTER_AREA)
+            b = G.color_bins(img, p.bins)
+        Ro, Rb = G.regional(b, self.H_obj, self.H_bkg)
+        nl = G.nlink_weights(img, p.boundary)
         cs, ct = G.tlink_caps(Ro, Rb, p.lam)
-        comp = largest_component(G.min_cut(cs, ct, nl, p.backend))
+        cut = G.min_cut(cs, ct, nl, p.backend)
+        if f < 1.0:
+            cut = cv2.resize(cut.astype(np.float32), (w, h), interpolation=cv2.INTER_LINEAR) > 0.5
+        comp = largest_component(cut)
         if comp.sum() >= 0.3 * self.last_area and self._support(bins, comp) >= p.lost_support * self.support0:
             self.mask, self.lost = comp, False
             self.centre, self.velocity = self._centroid(comp), np.zeros(2)
