@@ -5,13 +5,15 @@ Book *Object Tracking*, ch. 9 (``shared/book/ch09.md``).  Every frame:
 1. the region of interest is the bounding box of the previous mask dilated by ``r`` pixels
    (``r = max(r_min, 1.5 |v| + 0.05 sqrt(area))``, L8713-8724); outside the dilated mask is hard background;
 2. the graph of :mod:`.graphcut` is built on the ROI and cut (temporal seeding from the previous mask);
-3. if the mask touches the dilated region's border, ``r`` is doubled and the cut repeated (at most twice).
+3. if more than 2 % of the dilated region's border ends inside the cut, ``r`` is doubled and the cut repeated
+   (at most twice).
 
 The histograms come from the first mask (``init`` runs GrabCut in the box, or takes a mask with
 :meth:`GraphCutTracker.init_mask`), and are blended with rate ``alpha`` when the area changes by less than
-30 %.  ``lost`` when the mask vanishes or collapses below ``lost_area`` of the initial area; while lost the
-whole frame is cut without temporal seeds, and tracking resumes when a component of at least 30 % of the
-last good area appears.  ``info["mask"]`` is the full-frame boolean mask.
+30 %.  ``lost`` when the mask vanishes, collapses below ``lost_area`` of the initial area, or loses its colour
+support (``lost_support``); while lost the whole frame is cut without temporal seeds on a coarse grid, and
+tracking resumes when a component of at least 30 % of the last good area, with enough support, appears.
+``info["mask"]`` is the full-frame boolean mask.
 """
 
 from __future__ import annotations
