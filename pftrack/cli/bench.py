@@ -152,16 +152,11 @@ def cmd_synth(args) -> int:
         if detect_layout(Path(args.source)) != "mot":
             raise SourceError(f"{args.source}: not a MOTChallenge folder")
     if args.kind == "xray":
-        from ..errors import SourceError
-        from ..io.sources import read_image
+        from .common import image_file
 
         if not args.source:
             raise ParameterError("xray scenes need --source IMAGE (the grey frame to warp)")
-        if not Path(args.source).is_file():
-            raise SourceError(f"{args.source}: no such file")
-        image = read_image(Path(args.source))
-        if image is None:
-            raise SourceError(f"{args.source}: not an image")
+        image = image_file(args.source)
     prepare_output(out / "README.txt")
     for sd in seeds:
         if image is not None:

@@ -66,3 +66,29 @@ def follow_frames(first_number, first_frame, frames, init, step, emit) -> tuple[
             done += 1
             stop.check()
     return done, lost
+
+
+def first_frame(source, what: str):
+    """``(frames iterator, (number, frame))`` of a source's first frame; closes it and raises on no frames."""
+    from ..errors import SourceError
+
+    frames = source.numbered()
+    try:
+        return frames, next(frames)
+    except StopIteration:
+        source.close()
+        raise SourceError(f"{what}: no frames") from None
+
+
+def image_file(path: str):
+    """An image read from a file given on the command line, or a one-line error (missing / not an image)."""
+    from ..errors import SourceError
+    from ..io.sources import read_image
+
+    p = Path(path)
+    if not p.is_file():
+        raise SourceError(f"{path}: no such file")
+    img = read_image(p)
+    if img is None:
+        raise SourceError(f"{path}: not an image")
+    return img

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, follow_frames, progress
+from .common import close_all, first_frame, follow_frames, progress
 
 POINTS_HEADER = "frame,point,x,y,source"
 DIAG_HEADER = "frame,point,x,y,vx_of,vy_of,vx_af,vy_af,eps,delta_eps,e,qv,k,source"
@@ -84,17 +84,6 @@ def _fmt(v: float) -> str:
     return "nan" if not np.isfinite(v) else f"{v:.3f}".rstrip("0").rstrip(".")
 
 
-def _first_frame(source, what: str):
-    from ..errors import SourceError
-
-    frames = source.numbered()
-    try:
-        return frames, next(frames)
-    except StopIteration:
-        source.close()
-        raise SourceError(f"{what}: no frames") from None
-
-
 def cmd_points(args) -> int:
     import cv2
 
@@ -109,7 +98,7 @@ def cmd_points(args) -> int:
         if extra:
             prepare_output(extra)
     source = open_source(args.source)
-    frames, (number, frame) = _first_frame(source, args.source)
+    frames, (number, frame) = first_frame(source, args.source)
     try:
         pts = parse_points(args.points, frame.shape[1], frame.shape[0])
     except Exception:
@@ -204,8 +193,8 @@ def cmd_stereo(args) -> int:
     except Exception:
         left.close()
         raise
-    lf, (n0, l0) = _first_frame(left, args.left)
-    rf, (_, r0) = _first_frame(right, args.right)
+    lf, (n0, l0) = first_frame(left, args.left)
+    rf, (_, r0) = first_frame(right, args.right)
     sinks: list = []
     bar = None
     done = 0

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, follow_frames, progress
+from .common import close_all, first_frame, follow_frames, image_file, progress
 
 
 def add_segment(sub) -> None:
@@ -34,7 +34,7 @@ def cmd_segment(args) -> int:
     from ..errors import BoxError, InputError, ParameterError, SourceError
     from ..geometry import parse_box, validate_box
     from ..io.sinks import VideoSink, prepare_output
-    from ..io.sources import open_source, read_image
+    from ..io.sources import open_source
     from ..params import parse_param_assignments
     from ..segmentation.tracker import GraphCutParams, GraphCutTracker
 
@@ -43,11 +43,7 @@ def cmd_segment(args) -> int:
     params = GraphCutParams.from_mapping(parse_param_assignments(args.param))
     first_mask = None
     if args.mask:
-        if not Path(args.mask).is_file():
-            raise SourceError(f"{args.mask}: no such file")
-        img = read_image(Path(args.mask))
-        if img is None:
-            raise SourceError(f"{args.mask}: not an image")
+        img = image_file(args.mask)
         first_mask = (img if img.ndim == 2 else img.max(axis=2)) > 0
         if not first_mask.any():
             raise InputError(f"{args.mask}: the mask is empty")
@@ -56,12 +52,7 @@ def cmd_segment(args) -> int:
     if args.video_out:
         prepare_output(args.video_out)
     source = open_source(args.source)
-    frames = source.numbered()
-    try:
-        number, frame = next(frames)
-    except StopIteration:
-        source.close()
-        raise SourceError(f"{args.source}: no frames") from None
+    frames, (number, frame) = first_frame(source, args.source)
     H, W = frame.shape[:2]
     try:
         if first_mask is not None and first_mask.shape != (H, W):

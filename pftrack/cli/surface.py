@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, follow_frames, progress
+from .common import close_all, first_frame, follow_frames, image_file, progress
 
 
 def add_surface(sub) -> None:
@@ -32,10 +32,10 @@ def add_surface(sub) -> None:
 
 def cmd_surface(args) -> int:
 
-    from ..errors import BoxError, ParameterError, SourceError
+    from ..errors import BoxError, ParameterError
     from ..geometry import parse_box
     from ..io.sinks import VideoSink, _TextSink, prepare_output
-    from ..io.sources import open_source, read_image
+    from ..io.sources import open_source
     from ..surfaces.mesh import parse_mesh
     from ..surfaces.render import draw_mesh, retexture
     from ..surfaces.tracker import DeformableMesh, MeshParams
@@ -49,25 +49,12 @@ def cmd_surface(args) -> int:
     if args.lam is not None:
         kw["lam"] = args.lam
     params = MeshParams.from_mapping(kw)
-    texture = None
-    if args.texture:
-        from pathlib import Path
-
-        if not Path(args.texture).is_file():
-            raise SourceError(f"{args.texture}: no such file")
-        texture = read_image(Path(args.texture))
-        if texture is None:
-            raise SourceError(f"{args.texture}: not an image")
+    texture = image_file(args.texture) if args.texture else None
     prepare_output(args.out)
     if args.video_out:
         prepare_output(args.video_out)
     source = open_source(args.source)
-    frames = source.numbered()
-    try:
-        number, frame = next(frames)
-    except StopIteration:
-        source.close()
-        raise SourceError(f"{args.source}: no frames") from None
+    frames, (number, frame) = first_frame(source, args.source)
     H, W = frame.shape[:2]
     x, y, w, h = box
     if x < 0 or y < 0 or x + w > W or y + h > H or w < 8 or h < 8:
