@@ -132,7 +132,7 @@ def part_lcurve(out):
         ed, es, ve = [], [], []
         for n in range(1, len(sc.frames)):
             st = tr.update(sc.frames[n])
-            e_d, e_s = tr.solver.energies(tr.d, tr.rho, img_pyr=[gray01(sc.frames[n])], level=0)
+            e_d, e_s = tr.solver.energies(tr.d, tr.rho, gray01(sc.frames[n]))
             ed.append(e_d)
             es.append(e_s)
             Vt, _ = sc.truth(n, tr.V0)

@@ -148,7 +148,7 @@ def test_normal_equations_equal_the_stacked_least_squares_form():
     gx, gy = gradients(In)
     d = rng.uniform(-1, 1, (g.K, 2))
     rho = rng.uniform(0.9, 1.1, gp.K)
-    A, b, r, ok, _, _ = S.normal_equations(S.levels[0], In, gx, gy, d, rho, vH=1e9)
+    A, b, r, ok, _ = S.normal_equations(S.levels[0], In, gx, gy, d, rho, vH=1e9)
     J = dense_jacobian(S, 0, In, gx, gy, d)[ok]
     N = ok.sum()
     from pftrack.surfaces.mesh import directional_laplacian as DL

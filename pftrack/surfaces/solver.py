@@ -117,7 +117,7 @@ class _Pairs:
         self.shape = (Ka, Kb)
         self._flat_r = self.flat.ravel()
 
-    def block(self, c: np.ndarray, valid: np.ndarray | None = None) -> np.ndarray:
+    def block(self, c: np.ndarray) -> np.ndarray:
         w = (c[:, None] * self.prod).ravel()
         return np.bincount(self._flat_r, w, self.shape[0] * self.shape[1]).reshape(self.shape)
 
@@ -145,9 +145,15 @@ class LevelModel:
         self.Kg, self.Kp = Kg, Kp
         self.Bg = weights_matrix(self.ig, self.wg, Kg)
         self.Bp = weights_matrix(self.ip, self.wp, Kp)
-        self.gg = _Pairs(self.ig, self.wg, Kg, self.ig, self.wg, Kg)
-        self.gp = _Pairs(self.ig, self.wg, Kg, self.ip, self.wp, Kp)
-        self.pp = _Pairs(self.ip, self.wp, Kp, self.ip, self.wp, Kp)
+        self._pairs = None          # bincount tables of the NumPy path, built on first use
+
+    def pairs(self) -> tuple[_Pairs, _Pairs, _Pairs]:
+        """``(gg, gp, pp)`` index tables for ``B_a^T diag(c) B_b`` (only the NumPy reference path needs them)."""
+        if self._pairs is None:
+            self._pairs = (_Pairs(self.ig, self.wg, self.Kg, self.ig, self.wg, self.Kg),
+                           _Pairs(self.ig, self.wg, self.Kg, self.ip, self.wp, self.Kp),
+                           _Pairs(self.ip, self.wp, self.Kp, self.ip, self.wp, self.Kp))
+        return self._pairs
 
     def displacement(self, d: np.ndarray) -> np.ndarray:
         """Per-pixel displacement (full-resolution px) from vertex displacements ``d`` (K, 2)."""
@@ -266,32 +272,31 @@ class MeshSolver:
         if self.s.photometric:
             A[2 * Kg:, 2 * Kg:] += lam2 * self.s.lam_p ** 2 * self.LtL_p
             b[2 * Kg:] += lam2 * self.s.lam_p ** 2 * self.LtL_p @ rho
-        e_d = float(np.sum(huber_rho(r, vH) * ok) / N)
-        return A, b, r, ok, vH, e_d
+        return A, b, r, ok, vH
 
     def _assemble_numpy(self, lv: LevelModel, Gx, Gy, r, w, A, b) -> None:
         """The NumPy reference of the compiled assembly: ``B_a^T diag(c) B_b`` blocks by ``bincount``."""
         Kg, Kp = self.Kg, self.Kp
-        A[:Kg, :Kg] = lv.gg.block(w * Gx * Gx)
-        A[:Kg, Kg:2 * Kg] = lv.gg.block(w * Gx * Gy)
-        A[Kg:2 * Kg, Kg:2 * Kg] = lv.gg.block(w * Gy * Gy)
+        gg, gp, pp = lv.pairs()
+        A[:Kg, :Kg] = gg.block(w * Gx * Gx)
+        A[:Kg, Kg:2 * Kg] = gg.block(w * Gx * Gy)
+        A[Kg:2 * Kg, Kg:2 * Kg] = gg.block(w * Gy * Gy)
         A[Kg:2 * Kg, :Kg] = A[:Kg, Kg:2 * Kg].T
         b[:Kg] = lv.tvec(lv.ig, lv.wg, w * Gx * r, Kg)
         b[Kg:2 * Kg] = lv.tvec(lv.ig, lv.wg, w * Gy * r, Kg)
         if self.s.photometric:
-            A[:Kg, 2 * Kg:] = lv.gp.block(w * Gx * lv.I0)
-            A[Kg:2 * Kg, 2 * Kg:] = lv.gp.block(w * Gy * lv.I0)
+            A[:Kg, 2 * Kg:] = gp.block(w * Gx * lv.I0)
+            A[Kg:2 * Kg, 2 * Kg:] = gp.block(w * Gy * lv.I0)
             A[2 * Kg:, :2 * Kg] = A[:2 * Kg, 2 * Kg:].T
-            A[2 * Kg:, 2 * Kg:] = lv.pp.block(w * lv.I0 * lv.I0)
+            A[2 * Kg:, 2 * Kg:] = pp.block(w * lv.I0 * lv.I0)
             b[2 * Kg:] = lv.tvec(lv.ip, lv.wp, w * lv.I0 * r, Kp)
 
-    def energies(self, d, rho, img_pyr=None, level: int = 0, r=None, ok=None, vH=None) -> tuple[float, float]:
-        """``(E_D, E_S)`` as normalised in ch13.md §2 at one level."""
-        if r is None:
-            r, _ = self.residual(self.levels[level], img_pyr[level], d, rho)
-            ok = np.isfinite(r)
-            r = np.where(ok, r, 0.0)
-            vH = huber_scale(r[ok], self.s.huber_k)
+    def energies(self, d, rho, img: np.ndarray, level: int = 0) -> tuple[float, float]:
+        """``(E_D, E_S)`` as normalised in ch13.md §2, on ``img`` (the frame at pyramid ``level``)."""
+        r, _ = self.residual(self.levels[level], img, d, rho)
+        ok = np.isfinite(r)
+        r = np.where(ok, r, 0.0)
+        vH = huber_scale(r[ok], self.s.huber_k)
         e_d = float(np.sum(huber_rho(r, vH) * ok) / max(ok.sum(), 1))
         e_s = float(d[:, 0] @ self.LtL_g @ d[:, 0] + d[:, 1] @ self.LtL_g @ d[:, 1])
         if self.s.photometric:
@@ -309,7 +314,7 @@ class MeshSolver:
             img = pyr[lvl]
             gx, gy = gradients(img)
             for _ in range(self.s.max_iter):
-                A, b, r, ok, _, _ = self.normal_equations(lv, img, gx, gy, d, rho)
+                A, b, r, ok, _ = self.normal_equations(lv, img, gx, gy, d, rho)
                 if ok.sum() < 8:
                     break
                 A[np.diag_indices_from(A)] += 1e-10
