@@ -44,6 +44,12 @@ class ColorFeatures:
     y0: int
     pitch: int = 1
 
+    @property
+    def roi(self) -> tuple[int, int, int, int]:
+        """The image region ``(x0, y0, x1, y1)`` the quantised lattice covers."""
+        h, w = self.bins.shape
+        return self.x0, self.y0, self.x0 + w * self.pitch, self.y0 + h * self.pitch
+
     def to_lattice(self, ellipses: np.ndarray) -> tuple[np.ndarray, int, int]:
         """Ellipses in the coordinates of ``bins`` (and the origin to pass to the kernels).
 

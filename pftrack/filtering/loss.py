@@ -252,3 +252,99 @@ class RunningThreshold:
     def push(self, value: float) -> None:
         if math.isfinite(value):
             self.values.append(float(value))
+
+
+class FusedLoss:
+    """The two-class test of :class:`LossDetector` on several cues' scores, fused as independent evidence.
+
+    Each cue ``c`` keeps its own background (absent) statistics and target history; the
+    fused log-likelihood ratio is the naive-Bayes sum ``LLR = sum_c LLR_c(s_c)``.  A cue
+    that does not discriminate in the current scene (its history is not above its
+    background's upper tail) contributes ``LLR_c = 0`` by :func:`score_llr`'s rule, so
+    the fusion weighs each cue by how well it separates the target from this
+    background without any tuned weight.  Hysteresis, the confidence
+    ``sigmoid(LLR)`` and the learning rule are those of :class:`LossDetector`, applied
+    to the fused ratio; each cue's history learns only from its own consistent scores.
+
+    Scores are vectors ``(C,)`` (one per cue, each in [0, 1]); background scores ``(M, C)``.
+    The first cue's appearance statistics (``app_mu``, ``app_sd``) are the colour
+    tracker's Eqs. 13-14 threshold.
+    """
+
+    def __init__(self, n_cues: int, **kwargs):
+        self.members = [LossDetector(**kwargs) for _ in range(int(n_cues))]
+        self.lost_frames = self.members[0].lost_frames
+        self.reacquire_margin = self.members[0].reacquire_margin
+        self.reset(1.0)
+
+    def reset(self, initial_score: float, *, sd: float = 0.1) -> None:
+        for m in self.members:
+            m.reset(initial_score, sd=sd)
+        self.miss = 0
+        self.lost = False
+        self.llr = _LOG_CLIP
+
+    @property
+    def app_mu(self) -> float:
+        return self.members[0].app_mu
+
+    @property
+    def app_sd(self) -> float:
+        return self.members[0].app_sd
+
+    def set_background(self, scores: np.ndarray) -> None:
+        s = np.asarray(scores, dtype=np.float64).reshape(-1, len(self.members))
+        for c, m in enumerate(self.members):
+            if np.isfinite(s[:, c]).any():
+                m.set_background(s[:, c])
+
+    def evaluate(self, s) -> float:
+        """Fused ratio of a score vector; a NaN cue (not available) gives no evidence; all NaN is absence."""
+        s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
+        if not np.any(np.isfinite(s)):
+            return -_LOG_CLIP
+        llr = sum(m.evaluate(float(v)) for m, v in zip(self.members, s) if math.isfinite(v))
+        return float(min(max(llr, -_LOG_CLIP), _LOG_CLIP))
+
+    def _learn(self, s: np.ndarray) -> None:
+        confident = self.llr > self.reacquire_margin
+        for m, v in zip(self.members, s):
+            v = float(v)
+            if confident and math.isfinite(v) and (v - m.mu_t) / m.sd_t > -m.learn_z:
+                a = m.history_rate
+                d = v - m.mu_t
+                m.mu_t += a * d
+                m.var_t = max((1.0 - a) * (m.var_t + a * d * d), m.sd_floor_target ** 2)
+                m.unseen = 0
+            else:
+                m.unseen += 1
+
+    def step(self, s) -> tuple[bool, float]:
+        """As :meth:`LossDetector.step`, on the fused ratio of the score vector ``s``."""
+        s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
+        self.llr = self.evaluate(s)
+        self.miss = self.miss + 1 if self.llr < 0.0 else 0
+        self._learn(s)
+        self.lost = self.miss >= self.lost_frames
+        return self.lost, confidence(self.llr)
+
+    def confident(self, s) -> bool:
+        """The fused ratio is clearly the target's, and no cue vetoes it: a cue vetoes when its score is far
+        below its own history (``learn_z`` spreads) *and* its own ratio says background."""
+        s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
+        if not np.any(np.isfinite(s)) or self.llr <= self.reacquire_margin:
+            return False
+        return not any((float(v) - m.mu_t) / m.sd_t <= -m.learn_z and m.evaluate(float(v)) < 0.0
+                       for m, v in zip(self.members, s) if math.isfinite(v))
+
+    def acquire(self, s) -> bool:
+        """While lost: does a candidate with score vector ``s`` end the loss?"""
+        s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
+        for m in self.members:
+            m.unseen += 1
+        self.llr = self.evaluate(s)
+        if self.confident(s):
+            self.lost = False
+            self.miss = 0
+            return True
+        return False

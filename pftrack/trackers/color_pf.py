@@ -178,10 +178,9 @@ class ColorParticleFilter(SearchMixin, Tracker):
         # The background histograms are computed exactly like the samples' (a subsampled frame would
         # shift mu and sigma and with them the appearance threshold).
         rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h))
-        rho = rho[tot > 0]
-        if rho.size >= 2:
+        if np.count_nonzero(tot > 0) >= 2:
             # Eqs. 13-14, with a floor on the spread so a non-discriminative scene cannot collapse it
-            self.loss.set_background(rho)
+            self.loss.set_background(self._loss_scores(frame, ell[tot > 0], rho[tot > 0], (0, 0, w, h)))
             self.bg_mu = self.loss.app_mu
             self.bg_sd = self.loss.app_sd
         self._since_bg = 0
@@ -259,6 +258,22 @@ class ColorParticleFilter(SearchMixin, Tracker):
         ``feats`` is the quantised region ``roi`` (shared with the colour cue)."""
         return log_lik
 
+    def _loss_scores(self, frame: np.ndarray, ellipses: np.ndarray, rho: np.ndarray,
+                     roi: tuple[int, int, int, int]):
+        """The scores the loss test sees for a batch of ellipses (default: the colour ``rho``).
+
+        A subclass with further cues returns ``(M, C)`` scores in [0, 1] for a
+        :class:`~pftrack.filtering.loss.FusedLoss`."""
+        return rho
+
+    def _appearance_pass(self, rho: np.ndarray, threshold: float, log_lik: np.ndarray) -> np.ndarray:
+        """Which search samples look like the target: the appearance condition ``rho > mu + 2 sigma`` (Eq. 15)."""
+        return rho > threshold
+
+    def _search_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray, feats) -> np.ndarray:
+        """Further log-likelihood terms for the search's samples (default: none)."""
+        return log_lik
+
     def _update_models(self, frame: np.ndarray, estimate: np.ndarray, feats, rho_e: float) -> None:
         """Called when the colour model update gate passes (hook for further adaptive models)."""
 
@@ -301,9 +316,10 @@ class ColorParticleFilter(SearchMixin, Tracker):
         info = {"mode": "tracking", "n_pass": n_pass, "threshold": thr, "rho": rho_e}
         if p.loss_test == "likelihood":
             # two-class test on the estimate's score with hysteresis (pftrack.filtering.loss)
-            lost_now, score = self.loss.step(rho_e if ok and tot_e[0] > 0 else float("nan"))
+            s_e = self._loss_scores(frame, e_ell, np.array([rho_e]), roi)[0]
+            lost_now, score = self.loss.step(s_e if ok and tot_e[0] > 0 else float("nan"))
             self.miss = self.loss.miss
-            confident = self.loss.confident(rho_e)
+            confident = self.loss.confident(s_e)
             info["llr"] = self.loss.llr
         else:
             if not ok or n_pass < p.kickoff_fraction * n:

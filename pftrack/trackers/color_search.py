@@ -177,25 +177,26 @@ class SearchMixin:
         states[n_keep:, HY] = hy * scale[:, 0]
         self._clip_states(states)
         ell = self._ellipses(states)
-        rho, tot, _ = self._rho(frame, ell)
-        loglik = self._log_lik(rho, tot)
+        rho, tot, feats = self._rho(frame, ell)
+        loglik = self._search_log_lik(frame, states, self._log_lik(rho, tot), feats)
         if not np.isfinite(loglik).any():
             loglik = np.zeros_like(loglik)
         self._search_states = states
         self._search_loglik = loglik
         thr = self._threshold()
-        best = int(np.argmax(np.where(tot > 0, rho, -1.0)))
+        best = int(np.argmax(np.where(tot > 0, loglik, -np.inf))) if np.any(tot > 0) else 0
         # samples belonging to the best candidate: within one target size of it
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
         found = False
         conf = None
         if p.search_method == "appearance":
-            cluster = near & (rho > thr) & (tot > 0)
+            cluster = near & self._appearance_pass(rho, thr, loglik) & (tot > 0)
             if p.loss_test == "likelihood":
                 # the best candidate must look like the target's score history (hysteresis); that test is
                 # stricter than the count of passing samples, which then only needs a few supporters
                 found = cluster.sum() >= min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1) and \
-                    self.loss.acquire(float(rho[best]))
+                    self.loss.acquire(self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1],
+                                                        feats.roi)[0])
                 conf = confidence(self.loss.llr)
             else:
                 found = cluster.sum() > p.kickoff_fraction * p.n_particles
@@ -215,7 +216,8 @@ class SearchMixin:
                 d_rho, d_tot, _ = self._rho(frame, d_ell)
                 d_rho = np.where(d_tot > 0, d_rho, -1.0)
                 k = int(np.argmax(d_rho))
-                if d_rho[k] > thr and (p.loss_test != "likelihood" or self.loss.acquire(float(d_rho[k]))):
+                if d_rho[k] > thr and (p.loss_test != "likelihood" or self.loss.acquire(
+                        self._loss_scores(frame, d_ell[k:k + 1], d_rho[k:k + 1], (0, 0, *self._shape[::-1]))[0])):
                     self.size = self._confident_size = (float(d_ell[k, 2]), float(d_ell[k, 3]))
                     state = self._initial_state(d_ell[k])
                     self._start_tracking(np.tile(state, (p.n_particles, 1)))
@@ -236,6 +238,7 @@ class SearchMixin:
         if box is None:
             box = tuple(float(v) for v in ellipse_to_box(ell[best]))
         score = float(max(rho[best], 0.0)) if p.loss_test != "likelihood" else min(
-            confidence(self.loss.evaluate(float(rho[best]))), 0.5)
+            confidence(self.loss.evaluate(self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1],
+                                                            feats.roi)[0])), 0.5)
         return self._state(box=box, score=score, lost=True, info=info,
                            particles=states, weights=np.exp(loglik - loglik.max()))

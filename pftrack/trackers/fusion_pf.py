@@ -25,7 +25,9 @@ import numpy as np
 
 from ..cues.contrast import box_counts, contrast_scores, foreground_lut, probability_integral
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
+from ..cues.structure import StructureCue
 from ..filtering.dynamics import HX, HY, VX, VY
+from ..filtering.loss import FusedLoss
 from ..geometry import box_to_ellipse, ellipse_to_box
 from ..params import param
 from .color_pf import _ELL_COLS, ColorPF, ColorPFParams
@@ -58,6 +60,26 @@ class FusionPFParams(ColorPFParams):
     motion: bool = param(False, doc=(
         "Multiply in the local-motion likelihood of Kristan et al. (flow features in the particles' region). "
         "Helps when a similar object crosses the target; costs ~0.5 ms per frame."))
+    structure: bool = param(True, doc=(
+        "Add the structural cue of pftrack.cues.structure: structure_gain * r, with r the NCC in [-1, 1] of the "
+        "particle's grey patch with the reference (book ch. 14's NCC; gain/offset invariant, so it sees "
+        "grey targets and survives illumination drift)."))
+    structure_gain: float = param(10.0, ge=0, le=1000, doc=(
+        "Sharpness of the structural likelihood exp(structure_gain * r)."))
+    structure_pixels: int = param(256, ge=16, le=4096, doc="Pixels of the grey reference patch (box aspect).")
+    structure_rate: float = param(0.05, ge=0, le=1, doc=(
+        "Learning rate of the running reference patch, updated with the colour model's gate; the first "
+        "frame's patch is kept as an anchor (score = the better of the two)."))
+    fused_loss: bool = param(True, doc=(
+        "With the structural cue on, the loss test fuses the colour rho and the NCC as independent evidence "
+        "(pftrack.filtering.loss.FusedLoss: the sum of the two cues' likelihood ratios), and the search scores "
+        "its samples with every cue; off: the colour rho alone, as in color-pf."))
+    reliability_d: float = param(3.0, ge=0, le=100, doc=(
+        "With the fused loss test, each cue's log-likelihood (colour, structure) is scaled by its online "
+        "reliability min(1, d'/reliability_d), d' = (target history mean - background upper-tail mean) / "
+        "background spread of that cue (its separation in this scene, from the loss test's statistics), "
+        "floored at reliability_floor. 0 turns the scaling off."))
+    reliability_floor: float = param(0.1, ge=0, le=1, doc="Smallest reliability factor of a cue.")
     lk_levels: int = param(2, ge=1, le=6, doc="Pyramid levels of the flow when motion is on.")
     max_features: int = param(150, ge=1, le=1_000_000, doc="Flow features per frame when motion is on.")
 
@@ -72,6 +94,11 @@ class FusionPF(ColorPF):
         super().__init__(params, rng=rng, seed=seed, detector=detector)
         p = self.params
         self.motion_cue = LocalMotionCue(levels=p.lk_levels, max_features=p.max_features)
+        self.structure = StructureCue(p.structure_pixels)
+        if self._fused:
+            self.loss = FusedLoss(2, lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
+                                  history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
+                                  sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
         self._obj = None
         self._sur = None
         self._lut = None
@@ -80,10 +107,17 @@ class FusionPF(ColorPF):
         self._flow = None
         self.v_ref = None
 
+    @property
+    def _fused(self) -> bool:
+        p = self.params
+        return p.structure and p.fused_loss and p.loss_test == "likelihood"
+
     # ------------------------------------------------------------------ init
     def _init(self, frame, box):
-        st = super()._init(frame, box)
         p = self.params
+        if p.structure:  # before the colour init: its background statistics need the structural reference
+            self.structure.init(frame, box_to_ellipse(box))
+        st = super()._init(frame, box)
         if p.contrast:
             pitch = self.cue.step_for(box_to_ellipse(box).reshape(1, 4))
             feats = self.cue.prepare_frame(frame, pitch)
@@ -104,18 +138,64 @@ class FusionPF(ColorPF):
             return x0 - mx, y0 - my, x1 + mx, y1 + my
         return x0, y0, x1, y1
 
+    def _reliability(self) -> tuple[float, float]:
+        """Reliability factors of the colour and structural cues (see ``reliability_d``)."""
+        p = self.params
+        if not self._fused or p.reliability_d <= 0:
+            return 1.0, 1.0
+        out = []
+        for m in self.loss.members:
+            d = (m.mu_t - m.mu_b) / max(m.sd_b, 1e-9)
+            out.append(min(1.0, max(p.reliability_floor, d / p.reliability_d)))
+        return out[0], out[1]
+
     def _extra_log_lik(self, frame, states, log_lik, roi, feats):
         p = self.params
+        w_col, w_str = self._reliability()
+        if w_col != 1.0:
+            log_lik = log_lik * w_col
         if p.contrast and self._lut is not None:
             ii = probability_integral(feats.bins, self._lut)
             boxes = ellipse_to_box(self._ellipses(states))
             c = contrast_scores(ii, feats.x0, feats.y0, boxes, ring=p.ring, pitch=feats.pitch)
             log_lik = log_lik + p.contrast_gain * c
+        if p.structure and p.structure_gain > 0 and self.structure.ready:
+            log_lik = log_lik + (w_str * p.structure_gain) * self.structure.scores(frame, roi, self._ellipses(states))
         if p.motion:
             self._gray = to_gray(frame)
             self._flow = self.motion_cue.prepare(self._prev_gray, self._gray, roi)
             if self.v_ref is not None:
                 log_lik = log_lik + self.motion_cue.log_likelihood(self._flow, self._ellipses(states), self.v_ref)
+        return log_lik
+
+    def _loss_scores(self, frame, ellipses, rho, roi):
+        if not self._fused:
+            return rho
+        if not self.structure.ready:  # started from a histogram (init_auto): no reference patch, no evidence
+            return np.column_stack([rho, np.full(len(rho), np.nan)])
+        r = self.structure.scores(frame, roi, ellipses)
+        return np.column_stack([rho, 0.5 * (r + 1.0)])
+
+    def _appearance_pass(self, rho, threshold, log_lik):
+        if not self._fused:
+            return rho > threshold
+        # with fused cues the colour threshold alone would veto a target that only the structure sees: the
+        # supporters are the samples whose fused likelihood is within a factor e^3 of the best one's
+        return log_lik >= np.max(log_lik) - 3.0
+
+    def _search_log_lik(self, frame, states, log_lik, feats):
+        p = self.params
+        if not self._fused:
+            return log_lik
+        w_col, w_str = self._reliability()
+        log_lik = log_lik * w_col
+        ell = self._ellipses(states)
+        if p.contrast and self._lut is not None:
+            ii = probability_integral(feats.bins, self._lut)
+            log_lik = log_lik + p.contrast_gain * contrast_scores(ii, feats.x0, feats.y0, ellipse_to_box(ell),
+                                                                  ring=p.ring, pitch=feats.pitch)
+        if p.structure_gain > 0 and self.structure.ready:
+            log_lik = log_lik + (w_str * p.structure_gain) * self.structure.scores(frame, feats.roi, ell)
         return log_lik
 
     def _after_estimate(self, frame, estimate):
@@ -128,6 +208,8 @@ class FusionPF(ColorPF):
 
     def _update_models(self, frame, estimate, feats, rho_e):
         p = self.params
+        if p.structure:
+            self.structure.update(frame, estimate[_ELL_COLS], p.structure_rate)
         if not p.contrast or p.contrast_alpha <= 0:
             return
         box = ellipse_to_box(estimate[_ELL_COLS])
