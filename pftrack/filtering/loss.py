@@ -266,13 +266,23 @@ class FusedLoss:
     ``sigmoid(LLR)`` and the learning rule are those of :class:`LossDetector`, applied
     to the fused ratio; each cue's history learns only from its own consistent scores.
 
+    Each cue's ratio is clipped to ``[-cue_floor, cue_clip]`` before the sum (Gaussian score
+    models are over-confident in their tails: one cue far above its background must not
+    outvote another that sees the target gone; and a single cue's score drops for many
+    reasons besides absence — deformation, clutter passing behind a thin target, blur — so
+    its evidence *against* the target may be capped lower), and a cue's history learns only from
+    scores its own ratio calls target-like (a confident colour cue must not drag the
+    structure history onto an occluder).
+
     Scores are vectors ``(C,)`` (one per cue, each in [0, 1]); background scores ``(M, C)``.
     The first cue's appearance statistics (``app_mu``, ``app_sd``) are the colour
     tracker's Eqs. 13-14 threshold.
     """
 
-    def __init__(self, n_cues: int, **kwargs):
+    def __init__(self, n_cues: int, *, cue_clip: float = 10.0, cue_floor: float | None = None, **kwargs):
         self.members = [LossDetector(**kwargs) for _ in range(int(n_cues))]
+        self.cue_clip = float(cue_clip)
+        self.cue_floor = float(cue_clip if cue_floor is None else cue_floor)
         self.lost_frames = self.members[0].lost_frames
         self.reacquire_margin = self.members[0].reacquire_margin
         self.reset(1.0)
@@ -303,14 +313,15 @@ class FusedLoss:
         s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
         if not np.any(np.isfinite(s)):
             return -_LOG_CLIP
-        llr = sum(m.evaluate(float(v)) for m, v in zip(self.members, s) if math.isfinite(v))
+        lo, hi = -self.cue_floor, self.cue_clip
+        llr = sum(min(max(m.evaluate(float(v)), lo), hi) for m, v in zip(self.members, s) if math.isfinite(v))
         return float(min(max(llr, -_LOG_CLIP), _LOG_CLIP))
 
     def _learn(self, s: np.ndarray) -> None:
         confident = self.llr > self.reacquire_margin
         for m, v in zip(self.members, s):
             v = float(v)
-            if confident and math.isfinite(v) and (v - m.mu_t) / m.sd_t > -m.learn_z:
+            if confident and math.isfinite(v) and (v - m.mu_t) / m.sd_t > -m.learn_z and m.evaluate(v) >= 0.0:
                 a = m.history_rate
                 d = v - m.mu_t
                 m.mu_t += a * d

@@ -20,6 +20,7 @@ ablation in ``docs/fusion-pf.md``:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -66,10 +67,16 @@ class FusionPFParams(ColorPFParams):
         "grey targets and survives illumination drift)."))
     structure_gain: float = param(10.0, ge=0, le=1000, doc=(
         "Sharpness of the structural likelihood exp(structure_gain * r)."))
+    structure_weighting: Literal["kernel", "uniform"] = param("uniform", doc=(
+        "Pixel weights of the NCC: 'kernel' is the Epanechnikov profile of the ellipse inscribed in the box "
+        "(the colour cue's region; the box's corners are mostly background), 'uniform' the whole box."))
     structure_pixels: int = param(256, ge=16, le=4096, doc="Pixels of the grey reference patch (box aspect).")
-    structure_rate: float = param(0.05, ge=0, le=1, doc=(
+    structure_rate: float = param(0.02, ge=0, le=1, doc=(
         "Learning rate of the running reference patch, updated with the colour model's gate; the first "
         "frame's patch is kept as an anchor (score = the better of the two)."))
+    structure_anchor_gate: float = param(0.5, ge=-1, le=1, doc=(
+        "The running reference patch learns only from estimates whose NCC with the first frame's patch is at "
+        "least this (template-drift correction); -1 learns from every gated estimate."))
     fused_loss: bool = param(True, doc=(
         "With the structural cue on, the loss test fuses the colour rho and the NCC as independent evidence "
         "(pftrack.filtering.loss.FusedLoss: the sum of the two cues' likelihood ratios), and the search scores "
@@ -80,6 +87,12 @@ class FusionPFParams(ColorPFParams):
         "background spread of that cue (its separation in this scene, from the loss test's statistics), "
         "floored at reliability_floor. 0 turns the scaling off."))
     reliability_floor: float = param(0.1, ge=0, le=1, doc="Smallest reliability factor of a cue.")
+    loss_cue_clip: float = param(10.0, gt=0, le=30, doc=(
+        "With the fused loss test, each cue's log-likelihood ratio is clipped to at most loss_cue_clip before "
+        "the sum: the most odds e^clip one cue alone can give for the target."))
+    loss_cue_floor: float = param(2.0, gt=0, le=30, doc=(
+        "Lower clip of each cue's log-likelihood ratio in the fused loss test: the most odds one cue alone can "
+        "give against the target (a single cue also drops for reasons other than absence)."))
     lk_levels: int = param(2, ge=1, le=6, doc="Pyramid levels of the flow when motion is on.")
     max_features: int = param(150, ge=1, le=1_000_000, doc="Flow features per frame when motion is on.")
 
@@ -94,9 +107,9 @@ class FusionPF(ColorPF):
         super().__init__(params, rng=rng, seed=seed, detector=detector)
         p = self.params
         self.motion_cue = LocalMotionCue(levels=p.lk_levels, max_features=p.max_features)
-        self.structure = StructureCue(p.structure_pixels)
+        self.structure = StructureCue(p.structure_pixels, weighting=p.structure_weighting)
         if self._fused:
-            self.loss = FusedLoss(2, lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
+            self.loss = FusedLoss(2, cue_clip=p.loss_cue_clip, cue_floor=p.loss_cue_floor, lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
                                   history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                   sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
         self._obj = None
@@ -209,7 +222,7 @@ class FusionPF(ColorPF):
     def _update_models(self, frame, estimate, feats, rho_e):
         p = self.params
         if p.structure:
-            self.structure.update(frame, estimate[_ELL_COLS], p.structure_rate)
+            self.structure.update(frame, estimate[_ELL_COLS], p.structure_rate, p.structure_anchor_gate)
         if not p.contrast or p.contrast_alpha <= 0:
             return
         box = ellipse_to_box(estimate[_ELL_COLS])
@@ -224,6 +237,7 @@ class FusionPF(ColorPF):
         self._lut = foreground_lut(self._obj, self._sur)
 
     def _on_frame(self, frame):
+        self.structure.new_frame()
         if self.params.motion:
             self._prev_gray = self._gray if self._gray is not None else to_gray(frame)
             self._gray = None
