@@ -200,3 +200,28 @@ def test_bundled_clip_has_no_false_lost_frames():
     lost = np.array([s.lost for s in states])
     assert not np.any(lost & (ious >= 0.5)), np.flatnonzero(lost)
     assert np.mean(ious >= 0.5) > 0.9
+
+
+def test_fusion_pf_automatic_initialisation_runs_without_a_reference_patch():
+    """init_auto gives a histogram, no patch: the structural cue gives no evidence (NaN in the fused test) and
+    a reference left from an earlier target is dropped."""
+    from pftrack.geometry import box_to_ellipse
+    from pftrack.synth import entering_scene
+
+    from .conftest import render_scene
+
+    scene, frames, truths = render_scene(entering_scene(0, enter_at=15))
+    gt = scene.groundtruth(0)
+    tr = pftrack.create_tracker("fusion-pf", seed=0)
+    tr.init(frames[40], tuple(gt[40]))  # an earlier target: leaves a reference patch behind
+    assert tr.structure.ready
+    q = tr.cue.histogram(frames[40], box_to_ellipse(gt[40]))
+    st = tr.init_auto(frames[0], q, size=gt[40][2:])
+    assert not tr.structure.ready
+    states = [st] + [tr.update(f) for f in frames[1:]]
+    lost = np.array([s.lost for s in states])
+    assert lost[:15].all()
+    found = int(np.argmax(~lost))
+    assert 15 <= found <= 60
+    tail = slice(found + 3, len(states))
+    assert center_error(np.array([s.box for s in states])[tail], gt[tail]).mean() < 6.0

@@ -184,7 +184,14 @@ class LossDetector:
             self.miss += 1
         else:
             self.miss = 0
-        if self.confident(s):
+        self.learn(s, self.confident(s))
+        self.lost = self.miss >= self.lost_frames
+        return self.lost, confidence(llr)
+
+    def learn(self, s: float, ok: bool) -> None:
+        """Blend ``s`` into the target history when ``ok`` (exponential mean and variance); otherwise one
+        more frame unseen."""
+        if ok:
             a = self.history_rate
             d = s - self.mu_t
             self.mu_t += a * d
@@ -192,8 +199,6 @@ class LossDetector:
             self.unseen = 0
         else:
             self.unseen += 1
-        self.lost = self.miss >= self.lost_frames
-        return self.lost, confidence(llr)
 
     def confident(self, s: float) -> bool:
         """Is ``s`` clearly the target's (``LLR > reacquire_margin``) and consistent with its history?
@@ -321,14 +326,7 @@ class FusedLoss:
         confident = self.llr > self.reacquire_margin
         for m, v in zip(self.members, s):
             v = float(v)
-            if confident and math.isfinite(v) and (v - m.mu_t) / m.sd_t > -m.learn_z and m.evaluate(v) >= 0.0:
-                a = m.history_rate
-                d = v - m.mu_t
-                m.mu_t += a * d
-                m.var_t = max((1.0 - a) * (m.var_t + a * d * d), m.sd_floor_target ** 2)
-                m.unseen = 0
-            else:
-                m.unseen += 1
+            m.learn(v, confident and math.isfinite(v) and (v - m.mu_t) / m.sd_t > -m.learn_z and m.evaluate(v) >= 0.0)
 
     def step(self, s) -> tuple[bool, float]:
         """As :meth:`LossDetector.step`, on the fused ratio of the score vector ``s``."""

@@ -1,20 +1,24 @@
-"""``fusion-pf``: pftrack's default tracker — colour, background-aware contrast and (optionally) local motion.
+"""``fusion-pf``: pftrack's default tracker — colour, background-aware contrast and grey-patch structure, fused.
 
 It is ``color-pf`` (Nummiaro et al.) with the ingredients that make a colour
-particle filter hold on real footage, each a documented parameter with an
-ablation in ``docs/fusion-pf.md``:
+particle filter hold on real footage, grey video and illumination change, each a
+documented parameter with an ablation in ``docs/fusion-pf.md``:
 
-* **Likelihood = product of cues** (independent observations):
-  ``p(y | x) = p_colour(x) · p_contrast(x)^(contrast) · p_motion(x)^(motion)`` where
-  ``p_colour`` is Eq. 10 of Nummiaro et al. on the kernel histogram,
-  ``p_contrast ∝ exp(contrast_gain · c(x))`` scores the object/surround contrast of the
-  foreground-probability map (:mod:`pftrack.cues.contrast`) — a background-aware model
-  that also observes the target's extent, so the scale does not collapse or grow — and
-  ``p_motion`` is the local-motion likelihood of Kristan et al. (Eq. 7).
-* **Gated model updates**: the colour model (Eqs. 11–12) and the object/surround
-  colour counts adapt only while the estimate matches the model.
-* **Loss detection and re-acquisition** by the appearance condition of Nummiaro et
-  al. §6, as in ``color-pf``.
+* **Likelihood = product of cues** (independent observations), in the log domain:
+  ``log p(y | x) = w_col log p_colour + contrast_gain c + w_str structure_gain r [+ log p_motion]`` where
+  ``p_colour`` is Eq. 10 of Nummiaro et al. on the kernel histogram, ``c`` the object/surround
+  contrast of the foreground-probability map (:mod:`pftrack.cues.contrast`; it also observes the
+  target's extent), ``r`` the NCC of the particle's grey patch with the reference
+  (:mod:`pftrack.cues.structure`; book ch. 14's criterion, blind to gain and offset), and
+  ``p_motion`` the optional local-motion likelihood of Kristan et al. (Eq. 7).
+* **Reliability weights** ``w``: each cue's separation ``d'`` between its target-score history
+  and the upper tail of its background scores (the loss test's statistics), ``min(1, d'/reliability_d)``.
+* **The lost flag on fused evidence**: :class:`~pftrack.filtering.loss.FusedLoss` adds the
+  colour's and the structure's clipped log-likelihood ratios; the search scores its samples with
+  every cue.
+* **Gated model updates**: the colour model (Eqs. 11–12), the object/surround counts and the
+  structural reference adapt only on confident frames (the reference also only while it still
+  resembles the first frame's patch).
 """
 
 from __future__ import annotations
@@ -70,7 +74,7 @@ class FusionPFParams(ColorPFParams):
     structure_weighting: Literal["kernel", "uniform"] = param("uniform", doc=(
         "Pixel weights of the NCC: 'kernel' is the Epanechnikov profile of the ellipse inscribed in the box "
         "(the colour cue's region; the box's corners are mostly background), 'uniform' the whole box."))
-    structure_pixels: int = param(256, ge=16, le=4096, doc="Pixels of the grey reference patch (box aspect).")
+    structure_pixels: int = param(144, ge=16, le=4096, doc="Pixels of the grey reference patch (box aspect).")
     structure_rate: float = param(0.02, ge=0, le=1, doc=(
         "Learning rate of the running reference patch, updated with the colour model's gate; the first "
         "frame's patch is kept as an anchor (score = the better of the two)."))
@@ -126,6 +130,12 @@ class FusionPF(ColorPF):
         return p.structure and p.fused_loss and p.loss_test == "likelihood"
 
     # ------------------------------------------------------------------ init
+    def init_auto(self, frame, histogram, size, *, regions=None):
+        """As :meth:`ColorPF.init_auto`; a known histogram gives no reference patch, so the structural cue
+        stays off (no evidence) for this target."""
+        self.structure = StructureCue(self.params.structure_pixels, weighting=self.params.structure_weighting)
+        return super().init_auto(frame, histogram, size, regions=regions)
+
     def _init(self, frame, box):
         p = self.params
         if p.structure:  # before the colour init: its background statistics need the structural reference
