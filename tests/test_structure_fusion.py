@@ -158,7 +158,7 @@ def test_fusion_pf_follows_camouflaged_targets_that_colour_cannot_see():
         without.append(np.median(err0))
     with_s, without = np.array(with_s), np.array(without)
     assert np.sum(with_s < 3.0) >= 4, with_s
-    assert np.sum(np.array(lost_share) < 0.1) >= 4, lost_share
+    assert np.sum(np.array(lost_share) < 0.2) >= 4, lost_share
     assert np.all(without > 20.0), without
     assert np.median(without) > 10 * np.median(with_s), (with_s, without)
 

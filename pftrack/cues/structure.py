@@ -272,6 +272,7 @@ class StructureCue:
         self._first: np.ndarray | None = None
         self._run: np.ndarray | None = None
         self._templates: np.ndarray | None = None
+        self._first_std: np.ndarray | None = None
         self._reduced: Reduced | None = None
 
     @property
@@ -290,6 +291,7 @@ class StructureCue:
         self.weights = kernel_weights(self.shape, self.weighting)
         patch = self.patch(frame, e[0])
         self._first = patch
+        self._first_std = standardize(patch[None, :], weights=self.weights)  # constant: standardised once
         self._run = patch.copy()
         self._refresh()
 
@@ -306,8 +308,8 @@ class StructureCue:
         return sample_reduced(red, e, self.shape)[0]
 
     def _refresh(self) -> None:
-        ts = [self._run] + ([self._first] if self.anchor else [])
-        self._templates = standardize(np.stack(ts), weights=self.weights)
+        run = standardize(self._run[None, :], weights=self.weights)
+        self._templates = np.concatenate([run, self._first_std]) if self.anchor else run
 
     def scores(self, frame: np.ndarray, roi: tuple[int, int, int, int], ellipses: np.ndarray) -> np.ndarray:
         """NCC in [-1, 1] of every ellipse's box with the reference (the best of anchor and running mean)."""
@@ -326,8 +328,7 @@ class StructureCue:
         if rate <= 0 or self._run is None:
             return False
         patch = self.patch(frame, ellipse)
-        if anchor_gate > -1.0 and ncc_scores(patch[None, :], standardize(self._first[None, :], weights=self.weights),
-                                             weights=self.weights)[0] < anchor_gate:
+        if anchor_gate > -1.0 and ncc_scores(patch[None, :], self._first_std, weights=self.weights)[0] < anchor_gate:
             return False
         self._run = (1.0 - rate) * self._run + rate * patch
         self._refresh()

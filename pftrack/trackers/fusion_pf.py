@@ -74,7 +74,7 @@ class FusionPFParams(ColorPFParams):
     structure_weighting: Literal["kernel", "uniform"] = param("uniform", doc=(
         "Pixel weights of the NCC: 'kernel' is the Epanechnikov profile of the ellipse inscribed in the box "
         "(the colour cue's region; the box's corners are mostly background), 'uniform' the whole box."))
-    structure_pixels: int = param(144, ge=16, le=4096, doc="Pixels of the grey reference patch (box aspect).")
+    structure_pixels: int = param(256, ge=16, le=4096, doc="Pixels of the grey reference patch (box aspect).")
     structure_rate: float = param(0.02, ge=0, le=1, doc=(
         "Learning rate of the running reference patch, updated with the colour model's gate; the first "
         "frame's patch is kept as an anchor (score = the better of the two)."))
