@@ -10,10 +10,13 @@ OUT=docs/benchmarks.md
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
+# the trackers compared as ratios are always re-timed in this run (their cached runs are dropped)
+rm -f reports/bench-all/runs/*__fusion-pf__* reports/bench-all/runs/*__color-pf__* reports/bench-all/runs/*__opencv-csrt__*
+rm -f reports/bench-ablation/runs/*
 "$PFTRACK" eval "$DATA" --trackers all --seeds 5 --workers 1 --report reports/bench-all \
   --title "All trackers on the development sequences (OTB one-pass)" --doc "$tmp/all.md" --quiet > /dev/null
 "$PFTRACK" eval "$DATA" --seeds 5 --workers 1 --report reports/bench-ablation \
-  --trackers "fusion-pf,fusion-pf[contrast=false],fusion-pf[motion=true],fusion-pf[search=false],fusion-pf[contrast_alpha=0],fusion-pf[update_gate=never],fusion-pf[scale_rate_noise=0],fusion-pf[max_pixels=0],color-pf,opencv-csrt" \
+  --trackers "fusion-pf,fusion-pf[structure=false],fusion-pf[fused_loss=false],fusion-pf[reliability_d=0],fusion-pf[structure_anchor_gate=-1],fusion-pf[structure_weighting=kernel],fusion-pf[contrast=false],fusion-pf[motion=true],fusion-pf[search=false],fusion-pf[update_gate=never],fusion-pf[scale_rate_noise=0],color-pf,opencv-csrt" \
   --title "fusion-pf ablation (each row removes or changes one ingredient)" --doc "$tmp/ablation.md" --quiet > /dev/null
 
 {
