@@ -172,18 +172,23 @@ class FusionPF(ColorPF):
             out.append(min(1.0, max(p.reliability_floor, d / p.reliability_d)))
         return out[0], out[1]
 
-    def _extra_log_lik(self, frame, states, log_lik, roi, feats):
+    def _fused_log_lik(self, frame, ell, log_lik, roi, feats):
+        """The colour log-likelihood scaled by its reliability, plus the contrast and structural terms."""
         p = self.params
         w_col, w_str = self._reliability()
         if w_col != 1.0:
             log_lik = log_lik * w_col
         if p.contrast and self._lut is not None:
             ii = probability_integral(feats.bins, self._lut)
-            boxes = ellipse_to_box(self._ellipses(states))
-            c = contrast_scores(ii, feats.x0, feats.y0, boxes, ring=p.ring, pitch=feats.pitch)
+            c = contrast_scores(ii, feats.x0, feats.y0, ellipse_to_box(ell), ring=p.ring, pitch=feats.pitch)
             log_lik = log_lik + p.contrast_gain * c
         if p.structure and p.structure_gain > 0 and self.structure.ready:
-            log_lik = log_lik + (w_str * p.structure_gain) * self.structure.scores(frame, roi, self._ellipses(states))
+            log_lik = log_lik + (w_str * p.structure_gain) * self.structure.scores(frame, roi, ell)
+        return log_lik
+
+    def _extra_log_lik(self, frame, states, log_lik, roi, feats):
+        p = self.params
+        log_lik = self._fused_log_lik(frame, self._ellipses(states), log_lik, roi, feats)
         if p.motion:
             self._gray = to_gray(frame)
             self._flow = self.motion_cue.prepare(self._prev_gray, self._gray, roi)
@@ -207,19 +212,9 @@ class FusionPF(ColorPF):
         return log_lik >= np.max(log_lik) - 3.0
 
     def _search_log_lik(self, frame, states, log_lik, feats):
-        p = self.params
         if not self._fused:
             return log_lik
-        w_col, w_str = self._reliability()
-        log_lik = log_lik * w_col
-        ell = self._ellipses(states)
-        if p.contrast and self._lut is not None:
-            ii = probability_integral(feats.bins, self._lut)
-            log_lik = log_lik + p.contrast_gain * contrast_scores(ii, feats.x0, feats.y0, ellipse_to_box(ell),
-                                                                  ring=p.ring, pitch=feats.pitch)
-        if p.structure_gain > 0 and self.structure.ready:
-            log_lik = log_lik + (w_str * p.structure_gain) * self.structure.scores(frame, feats.roi, ell)
-        return log_lik
+        return self._fused_log_lik(frame, self._ellipses(states), log_lik, feats.roi, feats)
 
     def _after_estimate(self, frame, estimate):
         if not self.params.motion or self._flow is None:
