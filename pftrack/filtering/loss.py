@@ -29,8 +29,9 @@ The **confidence** reported to the user is the posterior ``P(target | s) =
 sigmoid(LLR)`` with equal priors, so ``score < 0.5`` on ``lost_frames`` frames is
 exactly what raises ``lost`` (the flag and the score agree).
 
-Pure functions (:func:`score_llr`, :func:`robust_background`) and a small state
-holder (:class:`LossDetector`); no images.
+Pure functions (:func:`score_llr`, :func:`robust_background`) and small state
+holders: :class:`LossDetector` for one score, :class:`FusedLoss` for several cues'
+scores fused as independent evidence (the sum of their clipped ratios); no images.
 """
 
 from __future__ import annotations
