@@ -146,8 +146,9 @@ def _track(spec, seed, **kw):
 def test_fusion_pf_follows_camouflaged_targets_that_colour_cannot_see():
     """The target is a flipped patch of the background (same colours): the structural cue and the fused
     loss test keep fusion-pf on it; with the structural cue off it is lost at once (6 seeded scenes).
-    Measured median errors 0.4-1.3 px on 5 of the 6 seeds (one loses the target after 25 frames, when the
-    constant-velocity prediction runs away), 31-88 px without the structural cue."""
+    Measured median errors 0.4-0.6 px and no lost frame on every seed, 31-88 px without the structural cue.
+    (With color-pf's velocity noise, 0.1, two seeds lost the target when the constant-velocity prediction
+    ran away: the reason fusion-pf's default is 0.025.)"""
     with_s, without, lost_share = [], [], []
     for seed in range(6):
         spec = camouflage_scene(seed, n_frames=60)
@@ -157,15 +158,15 @@ def test_fusion_pf_follows_camouflaged_targets_that_colour_cannot_see():
         err0, _ = _track(spec, seed, structure=False)
         without.append(np.median(err0))
     with_s, without = np.array(with_s), np.array(without)
-    assert np.sum(with_s < 3.0) >= 4, with_s
-    assert np.sum(np.array(lost_share) < 0.2) >= 4, lost_share
+    assert np.all(with_s < 3.0), with_s
+    assert np.all(np.array(lost_share) < 0.1), lost_share
     assert np.all(without > 20.0), without
     assert np.median(without) > 10 * np.median(with_s), (with_s, without)
 
 
 @pytest.mark.parametrize("kind, seeds, min_recall, max_false", [
-    ("vanish", range(200, 206), 0.7, 0.05),  # measured 0.82 / 0.00 (color-pf: 0.76 / 0.00)
-    ("leave", range(200, 205), 0.65, 0.1),  # measured 0.75 / 0.07 (color-pf: 0.80 / 0.08)
+    ("vanish", range(200, 206), 0.7, 0.05),  # measured 0.82 / 0.00
+    ("leave", range(200, 210), 0.6, 0.1),  # measured 0.68 / 0.05; one seed (200) swings it by 0.09
 ])
 def test_fused_lost_flag_as_a_detector_over_varied_scenes(kind, seeds, min_recall, max_false):
     from .test_loss_flag import _run

@@ -48,6 +48,10 @@ class FusionPFParams(ColorPFParams):
     position_noise: float = param(0.3, ge=0, le=10, doc=(
         "Std of the position noise, as a fraction of the mean half-axis (color-pf: 0.2); chosen by "
         "leave-one-sequence-out selection (docs/fusion-pf-selection.md)."))
+    velocity_noise: float = param(0.025, ge=0, le=10, doc=(
+        "Std of the velocity noise per frame, as a fraction of the mean half-axis (color-pf: 0.1). With the "
+        "peaked structural likelihood a noisier velocity lets the constant-velocity prediction run away; "
+        "chosen on the tune split (docs/fusion-pf-selection.md, stage 5)."))
     scale_rate_noise: float = param(0.01, ge=0, le=1, doc=(
         "Std of the noise on the scale rate (color-pf: 0.005). The contrast cue observes the extent, so "
         "the size may explore more."))
