@@ -9,16 +9,22 @@ book ch. 14 (eq. NCC, ``pftrack.cues.template``):
     r(B) = sum (p - mean p)(t - mean t) / sqrt(sum (p - mean p)^2 * sum (t - mean t)^2)  in [-1, 1]
 
 ``r`` is invariant to a gain and an offset of the grey levels, so a global
-illumination drift leaves it unchanged (ch. 14's reason for preferring NCC to SAD),
-and it is cheap: one ``cv2.resize`` of the particles' region to the patch resolution
-(area averaging: no aliasing however large the box), one ``cv2.remap`` for all
-particles, then a matrix-vector product.
+illumination drift leaves it unchanged (ch. 14's reason for preferring NCC to SAD).
+Optional per-pixel weights (:func:`kernel_weights`) make it a weighted NCC.
+
+Speed: the region the particles cover is block-averaged once per frame to about the
+patch resolution (:func:`reduce_region`: an integer-factor area resize of the 8-bit
+frame, then the grey conversion of the small image; no aliasing however large the
+box), and one compiled pass (:func:`ncc_reduced`) samples every box bilinearly and
+accumulates its NCC with every reference.  Without Numba the same is one
+``cv2.remap`` for all boxes and a matrix product.
 
 The reference is the first frame's patch, updated by a gated running mean (the
-caller decides when), with the first patch kept as an anchor: the score is the larger
-of the correlations with the anchor and with the running reference, so a bad update
-cannot wipe out what the target looked like at the start (the drift problem of
-template trackers, ch. 14 §4).
+caller decides when; :meth:`StructureCue.update` can also refuse patches that no
+longer resemble the first one), with the first patch kept as an anchor: the score is
+the larger of the correlations with the anchor and with the running reference, so a
+bad update cannot wipe out what the target looked like at the start (the drift
+problem of template trackers, ch. 14 §4).
 """
 
 from __future__ import annotations
