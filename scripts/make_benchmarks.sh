@@ -24,7 +24,8 @@ rm -f reports/bench-ablation/runs/*
   echo
   echo "Produced by \`bash scripts/make_benchmarks.sh\` (both tables below; each table is one \`pftrack eval\` run,"
   echo "so the speeds in a table were measured side by side — except that a rerun reuses the cached runs whose"
-  echo "tracker and parameters did not change, so a tracker whose defaults changed is timed in the later run)."
+  echo "tracker and parameters did not change, so a tracker whose defaults changed is timed in the later run;"
+  echo "\`fusion-pf\`, \`color-pf\` and CSRT, the trackers compared as ratios, are always re-timed in the run)."
   echo "Definitions: [evaluation.md](evaluation.md)."
   echo "Speed in detail (synthetic sweeps, end-to-end, ratios): [performance.md](performance.md)."
   echo
