@@ -190,6 +190,8 @@ def test_cli_mot_mv_cd_and_activity(tmp_path, capsys):
     a = np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)
     assert len(a) == 30 and set(np.unique(a[:, 1])) <= {1, 2, 3, 4, 5}
     assert main(["activity", str(tmp_path / "missing.mp4")]) == 2
+    assert main(["activity", str(tmp_path / "missing.mp4"), "--out", str(tmp_path / "none.csv")]) == 2
+    assert not (tmp_path / "none.csv").exists()  # bad input is refused before any output is written
     assert main(["mot", str(tmp_path / "missing.mp4"), "--detector", "mv"]) == 2
     assert "error" in capsys.readouterr().err
 

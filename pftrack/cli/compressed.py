@@ -28,10 +28,11 @@ def add_activity(sub) -> None:
 
 
 def cmd_activity(args) -> int:
-    from ..io.motion_vectors import iter_mv_frames, mv_field
+    from ..io.motion_vectors import MVSource, iter_mv_frames, mv_field
     from ..io.sinks import _TextSink, prepare_output
     from ..multi.compressed import intensity_level, motion_sigma
 
+    length = MVSource(args.source).length  # checks the file, its stream and codec before any output exists
     prepare_output(args.out)
     if args.plot:
         prepare_output(args.plot)
@@ -43,7 +44,7 @@ def cmd_activity(args) -> int:
     shares: list[float] = []
     out = _TextSink(args.out)
     out._write("frame,activity,sigma")
-    bar = progress(None, "activity", args.quiet)
+    bar = progress(length, "activity", args.quiet)
 
     def flush(upto: int) -> None:
         """Write frames up to ``upto`` (exclusive): the centred 5-frame median (edges repeated), quantised."""
