@@ -189,14 +189,14 @@ class SearchMixin:
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
         found = False
         conf = None
+        s_best = self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1], feats.roi)[0]
         if p.search_method == "appearance":
             cluster = near & self._appearance_pass(rho, thr, loglik) & (tot > 0)
             if p.loss_test == "likelihood":
                 # the best candidate must look like the target's score history (hysteresis); that test is
                 # stricter than the count of passing samples, which then only needs a few supporters
                 found = cluster.sum() >= min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1) and \
-                    self.loss.acquire(self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1],
-                                                        feats.roi)[0])
+                    self.loss.acquire(s_best)
                 conf = confidence(self.loss.llr)
             else:
                 found = cluster.sum() > p.kickoff_fraction * p.n_particles
@@ -238,7 +238,6 @@ class SearchMixin:
         if box is None:
             box = tuple(float(v) for v in ellipse_to_box(ell[best]))
         score = float(max(rho[best], 0.0)) if p.loss_test != "likelihood" else min(
-            confidence(self.loss.evaluate(self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1],
-                                                            feats.roi)[0])), 0.5)
+            confidence(self.loss.evaluate(s_best)), 0.5)
         return self._state(box=box, score=score, lost=True, info=info,
                            particles=states, weights=np.exp(loglik - loglik.max()))
