@@ -122,12 +122,13 @@ class OnlineRealBoost:
     """Online real AdaBoost over ``n_features`` block-valued features (one feature group)."""
 
     def __init__(self, n_features: int, n_blocks: int, *, n_selectors: int = 30, eps: float = 0.01,
-                 error_weighting: str = "confidence", replace: str = "update"):
+                 error_weighting: str = "confidence", replace: str = "update", forgetting: float = 1.0):
         if error_weighting not in ("confidence", "count"):
             raise ValueError("error_weighting must be 'confidence' or 'count'")
         if replace not in ("update", "sample"):
             raise ValueError("replace must be 'update' (once per update call, e.g. per frame) or 'sample'")
         self.replace = replace
+        self.forgetting = float(forgetting)
         self.m, self.b = int(n_features), int(n_blocks)
         self.n = int(n_selectors)
         self.eps = float(eps)
@@ -145,6 +146,8 @@ class OnlineRealBoost:
         if x.size and (x.min() < 0 or x.max() >= self.b):
             raise ValueError(f"block indices must lie in [0, {self.b})")
         per_sample = self.replace == "sample"
+        if self.forgetting < 1.0 and len(x):  # beta of ch03.md P4: old block counts fade once per update call
+            self.w *= self.forgetting
         for k in range(len(x)):
             _update(self.w, self.corr, self.wrong, self.sel, self.alpha, x[k], float(y[k]), self.eps,
                     self.count_errors, per_sample)
@@ -162,15 +165,25 @@ class OnlineRealBoost:
                 self.corr[n, worst[n]] = 1.0
                 self.wrong[n, worst[n]] = 1.0
 
-    def confidence(self, x: np.ndarray) -> np.ndarray:
-        """``Σ_n α_n h_n(x)`` for ``(..., M)`` block indices (vectorised over pixels)."""
-        x = np.asarray(x, dtype=np.int64)
-        flat = x.reshape(-1, self.m)
-        conf = np.zeros(len(flat))
+    def tables(self) -> np.ndarray:
+        """``(M, B)`` per-feature vote tables: ``T[m, b] = Σ_{n: sel_n = m} α_n h_{n,m}(b)``.
+
+        The strong classifier's confidence is ``Σ_m T[m, x_m]``: M gathers per pixel instead of one per
+        selector (selectors that share a feature are summed once)."""
+        t = np.zeros((self.m, self.b))
         for n in range(self.n):
             if self.alpha[n] == 0.0:
                 continue
             m = self.sel[n]
-            wb = self.w[n, m][flat[:, m]]
-            conf += self.alpha[n] * 0.5 * np.log((wb[:, 0] + self.eps) / (wb[:, 1] + self.eps))
-        return conf.reshape(x.shape[:-1])
+            wn = self.w[n, m]
+            t[m] += self.alpha[n] * 0.5 * np.log((wn[:, 0] + self.eps) / (wn[:, 1] + self.eps))
+        return t
+
+    def confidence(self, x: np.ndarray) -> np.ndarray:
+        """``Σ_n α_n h_n(x)`` for ``(..., M)`` block indices (vectorised over pixels)."""
+        x = np.asarray(x)
+        t = self.tables()
+        conf = np.zeros(x.shape[:-1])
+        for m in np.flatnonzero(np.any(t != 0.0, axis=1)):
+            conf += t[m][x[..., m]]
+        return conf

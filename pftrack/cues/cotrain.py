@@ -18,13 +18,64 @@ import numpy as np
 
 from .boosting import OnlineRealBoost, pixel_features
 
-__all__ = ["Blob", "CoTrainer", "best_blob", "fuse"]
+__all__ = ["Blob", "CoTrainer", "best_blob", "box_sums", "contrast_scores", "fuse", "integral"]
 
 
 def fuse(conf_c: np.ndarray, conf_t: np.ndarray) -> np.ndarray:
     """The vote of ch03.md §1.3: positive only where both maps are positive."""
     h = np.sign(np.minimum(conf_c, conf_t))
     return np.maximum(np.abs(conf_c), np.abs(conf_t)) * h
+
+
+def integral(values: np.ndarray) -> np.ndarray:
+    """``(H + 1, W + 1)`` float64 integral image of a map (for O(1) box sums)."""
+    return cv2.integral(np.ascontiguousarray(values, dtype=np.float64))
+
+
+def box_sums(ii: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sums and areas of the map over ``(P, 4)`` boxes ``(x, y, w, h)`` in map pixels.
+
+    Box edges are rounded to the pixel grid and clipped to the map; a box outside the map has
+    sum 0 and area 0."""
+    hh, ww = ii.shape[0] - 1, ii.shape[1] - 1
+    b = np.asarray(boxes, dtype=np.float64)
+    x0 = np.clip(np.rint(b[:, 0]), 0, ww).astype(np.int64)
+    y0 = np.clip(np.rint(b[:, 1]), 0, hh).astype(np.int64)
+    x1 = np.clip(np.rint(b[:, 0] + b[:, 2]), 0, ww).astype(np.int64)
+    y1 = np.clip(np.rint(b[:, 1] + b[:, 3]), 0, hh).astype(np.int64)
+    x1, y1 = np.maximum(x1, x0), np.maximum(y1, y0)
+    s = ii[y1, x1] - ii[y0, x1] - ii[y1, x0] + ii[y0, x0]
+    return s, ((x1 - x0) * (y1 - y0)).astype(np.float64)
+
+
+def _scaled_boxes(b: np.ndarray, k: float) -> np.ndarray:
+    """The boxes scaled by ``k`` about their centres."""
+    return np.column_stack([b[:, 0] + 0.5 * (1 - k) * b[:, 2], b[:, 1] + 0.5 * (1 - k) * b[:, 3],
+                            k * b[:, 2], k * b[:, 3]])
+
+
+def contrast_scores(ii: np.ndarray, boxes: np.ndarray, *, ring: float = 0.25,
+                    inner: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Object contrast of each box on an object map in [0, 1] (its integral ``ii``).
+
+    Returns ``(f_in − f_ring, f_in)``: the mean of the map over the box's centre (the box scaled
+    by ``inner``) minus its mean over the ring around the box (the box enlarged by ``ring`` of
+    its size on each side, minus the box).  The contrast is highest for a box whose centre is
+    covered by object pixels and whose surroundings are free of them: it falls when the box
+    slides off the object, when it is too large (background in its centre) and when it is too
+    small (object pixels in the ring).  ``inner`` < 1 matches a map that, like one trained on
+    the box's core, covers less than the whole box.  A ring clipped away by the map's border
+    counts as empty."""
+    b = np.asarray(boxes, dtype=np.float64)
+    s_box, a_box = box_sums(ii, b)
+    if inner == 1.0:
+        s_in, a_in = s_box, a_box
+    else:
+        s_in, a_in = box_sums(ii, _scaled_boxes(b, inner))
+    s_out, a_out = box_sums(ii, _scaled_boxes(b, 1.0 + 2.0 * ring))
+    f_in = s_in / np.maximum(a_in, 1.0)
+    f_ring = (s_out - s_box) / np.maximum(a_out - a_box, 1.0)
+    return f_in - f_ring, f_in
 
 
 @dataclass
@@ -57,10 +108,15 @@ class CoTrainer:
     """The two classifiers and their training from labelled pixels of a region."""
 
     def __init__(self, *, n_selectors: int = 30, colour_blocks: int = 32, ltp_t: float = 5.0,
-                 error_weighting: str = "confidence", rng: np.random.Generator | None = None):
-        self.colour = OnlineRealBoost(4, colour_blocks, n_selectors=n_selectors, error_weighting=error_weighting)
-        self.texture = OnlineRealBoost(9, 100, n_selectors=n_selectors, error_weighting=error_weighting)
+                 error_weighting: str = "confidence", eps: float = 0.01, replace: str = "update",
+                 forgetting: float = 1.0, rng: np.random.Generator | None = None):
+        kw = dict(n_selectors=n_selectors, error_weighting=error_weighting, eps=eps, replace=replace,
+                  forgetting=forgetting)
+        self.colour = OnlineRealBoost(4, colour_blocks, **kw)
+        self.texture = OnlineRealBoost(9, 100, **kw)
         self.blocks, self.t = colour_blocks, ltp_t
+        #: per-view decision offsets (0 = the classifiers' own sign); see ``learn_view(calibrate=True)``
+        self.bias = {"colour": 0.0, "texture": 0.0}
         self.rng = rng or np.random.default_rng(0)
 
     def features(self, bgr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -70,8 +126,10 @@ class CoTrainer:
         """Opened colour and texture confidence maps and their fusion."""
         col, tex = feats
         k = np.ones((opening, opening), np.uint8)
-        conf_c = cv2.morphologyEx(self.colour.confidence(col).astype(np.float32), cv2.MORPH_OPEN, k)
-        conf_t = cv2.morphologyEx(self.texture.confidence(tex).astype(np.float32), cv2.MORPH_OPEN, k)
+        conf_c = self.colour.confidence(col) - self.bias["colour"]
+        conf_t = self.texture.confidence(tex) - self.bias["texture"]
+        conf_c = cv2.morphologyEx(conf_c.astype(np.float32), cv2.MORPH_OPEN, k)
+        conf_t = cv2.morphologyEx(conf_t.astype(np.float32), cv2.MORPH_OPEN, k)
         return conf_c, conf_t, fuse(conf_c, conf_t)
 
     def learn(self, feats, pos: np.ndarray, neg: np.ndarray, *, max_each: int = 200,
@@ -80,22 +138,33 @@ class CoTrainer:
 
         ``pos_texture`` gives the texture classifier its own positives (co-training across views, where
         each classifier is taught by the other's most confident pixels); by default both get ``pos``."""
-        n = self._learn_one(self.colour, feats[0], pos, neg, max_each)
-        return n + self._learn_one(self.texture, feats[1], pos if pos_texture is None else pos_texture, neg,
-                                   max_each)
+        n = self.learn_view("colour", feats, pos, neg, max_each=max_each)
+        return n + self.learn_view("texture", feats, pos if pos_texture is None else pos_texture, neg,
+                                   max_each=max_each)
 
-    def _learn_one(self, clf: OnlineRealBoost, feat: np.ndarray, pos: np.ndarray, neg: np.ndarray,
-                   max_each: int) -> int:
+    def learn_view(self, view: str, feats, pos: np.ndarray, neg: np.ndarray, *, max_each: int = 200,
+                   balance: int | None = None, calibrate: bool = False) -> int:
+        """Train one classifier (``"colour"`` or ``"texture"``) on at most ``max_each`` pixels of each mask.
+
+        With ``balance``, at most ``max(number of positives, balance)`` negatives are drawn, so that a
+        frame with few positives does not teach the classifier that everything is background."""
+        clf, feat = (self.colour, feats[0]) if view == "colour" else (self.texture, feats[1])
         py, px = np.nonzero(pos)
         ny, nx = np.nonzero(neg)
         if len(py) > max_each:
             k = self.rng.choice(len(py), max_each, replace=False)
             py, px = py[k], px[k]
-        if len(ny) > max_each:
-            k = self.rng.choice(len(ny), max_each, replace=False)
+        n_neg = max_each if balance is None else min(max_each, max(len(py), balance))
+        if len(ny) > n_neg:
+            k = self.rng.choice(len(ny), n_neg, replace=False)
             ny, nx = ny[k], nx[k]
         ys, xs = np.concatenate([py, ny]), np.concatenate([px, nx])
         lab = np.concatenate([np.ones(len(py)), -np.ones(len(ny))])
         order = self.rng.permutation(len(lab))
-        clf.update(feat[ys[order], xs[order]], lab[order])
+        x = feat[ys[order], xs[order]]
+        clf.update(x, lab[order])
+        if calibrate and len(py) and len(ny):
+            conf = clf.confidence(x)
+            pos = lab[order] > 0
+            self.bias[view] = 0.5 * (float(np.median(conf[pos])) + float(np.median(conf[~pos])))
         return len(lab)

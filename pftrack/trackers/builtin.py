@@ -21,6 +21,7 @@ from .sift_ransac import SiftRansac
 from .ssim_pf import SSIMPF, HybridSSIMPF
 from .switching import Switching
 from .covariance_tracker import CovarianceTracker
+from .cotrain_pf import CoTrainPF
 from .fs_meanshift import FSMeanShift
 from .template import TemplateTracker
 
@@ -75,6 +76,9 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
      "occlusions; box by median displacement and scale, lost when most points are predicted (book ch. 7)", {}),
     ("lk-rls-fuzzy", LKRLSFuzzy,
      "lk-rls with the gate gain k set every frame by the chapter's fuzzy controller (book ch. 7)", {}),
+    ("cotrain-pf", CoTrainPF,
+     "Particle filter on co-trained online real-AdaBoost confidence maps (colour and LTP texture views, opened "
+     "and fused), SEIR evolutionary resampling, retraining from the box's core when confident (book ch. 3)", {}),
     ("meanshift", MeanShift, "Mean shift on kernel colour histograms, scale by best rho among ±5 % (Comaniciu et al.)",
      {"family": "baseline"}),
     ("kalman-meanshift", KalmanMeanShift, "Mean shift started from a Kalman prediction (Comaniciu & Ramesh)",
