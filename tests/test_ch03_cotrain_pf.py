@@ -107,7 +107,7 @@ def _textured_target_scene(seed: int, n: int = 50):
         x = 40 + 120 * (0.5 - 0.5 * np.cos(t / n * np.pi)) + rng.normal(0, 0.3)
         y = 60 + 25 * np.sin(t / 9.0)
         sprite = palette[rng.integers(0, 6, (th, tw))].astype(np.uint8)  # same colours, pixel-level texture
-        xi, yi = int(round(x)), int(round(y))
+        xi, yi = round(x), round(y)
         img[yi:yi + th, xi:xi + tw] = sprite
         noise = rng.normal(0, 2.0, img.shape)
         frames.append(np.clip(img + noise, 0, 255).astype(np.uint8))
@@ -171,3 +171,28 @@ def test_cotrain_pf_runs_on_grey_frames():
     c = np.array([[s.box[0] + s.box[2] / 2, s.box[1] + s.box[3] / 2] for s in states])
     err = np.linalg.norm(c - (gt[1:, :2] + gt[1:, 2:] / 2), axis=1)
     assert np.median(err) < 5.0
+
+
+def test_track_show_map_puts_the_learned_map_beside_the_frame(tmp_path, capsys):
+    from pftrack.cli import main
+
+    frames, gt = _textured_target_scene(7, n=12)
+    d = tmp_path / "seq"
+    d.mkdir()
+    for k, f in enumerate(frames):
+        cv2.imwrite(str(d / f"{k:04d}.png"), f)
+    box = ",".join(str(int(v)) for v in gt[0])
+    video = tmp_path / "m.avi"
+    assert main(["track", str(d), "--box", box, "--tracker", "cotrain-pf", "--out", str(tmp_path / "t.csv"),
+                 "--video-out", str(video), "--show-map", "--quiet"]) == 0
+    cap = cv2.VideoCapture(str(video))
+    ok, img = cap.read()
+    cap.release()
+    assert ok and img.shape[1] == 2 * frames[0].shape[1]
+    x, y, w, h = (int(v) for v in gt[1])
+    panel = img[:, frames[0].shape[1]:]
+    assert panel[y + h // 2, x + w // 2].mean() > panel[5, 5].mean() + 40  # the target glows, the frame is dimmed
+    capsys.readouterr()
+    assert main(["track", str(d), "--box", box, "--tracker", "color-pf", "--out", str(tmp_path / "u.csv"),
+                 "--video-out", str(tmp_path / "u.avi"), "--show-map", "--quiet"]) == 2
+    assert "no confidence map" in capsys.readouterr().err

@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import Interrupted
 from .common import DEFAULT_TRACKER, close_all, progress
 
@@ -18,6 +20,9 @@ def add_track(sub) -> None:
     p.add_argument("--out", default="track.csv", help="CSV output (default track.csv)")
     p.add_argument("--json-out", help="also write JSON Lines (one object per frame, with particles summary)")
     p.add_argument("--video-out", help="annotated video output (ellipse, particles, trajectory)")
+    p.add_argument("--show-map", action="store_true", help=(
+        "with --video-out: put the tracker's confidence map beside each frame (trackers that learn a map, "
+        "e.g. cotrain-pf)"))
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="tracker parameter (repeatable)")
     p.add_argument("--skip-bad-frames", action="store_true", help="skip unreadable frames instead of stopping")
@@ -26,7 +31,7 @@ def add_track(sub) -> None:
 
 
 def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=None, seed=0, params=None,
-              skip_bad_frames=False, quiet=False, gt_overlay=False) -> dict:
+              skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False) -> dict:
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
     from ..geometry import parse_box
     from ..io.sinks import CsvTrackSink, JsonLinesSink, VideoSink, prepare_output
@@ -34,9 +39,14 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     from ..pipeline import TrackRun, interrupt_on_sigterm, track_source
     from ..trackers.registry import create_tracker
     from ..trackers.warmup import warm_up
-    from ..viz.draw import TrackDrawer
+    from ..errors import ParameterError
+    from ..viz.draw import TrackDrawer, map_panel
 
     tracker = create_tracker(tracker_name, seed=seed, params=params or {})
+    if show_map and not hasattr(tracker, "confidence_map"):
+        raise ParameterError(f"--show-map: tracker '{tracker_name}' has no confidence map (try cotrain-pf)")
+    if show_map and not video_out:
+        raise ParameterError("--show-map needs --video-out")
     # kernels are compiled (first run) or loaded from the on-disk cache here, never inside the timed loop
     warm_seconds = warm_up(tracker_name, params or {})
     init_box = parse_box(box) if isinstance(box, str) else box
@@ -74,7 +84,11 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
                     jsonl.write(rec)
                 if video:
                     g = gt[number - 1] if gt is not None and number - 1 < len(gt) else None
-                    video.write(drawer.draw(frame, state, number, gt_box=g))
+                    img = drawer.draw(frame, state, number, gt_box=g)
+                    if show_map:
+                        cm = tracker.confidence_map()
+                        img = np.hstack([img, map_panel(frame, *(cm if cm is not None else (None, None)))])
+                    video.write(img)
                 bar.update(1)
                 stop.check()
     except KeyboardInterrupt:
@@ -90,7 +104,7 @@ def cmd_track(args) -> int:
 
     res = run_track(args.source, box=args.box, tracker_name=args.tracker, out=args.out, video_out=args.video_out,
                     json_out=args.json_out, seed=args.seed, params=parse_param_assignments(args.param),
-                    skip_bad_frames=args.skip_bad_frames, quiet=args.quiet)
+                    skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, show_map=args.show_map)
     msg = (f"{res['frames']} frames tracked with {args.tracker}: {res['update_fps']:.0f} update fps, "
            f"{res['end_to_end_fps']:.0f} fps end to end, lost in {res['lost_frames']} frames -> {args.out}")
     if res["skipped"]:

@@ -46,15 +46,18 @@ def riu2_table() -> np.ndarray:
 _RIU2 = riu2_table()
 
 
-def ltp_codes(centre: np.ndarray, neighbour: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
-    """Upper and lower LTP codes (uint8) of every pixel; borders use replicated pixels."""
+def ltp_codes(centre: np.ndarray, neighbour: np.ndarray, t: float, radius: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Upper and lower LTP codes (uint8) of every pixel; borders use replicated pixels.
+
+    ``radius`` r > 1 takes the 8 neighbours on the square ring at distance r (the grey-input set)."""
     c = centre.astype(np.int32)
-    n = cv2.copyMakeBorder(neighbour.astype(np.int32), 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+    r = int(radius)
+    n = cv2.copyMakeBorder(neighbour.astype(np.int32), r, r, r, r, cv2.BORDER_REPLICATE)
     h, w = c.shape
     up = np.zeros((h, w), np.int32)
     lo = np.zeros((h, w), np.int32)
     for u, (dy, dx) in enumerate(_NEIGHBOURS):
-        x = n[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] - c
+        x = n[r + r * dy:r + r * dy + h, r + r * dx:r + r * dx + w] - c
         up |= (x >= t).astype(np.int32) << u
         lo |= (x <= -t).astype(np.int32) << u
     return up.astype(np.uint8), lo.astype(np.uint8)
@@ -68,8 +71,41 @@ def colour_features(bgr: np.ndarray, blocks: int = 32) -> np.ndarray:
     return np.minimum(chans * blocks // 256, blocks - 1)
 
 
-def pixel_features(bgr: np.ndarray, *, t: float = 5.0, colour_blocks: int = 32) -> tuple[np.ndarray, np.ndarray]:
-    """Colour group ``(H, W, 4)`` and texture group ``(H, W, 9)`` block indices (ch03.md §1.1)."""
+#: grey input: (radius, multiple of t) of the nine texture features, in place of the nine channel pairs
+GREY_LTP = ((1, 0.5), (1, 1.0), (1, 2.0), (2, 0.5), (2, 1.0), (2, 2.0), (3, 0.5), (3, 1.0), (3, 2.0))
+
+
+def grey_features(gray: np.ndarray, *, t: float = 5.0, blocks: int = 32) -> tuple[np.ndarray, np.ndarray]:
+    """The two groups for grey input, where the chapter's cross-channel set collapses (R = G = B = Y, and
+    the nine channel pairs give one code nine times).
+
+    Intensity group (4): Y, Y smoothed over 3x3 and 7x7 windows, and the gradient magnitude (Sobel), each
+    in ``blocks`` blocks, after dividing Y by its mean over the given region (times 128), so that a global
+    gain change of the light leaves the blocks in place.  Texture group (9): LTP codes of Y at radii 1, 2, 3
+    and thresholds t/2, t, 2t."""
+    y = gray.astype(np.float32)
+    y *= 128.0 / max(float(y.mean()), 1.0)
+    gx = cv2.Sobel(y, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(y, cv2.CV_32F, 0, 1, ksize=3)
+    mag = np.minimum(np.sqrt(gx * gx + gy * gy) / 4.0, 255.0)  # 3x3 Sobel: |g| <= 4 * 255 * sqrt(2)
+    chans = np.dstack([y, cv2.blur(y, (3, 3)), cv2.blur(y, (7, 7)), mag]).astype(np.int64)
+    col = np.minimum(np.clip(chans, 0, 255) * blocks // 256, blocks - 1)
+    tex = np.empty(gray.shape[:2] + (9,), dtype=np.int64)
+    for k, (r, tm) in enumerate(GREY_LTP):
+        up, lo = ltp_codes(gray, gray, tm * t, radius=r)
+        tex[..., k] = 10 * _RIU2[up] + _RIU2[lo]
+    return col, tex
+
+
+def pixel_features(bgr: np.ndarray, *, t: float = 5.0, colour_blocks: int = 32,
+                   gray: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Colour group ``(H, W, 4)`` and texture group ``(H, W, 9)`` block indices (ch03.md §1.1).
+
+    ``gray=True`` (grey input) gives :func:`grey_features` instead: the same group sizes, with features
+    that still differ from one another."""
+    if gray:
+        return grey_features(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY) if bgr.ndim == 3 else bgr, t=t,
+                             blocks=colour_blocks)
     rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
     tex = np.empty(bgr.shape[:2] + (9,), dtype=np.int64)
     for k, (ci, ni) in enumerate(LTP_PAIRS):

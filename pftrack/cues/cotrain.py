@@ -110,8 +110,8 @@ class CoTrainer:
     def __init__(self, *, n_selectors: int = 30, colour_blocks: int = 32, ltp_t: float = 5.0,
                  error_weighting: str = "confidence", eps: float = 0.01, replace: str = "update",
                  forgetting: float = 1.0, rng: np.random.Generator | None = None):
-        kw = dict(n_selectors=n_selectors, error_weighting=error_weighting, eps=eps, replace=replace,
-                  forgetting=forgetting)
+        kw = {"n_selectors": n_selectors, "error_weighting": error_weighting, "eps": eps, "replace": replace,
+                  "forgetting": forgetting}
         self.colour = OnlineRealBoost(4, colour_blocks, **kw)
         self.texture = OnlineRealBoost(9, 100, **kw)
         self.blocks, self.t = colour_blocks, ltp_t
@@ -119,8 +119,8 @@ class CoTrainer:
         self.bias = {"colour": 0.0, "texture": 0.0}
         self.rng = rng or np.random.default_rng(0)
 
-    def features(self, bgr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return pixel_features(bgr, t=self.t, colour_blocks=self.blocks)
+    def features(self, bgr: np.ndarray, *, gray: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        return pixel_features(bgr, t=self.t, colour_blocks=self.blocks, gray=gray)
 
     def maps(self, feats, *, opening: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Opened colour and texture confidence maps and their fusion."""

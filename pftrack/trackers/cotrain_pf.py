@@ -29,6 +29,7 @@ import cv2
 import numpy as np
 
 from ..cues import cotrain as ct
+from ..cues.intensity import is_gray
 from ..filtering.particles import effective_sample_size, weights_from_log
 from ..filtering.resampling import multinomial, systematic
 from ..filtering.seir import seir
@@ -81,6 +82,10 @@ class CoTrainPFParams(Params):
     n_selectors: int = param(10, ge=1, le=200, doc="Selectors per classifier (Algorithm 1; ch03.md §2: 10).")
     colour_blocks: int = param(32, ge=2, le=256, doc="Blocks per colour feature (ch03.md §2: 32).")
     ltp_t: float = param(5.0, ge=0, le=255, doc="LTP threshold t of Eq. 2 (grey levels; ch03.md §2: 5).")
+    grey_features: Literal["auto", "on", "off"] = param("auto", doc=(
+        "On grey input the chapter's 13 features collapse (R = G = B = Y; the nine channel pairs give one LTP "
+        "code). 'auto' switches to the grey set when the first frame has no colour: Y, two smoothed Y, the "
+        "gradient magnitude, and LTP codes at radii 1-3 and thresholds t/2, t, 2t (cues.boosting.grey_features)."))
     eps: float = param(1.0, gt=0, le=100, doc="epsilon of the weak learners' log-odds (ch03.md §2: 1.0).")
     error_weighting: Literal["confidence", "count"] = param("confidence", doc=(
         "Error accumulators weighted by |h| (the text's reading) or counted (Grabner)."))
@@ -139,9 +144,9 @@ class CoTrainPF(Tracker):
         f = self.f
         crop = frame[y0:y1, x0:x1]
         if f < 1.0:
-            size = (max(int(round((x1 - x0) * f)), 3), max(int(round((y1 - y0) * f)), 3))
+            size = (max(round((x1 - x0) * f), 3), max(round((y1 - y0) * f), 3))
             crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
-        feats = self.co.features(crop)
+        feats = self.co.features(crop, gray=self.gray)
         conf_c, conf_t, fused = self.co.maps(feats, opening=self.params.opening)
         fx, fy = crop.shape[1] / (x1 - x0), crop.shape[0] / (y1 - y0)
         if self.params.fusion == "sum":
@@ -217,6 +222,12 @@ class CoTrainPF(Tracker):
         self.co.learn_view("texture", m["feats"], pos_t, neg, max_each=p.max_samples, balance=bal,
                            calibrate=p.calibrate)
 
+    def confidence_map(self) -> tuple[np.ndarray, tuple[int, int, int, int]] | None:
+        """The last frame's fused object map in ``[0, 1]`` and its region ``(x0, y0, x1, y1)`` in frame pixels
+        (for display: ``pftrack track --show-map``)."""
+        m = getattr(self, "last_maps", None)
+        return None if m is None else (m["obj"], m["region"])
+
     # ------------------------------------------------------------------ protocol
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
@@ -224,6 +235,7 @@ class CoTrainPF(Tracker):
                                error_weighting=p.error_weighting, eps=p.eps, replace=p.replace,
                                forgetting=p.forgetting, rng=self.rng)
         x, y, w, h = (float(v) for v in box)
+        self.gray = p.grey_features == "on" or (p.grey_features == "auto" and is_gray(frame))
         self.box = (x, y, w, h)
         self.size0 = (w, h)
         self.f = min(1.0, float(np.sqrt(p.work_area / max(w * h, 1.0))))

@@ -77,3 +77,21 @@ class TrackDrawer:
         cv2.putText(img, text, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
         cv2.putText(img, text, (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
         return img
+
+
+def map_panel(frame: np.ndarray, values: np.ndarray | None, region) -> np.ndarray:
+    """A panel the size of ``frame``: the frame dimmed to grey, with a ``[0, 1]`` map (a tracker's
+    confidence map over its candidate region ``(x0, y0, x1, y1)``) drawn in colour where it was computed."""
+    g = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) // 3
+    panel = cv2.cvtColor(g, cv2.COLOR_GRAY2BGR)
+    if values is None or region is None:
+        return panel
+    x0, y0, x1, y1 = (int(v) for v in region)
+    if x1 <= x0 or y1 <= y0:
+        return panel
+    m = cv2.resize(np.clip(np.asarray(values, np.float32), 0, 1), (x1 - x0, y1 - y0),
+                   interpolation=cv2.INTER_NEAREST)
+    panel[y0:y1, x0:x1] = cv2.applyColorMap((m * 255).astype(np.uint8), cv2.COLORMAP_INFERNO)
+    cv2.rectangle(panel, (x0, y0), (x1 - 1, y1 - 1), (255, 255, 255), 1)
+    return panel
+
