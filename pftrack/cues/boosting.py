@@ -75,6 +75,15 @@ def colour_features(bgr: np.ndarray, blocks: int = 32) -> np.ndarray:
 GREY_LTP = ((1, 0.5), (1, 1.0), (1, 2.0), (2, 0.5), (2, 1.0), (2, 2.0), (3, 0.5), (3, 1.0), (3, 2.0))
 
 
+def grey_texture(gray: np.ndarray, *, t: float = 5.0) -> np.ndarray:
+    """``(H, W, 9)`` LTP blocks of one channel at radii 1, 2, 3 and thresholds t/2, t, 2t."""
+    tex = np.empty(gray.shape[:2] + (9,), dtype=np.int64)
+    for k, (r, tm) in enumerate(GREY_LTP):
+        up, lo = ltp_codes(gray, gray, tm * t, radius=r)
+        tex[..., k] = 10 * _RIU2[up] + _RIU2[lo]
+    return tex
+
+
 def grey_features(gray: np.ndarray, *, t: float = 5.0, blocks: int = 32) -> tuple[np.ndarray, np.ndarray]:
     """The two groups for grey input, where the chapter's cross-channel set collapses (R = G = B = Y, and
     the nine channel pairs give one code nine times).
@@ -90,22 +99,21 @@ def grey_features(gray: np.ndarray, *, t: float = 5.0, blocks: int = 32) -> tupl
     mag = np.minimum(np.sqrt(gx * gx + gy * gy) / 4.0, 255.0)  # 3x3 Sobel: |g| <= 4 * 255 * sqrt(2)
     chans = np.dstack([y, cv2.blur(y, (3, 3)), cv2.blur(y, (7, 7)), mag]).astype(np.int64)
     col = np.minimum(np.clip(chans, 0, 255) * blocks // 256, blocks - 1)
-    tex = np.empty(gray.shape[:2] + (9,), dtype=np.int64)
-    for k, (r, tm) in enumerate(GREY_LTP):
-        up, lo = ltp_codes(gray, gray, tm * t, radius=r)
-        tex[..., k] = 10 * _RIU2[up] + _RIU2[lo]
-    return col, tex
+    return col, grey_texture(gray, t=t)
 
 
 def pixel_features(bgr: np.ndarray, *, t: float = 5.0, colour_blocks: int = 32,
-                   gray: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                   gray: bool = False, texture: str = "pairs") -> tuple[np.ndarray, np.ndarray]:
     """Colour group ``(H, W, 4)`` and texture group ``(H, W, 9)`` block indices (ch03.md §1.1).
 
     ``gray=True`` (grey input) gives :func:`grey_features` instead: the same group sizes, with features
-    that still differ from one another."""
+    that still differ from one another.  ``texture="radii"`` keeps the colour group and takes the texture
+    group of :func:`grey_texture` on Y (multi-radius LTP) instead of the nine channel pairs."""
     if gray:
         return grey_features(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY) if bgr.ndim == 3 else bgr, t=t,
                              blocks=colour_blocks)
+    if texture == "radii":
+        return colour_features(bgr, colour_blocks), grey_texture(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY), t=t)
     rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
     tex = np.empty(bgr.shape[:2] + (9,), dtype=np.int64)
     for k, (ci, ni) in enumerate(LTP_PAIRS):

@@ -119,15 +119,27 @@ class CoTrainer:
         self.bias = {"colour": 0.0, "texture": 0.0}
         self.rng = rng or np.random.default_rng(0)
 
-    def features(self, bgr: np.ndarray, *, gray: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        return pixel_features(bgr, t=self.t, colour_blocks=self.blocks, gray=gray)
+    def features(self, bgr: np.ndarray, *, gray: bool = False, texture: str = "pairs") -> tuple[np.ndarray, np.ndarray]:
+        return pixel_features(bgr, t=self.t, colour_blocks=self.blocks, gray=gray, texture=texture)
 
-    def maps(self, feats, *, opening: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Opened colour and texture confidence maps and their fusion."""
-        col, tex = feats
+    def raw_maps(self, feats) -> tuple[np.ndarray, np.ndarray]:
+        """Both views' confidences, re-centred by their offsets, before opening."""
+        return (self.colour.confidence(feats[0]) - self.bias["colour"],
+                self.texture.confidence(feats[1]) - self.bias["texture"])
+
+    def maps(self, feats, *, opening: int = 3, anchor: CoTrainer | None = None,
+             anchor_weight: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Opened colour and texture confidence maps and their fusion.
+
+        With ``anchor`` (a frozen copy of the first frame's pair), each view's confidence is
+        ``(1 − anchor_weight)·online + anchor_weight·anchor``: what was learned from the given box
+        cannot drift away."""
         k = np.ones((opening, opening), np.uint8)
-        conf_c = self.colour.confidence(col) - self.bias["colour"]
-        conf_t = self.texture.confidence(tex) - self.bias["texture"]
+        conf_c, conf_t = self.raw_maps(feats)
+        if anchor is not None and anchor_weight > 0:
+            a_c, a_t = anchor.raw_maps(feats)
+            conf_c = (1 - anchor_weight) * conf_c + anchor_weight * a_c
+            conf_t = (1 - anchor_weight) * conf_t + anchor_weight * a_t
         conf_c = cv2.morphologyEx(conf_c.astype(np.float32), cv2.MORPH_OPEN, k)
         conf_t = cv2.morphologyEx(conf_t.astype(np.float32), cv2.MORPH_OPEN, k)
         return conf_c, conf_t, fuse(conf_c, conf_t)

@@ -55,8 +55,13 @@ class ColorModelParams(Params):
         "Book ch. 4 variant: set sigma^2 = d_min^2 / 2 each frame from the smallest Bhattacharyya "
         "distance among the samples, so the likelihood adapts to how well the best sample matches."))
     min_half_axis: float = param(2.0, ge=0.5, le=1000, doc="Smallest half-axis a sample may have (pixels).")
-    resampler: Literal["multinomial", "systematic", "stratified", "residual"] = param("multinomial", doc=(
-        "Selection step (Fig. 2, step 1): 'multinomial' is the paper's cumulative sums + binary search."))
+    resampler: Literal["multinomial", "systematic", "stratified", "residual", "seir"] = param("multinomial", doc=(
+        "Selection step (Fig. 2, step 1): 'multinomial' is the paper's cumulative sums + binary search. 'seir' "
+        "adds book ch. 3's sequential evolutionary importance resampling after the weighting (copy, crossover, "
+        "mutation, selection of N from 3N while N_eff < 0.8 N, at most 10 loops; pftrack.filtering.seir), then "
+        "selects systematically."))
+    seir_mutation: float = param(0.5, gt=0, le=10, doc=(
+        "With resampler='seir': the mutation std lambda (Eq. 10) as a multiple of the position and size noise."))
     resample_ess: float = param(1.0, gt=0, le=1, doc=(
         "Resample when N_eff < resample_ess * N. 1 resamples every frame, as in Fig. 2."))
     alpha: float = param(0.05, ge=0, le=1, doc=(

@@ -51,6 +51,7 @@ from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
 from ..filtering.loss import LossDetector
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
+from ..filtering.seir import seir
 from ..geometry import Box, box_to_ellipse, ellipse_to_box
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams, ColorPFParams
@@ -85,7 +86,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
                                  history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                  sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
-        self.resampler = get_resampler(p.resampler)
+        self.resampler = get_resampler("systematic" if p.resampler == "seir" else p.resampler)
         if detector is not None and not callable(detector):
             raise ParameterError("detector must be a callable frame -> boxes")
         self.detector = detector
@@ -258,6 +259,37 @@ class ColorParticleFilter(SearchMixin, Tracker):
         ``feats`` is the quantised region ``roi`` (shared with the colour cue)."""
         return log_lik
 
+    def _seir(self, frame: np.ndarray, ps: ParticleSet, log_lik: np.ndarray, rho: np.ndarray,
+              roi: tuple[int, int, int, int], feats):
+        """Book ch. 3's SEIR loop on the weighted particles (``resampler='seir'``).
+
+        New particles are scored with the same cues on the same prepared region; the likelihood's
+        sigma is the one this frame's weighting used (with ``adaptive_sigma`` it is frozen at the
+        batch's d_min, so that the new particles do not change the scale)."""
+        p = self.params
+        est = ps._mean
+        std = np.zeros(ps.states.shape[1])
+        base = np.asarray(self._noise_std(est[HX], est[HY]), dtype=np.float64)
+        for c in (X, Y, HX, HY):
+            std[c] = p.seir_mutation * base[c]
+        if p.adaptive_sigma:
+            d2 = 1.0 - rho
+            s2 = max(float(d2[np.isfinite(log_lik)].min()) / 2.0 if np.isfinite(log_lik).any() else 0.5, 1e-6)
+        else:
+            s2 = p.sigma ** 2
+
+        def score(states: np.ndarray) -> np.ndarray:
+            self._clip_states(states)
+            r, tot = self.cue.rho(feats, self._ellipses(states), self._sqrt_q)
+            ll = -(1.0 - r) / (2.0 * s2)
+            ll[tot <= 0] = -np.inf
+            return self._extra_log_lik(frame, states, ll, roi, feats)
+
+        states, ll, info = seir(ps.states, log_lik, score, self.rng, mutation_std=std)
+        ps.states[:] = states
+        ps.set_log_likelihood(ll)
+        return info
+
     def _loss_scores(self, frame: np.ndarray, ellipses: np.ndarray, rho: np.ndarray,
                      roi: tuple[int, int, int, int]):
         """The scores the loss test sees for a batch of ellipses (default: the colour ``rho``).
@@ -301,6 +333,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         # (4) weight
         log_lik = self._extra_log_lik(frame, ps.states, self._log_lik(rho, tot), roi, feats)
         ok = ps.set_log_likelihood(log_lik, accumulate=p.resample_ess < 1.0)
+        seir_info = self._seir(frame, ps, log_lik, rho, roi, feats) if p.resampler == "seir" and ok else None
         # (5) estimate
         self.estimate = est = ps._mean.copy()
         self._after_estimate(frame, est)
@@ -314,6 +347,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         thr = self._threshold()
         n_pass = int(np.count_nonzero(rho > thr))
         info = {"mode": "tracking", "n_pass": n_pass, "threshold": thr, "rho": rho_e}
+        if seir_info is not None:
+            info["ess"], info["loops"] = seir_info.ess, seir_info.loops
         if p.loss_test == "likelihood":
             # two-class test on the estimate's score with hysteresis (pftrack.filtering.loss)
             s_e = self._loss_scores(frame, e_ell, np.array([rho_e]), roi)[0]
