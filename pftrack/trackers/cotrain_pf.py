@@ -6,17 +6,21 @@ Per frame (ch03.md §1.8):
 1. predict the particles ``(x, y, s)`` by a random walk (Eq. 4; the scale is ch03.md P10's extension);
 2. the candidate region: the last box enlarged by ``margin`` on each side, united with the
    particles' boxes, resampled so that the target covers about ``work_area`` pixels;
-3. the 13 per-pixel features and the two online real-AdaBoost confidence maps
-   (:mod:`pftrack.cues.boosting`), each opened, fused by vote (:func:`pftrack.cues.cotrain.fuse`);
-4. the likelihood of each particle's box on the fused map: ``likelihood="window"`` is the
+3. the 13 per-pixel features (a grey-input set on grey frames) and the two online real-AdaBoost
+   confidence maps (:mod:`pftrack.cues.boosting`), each re-centred by its calibrated offset, mixed
+   with a frozen copy of the first frame's classifiers (``anchor``) and opened; fused by sum of
+   log-odds (``fusion="sum"``) or by the chapter's vote (:func:`pftrack.cues.cotrain.fuse`);
+4. the likelihood of each particle's box on the object map: ``likelihood="window"`` is the
    chapter's Eq. 13 (windowed sum of positive confidence times a Gaussian gate);
-   ``"contrast"`` (default) is the fraction of object pixels inside the box minus that of the
-   ring around it, times ``contrast_gain`` in the log domain, times the same gate;
+   ``"contrast"`` (default) is the map's mean over the box's centre minus its mean over the ring
+   around the box, times ``contrast_gain`` in the log domain, times the same gate;
 5. SEIR (Algorithm 3, :func:`pftrack.filtering.seir.seir`) or plain resampling;
-6. the weighted-mean estimate; the contrast of its box is the score;
-7. retraining of both classifiers when the score passes the gate (the positives come from the
-   box's core, chosen per ``label_mode``; the negatives from outside the enlarged box), and the
-   lost flag when it stays below ``lost_gate`` of its running median.
+6. the weighted-mean estimate; its contrast relative to the running median is the score;
+7. retraining of both classifiers when the score passes ``update_gate`` (positives from the box's
+   core, chosen per ``label_mode``; negatives from outside the enlarged box, class-balanced), and
+   the lost flag when it stays below ``lost_gate`` for ``lost_frames`` frames.
+
+Every change from the chapter is measured on the tune split in docs/cotrain.md.
 """
 
 from __future__ import annotations
