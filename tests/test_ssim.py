@@ -205,3 +205,22 @@ def test_region_ssim_and_sparse_gradients_agree_with_the_dense_ones():
     dense = S.dssim_ascent(img, gx, gy, tmpl, (84, 58), scale=2.0)
     sparse = S.dssim_ascent(img, None, None, tmpl, (84, 58), scale=2.0)
     assert dense[:2] == sparse[:2] == (80.0, 60.0)
+
+
+def test_global_ssim_map_equals_the_batched_global_ssim_at_every_placement():
+    from pftrack.cues.ssim import sample_stack, ssim_global_map, ssim_global_stack, top_peaks
+
+    rng = np.random.default_rng(11)
+    img = cv2.GaussianBlur(rng.uniform(0, 255, (40, 50)), (0, 0), 1.5).astype(np.float32)
+    tpl = img[10:19, 20:33].copy()  # 9 x 13, an exact placement at top-left (20, 10)
+    m = ssim_global_map(img, tpl)
+    assert m.shape == (32, 38)
+    ys, xs = np.mgrid[0:32:5, 0:38:6]
+    st = np.column_stack([xs.ravel() + 13 / 2, ys.ravel() + 9 / 2, np.ones(xs.size)])
+    ref = ssim_global_stack(sample_stack(img, st, (9, 13)), tpl)
+    assert np.allclose(m[ys.ravel(), xs.ravel()], ref, atol=1e-4)
+    assert m[10, 20] == pytest.approx(1.0, abs=1e-5) and np.unravel_index(np.argmax(m), m.shape) == (10, 20)
+    peaks = top_peaks(m, 3, (4, 6))
+    assert tuple(peaks[0]) == (10, 20)
+    assert np.all(np.abs(peaks[1:] - peaks[0]).max(axis=1) > 0)
+    assert all(abs(r - 10) > 4 or abs(c - 20) > 6 for r, c in peaks[1:])  # suppressed neighbourhood

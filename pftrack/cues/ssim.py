@@ -227,6 +227,47 @@ def ssim_global_stack(stack: np.ndarray, template: np.ndarray, *, c1: float = C1
     return (2 * mx * mt + c1) * (2 * cxt + c2) / ((mx * mx + mt * mt + c1) * (vx + vt + c2))
 
 
+def ssim_global_map(image: np.ndarray, template: np.ndarray, *, c1: float = C1, c2: float = C2) -> np.ndarray:
+    """Eq. (21) with global statistics (18)-(20) for every placement of ``template`` in ``image``.
+
+    Returns the ``(H - h + 1, W - w + 1)`` map (top-left anchored, as ``cv2.matchTemplate``): the
+    covariance term is one ``matchTemplate`` with the zero-mean template, the window means and
+    variances come from integral images.  The placement with top-left ``(x0, y0)`` is the state
+    ``(x0 + w / 2, y0 + h / 2, 1)`` of :func:`ssim_global_stack`."""
+    img = np.ascontiguousarray(image, dtype=np.float32)
+    t = np.asarray(template, dtype=np.float64)
+    h, w = t.shape
+    n = h * w
+    mt = t.mean()
+    dt = t - mt
+    vt = float(np.sum(dt * dt)) / (n - 1)
+    cxt = cv2.matchTemplate(img, dt.astype(np.float32), cv2.TM_CCORR).astype(np.float64) / (n - 1)
+    s1, s2 = cv2.integral2(img, sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
+
+    def window(ii):
+        return ii[h:, w:] - ii[:-h, w:] - ii[h:, :-w] + ii[:-h, :-w]
+
+    mx = window(s1) / n
+    vx = np.maximum(window(s2) - n * mx * mx, 0.0) / (n - 1)
+    return (2 * mx * mt + c1) * (2 * cxt + c2) / ((mx * mx + mt * mt + c1) * (vx + vt + c2))
+
+
+def top_peaks(score: np.ndarray, k: int, radius: tuple[int, int]) -> np.ndarray:
+    """Row-major ``(row, col)`` of up to ``k`` maxima of ``score``, each at least ``radius = (ry, rx)`` from
+    the ones before it (greedy non-maximum suppression)."""
+    a = np.array(score, dtype=np.float64, copy=True)
+    ry, rx = max(int(radius[0]), 0), max(int(radius[1]), 0)
+    out = []
+    for _ in range(k):
+        i = int(np.argmax(a))
+        r, c = divmod(i, a.shape[1])
+        if not np.isfinite(a[r, c]) or a[r, c] == -np.inf:
+            break
+        out.append((r, c))
+        a[max(r - ry, 0):r + ry + 1, max(c - rx, 0):c + rx + 1] = -np.inf
+    return np.array(out, dtype=np.int64).reshape(-1, 2)
+
+
 def ssim_reference(a: np.ndarray, b: np.ndarray, *, crop: bool = True, sigma: float = WINDOW_SIGMA,
                    size: int = WINDOW, c1: float = C1, c2: float = C2, border: int = cv2.BORDER_REFLECT) -> float:
     """Wang et al.'s MSSIM of one pair, written straight from the formula (float64; the tests' oracle)."""

@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+import cv2
 import numpy as np
 
 from ..cues import ssim as S
@@ -146,25 +147,13 @@ class DSSIMTracker(Tracker):
         return TrackState(box=box, score=conf, lost=False, info={"ssim": sv, "iterations": it, "llr": self.loss.llr})
 
     def _search(self, gray, gx, gy) -> TrackState:
-        """Coarse to fine: global SSIM on a grid over the frame (one batched pass), then the ascent from
-        the best few; the best end point must pass the loss test."""
-        fh, fw = self._shape
-        w, h = self.size0[0] * self.s, self.size0[1] * self.s
-        step = max(0.25 * min(w, h), 2.0)
-        while (fw / step) * (fh / step) > 1200:  # bound the cost: the ascent covers the gaps
-            step *= 1.25
-        xs, ys = np.arange(step / 2, fw, step), np.arange(step / 2, fh, step)
-        gxs, gys = np.meshgrid(xs, ys)
-        starts = np.column_stack([gxs.ravel(), gys.ravel(), np.full(gxs.size, self.s * self.pix)])
-        # the coarse pass compares at half resolution (a quarter of the pixels)
-        half = self.template[::2, ::2]
-        coarse_states = starts.copy()
-        coarse_states[:, 2] *= 2.0
-        coarse = S.ssim_global_stack(S.sample_stack(gray, coarse_states, half.shape), half)
-        top = np.argsort(-coarse)[:5]
+        """Coarse to fine: global SSIM of every placement on a frame reduced so that the target spans half
+        the reference patch (one ``matchTemplate`` and integral images, :func:`pftrack.cues.ssim.ssim_global_map`),
+        then the ascent from the best few separated peaks; the best end point must pass the loss test."""
+        starts = self._coarse_starts(gray)
         if gx is None:
             gx = gy = np.empty((0, 0), np.float32)
-        res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts[top], max_iter=self.params.max_iter)
+        res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts, max_iter=self.params.max_iter)
         k = int(np.argmax(res[:, 2]))
         if self.loss.acquire(float(res[k, 2])):
             self.mode = "tracking"
@@ -174,6 +163,23 @@ class DSSIMTracker(Tracker):
                               info={"ssim": float(res[k, 2]), "mode": "acquired"})
         return TrackState(box=self._box_out, score=min(confidence(self.loss.llr), 0.5), lost=True,
                           info={"ssim": float(res[k, 2]), "mode": "searching"})
+
+    def _coarse_starts(self, gray: np.ndarray, n: int = 5) -> np.ndarray:
+        """``(n, 3)`` start states of the search: the best separated placements at the coarse level."""
+        fh, fw = self._shape
+        th, tw = self.template.shape
+        # an integer reduction (OpenCV's fast area path) so that the target spans about half the patch
+        k = max(int(2.0 * self.s * self.pix), 1)
+        sw, sh = fw // k, fh // k
+        hw = max(int(round(tw * self.s * self.pix / k)), 3)
+        hh = max(int(round(th * self.s * self.pix / k)), 3)
+        if sw < hw or sh < hh:  # the target fills the frame: start from the frame's centre
+            return np.array([[fw / 2.0, fh / 2.0, self.s * self.pix]])
+        small = cv2.resize(gray[:sh * k, :sw * k], (sw, sh), interpolation=cv2.INTER_AREA)
+        half = cv2.resize(self.template.astype(np.float32), (hw, hh), interpolation=cv2.INTER_AREA)
+        peaks = S.top_peaks(S.ssim_global_map(small, half), n, (hh // 2, hw // 2))
+        return np.column_stack([(peaks[:, 1] + hw / 2.0) * k, (peaks[:, 0] + hh / 2.0) * k,
+                                np.full(len(peaks), self.s * self.pix)])
 
     def _gray(self, frame: np.ndarray) -> np.ndarray:
         return smoothed_gray(frame, self.params.smooth)
