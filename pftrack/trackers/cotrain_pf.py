@@ -110,6 +110,9 @@ class CoTrainPFParams(Params):
         "the pixels the fused map calls object, Algorithm 2), 'cross' (Blum & Mitchell co-training: each "
         "learns the pixels the other one calls object; a blind view then starves the other), 'blob' (the "
         "most confident half of the fused map's best blob, the text's rule), 'self' (the whole core)."))
+    label_confidence: float = param(0.5, ge=0, lt=1, doc=(
+        "label_mode='fused': a core pixel is a positive when the object map exceeds this (0.5: the fused "
+        "decision)."))
     core: float = param(0.6, gt=0, le=1, doc="Positives come from the ellipse of this fraction of the box.")
     max_samples: int = param(300, ge=10, le=100_000, doc="Positives and negatives per classifier per frame (cap).")
     min_negatives: int = param(30, ge=0, le=100_000, doc=(
@@ -221,7 +224,7 @@ class CoTrainPF(Tracker):
         elif p.label_mode == "cross":
             pos_c, pos_t = core & (m["conf_t"] > 0), core & (m["conf_c"] > 0)
         elif p.label_mode == "fused":  # the core pixels that the fused map calls object (Algorithm 2)
-            pos_c = pos_t = core & (m["obj"] > 0.5)
+            pos_c = pos_t = core & (m["obj"] > p.label_confidence)
         else:  # 'blob': the best blob's most confident half, the chapter's literal rule
             blob = ct.best_blob(np.where(core, m["fused"], 0.0))
             if blob is None:
