@@ -94,7 +94,7 @@ def maps_experiment(data: Path, frames: int = 100) -> list[dict]:
         for k, (ip, mp) in enumerate(zip(imgs, masks)):
             frame = cv2.imread(str(ip))
             box = gt[k]
-            reg, f, crop, size = _fit(frame, box)
+            reg, _, crop, size = _fit(frame, box)
             col, tex = pixel_features(crop)
             feats = (col, tex)
             allf = np.concatenate([np.minimum(col * 100 // 32, 99), tex], axis=2)  # one 100-block scale
@@ -177,7 +177,7 @@ def seir_experiment(data: Path, seq: str = "otb_crossing") -> dict:
             b = -0.5 * np.sum((z - (30, 55)) ** 2, axis=1) / 4 + np.log(0.7)
             return np.logaddexp(a, b)
 
-        _, lls, info = seir(x, ll(x), ll, rng, mutation_std=2.5)
+        _, _, info = seir(x, ll(x), ll, rng, mutation_std=2.5)
         w = weights_from_log(ll(x))
         res.append((info.ess[0], info.ess[-1], info.loops, 1.0 / np.sum(w * w)))
     r = np.array(res)

@@ -33,13 +33,13 @@ def add_track(sub) -> None:
 def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=None, seed=0, params=None,
               skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False) -> dict:
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
+    from ..errors import ParameterError
     from ..geometry import parse_box
     from ..io.sinks import CsvTrackSink, JsonLinesSink, VideoSink, prepare_output
     from ..io.sources import open_source
     from ..pipeline import TrackRun, interrupt_on_sigterm, track_source
     from ..trackers.registry import create_tracker
     from ..trackers.warmup import warm_up
-    from ..errors import ParameterError
     from ..viz.draw import TrackDrawer, map_panel
 
     tracker = create_tracker(tracker_name, seed=seed, params=params or {})

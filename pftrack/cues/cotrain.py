@@ -111,7 +111,7 @@ class CoTrainer:
                  error_weighting: str = "confidence", eps: float = 0.01, replace: str = "update",
                  forgetting: float = 1.0, rng: np.random.Generator | None = None):
         kw = {"n_selectors": n_selectors, "error_weighting": error_weighting, "eps": eps, "replace": replace,
-                  "forgetting": forgetting}
+              "forgetting": forgetting}
         self.colour = OnlineRealBoost(4, colour_blocks, **kw)
         self.texture = OnlineRealBoost(9, 100, **kw)
         self.blocks, self.t = colour_blocks, ltp_t

@@ -171,8 +171,8 @@ class DSSIMTracker(Tracker):
         # an integer reduction (OpenCV's fast area path) so that the target spans about half the patch
         k = max(int(2.0 * self.s * self.pix), 1)
         sw, sh = fw // k, fh // k
-        hw = max(int(round(tw * self.s * self.pix / k)), 3)
-        hh = max(int(round(th * self.s * self.pix / k)), 3)
+        hw = max(round(tw * self.s * self.pix / k), 3)
+        hh = max(round(th * self.s * self.pix / k), 3)
         if sw < hw or sh < hh:  # the target fills the frame: start from the frame's centre
             return np.array([[fw / 2.0, fh / 2.0, self.s * self.pix]])
         small = cv2.resize(gray[:sh * k, :sw * k], (sw, sh), interpolation=cv2.INTER_AREA)
