@@ -43,7 +43,7 @@ def test_seir_is_reproducible_and_stops_when_the_ess_is_high():
     assert capped.loops == 3  # an unreachable target stops at T_max
 
 
-@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf", "local-motion-pf"])
 def test_any_colour_particle_filter_takes_resampler_seir(name):
     """``resampler="seir"`` runs the loop inside the colour PFs: ESS per loop reported, reproducible with a
     seed, and the target followed on a simple synthetic scene."""

@@ -242,6 +242,11 @@ class ColorParticleFilter(SearchMixin, Tracker):
         """Move the samples with the dynamic model (in place); return the region their ellipses cover."""
         raise NotImplementedError
 
+    def _step_std(self, est: np.ndarray) -> np.ndarray:
+        """``(D,)`` one-step std of the dynamic model's noise on the centre and half-axes (``X, Y, HX, HY``;
+        other entries 0) around the state ``est``: the scale of SEIR's mutation."""
+        raise NotImplementedError
+
     def _initial_state(self, ellipse) -> np.ndarray:
         """A state at rest on an ellipse ``(cx, cy, hx, hy)``."""
         state = np.zeros(self.dim)
@@ -268,10 +273,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         batch's d_min, so that the new particles do not change the scale)."""
         p = self.params
         est = ps._mean
-        std = np.zeros(ps.states.shape[1])
-        base = np.asarray(self._noise_std(est[HX], est[HY]), dtype=np.float64)
-        for c in (X, Y, HX, HY):
-            std[c] = p.seir_mutation * base[c]
+        std = p.seir_mutation * self._step_std(est)
         if p.adaptive_sigma:
             d2 = 1.0 - rho
             s2 = max(float(d2[np.isfinite(log_lik)].min()) / 2.0 if np.isfinite(log_lik).any() else 0.5, 1e-6)
@@ -438,6 +440,13 @@ class ColorPF(ColorParticleFilter):
         pos = max(p.position_noise * hbar, p.min_noise_px)
         vel = p.velocity_noise * hbar
         return np.array([pos, pos, vel, vel, p.size_noise * hx, p.size_noise * hy, p.scale_rate_noise])
+
+    def _step_std(self, est: np.ndarray) -> np.ndarray:
+        std = np.zeros(self.dim)
+        base = self._noise_std(est[HX], est[HY])
+        for c in (X, Y, HX, HY):
+            std[c] = base[c]
+        return std
 
     def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:
         est = self.estimate

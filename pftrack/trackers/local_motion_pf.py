@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
-from ..filtering.dynamics import VX, VY, NCVRandomWalk
+from ..filtering.dynamics import HX, HY, VX, VY, X, Y, NCVRandomWalk
 from ..params import param
 from .color_pf import _ELL_COLS, ColorModelParams, ColorParticleFilter
 
@@ -93,6 +93,15 @@ class LocalMotionPF(ColorParticleFilter):
     def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:
         fh, fw = self._shape
         return self.dynamics.propagate(states, self.rng, frame_size=(fw, fh))
+
+    def _step_std(self, est: np.ndarray) -> np.ndarray:
+        """Eq. 10's one-step noise: half the white acceleration on the centre, the relative size walk
+        (std max_size_change / 3) on the half-axes."""
+        std = np.zeros(self.dim)
+        d = self.dynamics
+        std[[X, Y]] = 0.5 * d.sigma_xy
+        std[[HX, HY]] = d.max_size_change / 3.0 * est[[HX, HY]]
+        return std
 
     # ------------------------------------------------------------------ local motion
     def _extra_log_lik(self, frame, states, log_lik, roi, feats):
