@@ -182,6 +182,7 @@ class OnlineRealBoost:
         self.wrong = np.ones((self.n, self.m))
         self.sel = np.zeros(self.n, dtype=np.int64)
         self.alpha = np.zeros(self.n)
+        self._tables: np.ndarray | None = None  # cache of tables(), dropped whenever the learners change
 
     def update(self, x: np.ndarray, y) -> None:
         """Learn labelled samples in order: ``x`` ``(S, M)`` block indices, ``y`` ``(S,)`` in {+1, −1}."""
@@ -190,6 +191,7 @@ class OnlineRealBoost:
         if x.size and (x.min() < 0 or x.max() >= self.b):
             raise ValueError(f"block indices must lie in [0, {self.b})")
         per_sample = self.replace == "sample"
+        self._tables = None
         if self.forgetting < 1.0 and len(x):  # beta of ch03.md P4: old block counts fade once per update call
             self.w *= self.forgetting
         for k in range(len(x)):
@@ -213,7 +215,9 @@ class OnlineRealBoost:
         """``(M, B)`` per-feature vote tables: ``T[m, b] = Σ_{n: sel_n = m} α_n h_{n,m}(b)``.
 
         The strong classifier's confidence is ``Σ_m T[m, x_m]``: M gathers per pixel instead of one per
-        selector (selectors that share a feature are summed once)."""
+        selector (selectors that share a feature are summed once).  Cached until the next ``update``."""
+        if self._tables is not None:
+            return self._tables
         t = np.zeros((self.m, self.b))
         for n in range(self.n):
             if self.alpha[n] == 0.0:
@@ -221,6 +225,7 @@ class OnlineRealBoost:
             m = self.sel[n]
             wn = self.w[n, m]
             t[m] += self.alpha[n] * 0.5 * np.log((wn[:, 0] + self.eps) / (wn[:, 1] + self.eps))
+        self._tables = t
         return t
 
     def confidence(self, x: np.ndarray) -> np.ndarray:
