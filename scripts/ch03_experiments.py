@@ -26,7 +26,7 @@ from scipy.stats import rankdata
 
 import pftrack
 from pftrack.cues.boosting import OnlineRealBoost, pixel_features
-from pftrack.cues.cotrain import CoTrainer
+from pftrack.cues.cotrain import CoTrainer, train_pixels
 from pftrack.eval.metrics import frame_center_errors, frame_ious, ope_scores
 from pftrack.filtering.particles import weights_from_log
 from pftrack.filtering.seir import seir
@@ -124,24 +124,10 @@ def maps_experiment(data: Path, frames: int = 100) -> list[dict]:
                 co.learn_view("texture", feats, pos_t, neg, max_each=300, balance=None if k == 0 else 30,
                               calibrate=True)
                 # the single classifier, trained the same way on all 13 features
-                py, px = np.nonzero(pos_1)
-                ny, nx = np.nonzero(neg)
-                if len(py) > 300:
-                    sel = rng.choice(len(py), 300, replace=False)
-                    py, px = py[sel], px[sel]
-                nn = 300 if k == 0 else min(300, max(len(py), 30))
-                if len(ny) > nn:
-                    sel = rng.choice(len(ny), nn, replace=False)
-                    ny, nx = ny[sel], nx[sel]
-                ys, xs = np.concatenate([py, ny]), np.concatenate([px, nx])
-                lab = np.concatenate([np.ones(len(py)), -np.ones(len(ny))])
-                order = rng.permutation(len(lab))
-                x = allf[ys[order], xs[order]]
-                single.update(x, lab[order])
-                if len(py) and len(ny):
-                    conf = single.confidence(x)
-                    pos = lab[order] > 0
-                    bias_single = 0.5 * (np.median(conf[pos]) + np.median(conf[~pos]))
+                offset, _ = train_pixels(single, allf, pos_1, neg, rng, max_each=300,
+                                         balance=None if k == 0 else 30)
+                if offset is not None:
+                    bias_single = offset
         for name in aucs:
             rows.append({"sequence": seq, "split": split, "map": name, "pixel_auc": float(np.nanmean(aucs[name])),
                          "precision": float(np.nanmean(pos_share[name]))})

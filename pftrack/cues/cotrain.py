@@ -18,7 +18,8 @@ import numpy as np
 
 from .boosting import OnlineRealBoost, pixel_features
 
-__all__ = ["Blob", "CoTrainer", "best_blob", "box_sums", "contrast_scores", "fuse", "integral"]
+__all__ = ["Blob", "CoTrainer", "best_blob", "box_sums", "contrast_scores", "fuse", "integral",
+           "train_pixels"]
 
 
 def fuse(conf_c: np.ndarray, conf_t: np.ndarray) -> np.ndarray:
@@ -161,22 +162,36 @@ class CoTrainer:
         With ``balance``, at most ``max(number of positives, balance)`` negatives are drawn, so that a
         frame with few positives does not teach the classifier that everything is background."""
         clf, feat = (self.colour, feats[0]) if view == "colour" else (self.texture, feats[1])
-        py, px = np.nonzero(pos)
-        ny, nx = np.nonzero(neg)
-        if len(py) > max_each:
-            k = self.rng.choice(len(py), max_each, replace=False)
-            py, px = py[k], px[k]
-        n_neg = max_each if balance is None else min(max_each, max(len(py), balance))
-        if len(ny) > n_neg:
-            k = self.rng.choice(len(ny), n_neg, replace=False)
-            ny, nx = ny[k], nx[k]
-        ys, xs = np.concatenate([py, ny]), np.concatenate([px, nx])
-        lab = np.concatenate([np.ones(len(py)), -np.ones(len(ny))])
-        order = self.rng.permutation(len(lab))
-        x = feat[ys[order], xs[order]]
-        clf.update(x, lab[order])
-        if calibrate and len(py) and len(ny):
-            conf = clf.confidence(x)
-            pos = lab[order] > 0
-            self.bias[view] = 0.5 * (float(np.median(conf[pos])) + float(np.median(conf[~pos])))
-        return len(lab)
+        offset, n = train_pixels(clf, feat, pos, neg, self.rng, max_each=max_each, balance=balance)
+        if calibrate and offset is not None:
+            self.bias[view] = offset
+        return n
+
+
+def train_pixels(clf: OnlineRealBoost, feat: np.ndarray, pos: np.ndarray, neg: np.ndarray,
+                 rng: np.random.Generator, *, max_each: int = 200,
+                 balance: int | None = None) -> tuple[float | None, int]:
+    """Teach ``clf`` at most ``max_each`` pixels of each mask (``feat`` is ``(H, W, M)`` block indices), in a
+    random interleaved order; with ``balance``, at most ``max(number of positives, balance)`` negatives.
+
+    Returns the calibrated decision offset — halfway between the median confidence of the positives and
+    that of the negatives just learned (None when a class is empty) — and the number of samples."""
+    py, px = np.nonzero(pos)
+    ny, nx = np.nonzero(neg)
+    if len(py) > max_each:
+        k = rng.choice(len(py), max_each, replace=False)
+        py, px = py[k], px[k]
+    n_neg = max_each if balance is None else min(max_each, max(len(py), balance))
+    if len(ny) > n_neg:
+        k = rng.choice(len(ny), n_neg, replace=False)
+        ny, nx = ny[k], nx[k]
+    ys, xs = np.concatenate([py, ny]), np.concatenate([px, nx])
+    lab = np.concatenate([np.ones(len(py)), -np.ones(len(ny))])
+    order = rng.permutation(len(lab))
+    x = feat[ys[order], xs[order]]
+    clf.update(x, lab[order])
+    if not (len(py) and len(ny)):
+        return None, len(lab)
+    conf = clf.confidence(x)
+    is_pos = lab[order] > 0
+    return 0.5 * (float(np.median(conf[is_pos])) + float(np.median(conf[~is_pos]))), len(lab)
