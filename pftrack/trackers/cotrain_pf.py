@@ -207,7 +207,7 @@ class CoTrainPF(Tracker):
         """Core ellipse of the box and the negatives (outside the box enlarged by 20 %), in map pixels."""
         hh, ww = m["fused"].shape
         bx, by, bw, bh = self._to_map(m, np.array([box]))[0]
-        yy, xx = np.mgrid[0:hh, 0:ww]
+        yy, xx = np.ogrid[0:hh, 0:ww]
         cx, cy = bx + bw / 2 - 0.5, by + bh / 2 - 0.5
         c = self.params.core
         core = ((xx - cx) / max(c * bw / 2, 0.5)) ** 2 + ((yy - cy) / max(c * bh / 2, 0.5)) ** 2 <= 1.0
