@@ -8,7 +8,8 @@ Tune: frames 1-200, colour seeds 0-2; report: frames 201-400, colour seeds 100-1
 three positions of the blind strip.  In every scene the people seen in both cameras are split
 `repeats` times at random into training people (40 %: their tracks fit the BTF and the
 new-person threshold) and test people; we count the test hand-overs linked correctly by the
-one-to-one assignment (`links`), and rank-1: whether each test probe's most similar earlier
+one-to-one assignment (`links`) and the fraction of all links that are such hand-overs
+(`precision`), and rank-1: whether each test probe's most similar earlier
 track of the other camera is the right one.
 """
 
@@ -29,6 +30,7 @@ from pftrack.multicam.btf import (
     fit_btf_subspace,
 )
 from pftrack.multicam.handover import (
+    cooccur_threshold,
     describe_tracks,
     fit_btf,
     fit_transit,
@@ -38,6 +40,7 @@ from pftrack.multicam.handover import (
 from pftrack.synth.twocam import twocam_scene
 
 SPLITS = ((300, 390), (340, 430), (380, 470))
+NEW_QUANTILE = 0.25   # the new-person rule's quantile of co-occurring pairs, chosen on the tune scenes
 
 
 def foreground(frames: dict) -> dict:
@@ -83,20 +86,30 @@ def scene_scores(sc, repeats: int, seed: int) -> dict:
                         cands = [k for k in app_b if k not in ex_b and app_b[k].last < app_a[a].first]
                         ll = [btf_subspace_loglik(model, btf_from_hists(app_a[a].raw, app_b[k].raw)) for k in cands]
                         r1s += cands[int(np.argmax(ll))] == b
-                acc_s = out.setdefault("BTF subspace (PPCA) rank-1 only", [0, 0, 0])
+                acc_s = out.setdefault("BTF subspace (PPCA) rank-1 only", [0, 0, 0, 0])
                 acc_s[1] += r1s
                 acc_s[2] += len(test)
             for method in ("none", "mbtf", "cbtf"):
                 lut = fit_btf(app_a, app_b, pairs, method)
-                tau = new_threshold(app_a, app_b, pairs, method)
+                tau = cooccur_threshold(app_a, app_b, lut, NEW_QUANTILE)
+                if tau is None:
+                    tau = new_threshold(app_a, app_b, pairs, method)
                 links = link_tracks(app_a, app_b, lut, tau_new=tau, exclude_a=ex_a, exclude_b=ex_b)
                 ok = sum((a, b) in set(test) for a, b, _ in links)
                 tr = fit_transit(app_a, app_b, pairs)
                 links_t = link_tracks(app_a, app_b, lut, tau_new=tau, exclude_a=ex_a, exclude_b=ex_b, transit=tr)
                 ok_t = sum((a, b) in set(test) for a, b, _ in links_t)
-                acc_t = out.setdefault(f"{feat} {method} +transit", [0, 0, 0])
+                acc_t = out.setdefault(f"{feat} {method} +transit", [0, 0, 0, 0])
                 acc_t[0] += ok_t
                 acc_t[2] += len(test)
+                acc_t[3] += len(links_t)
+                # the former rule: the threshold that best separates the training pairs from their impostors
+                links_p = link_tracks(app_a, app_b, lut, tau_new=new_threshold(app_a, app_b, pairs, method),
+                                      exclude_a=ex_a, exclude_b=ex_b)
+                acc_p = out.setdefault(f"{feat} {method} pairs-rule", [0, 0, 0, 0])
+                acc_p[0] += sum((a, b) in set(test) for a, b, _ in links_p)
+                acc_p[2] += len(test)
+                acc_p[3] += len(links_p)
                 # rank-1: each test probe against the earlier tracks of the other camera (not training ones)
                 r1 = 0
                 for a, b in test:
@@ -110,11 +123,13 @@ def scene_scores(sc, repeats: int, seed: int) -> dict:
                         s = similarity_matrix(apply_btf_hist(app_a[a].hist, lut)[None],
                                               np.stack([app_b[k].hist for k in cands]))[0]
                         r1 += cands[int(np.argmax(s))] == b
-                acc = out.setdefault(f"{feat} {method}", [0, 0, 0])
+                acc = out.setdefault(f"{feat} {method}", [0, 0, 0, 0])
                 acc[0] += ok
                 acc[1] += r1
                 acc_t[1] += r1                             # rank-1 is appearance only
+                acc_p[1] += r1
                 acc[2] += len(test)
+                acc[3] += len(links)
     return out
 
 
@@ -162,15 +177,17 @@ def run(data: Path, numbers, seeds, repeats: int) -> dict:
         for sp in SPLITS:
             sc = twocam_scene(data / "pets09_s2l1_dev", sd, numbers=numbers, split=sp)
             sc_scores = scene_scores(sc, repeats, sd)
-            for k, (ok, r1, n) in sc_scores.items():
+            for k, (ok, r1, n, nl) in sc_scores.items():
                 per_scene.setdefault(k, []).append(ok / n)
-                t = total.setdefault(k, [0, 0, 0])
+                t = total.setdefault(k, [0, 0, 0, 0])
                 t[0] += ok
                 t[1] += r1
                 t[2] += n
+                t[3] += nl
             print(numbers, sd, sp, {k: round(v[0] / v[2], 3) for k, v in sc_scores.items()}, flush=True)
-    return {k: {"links": ok / n, "rank1": r1 / n, "handovers": n, "links_scene_std": float(np.std(per_scene[k]))}
-            for k, (ok, r1, n) in total.items()}
+    return {k: {"links": ok / n, "precision": ok / nl if nl else None, "rank1": r1 / n, "handovers": n,
+                "links_scene_std": float(np.std(per_scene[k]))}
+            for k, (ok, r1, n, nl) in total.items()}
 
 
 def main() -> None:
@@ -196,7 +213,8 @@ def main() -> None:
     for name, table in res.items():
         print(name)
         for k, v in sorted(table.items()):
-            print(f"  {k:18s} links {v['links']:.3f}  rank-1 {v['rank1']:.3f}  (n = {v['handovers']}, "
+            prec = "   -  " if v["precision"] is None else f"{v['precision']:.3f}"
+            print(f"  {k:28s} links {v['links']:.3f}  precision {prec}  rank-1 {v['rank1']:.3f}  (n = {v['handovers']}, "
                   f"scene std {v['links_scene_std']:.3f})")
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(json.dumps(res, indent=1) + "\n", encoding="utf-8")

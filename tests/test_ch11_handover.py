@@ -112,6 +112,35 @@ def test_linking_is_one_to_one_in_time_order_with_new_people():
     assert link_tracks({2: a[2]}, b2, lut, tau_new=0.0) == []
 
 
+def test_new_person_threshold_from_tracks_seen_at_the_same_time_in_both_cameras():
+    from pftrack.multicam.handover import cooccur_threshold
+
+    lut = np.tile(np.arange(256.0), (3, 1))
+    # one-hot colours: the similarity is the fraction of channels in the same bin
+    a = {1: _app(1, 1, 10, (200, 10, 10)), 2: _app(2, 1, 10, (10, 200, 10))}
+    b = {5: _app(5, 1, 10, (200, 200, 10)),    # seen with 1 and 2: similarities 2/3 and 2/3
+         6: _app(6, 5, 12, (10, 10, 200)),     # seen with 1 and 2: 1/3 and 1/3
+         7: _app(7, 30, 40, (200, 10, 10))}    # after both: identical to 1, but not a co-occurring pair
+    assert cooccur_threshold(a, b, lut, 0.25) == pytest.approx(1 / 3)
+    assert cooccur_threshold(a, b, lut, 0.5) == pytest.approx(0.5)
+    assert cooccur_threshold(a, b, lut, 1.0) == pytest.approx(2 / 3)
+    assert cooccur_threshold(a, {7: b[7]}, lut) is None
+    with pytest.raises(ValueError):
+        cooccur_threshold(a, b, lut, 1.5)
+    # the pairs are scored through the BTF, as the links are: mapping camera A's green 10 to 200 makes
+    # 1 identical to 5 (similarity 1) and unlike 6 (0)
+    lut2 = lut.copy()
+    lut2[1, 10] = 200
+    assert cooccur_threshold(a, b, lut2, 1.0) == pytest.approx(1.0)
+    assert cooccur_threshold(a, b, lut2, 0.0) == pytest.approx(0.0)
+    # end to end: 7 is linked to 1 (identical) under the threshold, and a probe only as similar as the
+    # least alike co-occurring people is a new person
+    tau = cooccur_threshold(a, b, lut, 0.25)
+    b[8] = _app(8, 50, 60, (10, 10, 200))
+    links = link_tracks(a, b, lut, tau_new=tau + 1e-9)
+    assert [(x, y) for x, y, _ in links] == [(1, 7)]
+
+
 def test_transit_time_breaks_a_tie_between_look_alikes():
     from pftrack.multicam.handover import fit_transit
 

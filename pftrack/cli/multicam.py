@@ -26,8 +26,10 @@ def add_handover(sub) -> None:
     p.add_argument("--foreground", choices=["mog2", "none"], default="mog2",
                    help="count only foreground pixels of each box (MOG2 over each camera), or all of them")
     p.add_argument("--new-threshold", default="auto",
-                   help="similarity below which a probe is a new person: a number, 'auto' (from the training "
-                        "pairs) or 'none'")
+                   help="similarity below which a probe is a new person: a number; 'auto' (default: the lower "
+                        "quartile of the similarities of tracks seen at the same time in the two cameras, who are "
+                        "different people; 'pairs' without such tracks); 'pairs' (the threshold that best separates "
+                        "the training pairs from their impostors); or 'none'")
     p.add_argument("--transit", action="store_true",
                    help="also weigh each candidate by a log-normal transit-time model fitted on the training pairs "
                         "(helps where people cross the blind zone at a steady pace; it hurt on the PETS two-camera "
@@ -100,6 +102,7 @@ def cmd_handover(args) -> int:
     from ..io.sinks import _TextSink, prepare_output
     from ..io.sources import open_source
     from ..multicam.handover import (
+        cooccur_threshold,
         describe_tracks,
         fit_btf,
         fit_transit,
@@ -129,15 +132,17 @@ def cmd_handover(args) -> int:
             source.close()
     app_a, app_b = apps
     lut = fit_btf(app_a, app_b, pairs, args.btf)
-    if args.new_threshold == "auto":
+    tau = cooccur_threshold(app_a, app_b, lut) if args.new_threshold == "auto" else None
+    if args.new_threshold == "pairs" or (args.new_threshold == "auto" and tau is None):
         tau = new_threshold(app_a, app_b, pairs, args.btf)
     elif args.new_threshold == "none":
         tau = 0.0
-    else:
+    elif args.new_threshold != "auto":
         try:
             tau = float(args.new_threshold)
         except ValueError:
-            raise ParameterError(f"--new-threshold must be a number, 'auto' or 'none', got {args.new_threshold!r}") from None
+            raise ParameterError("--new-threshold must be a number, 'auto', 'pairs' or 'none', "
+                                 f"got {args.new_threshold!r}") from None
     transit = fit_transit(app_a, app_b, pairs) if args.transit else None
     if args.transit and transit is None:
         raise ParameterError("--transit needs training pairs (--train-pairs) whose tracks follow each other in time")

@@ -4,6 +4,7 @@ from .appearance import FEATURES, region_histograms, similarity, similarity_matr
 from .btf import apply_btf_hist, apply_btf_image, btf_from_hists, cbtf, mbtf
 from .handover import (
            TrackAppearance,
+           cooccur_threshold,
            describe_tracks,
            fit_btf,
            link_tracks,
@@ -11,5 +12,5 @@ from .handover import (
 )
 
 __all__ = ["FEATURES", "TrackAppearance", "apply_btf_hist", "apply_btf_image", "btf_from_hists", "cbtf",
-           "describe_tracks", "fit_btf", "link_tracks", "mbtf", "new_threshold", "region_histograms", "similarity",
+           "cooccur_threshold", "describe_tracks", "fit_btf", "link_tracks", "mbtf", "new_threshold", "region_histograms", "similarity",
            "similarity_matrix"]

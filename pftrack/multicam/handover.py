@@ -9,9 +9,12 @@
 3. Camera A's appearances are brought into camera B's colours (push-forward, Eqs. 25–26)
    and compared with camera B's (Eqs. 23–24).  Eq. 2 under the one-to-one constraint is a
    linear assignment (``scipy.optimize.linear_sum_assignment``) on −log similarity, with a
-   "new person" option of cost −log τ_new per track, τ_new the threshold that best separates
-   the training set's genuine and impostor pairs (proposed; the text gives no rule).  Only pairs whose
-   tracks follow each other in time (one ends before the other starts) can be linked.
+   "new person" option of cost −log τ_new per track (proposed; the text gives no rule).  τ_new is
+   the lower quartile of the similarities of track pairs seen at the same time in the two
+   cameras, which are different people because the views are disjoint
+   (:func:`cooccur_threshold`); :func:`new_threshold`, the threshold that best separates the
+   training set's genuine and impostor pairs, is the alternative.  Only pairs whose tracks
+   follow each other in time (one ends before the other starts) can be linked.
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from scipy.optimize import linear_sum_assignment
 from .appearance import region_histograms, similarity_matrix
 from .btf import apply_btf_hist, cbtf, identity_btf, mbtf
 
-__all__ = ["TrackAppearance", "describe_tracks", "fit_btf", "fit_transit", "link_tracks", "new_threshold"]
+__all__ = ["TrackAppearance", "cooccur_threshold", "describe_tracks", "fit_btf", "fit_transit", "link_tracks",
+           "new_threshold"]
 
 
 @dataclass
@@ -91,6 +95,32 @@ def _similarities(app_a, app_b, lut) -> tuple[list[int], list[int], np.ndarray]:
     B = np.stack([app_b[k].hist for k in kb]) if kb else np.zeros((0, 1, 3, 256))
     S = similarity_matrix(A, B) if len(A) and len(B) else np.zeros((len(ka), len(kb)))
     return ka, kb, S
+
+
+def cooccur_threshold(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppearance], lut: np.ndarray,
+                      quantile: float = 0.25) -> float | None:
+    """τ_new from pairs known to be different people, without labels (proposed; the text gives no rule).
+
+    The two views are disjoint, so a track of camera A and a track of camera B whose time spans overlap are
+    two people.  Their similarities (through ``lut``, as the links are scored) sample the impostor
+    distribution of this very recording, cameras and BTF included; a probe whose best affordable match is
+    less similar than their lower ``quantile`` is a new person.  This needs no training pairs and does not
+    depend on the 2–4 people a BTF is usually fitted on.  The quartile was chosen on the tune scenes
+    (docs/handover.md).  None when no two tracks co-occur.
+    """
+    if not 0.0 <= quantile <= 1.0:
+        raise ValueError("quantile must be in [0, 1]")
+    ka, kb, S = _similarities(app_a, app_b, lut)
+    if not ka or not kb:
+        return None
+    fa = np.array([app_a[k].first for k in ka])[:, None]
+    la = np.array([app_a[k].last for k in ka])[:, None]
+    fb = np.array([app_b[k].first for k in kb])[None, :]
+    lb = np.array([app_b[k].last for k in kb])[None, :]
+    overlap = (fa <= lb) & (fb <= la)
+    if not overlap.any():
+        return None
+    return float(np.quantile(S[overlap], quantile))
 
 
 def new_threshold(app_a, app_b, pairs, method: str) -> float:
