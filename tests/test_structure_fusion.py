@@ -84,6 +84,44 @@ def test_sampled_box_equals_the_area_resized_crop():
     assert ncc_scores(got.reshape(1, -1), standardize(ref.reshape(1, -1)))[0] > 0.94  # 2 px off: 0.88
 
 
+@pytest.mark.parametrize("k", [4, 8, 12, 16])
+def test_large_block_reduction_is_close_to_the_block_means(k):
+    """k >= 8 averages a spread subset of each block's pixels instead of all k x k (exact below)."""
+    img = _texture(3, (480, 640))
+    red = reduce_region(img, (0, 0, 640, 480), k)
+    h, w = 480 // k, 640 // k
+    grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY).astype(np.float64)
+    exact = grey[:h * k, :w * k].reshape(h, k, w, k).mean(axis=(1, 3))
+    assert red.gray.shape == exact.shape and red.k == k
+    # the texture's features span ~5 px: block means of 16 px keep little contrast, a sampled mean a bit more
+    assert np.mean(np.abs(red.gray - exact)) < 0.25 * np.std(exact) + 1.0
+    assert np.corrcoef(red.gray.ravel(), exact.ravel())[0, 1] > 0.9
+
+
+def test_the_frame_region_is_reused_for_the_estimate_and_at_the_frame_edge():
+    img = _texture(4)
+    cue = StructureCue(256)
+    cue.init(img, np.array([80.0, 60.0, 15.0, 12.0]))
+    calls = []
+    import pftrack.cues.structure as S
+
+    orig = S.reduce_region
+    S.reduce_region = lambda *a: calls.append(a[1]) or orig(*a)
+    try:
+        rng = np.random.default_rng(0)
+        for cx in (80.0, 150.0):  # inside, and a target leaving across the right edge
+            cue.new_frame()
+            calls.clear()
+            ell = np.column_stack([cx + rng.normal(0, 2, 50), 60 + rng.normal(0, 2, 50), np.full(50, 15.0),
+                                   np.full(50, 12.0)])
+            cue.scores(img, (0, 0, 160, 120), ell)
+            cue.scores(img, (0, 0, 160, 120), ell.mean(axis=0, keepdims=True))   # the estimate
+            cue.update(img, ell.mean(axis=0), 0.1)                                # its patch
+            assert len(calls) == 1, (cx, calls)
+    finally:
+        S.reduce_region = orig
+
+
 def test_structure_cue_peaks_at_the_target_and_keeps_its_anchor():
     img = _texture(2)
     cue = StructureCue(256)

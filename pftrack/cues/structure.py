@@ -55,20 +55,51 @@ def gray_region(frame: np.ndarray, roi: tuple[int, int, int, int]) -> np.ndarray
     return sub.astype(np.float32)
 
 
+@njit(cache=True)
+def _bounds(ell):
+    """``(min x0, min y0, max x1, max y1)`` of the boxes of ellipses ``(N, 4)`` ``(cx, cy, hx, hy)``."""
+    x0 = y0 = math.inf
+    x1 = y1 = -math.inf
+    for i in range(ell.shape[0]):
+        x0 = min(x0, ell[i, 0] - ell[i, 2])
+        y0 = min(y0, ell[i, 1] - ell[i, 3])
+        x1 = max(x1, ell[i, 0] + ell[i, 2])
+        y1 = max(y1, ell[i, 1] + ell[i, 3])
+    return x0, y0, x1, y1
+
+
+def box_bounds(ell: np.ndarray) -> tuple[float, float, float, float]:
+    """``(min x0, min y0, max x1, max y1)`` of the boxes of ellipses ``(N, 4)`` (compiled when Numba is on)."""
+    if numba_enabled():
+        return _bounds(ell)
+    return (float(np.min(ell[:, 0] - ell[:, 2])), float(np.min(ell[:, 1] - ell[:, 3])),
+            float(np.max(ell[:, 0] + ell[:, 2])), float(np.max(ell[:, 1] + ell[:, 3])))
+
+
 class Reduced:
     """A grey, block-averaged copy of a frame region: reduced pixel ``(j, i)`` averages the ``k x k`` block
-    whose top-left frame pixel is ``(x0 + i k, y0 + j k)``."""
+    whose top-left frame pixel is ``(x0 + i k, y0 + j k)``.  ``frame_size`` ``(W, H)`` is the frame's, when
+    known: a region that reaches the frame's edge (to within a block) covers whatever lies beyond it."""
 
-    __slots__ = ("gray", "x0", "y0", "k")
+    __slots__ = ("frame_size", "gray", "k", "x0", "y0")
 
-    def __init__(self, gray: np.ndarray, x0: int, y0: int, k: int):
-        self.gray, self.x0, self.y0, self.k = gray, x0, y0, k
+    def __init__(self, gray: np.ndarray, x0: int, y0: int, k: int, frame_size: tuple[int, int] | None = None):
+        self.gray, self.x0, self.y0, self.k, self.frame_size = gray, x0, y0, k, frame_size
 
     def covers(self, ell: np.ndarray) -> bool:
+        """Do the boxes of the ellipses ``(N, 4)`` lie in the region (a box sampled from it then equals one
+        sampled from a region computed for it, up to the blocks' alignment)?"""
         h, w = self.gray.shape
-        return bool(np.all(ell[:, 0] - ell[:, 2] >= self.x0) and np.all(ell[:, 1] - ell[:, 3] >= self.y0)
-                    and np.all(ell[:, 0] + ell[:, 2] <= self.x0 + w * self.k)
-                    and np.all(ell[:, 1] + ell[:, 3] <= self.y0 + h * self.k))
+        x1, y1 = self.x0 + w * self.k, self.y0 + h * self.k
+        lo_x, lo_y = self.x0, self.y0
+        if self.frame_size is not None:  # the frame's edges: a recomputed region could not reach further
+            fw, fh = self.frame_size
+            lo_x = -math.inf if self.x0 <= 0 else lo_x
+            lo_y = -math.inf if self.y0 <= 0 else lo_y
+            x1 = math.inf if x1 + self.k > fw else x1
+            y1 = math.inf if y1 + self.k > fh else y1
+        bx0, by0, bx1, by1 = box_bounds(ell)
+        return bool(bx0 >= lo_x and by0 >= lo_y and bx1 <= x1 and by1 <= y1)
 
 
 def reduction_factor(ellipses: np.ndarray, shape: tuple[int, int]) -> int:
@@ -88,16 +119,24 @@ def reduce_region(frame: np.ndarray, roi: tuple[int, int, int, int], k: int) -> 
     h = max(1, (y1 - y0) // k) * k
     w, h = min(w, frame.shape[1] - x0), min(h, frame.shape[0] - y0)
     sub = frame[y0:y0 + h, x0:x0 + w]
-    if k > 1 and w >= k and h >= k:
-        # large blocks average a 4 x 4 lattice of their pixels: the cost stays bounded by the
-        # patch resolution, not the target's size (a coarse area filter is enough for a 16x16 NCC patch)
-        step = k // 4 if k >= 8 else 1
-        if step > 1:
-            sub = sub[::step, ::step]
-        sub = cv2.resize(sub, (w // k, h // k), interpolation=cv2.INTER_AREA)
+    if k >= 8 and w >= k and h >= k:
+        # large blocks average a subset of their pixels, so that the cost stays bounded by the patch
+        # resolution, not the target's size (a coarse area filter is enough for a 16x16 NCC patch): a
+        # bilinear resize by a factor f in [2, 8) to 2^J times the output size averages 2 pixels per
+        # cell and direction, and J exact halvings average the cells: 2^(J+1) >= k/4 samples per block
+        # and direction, spread over it (about 7x faster than an area resize of a
+        # strided lattice at k = 16)
+        levels = max(1, int(math.log2(k)) - 2)
+        ow, oh = w // k, h // k
+        sub = cv2.resize(sub, (ow << levels, oh << levels), interpolation=cv2.INTER_LINEAR)
+        for j in range(levels - 1, -1, -1):
+            sub = cv2.resize(sub, (ow << j, oh << j), interpolation=cv2.INTER_LINEAR)
+    elif k > 1 and w >= k and h >= k:
+        sub = cv2.resize(sub, (w // k, h // k), interpolation=cv2.INTER_AREA)  # exact block means
     else:
         k = 1
-    return Reduced(gray_region(sub, (0, 0, sub.shape[1], sub.shape[0])), x0, y0, k)
+    return Reduced(gray_region(sub, (0, 0, sub.shape[1], sub.shape[0])), x0, y0, k,
+                   (int(frame.shape[1]), int(frame.shape[0])))
 
 
 def _maps(red: Reduced, ell: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
@@ -140,11 +179,15 @@ def sample_boxes(frame: np.ndarray, roi: tuple[int, int, int, int], ellipses: np
     return sample_reduced(_reduced_for(frame, roi, ell, shape), ell, shape)
 
 
-def _reduced_for(frame, roi, ell, shape) -> Reduced:
+def _reduced_for(frame, roi, ell, shape, pad_blocks: int = 0) -> Reduced:
+    """The reduced region of the boxes' bounding rectangle within ``roi``, widened by ``pad_blocks`` blocks on
+    every side (so that later boxes of the same frame near these, the estimate's, are covered too)."""
+    k = reduction_factor(ell, shape)
+    pad = pad_blocks * k
     bx0, by0, bx1, by1 = _box_roi(ell, frame.shape[1], frame.shape[0])
-    x0, y0 = max(roi[0], bx0), max(roi[1], by0)
-    x1, y1 = max(min(roi[2], bx1), x0 + 1), max(min(roi[3], by1), y0 + 1)
-    return reduce_region(frame, (x0, y0, x1, y1), reduction_factor(ell, shape))
+    x0, y0 = max(roi[0], bx0 - pad, 0), max(roi[1], by0 - pad, 0)
+    x1, y1 = max(min(roi[2], bx1 + pad), x0 + 1), max(min(roi[3], by1 + pad), y0 + 1)
+    return reduce_region(frame, (x0, y0, x1, y1), k)
 
 
 def kernel_weights(shape: tuple[int, int], kind: str = "kernel") -> np.ndarray:
@@ -187,49 +230,78 @@ def ncc_scores(patches: np.ndarray, templates: np.ndarray, floor: float = 1.0,
 
 
 @njit(cache=True)
+def _sample_row(gray, y, h):
+    """Row indices and weight of a bilinear sample at row ``y`` (border replicated)."""
+    y = min(max(y, 0.0), h - 1.0)
+    y0 = min(int(y), max(h - 2, 0))
+    fy = y - y0 if h > 1 else 0.0
+    y1 = y0 + 1 if h > 1 else y0
+    return y0, y1, fy
+
+
+@njit(cache=True)
+def _columns(cx, sx, u, w, xi, xf):
+    """Column indices and weights of a box's bilinear samples (border replicated by clamping)."""
+    for b in range(u.shape[0]):
+        x = min(max(cx + u[b] * sx, 0.0), w - 1.0)
+        x0 = min(int(x), max(w - 2, 0))
+        xi[b] = x0
+        xf[b] = x - x0 if w > 1 else 0.0
+
+
+@njit(cache=True)
 def _ncc_boxes(gray, cx, cy, sx, sy, u, v, tmpl, wts, floor2, out):
     """Bilinear sampling (border replicated) of every box's patch and its best weighted NCC, in one pass:
     ``r = sum p T / sqrt(sum w (p - mean_w p)^2 + floor2 P)`` with ``T = sqrt(w) t~`` (``sum sqrt(w) t~ = 0``
-    for a standardised template ``t~``, so the patch's mean drops out of the numerator)."""
+    for a standardised template ``t~``, so the patch's mean drops out of the numerator).  ``wts`` of length 0
+    means uniform weights; one or two templates (the usual running reference and anchor) keep their dot
+    products in registers."""
     h, w = gray.shape
     n = cx.shape[0]
     ph, pw = v.shape[0], u.shape[0]
     kt = tmpl.shape[0]
     npix = ph * pw
+    uniform = wts.shape[0] == 0
     dots = np.empty(kt)
     xi = np.empty(pw, np.int64)
     xf = np.empty(pw)
+    dx = 1 if w > 1 else 0
+    t0 = tmpl[0]
+    t1 = tmpl[kt - 1]
     for i in range(n):
-        # column indices and weights once per box (border replicated by clamping)
-        for b in range(pw):
-            x = min(max(cx[i] + u[b] * sx[i], 0.0), w - 1.0)
-            x0 = min(int(x), max(w - 2, 0))
-            xi[b] = x0
-            xf[b] = x - x0 if w > 1 else 0.0
+        _columns(cx[i], sx[i], u, w, xi, xf)
         s1 = 0.0
         s2 = 0.0
+        d0 = 0.0
+        d1 = 0.0
         for q in range(kt):
             dots[q] = 0.0
-        dx = 1 if w > 1 else 0
         for a in range(ph):
-            y = min(max(cy[i] + v[a] * sy[i], 0.0), h - 1.0)
-            y0 = min(int(y), max(h - 2, 0))
-            fy = y - y0 if h > 1 else 0.0
-            y1 = y0 + 1 if h > 1 else y0
+            y0, y1, fy = _sample_row(gray, cy[i] + v[a] * sy[i], h)
+            r0 = gray[y0]
+            r1 = gray[y1]
+            base = a * pw
             for b in range(pw):
                 x0 = xi[b]
                 fx = xf[b]
-                g00 = gray[y0, x0]
-                g10 = gray[y1, x0]
-                top = g00 + fx * (gray[y0, x0 + dx] - g00)
-                bot = g10 + fx * (gray[y1, x0 + dx] - g10)
+                g00 = r0[x0]
+                g10 = r1[x0]
+                top = g00 + fx * (r0[x0 + dx] - g00)
+                bot = g10 + fx * (r1[x0 + dx] - g10)
                 val = top + fy * (bot - top)
-                k = a * pw + b
-                wv = wts[k] * val
+                k = base + b
+                wv = val if uniform else wts[k] * val
                 s1 += wv
                 s2 += wv * val
-                for q in range(kt):
-                    dots[q] += val * tmpl[q, k]
+                if kt <= 2:
+                    d0 += val * t0[k]
+                    d1 += val * t1[k]
+                else:
+                    for q in range(kt):
+                        dots[q] += val * tmpl[q, k]
+        if kt <= 2:
+            dots[0] = d0
+            dots[kt - 1] = d1
         var = s2 - s1 * s1 / npix
         if var < 0.0:
             var = 0.0
@@ -241,23 +313,47 @@ def _ncc_boxes(gray, cx, cy, sx, sy, u, v, tmpl, wts, floor2, out):
         out[i] = best / norm
 
 
+_GRIDS: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _grid(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """``(u, v)``: the patch's sample positions across the box, -1..1 (cached per shape)."""
+    g = _GRIDS.get(shape)
+    if g is None:
+        ph, pw = shape
+        g = _GRIDS[shape] = (((np.arange(pw) + 0.5) / pw - 0.5) * 2.0, ((np.arange(ph) + 0.5) / ph - 0.5) * 2.0)
+    return g
+
+
+def _box_params(red: Reduced, ell: np.ndarray):
+    k = float(red.k)
+    return (ell[:, 0] - red.x0) / k - 0.5, (ell[:, 1] - red.y0) / k - 0.5, ell[:, 2] / k, ell[:, 3] / k
+
+
+def weighted_templates(templates: np.ndarray, weights: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(T, w)`` for :func:`ncc_reduced`'s compiled pass: the standardised templates times ``sqrt(w)`` and
+    the weights (empty for uniform ones)."""
+    t = np.atleast_2d(np.asarray(templates, dtype=np.float64))
+    if weights is None or np.all(np.asarray(weights) == 1.0):
+        return np.ascontiguousarray(t), np.empty(0)
+    w = np.asarray(weights, dtype=np.float64)
+    return np.ascontiguousarray(t * np.sqrt(w)[None, :]), w
+
+
 def ncc_reduced(red: Reduced, ellipses: np.ndarray, shape: tuple[int, int], templates: np.ndarray,
-                floor: float = 1.0, weights: np.ndarray | None = None) -> np.ndarray:
-    """:func:`ncc_scores` of :func:`sample_reduced`'s patches, compiled in one pass when Numba is enabled."""
+                floor: float = 1.0, weights: np.ndarray | None = None, *,
+                prepared: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """:func:`ncc_scores` of :func:`sample_reduced`'s patches, compiled in one pass when Numba is enabled
+    (``prepared``: :func:`weighted_templates` of the templates and weights, to skip that step)."""
     ell = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
     if ell.shape[0] == 0:
         return np.empty(0)
     if not numba_enabled():
         return ncc_scores(sample_reduced(red, ell, shape), templates, floor, weights)
-    ph, pw = shape
-    k = float(red.k)
-    u = ((np.arange(pw) + 0.5) / pw - 0.5) * 2.0
-    v = ((np.arange(ph) + 0.5) / ph - 0.5) * 2.0
+    u, v = _grid(shape)
+    tw, w = prepared if prepared is not None else weighted_templates(templates, weights)
     out = np.empty(ell.shape[0])
-    w = np.ones(ph * pw) if weights is None else np.asarray(weights, dtype=np.float64)
-    _ncc_boxes(red.gray, (ell[:, 0] - red.x0) / k - 0.5, (ell[:, 1] - red.y0) / k - 0.5, ell[:, 2] / k,
-               ell[:, 3] / k, u, v, np.atleast_2d(np.asarray(templates, dtype=np.float64)) * np.sqrt(w)[None, :], w,
-               float(floor) ** 2, out)
+    _ncc_boxes(red.gray, *_box_params(red, ell), u, v, tw, w, float(floor) ** 2, out)
     return out
 
 
@@ -280,6 +376,8 @@ class StructureCue:
         self._templates: np.ndarray | None = None
         self._first_std: np.ndarray | None = None
         self._reduced: Reduced | None = None
+        self._prepared: tuple[np.ndarray, np.ndarray] | None = None
+        self._first_prepared: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def ready(self) -> bool:
@@ -298,13 +396,14 @@ class StructureCue:
         patch = self.patch(frame, e[0])
         self._first = patch
         self._first_std = standardize(patch[None, :], weights=self.weights)  # constant: standardised once
+        self._first_prepared = None
         self._run = patch.copy()
         self._refresh()
 
     def _region(self, frame: np.ndarray, roi, ell: np.ndarray) -> Reduced:
         red = self._reduced
         if red is None or not red.covers(ell):
-            red = self._reduced = _reduced_for(frame, roi, ell, self.shape)
+            red = self._reduced = _reduced_for(frame, roi, ell, self.shape, pad_blocks=2)
         return red
 
     def patch(self, frame: np.ndarray, ellipse) -> np.ndarray:
@@ -316,13 +415,15 @@ class StructureCue:
     def _refresh(self) -> None:
         run = standardize(self._run[None, :], weights=self.weights)
         self._templates = np.concatenate([run, self._first_std]) if self.anchor else run
+        self._prepared = weighted_templates(self._templates, self.weights)
 
     def scores(self, frame: np.ndarray, roi: tuple[int, int, int, int], ellipses: np.ndarray) -> np.ndarray:
         """NCC in [-1, 1] of every ellipse's box with the reference (the best of anchor and running mean)."""
         ell = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
         if ell.shape[0] == 0:
             return np.empty(0)
-        return ncc_reduced(self._region(frame, roi, ell), ell, self.shape, self._templates, weights=self.weights)
+        return ncc_reduced(self._region(frame, roi, ell), ell, self.shape, self._templates, weights=self.weights,
+                           prepared=self._prepared)
 
     def update(self, frame: np.ndarray, ellipse, rate: float, anchor_gate: float = -1.0) -> bool:
         """Blend the estimate's patch into the running reference: ``t <- (1 - rate) t + rate p``.
@@ -333,18 +434,25 @@ class StructureCue:
         whether the reference changed."""
         if rate <= 0 or self._run is None:
             return False
-        patch = self.patch(frame, ellipse)
-        if anchor_gate > -1.0 and ncc_scores(patch[None, :], self._first_std, weights=self.weights)[0] < anchor_gate:
-            return False
+        e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
+        red = self._region(frame, _box_roi(e, frame.shape[1], frame.shape[0]), e)
+        if anchor_gate > -1.0:
+            if self._first_prepared is None:
+                self._first_prepared = weighted_templates(self._first_std, self.weights)
+            if ncc_reduced(red, e, self.shape, self._first_std, weights=self.weights,
+                           prepared=self._first_prepared)[0] < anchor_gate:
+                return False
+        patch = sample_reduced(red, e, self.shape)[0]
         self._run = (1.0 - rate) * self._run + rate * patch
         self._refresh()
         return True
 
 
 def _box_roi(ell: np.ndarray, width: int, height: int) -> tuple[int, int, int, int]:
-    x0 = int(math.floor(np.min(ell[:, 0] - ell[:, 2]))) - 1
-    y0 = int(math.floor(np.min(ell[:, 1] - ell[:, 3]))) - 1
-    x1 = int(math.ceil(np.max(ell[:, 0] + ell[:, 2]))) + 1
-    y1 = int(math.ceil(np.max(ell[:, 1] + ell[:, 3]))) + 1
+    bx0, by0, bx1, by1 = box_bounds(ell)
+    x0 = int(math.floor(bx0)) - 1
+    y0 = int(math.floor(by0)) - 1
+    x1 = int(math.ceil(bx1)) + 1
+    y1 = int(math.ceil(by1)) + 1
     x0, y0 = min(max(x0, 0), max(width - 1, 0)), min(max(y0, 0), max(height - 1, 0))
     return x0, y0, max(min(x1, width), x0 + 1), max(min(y1, height), y0 + 1)

@@ -314,24 +314,33 @@ class FusedLoss:
             if np.isfinite(s[:, c]).any():
                 m.set_background(s[:, c])
 
+    def _vector(self, s) -> list[float]:
+        """The score vector as ``C`` Python floats (a scalar is broadcast): the test runs once per frame on a
+        handful of numbers, where NumPy's per-call overhead would dominate."""
+        v = np.asarray(s, dtype=np.float64).ravel().tolist()
+        if len(v) == len(self.members):
+            return v
+        if len(v) == 1:
+            return v * len(self.members)
+        raise ValueError(f"expected {len(self.members)} scores, got {len(v)}")
+
     def evaluate(self, s) -> float:
         """Fused ratio of a score vector; a NaN cue (not available) gives no evidence; all NaN is absence."""
-        s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
-        if not np.any(np.isfinite(s)):
+        s = self._vector(s)
+        if not any(math.isfinite(v) for v in s):
             return -_LOG_CLIP
         lo, hi = -self.cue_floor, self.cue_clip
-        llr = sum(min(max(m.evaluate(float(v)), lo), hi) for m, v in zip(self.members, s) if math.isfinite(v))
+        llr = sum(min(max(m.evaluate(v), lo), hi) for m, v in zip(self.members, s) if math.isfinite(v))
         return float(min(max(llr, -_LOG_CLIP), _LOG_CLIP))
 
-    def _learn(self, s: np.ndarray) -> None:
+    def _learn(self, s: list[float]) -> None:
         confident = self.llr > self.reacquire_margin
         for m, v in zip(self.members, s):
-            v = float(v)
             m.learn(v, confident and math.isfinite(v) and (v - m.mu_t) / m.sd_t > -m.learn_z and m.evaluate(v) >= 0.0)
 
     def step(self, s) -> tuple[bool, float]:
         """As :meth:`LossDetector.step`, on the fused ratio of the score vector ``s``."""
-        s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
+        s = self._vector(s)
         self.llr = self.evaluate(s)
         self.miss = self.miss + 1 if self.llr < 0.0 else 0
         self._learn(s)
@@ -341,15 +350,15 @@ class FusedLoss:
     def confident(self, s) -> bool:
         """The fused ratio is clearly the target's, and no cue vetoes it: a cue vetoes when its score is far
         below its own history (``learn_z`` spreads) *and* its own ratio says background."""
-        s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
-        if not np.any(np.isfinite(s)) or self.llr <= self.reacquire_margin:
+        s = self._vector(s)
+        if not any(math.isfinite(v) for v in s) or self.llr <= self.reacquire_margin:
             return False
-        return not any((float(v) - m.mu_t) / m.sd_t <= -m.learn_z and m.evaluate(float(v)) < 0.0
+        return not any((v - m.mu_t) / m.sd_t <= -m.learn_z and m.evaluate(v) < 0.0
                        for m, v in zip(self.members, s) if math.isfinite(v))
 
     def acquire(self, s) -> bool:
         """While lost: does a candidate with score vector ``s`` end the loss?"""
-        s = np.broadcast_to(np.asarray(s, dtype=np.float64).ravel(), (len(self.members),))
+        s = self._vector(s)
         for m in self.members:
             m.unseen += 1
         self.llr = self.evaluate(s)
