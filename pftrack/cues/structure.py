@@ -12,11 +12,12 @@ book ch. 14 (eq. NCC, ``pftrack.cues.template``):
 illumination drift leaves it unchanged (ch. 14's reason for preferring NCC to SAD).
 Optional per-pixel weights (:func:`kernel_weights`) make it a weighted NCC.
 
-Speed: the region the particles cover is block-averaged once per frame to about the
-patch resolution (:func:`reduce_region`: an integer-factor area resize of the 8-bit
-frame, then the grey conversion of the small image; no aliasing however large the
-box), and one compiled pass (:func:`ncc_reduced`) samples every box bilinearly and
-accumulates its NCC with every reference.  Without Numba the same is one
+Speed: the region the particles cover (with a margin, so that the estimate's box later in
+the frame finds it too) is block-averaged once per frame to about the patch resolution
+(:func:`reduce_region`: exact block means for small blocks, a spread subset of each
+block's pixels for large ones, so the cost does not grow with the box), and one
+compiled pass (:func:`ncc_reduced`) samples every box bilinearly and accumulates its NCC
+with every reference.  Without Numba the same is one
 ``cv2.remap`` for all boxes and a matrix product.
 
 The reference is the first frame's patch, updated by a gated running mean (the
@@ -111,8 +112,9 @@ def reduction_factor(ellipses: np.ndarray, shape: tuple[int, int]) -> int:
 
 
 def reduce_region(frame: np.ndarray, roi: tuple[int, int, int, int], k: int) -> Reduced:
-    """Grey levels of ``frame[roi]`` averaged over ``k x k`` blocks (integer-factor area resize first, on the
-    8-bit frame, then the grey conversion of the small image)."""
+    """Grey levels of ``frame[roi]`` averaged over ``k x k`` blocks: exact block means (an integer-factor area
+    resize of the 8-bit frame, then the grey conversion of the small image) for k < 8, a spread subset of each
+    block's pixels for larger blocks."""
     x0, y0, x1, y1 = (int(v) for v in roi)
     k = max(1, int(k))
     w = max(1, (x1 - x0) // k) * k
@@ -124,8 +126,8 @@ def reduce_region(frame: np.ndarray, roi: tuple[int, int, int, int], k: int) -> 
         # resolution, not the target's size (a coarse area filter is enough for a 16x16 NCC patch): a
         # bilinear resize by a factor f in [2, 8) to 2^J times the output size averages 2 pixels per
         # cell and direction, and J exact halvings average the cells: 2^(J+1) >= k/4 samples per block
-        # and direction, spread over it (about 7x faster than an area resize of a
-        # strided lattice at k = 16)
+        # and direction, spread over it (about 7x faster than an area resize of a strided lattice at
+        # k = 16)
         levels = max(1, int(math.log2(k)) - 2)
         ow, oh = w // k, h // k
         sub = cv2.resize(sub, (ow << levels, oh << levels), interpolation=cv2.INTER_LINEAR)
