@@ -232,7 +232,7 @@ def ncc_scores(patches: np.ndarray, templates: np.ndarray, floor: float = 1.0,
 
 
 @njit(cache=True)
-def _sample_row(gray, y, h):
+def _sample_row(y, h):
     """Row indices and weight of a bilinear sample at row ``y`` (border replicated)."""
     y = min(max(y, 0.0), h - 1.0)
     y0 = min(int(y), max(h - 2, 0))
@@ -279,7 +279,7 @@ def _ncc_boxes(gray, cx, cy, sx, sy, u, v, tmpl, wts, floor2, out):
         for q in range(kt):
             dots[q] = 0.0
         for a in range(ph):
-            y0, y1, fy = _sample_row(gray, cy[i] + v[a] * sy[i], h)
+            y0, y1, fy = _sample_row(cy[i] + v[a] * sy[i], h)
             r0 = gray[y0]
             r1 = gray[y1]
             base = a * pw
