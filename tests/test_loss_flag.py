@@ -115,11 +115,11 @@ def test_grey_input_tracking_on_varied_scenes(tracker):
 
 # ------------------------------------------------------------------------------ the flag over varied scenes
 
-def _run(spec, seed, tracker="color-pf"):
+def _run(spec, seed, tracker="color-pf", **params):
     scene = Scene(spec)
     gt = scene.groundtruth(0)
     hid = hidden_frames(spec)
-    t = pftrack.create_tracker(tracker, seed=seed)
+    t = pftrack.create_tracker(tracker, seed=seed, **params)
     boxes, lost = [gt[0]], [False]
     t.init(scene.render(0)[0], tuple(gt[0]))
     for k in range(1, spec.n_frames):

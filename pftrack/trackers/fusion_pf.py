@@ -28,7 +28,15 @@ from typing import Literal
 
 import numpy as np
 
-from ..cues.contrast import box_counts, contrast_scores, foreground_lut, probability_integral
+from ..cues.color import ellipse_rho, quantize
+from ..cues.contrast import (
+    box_counts,
+    contrast_scores,
+    foreground_lut,
+    probability_integral,
+)
+from ..cues.histogram_cue import ColorFeatures
+from ..cues.intensity import channel_levels, gain_maps
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
 from ..cues.structure import StructureCue
 from ..filtering.dynamics import HX, HY, VX, VY
@@ -101,6 +109,11 @@ class FusionPFParams(ColorPFParams):
     loss_cue_floor: float = param(2.0, gt=0, le=30, doc=(
         "Lower clip of each cue's log-likelihood ratio in the fused loss test: the most odds one cue alone can "
         "give against the target (a single cue also drops for reasons other than absence)."))
+    relit_colour: bool = param(True, doc=(
+        "While searching, the colour score of the best candidate is also taken after undoing a global per-channel "
+        "gain (von Kries: the frame's channel medians against those of the last background refresh, when the "
+        "target was seen), and the better of the two is used; a target whose colours drifted with the light "
+        "while it was hidden is then not vetoed by the colour cue. Colour RGB input only."))
     lk_levels: int = param(2, ge=1, le=6, doc="Pyramid levels of the flow when motion is on.")
     max_features: int = param(150, ge=1, le=1_000_000, doc="Flow features per frame when motion is on.")
 
@@ -127,6 +140,8 @@ class FusionPF(ColorPF):
         self._gray = None
         self._flow = None
         self.v_ref = None
+        self._ref_levels: np.ndarray | None = None
+        self._levels: tuple[int, np.ndarray] | None = None
 
     @property
     def _fused(self) -> bool:
@@ -200,13 +215,48 @@ class FusionPF(ColorPF):
                 log_lik = log_lik + self.motion_cue.log_likelihood(self._flow, self._ellipses(states), self.v_ref)
         return log_lik
 
+    def _background_stats(self, frame, exclude):
+        super()._background_stats(frame, exclude)
+        if self.params.relit_colour and self.cue.color_space == "rgb" and frame.ndim == 3 and self.mode == "tracking":
+            self._ref_levels = channel_levels(frame, stride=16)  # the light while the target is seen
+
+    def _relit_rho(self, frame: np.ndarray, ellipse: np.ndarray) -> float:
+        """Colour rho of one ellipse with the frame's per-channel gain against ``_ref_levels`` undone."""
+        if self._levels is None or self._levels[0] != self.frame_index:
+            self._levels = (self.frame_index, channel_levels(frame, stride=16))
+        lut = np.ascontiguousarray(np.take_along_axis(self.cue._base_lut,
+                                                      gain_maps(self._ref_levels, self._levels[1]).astype(np.intp),
+                                                      axis=1))
+        e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
+        pitch = self.cue.step_for(e)
+        fh, fw = self._shape
+        x0 = max(int(e[0, 0] - e[0, 2]) - 1, 0)
+        y0 = max(int(e[0, 1] - e[0, 3]) - 1, 0)
+        x0 -= x0 % pitch
+        y0 -= y0 % pitch
+        x1, y1 = min(int(e[0, 0] + e[0, 2]) + 2, fw), min(int(e[0, 1] + e[0, 3]) + 2, fh)
+        region = frame[y0:y1:pitch, x0:x1:pitch]
+        if region.size == 0:
+            return 0.0
+        feats = ColorFeatures(quantize(np.ascontiguousarray(region), lut), x0, y0, pitch)
+        el, ox, oy = feats.to_lattice(e)
+        r, tot = ellipse_rho(feats.bins, ox, oy, el, self._sqrt_q, kernel=self.cue.kernel)
+        return float(r[0]) if tot[0] > 0 else 0.0
+
     def _loss_scores(self, frame, ellipses, rho, roi):
         if not self._fused:
             return rho
         if not self.structure.ready:  # started from a histogram (init_auto): no reference patch, no evidence
             return np.column_stack([rho, np.full(len(rho), np.nan)])
-        r = self.structure.scores(frame, roi, ellipses)
-        return np.column_stack([rho, 0.5 * (r + 1.0)])
+        s = 0.5 * (self.structure.scores(frame, roi, ellipses) + 1.0)
+        if (self.mode == "searching" and len(rho) == 1 and self.params.relit_colour and self._ref_levels is not None
+                and frame.ndim == 3 and self.cue.color_space == "rgb"):
+            col, st = self.loss.members
+            # the colour would veto a candidate the structure alone could acquire: is it only the light?
+            if ((float(rho[0]) - col.mu_t) / col.sd_t <= -col.learn_z
+                    and st.evaluate(float(s[0])) - self.loss.cue_floor > self.loss.reacquire_margin):
+                rho = np.maximum(rho, self._relit_rho(frame, ellipses[0]))
+        return np.column_stack([rho, s])
 
     def _appearance_pass(self, rho, threshold, log_lik):
         if not self._fused:
