@@ -281,7 +281,7 @@ def test_relit_colour_undoes_a_global_gain_for_the_search():
     rho_raw = float(t._rho(lit, ell[None], (0, 0, 320, 240))[0][0])
     rho_relit = t._relit_rho(lit, ell)
     rho_same = float(t._rho(img, ell[None], (0, 0, 320, 240))[0][0])
-    assert rho_raw < 0.6 < 0.9 < rho_relit, (rho_raw, rho_relit)
+    assert rho_raw < 0.6 and rho_relit > 0.9, (rho_raw, rho_relit)
     assert rho_relit == pytest.approx(rho_same, abs=0.08)
 
 
