@@ -144,11 +144,14 @@ class ColorCue:
                 if self.normalize == "adaptive" and np.all(np.abs(gains - 1.0) < 0.05):
                     self.lut = self._base_lut  # within the dead zone: raw colours (no jitter from the medians)
                     return
-                maps = gain_maps(self._ref_levels, self._levels)
+                self.lut = self.mapped_lut(gain_maps(self._ref_levels, self._levels))
             else:
-                maps = channel_equalization_maps(frame)
-            # compose: bin index = base_lut[c][map_c[value]]
-            self.lut = np.ascontiguousarray(np.take_along_axis(self._base_lut, maps.astype(np.intp), axis=1))
+                self.lut = self.mapped_lut(channel_equalization_maps(frame))
+
+    def mapped_lut(self, maps: np.ndarray) -> np.ndarray:
+        """The RGB quantisation table after per-channel value maps ``(3, 256)`` (bin = base_lut[c][map_c[v]]),
+        for example :func:`~pftrack.cues.intensity.gain_maps` to undo a lighting change."""
+        return np.ascontiguousarray(np.take_along_axis(self._base_lut, np.asarray(maps).astype(np.intp), axis=1))
 
     def confirm(self, rate: float) -> None:
         """The tracker is confident on this frame: move the ``"adaptive"`` reference towards its levels."""
@@ -176,16 +179,25 @@ class ColorCue:
         self._scratch = np.zeros((2, self.n_bins))
 
     # -- features -----------------------------------------------------------------
-    def prepare(self, frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int = 1) -> ColorFeatures:
+    def prepare(self, frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int = 1, *,
+                lut: np.ndarray | None = None) -> ColorFeatures:
         """Quantise the region ``roi = (x0, y0, x1, y1)`` of a BGR frame once.
 
         With ``pitch > 1`` only the lattice ``x % pitch == y % pitch == 0`` is quantised
-        (see :meth:`step_for`), which divides the work by ``pitch**2``.
+        (see :meth:`step_for`), which divides the work by ``pitch**2``.  With ``lut`` (RGB, e.g.
+        :meth:`mapped_lut`) the region is quantised with that table into a new array, leaving the
+        frame's features (the shared buffer) untouched.
         """
         x0, y0, x1, y1 = roi
         pitch = max(int(pitch), 1)
         x0 -= x0 % pitch
         y0 -= y0 % pitch
+        if lut is not None and self.color_space == "rgb":
+            region = frame[y0:y1:pitch, x0:x1:pitch]
+            bins = np.empty(region.shape[:2], dtype=np.uint16)
+            if region.size:
+                quantize(np.ascontiguousarray(region), lut, bins)
+            return ColorFeatures(bins, x0, y0, pitch)
         if self.color_space == "gray":
             h, w = len(range(y0, min(y1, frame.shape[0]), pitch)), len(range(x0, min(x1, frame.shape[1]), pitch))
             if self._qbuf.size < h * w:

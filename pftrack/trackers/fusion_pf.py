@@ -28,14 +28,12 @@ from typing import Literal
 
 import numpy as np
 
-from ..cues.color import ellipse_rho, quantize
 from ..cues.contrast import (
     box_counts,
     contrast_scores,
     foreground_lut,
     probability_integral,
 )
-from ..cues.histogram_cue import ColorFeatures
 from ..cues.intensity import channel_levels, gain_maps
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
 from ..cues.structure import StructureCue
@@ -224,23 +222,13 @@ class FusionPF(ColorPF):
         """Colour rho of one ellipse with the frame's per-channel gain against ``_ref_levels`` undone."""
         if self._levels is None or self._levels[0] != self.frame_index:
             self._levels = (self.frame_index, channel_levels(frame, stride=16))
-        lut = np.ascontiguousarray(np.take_along_axis(self.cue._base_lut,
-                                                      gain_maps(self._ref_levels, self._levels[1]).astype(np.intp),
-                                                      axis=1))
         e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
-        pitch = self.cue.step_for(e)
         fh, fw = self._shape
-        x0 = max(int(e[0, 0] - e[0, 2]) - 1, 0)
-        y0 = max(int(e[0, 1] - e[0, 3]) - 1, 0)
-        x0 -= x0 % pitch
-        y0 -= y0 % pitch
-        x1, y1 = min(int(e[0, 0] + e[0, 2]) + 2, fw), min(int(e[0, 1] + e[0, 3]) + 2, fh)
-        region = frame[y0:y1:pitch, x0:x1:pitch]
-        if region.size == 0:
-            return 0.0
-        feats = ColorFeatures(quantize(np.ascontiguousarray(region), lut), x0, y0, pitch)
-        el, ox, oy = feats.to_lattice(e)
-        r, tot = ellipse_rho(feats.bins, ox, oy, el, self._sqrt_q, kernel=self.cue.kernel)
+        roi = (max(int(e[0, 0] - e[0, 2]) - 1, 0), max(int(e[0, 1] - e[0, 3]) - 1, 0),
+               min(int(e[0, 0] + e[0, 2]) + 2, fw), min(int(e[0, 1] + e[0, 3]) + 2, fh))
+        feats = self.cue.prepare(frame, roi, self.cue.step_for(e),
+                                 lut=self.cue.mapped_lut(gain_maps(self._ref_levels, self._levels[1])))
+        r, tot = self.cue.rho(feats, e, self._sqrt_q, reuse=False)
         return float(r[0]) if tot[0] > 0 else 0.0
 
     def _loss_scores(self, frame, ellipses, rho, roi):
