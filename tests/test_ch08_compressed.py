@@ -208,3 +208,46 @@ def test_block_energy_at_matches_the_full_pseudo_residual():
     full = block_energy(pseudo_residual(a, b, fwd))
     # cv2.remap (the full path) quantises coordinates to 1/32 px; the block path samples exactly
     assert np.allclose(block_energy_at(a, b, fwd, mask)[mask], full[mask], rtol=0.05)
+
+
+def test_trailing_trim_keeps_the_current_position_of_a_frame_difference_region():
+    """A 20x40 object moving by (+6, -2) px between two frames: the difference region covers both positions
+    (x 100..126, y 48..90); cutting back the trailing side by the displacement gives the current box."""
+    union = (100.0, 48.0, 26.0, 42.0)
+    assert C.trailing_trim(union, (6.0, -2.0)) == pytest.approx((106.0, 48.0, 20.0, 40.0))
+    assert C.trailing_trim(union, (-6.0, 2.0)) == pytest.approx((100.0, 50.0, 20.0, 40.0))
+    assert C.trailing_trim(union, (0.0, 0.0)) == pytest.approx(union)
+    # a displacement larger than the region never leaves less than one block
+    x, y, w, h = C.trailing_trim((0.0, 0.0, 8.0, 8.0), (30.0, 0.0))
+    assert w == pytest.approx(C.BLOCK) and x == pytest.approx(8.0 - C.BLOCK)
+
+
+def test_the_analyser_trims_a_moving_object_to_its_current_position():
+    """A textured 20x40 object moves by +8 px between two frames. The frame difference covers both positions
+    (28 px wide); the analyser's box, cut back by the median vector of the object's moving blocks, is the
+    current one. The vectors cover only part of the group (8x8 partitions on the current position), so a
+    mean over all the group's blocks would trim less."""
+    from pftrack.io.motion_vectors import MVFrame
+
+    texture = np.random.default_rng(0).integers(120, 255, (40, 20)).astype(np.uint8)  # textured: differences inside
+    prev = np.full((120, 240), 60, np.uint8)
+    cur = prev.copy()
+    prev[40:80, 100:120] = texture
+    cur[40:80, 108:128] = texture
+    dt = np.dtype([("source", "i4"), ("w", "u1"), ("h", "u1"), ("src_x", "i2"), ("src_y", "i2"), ("dst_x", "i2"),
+                   ("dst_y", "i2"), ("flags", "u8"), ("motion_x", "i4"), ("motion_y", "i4"), ("motion_scale", "u2")])
+    xs, ys = np.meshgrid(np.arange(108, 128, 8), np.arange(40, 80, 8))
+    mvs = np.zeros(xs.size, dt)
+    mvs["source"], mvs["w"], mvs["h"], mvs["motion_scale"] = -1, 8, 8, 4
+    mvs["dst_x"], mvs["dst_y"] = xs.ravel() + 4, ys.ravel() + 4
+    mvs["motion_x"] = -32                                 # a forward displacement of +8 px
+    an = C.BlockAnalyser(C.CDParams(n_min=4))
+    assert an(MVFrame(1, "P", mvs, prev)) == []
+    (g,) = an(MVFrame(2, "P", mvs, cur))
+    assert g.box[0] == pytest.approx(108.0) and g.box[0] + g.box[2] == pytest.approx(128.0)
+    assert g.box[1] == pytest.approx(40.0) and g.box[3] == pytest.approx(40.0)
+    untrimmed = C.BlockAnalyser(C.CDParams(n_min=4, trim=False))
+    untrimmed(MVFrame(1, "P", mvs, prev))
+    (u,) = untrimmed(MVFrame(2, "P", mvs, cur))
+    assert u.box[0] == pytest.approx(100.0) and u.box[2] == pytest.approx(28.0)
+    assert C.trailing_trim(u.box, u.velocity)[0] < 107.0  # the group's mean vector, zero blocks included

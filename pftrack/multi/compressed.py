@@ -50,6 +50,10 @@ class CDParams(Params):
         "whose plain frame difference exceeds tau_d -- FFmpeg exports 8x8/16x16 partitions, which bleed onto the "
         "background, and the pseudo-residual of an ordinary encode is noisy."))
     tau_d: float = param(8192.0, ge=0, doc="Frame-difference energy per 4x4 block for refine='difference'.")
+    trim: bool = param(True, doc=(
+        "With refine='difference': a frame difference marks the object where it was and where it is, so each "
+        "group's box is cut back by the group's displacement on its trailing side (the part that is where the "
+        "object was in the previous frame)."))
     min_speed: float = param(1.0, ge=0, doc=(
         "Blocks whose vector is shorter than this (pixels) count as zero motion: the encoder's sub-pixel vectors on "
         "static texture are noise (1.0 chosen on PETS frames 1-200)."))
@@ -120,7 +124,25 @@ class BlockAnalyser:
             E = block_energy_at(y, self.prev_y, fwd, moving)   # only blocks with motion can be foreground
             self.fg = foreground_blocks(fwd, has, E, self.p.tau_r, self.p.min_speed)
         self.prev_y = y
-        return group_blocks(self.fg, fwd, E, self.p)
+        groups = group_blocks(self.fg, fwd, E, self.p)
+        if self.p.refine == "difference" and self.p.trim:
+            for g in groups:
+                # the object's displacement: the median vector of its blocks that move (the difference mask
+                # also holds blocks with no or a zero vector, which would shrink a mean)
+                sel = g.mask & moving
+                if sel.any():
+                    g.box = trailing_trim(g.box, np.median(fwd[sel], axis=0))
+        return groups
+
+
+def trailing_trim(box, velocity, min_size: float = BLOCK) -> tuple[float, float, float, float]:
+    """The box of a frame-difference region ``(x, y, w, h)`` without its trailing part: the difference of two
+    frames covers an object moving by ``velocity = (vx, vy)`` pixels at both positions, so the current one is
+    the union cut back by ``|v|`` on the side it moved away from (not below ``min_size``)."""
+    x, y, w, h = (float(v) for v in box)
+    vx, vy = (float(v) for v in velocity)
+    cx, cy = min(abs(vx), max(w - min_size, 0.0)), min(abs(vy), max(h - min_size, 0.0))
+    return (x + (cx if vx > 0 else 0.0), y + (cy if vy > 0 else 0.0), w - cx, h - cy)
 
 
 def _dilate(mask: np.ndarray, r: int) -> np.ndarray:
