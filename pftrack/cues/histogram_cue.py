@@ -184,15 +184,17 @@ class ColorCue:
         """Quantise the region ``roi = (x0, y0, x1, y1)`` of a BGR frame once.
 
         With ``pitch > 1`` only the lattice ``x % pitch == y % pitch == 0`` is quantised
-        (see :meth:`step_for`), which divides the work by ``pitch**2``.  With ``lut`` (RGB, e.g.
-        :meth:`mapped_lut`) the region is quantised with that table into a new array, leaving the
+        (see :meth:`step_for`), which divides the work by ``pitch**2``.  With ``lut`` (RGB features only,
+        e.g. :meth:`mapped_lut`) the region is quantised with that table into a new array, leaving the
         frame's features (the shared buffer) untouched.
         """
         x0, y0, x1, y1 = roi
         pitch = max(int(pitch), 1)
         x0 -= x0 % pitch
         y0 -= y0 % pitch
-        if lut is not None and self.color_space == "rgb":
+        if lut is not None:
+            if self.color_space != "rgb":
+                raise ValueError("a quantisation table applies to RGB features only")
             region = frame[y0:y1:pitch, x0:x1:pitch]
             bins = np.empty(region.shape[:2], dtype=np.uint16)
             if region.size:
