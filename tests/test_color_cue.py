@@ -176,3 +176,23 @@ def test_max_pixels_picks_a_lattice():
     assert cue.step_for(np.array([[0, 0, 10.0, 10.0]])) == 1
     assert cue.step_for(np.array([[0, 0, 50.0, 50.0]])) == 3  # 7854 px -> pitch 3 (~873 samples)
     assert ColorCue().step_for(np.array([[0, 0, 500.0, 500.0]])) == 1
+
+
+def test_prepare_with_a_mapped_table_undoes_a_gain_without_touching_the_frame_features():
+    from pftrack.cues.intensity import channel_levels, gain_maps
+
+    rng = np.random.default_rng(3)
+    img = rng.integers(20, 160, (60, 80, 3)).astype(np.uint8)
+    lit = (img.astype(np.float32) * np.array([1.5, 1.0, 0.75], np.float32)).round().clip(0, 255).astype(np.uint8)
+    cue = ColorCue("rgb")
+    roi = (10, 10, 70, 50)
+    ref = cue.prepare(img, roi).bins.copy()
+    frame_feats = cue.prepare(lit, roi)          # the frame's features live in the cue's shared buffer
+    held = frame_feats.bins.copy()
+    identity = cue.prepare(img, roi, lut=cue.mapped_lut(np.tile(np.arange(256), (3, 1))))
+    assert np.array_equal(identity.bins, ref)
+    relit = cue.prepare(lit, roi, lut=cue.mapped_lut(gain_maps(channel_levels(img), channel_levels(lit))))
+    assert np.mean(relit.bins == ref) > 0.9 > np.mean(held == ref)
+    assert np.array_equal(frame_feats.bins, held)  # a mapped table quantises into its own array
+    with pytest.raises(ValueError):
+        ColorCue("gray").prepare(img, roi, lut=cue.lut)
