@@ -108,10 +108,11 @@ class FusionPFParams(ColorPFParams):
         "Lower clip of each cue's log-likelihood ratio in the fused loss test: the most odds one cue alone can "
         "give against the target (a single cue also drops for reasons other than absence)."))
     relit_colour: bool = param(True, doc=(
-        "While searching, the colour score of the best candidate is also taken after undoing a global per-channel "
-        "gain (von Kries: the frame's channel medians against those of the last background refresh, when the "
-        "target was seen), and the better of the two is used; a target whose colours drifted with the light "
-        "while it was hidden is then not vetoed by the colour cue. Colour RGB input only."))
+        "While searching, when the colour cue would veto the best candidate that the structural cue alone could "
+        "acquire, its colour score is retaken after undoing a global per-channel gain (von Kries: the frame's "
+        "channel medians against those of the last background refresh, when the target was seen), and the "
+        "better of the two is used: a target whose colours drifted with the light while it was hidden is not "
+        "vetoed for that. Colour RGB input only."))
     lk_levels: int = param(2, ge=1, le=6, doc="Pyramid levels of the flow when motion is on.")
     max_features: int = param(150, ge=1, le=1_000_000, doc="Flow features per frame when motion is on.")
 
