@@ -298,3 +298,25 @@ def test_relit_colour_reacquires_a_target_whose_colours_drifted_while_hidden(see
     assert on.reappearances == off.reappearances == 1
     assert (on.reacquired, off.reacquired) == (1, 0)
     assert on.recall == pytest.approx(off.recall) and on.false_rate <= off.false_rate + 1e-9
+
+
+def test_box_bounds_compiled_and_numpy_agree_and_cover_uses_them():
+    from pftrack._numba import set_numba_enabled
+    from pftrack.cues.structure import Reduced, box_bounds
+
+    rng = np.random.default_rng(7)
+    ell = np.column_stack([rng.uniform(0, 100, 20), rng.uniform(0, 80, 20), rng.uniform(1, 9, 20), rng.uniform(1, 9, 20)])
+    ref = (np.min(ell[:, 0] - ell[:, 2]), np.min(ell[:, 1] - ell[:, 3]), np.max(ell[:, 0] + ell[:, 2]),
+           np.max(ell[:, 1] + ell[:, 3]))
+    assert box_bounds(ell) == pytest.approx(ref)
+    prev = set_numba_enabled(False)
+    try:
+        assert box_bounds(ell) == pytest.approx(ref)
+    finally:
+        set_numba_enabled(prev)
+    # a region inside the frame covers only what lies in it; one reaching the frame's edge covers beyond it
+    red = Reduced(np.zeros((10, 10), np.float32), 20, 20, 2, (200, 100))
+    assert red.covers(np.array([[30.0, 30.0, 5.0, 5.0]])) and not red.covers(np.array([[38.0, 30.0, 5.0, 5.0]]))
+    edge = Reduced(np.zeros((10, 10), np.float32), 0, 0, 2, (21, 21))
+    assert edge.covers(np.array([[18.0, 18.0, 6.0, 6.0]])) and edge.covers(np.array([[1.0, 1.0, 4.0, 4.0]]))
+    assert not Reduced(np.zeros((10, 10), np.float32), 0, 0, 2).covers(np.array([[18.0, 18.0, 6.0, 6.0]]))
