@@ -126,8 +126,8 @@ def reduce_region(frame: np.ndarray, roi: tuple[int, int, int, int], k: int) -> 
         # resolution, not the target's size (a coarse area filter is enough for a 16x16 NCC patch): a
         # bilinear resize by a factor f in [2, 8) to 2^J times the output size averages 2 pixels per
         # cell and direction, and J exact halvings average the cells: 2^(J+1) >= k/4 samples per block
-        # and direction, spread over it (about 7x faster than an area resize of a strided lattice at
-        # k = 16)
+        # and direction, spread over it (on a 624 x 416 region, 6.8x faster than an area resize of a
+        # strided lattice at k = 8, 1.7x at k = 16)
         levels = max(1, int(math.log2(k)) - 2)
         ow, oh = w // k, h // k
         sub = cv2.resize(sub, (ow << levels, oh << levels), interpolation=cv2.INTER_LINEAR)
