@@ -251,3 +251,43 @@ def test_the_analyser_trims_a_moving_object_to_its_current_position():
     (u,) = untrimmed(MVFrame(2, "P", mvs, cur))
     assert u.box[0] == pytest.approx(100.0) and u.box[2] == pytest.approx(28.0)
     assert C.trailing_trim(u.box, u.velocity)[0] < 107.0  # the group's mean vector, zero blocks included
+
+
+def test_compiled_field_energy_and_hole_filling_equal_their_references():
+    """The compiled motion-vector painting and block energies equal the NumPy code bit for bit (overlapping
+    partitions of several sizes included), and the OpenCV hole filling equals SciPy's."""
+    from scipy.ndimage import binary_fill_holes
+
+    from pftrack._numba import NUMBA_INSTALLED, set_numba_enabled
+    from pftrack.io.motion_vectors import block_energy_at, mv_field
+
+    rng = np.random.default_rng(5)
+    dt = np.dtype([("source", "i4"), ("w", "u1"), ("h", "u1"), ("src_x", "i2"), ("src_y", "i2"), ("dst_x", "i2"),
+                   ("dst_y", "i2"), ("flags", "u8"), ("motion_x", "i4"), ("motion_y", "i4"), ("motion_scale", "u2")])
+    n = 400
+    mvs = np.zeros(n, dt)
+    mvs["source"] = rng.choice([-1, 1], n, p=[0.9, 0.1])
+    mvs["w"] = rng.choice([4, 8, 16], n)
+    mvs["h"] = rng.choice([4, 8, 16], n)
+    mvs["dst_x"] = rng.integers(-8, 170, n)       # some partitions reach over the frame's edges
+    mvs["dst_y"] = rng.integers(-8, 130, n)
+    mvs["motion_x"] = rng.integers(-40, 40, n)
+    mvs["motion_y"] = rng.integers(-40, 40, n)
+    mvs["motion_scale"] = 4
+    y_prev = rng.integers(0, 255, (121, 161)).astype(np.uint8)
+    y_cur = rng.integers(0, 255, (121, 161)).astype(np.uint8)
+    out = {}
+    for enabled in ([False, True] if NUMBA_INSTALLED else [False]):
+        prev = set_numba_enabled(enabled)
+        try:
+            fwd, has = mv_field(mvs, y_cur.shape)
+            out[enabled] = (fwd, has, block_energy_at(y_cur, y_prev, fwd, has))
+        finally:
+            set_numba_enabled(prev)
+    if NUMBA_INSTALLED:
+        for a, b in zip(out[False], out[True]):
+            assert np.array_equal(a, b)
+    assert out[False][1].any() and (out[False][2] > 0).any()
+    for _ in range(50):
+        m = (rng.random((30, 40)) < rng.uniform(0.2, 0.8)).astype(np.uint8)
+        assert np.array_equal(C.fill_holes(m), binary_fill_holes(m).astype(np.uint8))

@@ -20,7 +20,6 @@ from typing import Literal
 
 import cv2
 import numpy as np
-from scipy.ndimage import binary_fill_holes
 from scipy.optimize import linear_sum_assignment
 
 from ..io.motion_vectors import BLOCK, block_energy_at, mv_field
@@ -78,11 +77,20 @@ def foreground_blocks(fwd: np.ndarray, has: np.ndarray, E: np.ndarray, tau_r: fl
     return has & (np.hypot(fwd[..., 0], fwd[..., 1]) >= min_speed) & (E > tau_r)
 
 
+def fill_holes(mask: np.ndarray) -> np.ndarray:
+    """``scipy.ndimage.binary_fill_holes`` (4-connected background) of a 0/1 mask, with one OpenCV flood fill:
+    the background reachable from outside the padded mask is not a hole.  uint8 0/1."""
+    m = np.zeros((mask.shape[0] + 2, mask.shape[1] + 2), np.uint8)
+    m[1:-1, 1:-1] = mask != 0
+    cv2.floodFill(m, None, (0, 0), 2, flags=4)
+    return (m[1:-1, 1:-1] != 2).astype(np.uint8)
+
+
 def group_blocks(fg: np.ndarray, fwd: np.ndarray, E: np.ndarray, p: CDParams = CDParams()) -> list[Group]:
     m = fg.astype(np.uint8)
     if p.closing:
         m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, np.ones((p.closing, p.closing), np.uint8))
-        m = binary_fill_holes(m).astype(np.uint8)
+        m = fill_holes(m)
     n, lab, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
     comps = [k for k in range(1, n) if stats[k, cv2.CC_STAT_AREA] >= p.n_min]
     comps = sorted(comps, key=lambda k: -stats[k, cv2.CC_STAT_AREA])[:p.max_groups]
