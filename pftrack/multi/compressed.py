@@ -98,12 +98,14 @@ def group_blocks(fg: np.ndarray, fwd: np.ndarray, E: np.ndarray, p: CDParams = C
     for k in comps:
         mk = lab == k
         x, y, w, h = stats[k, :4]
-        moving = mk & fg
-        sel = moving if moving.any() else mk
-        v = fwd[sel].mean(axis=0)
+        win = (slice(y, y + h), slice(x, x + w))          # the component's bounding box: the same elements,
+        mw = mk[win]                                      # in the same order, as the full-frame masks
+        moving = mw & fg[win]
+        sel = moving if moving.any() else mw
+        v = fwd[win][sel].mean(axis=0)
         out.append(Group((float(x * BLOCK), float(y * BLOCK), float(w * BLOCK), float(h * BLOCK)), mk,
-                         float(np.degrees(np.arctan2(v[1], v[0])) % 360.0), float(E[mk].sum()),
-                         (float(v[0]), float(v[1])), int(mk.sum())))
+                         float(np.degrees(np.arctan2(v[1], v[0])) % 360.0), float(E[win][mw].sum()),
+                         (float(v[0]), float(v[1])), int(mw.sum())))
     out.sort(key=lambda g: (g.box[1], g.box[0]))      # top-left first (L7604-7606)
     return out
 
@@ -137,9 +139,11 @@ class BlockAnalyser:
             for g in groups:
                 # the object's displacement: the median vector of its blocks that move (the difference mask
                 # also holds blocks with no or a zero vector, which would shrink a mean)
-                sel = g.mask & moving
+                bx, by, bw, bh = (int(v) // BLOCK for v in g.box)
+                win = (slice(by, by + bh), slice(bx, bx + bw))   # the group's blocks all lie in its box
+                sel = g.mask[win] & moving[win]
                 if sel.any():
-                    g.box = trailing_trim(g.box, np.median(fwd[sel], axis=0))
+                    g.box = trailing_trim(g.box, np.median(fwd[win][sel], axis=0))
         return groups
 
 
