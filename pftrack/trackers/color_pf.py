@@ -139,15 +139,17 @@ class ColorParticleFilter(SearchMixin, Tracker):
         rho, tot = self.cue.rho(feats, ellipses, self._sqrt_q)
         return rho, tot, feats
 
-    def _log_lik(self, rho: np.ndarray, tot: np.ndarray) -> np.ndarray:
-        d2 = 1.0 - rho
-        if self.params.adaptive_sigma:
-            valid = tot > 0
-            dmin = float(d2[valid].min()) if valid.any() else 1.0
-            s2 = max(dmin / 2.0, 1e-6)
-        else:
-            s2 = self.params.sigma ** 2
-        ll = -d2 / (2.0 * s2)
+    def _sigma2(self, rho: np.ndarray, tot: np.ndarray) -> float:
+        """sigma^2 of Eq. 10: the parameter, or with ``adaptive_sigma`` d_min^2 / 2 over the batch (book ch. 4)."""
+        if not self.params.adaptive_sigma:
+            return self.params.sigma ** 2
+        valid = tot > 0
+        dmin = float((1.0 - rho)[valid].min()) if valid.any() else 1.0
+        return max(dmin / 2.0, 1e-6)
+
+    def _log_lik(self, rho: np.ndarray, tot: np.ndarray, s2: float | None = None) -> np.ndarray:
+        """Eq. 10 in the log domain, ``-(1 - rho) / (2 sigma^2)`` (``s2`` given: that sigma^2)."""
+        ll = -(1.0 - rho) / (2.0 * (self._sigma2(rho, tot) if s2 is None else s2))
         ll[tot <= 0] = -np.inf  # the ellipse has no pixel in the image: zero likelihood
         return ll
 
@@ -264,7 +266,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         ``feats`` is the quantised region ``roi`` (shared with the colour cue)."""
         return log_lik
 
-    def _seir(self, frame: np.ndarray, ps: ParticleSet, log_lik: np.ndarray, rho: np.ndarray,
+    def _seir(self, frame: np.ndarray, ps: ParticleSet, log_lik: np.ndarray, rho: np.ndarray, tot: np.ndarray,
               roi: tuple[int, int, int, int], feats):
         """Book ch. 3's SEIR loop on the weighted particles (``resampler='seir'``).
 
@@ -274,18 +276,12 @@ class ColorParticleFilter(SearchMixin, Tracker):
         p = self.params
         est = ps._mean
         std = p.seir_mutation * self._step_std(est)
-        if p.adaptive_sigma:
-            d2 = 1.0 - rho
-            s2 = max(float(d2[np.isfinite(log_lik)].min()) / 2.0 if np.isfinite(log_lik).any() else 0.5, 1e-6)
-        else:
-            s2 = p.sigma ** 2
+        s2 = self._sigma2(rho, tot)
 
         def score(states: np.ndarray) -> np.ndarray:
             self._clip_states(states)
-            r, tot = self.cue.rho(feats, self._ellipses(states), self._sqrt_q)
-            ll = -(1.0 - r) / (2.0 * s2)
-            ll[tot <= 0] = -np.inf
-            return self._extra_log_lik(frame, states, ll, roi, feats)
+            r, t = self.cue.rho(feats, self._ellipses(states), self._sqrt_q)
+            return self._extra_log_lik(frame, states, self._log_lik(r, t, s2), roi, feats)
 
         states, ll, info = seir(ps.states, log_lik, score, self.rng, mutation_std=std)
         ps.states[:] = states
@@ -335,7 +331,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         # (4) weight
         log_lik = self._extra_log_lik(frame, ps.states, self._log_lik(rho, tot), roi, feats)
         ok = ps.set_log_likelihood(log_lik, accumulate=p.resample_ess < 1.0)
-        seir_info = self._seir(frame, ps, log_lik, rho, roi, feats) if p.resampler == "seir" and ok else None
+        seir_info = self._seir(frame, ps, log_lik, rho, tot, roi, feats) if p.resampler == "seir" and ok else None
         # (5) estimate
         self.estimate = est = ps._mean.copy()
         self._after_estimate(frame, est)
@@ -443,9 +439,7 @@ class ColorPF(ColorParticleFilter):
 
     def _step_std(self, est: np.ndarray) -> np.ndarray:
         std = np.zeros(self.dim)
-        base = self._noise_std(est[HX], est[HY])
-        for c in (X, Y, HX, HY):
-            std[c] = base[c]
+        std[_ELL_COLS] = self._noise_std(est[HX], est[HY])[_ELL_COLS]
         return std
 
     def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:

@@ -304,8 +304,6 @@ class CoTrainPF(Tracker):
             info["ess"], info["loops"] = [effective_sample_size(w)], 0
         est = w @ X
         idx = systematic(w, self.rng) if p.resampler != "multinomial" else multinomial(w, self.rng)
-        weights_out = w
-        particles_out = X
         self.particles = X[idx]
         bw, bh = est[2] * self.size0[0], est[2] * self.size0[1]
         est_box = (float(est[0] - bw / 2), float(est[1] - bh / 2), float(bw), float(bh))
@@ -326,4 +324,4 @@ class CoTrainPF(Tracker):
         self.last_maps = m
         info.update(contrast=c, reference=ref, region=m["region"])
         return TrackState(box=self.box, score=float(np.clip(c / ref, 0.0, 1.0)), lost=self.lost,
-                          particles=particles_out, weights=weights_out, state_names=self.state_names, info=info)
+                          particles=X, weights=w, state_names=self.state_names, info=info)
