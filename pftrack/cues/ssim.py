@@ -227,13 +227,19 @@ def ssim_global_stack(stack: np.ndarray, template: np.ndarray, *, c1: float = C1
     return (2 * mx * mt + c1) * (2 * cxt + c2) / ((mx * mx + mt * mt + c1) * (vx + vt + c2))
 
 
-def ssim_global_map(image: np.ndarray, template: np.ndarray, *, c1: float = C1, c2: float = C2) -> np.ndarray:
+def ssim_global_map(image: np.ndarray, template: np.ndarray, *, c1: float = C1, c2: float = C2,
+                    work: dict | None = None) -> np.ndarray:
     """Eq. (21) with global statistics (18)-(20) for every placement of ``template`` in ``image``.
 
     Returns the ``(H - h + 1, W - w + 1)`` map (top-left anchored, as ``cv2.matchTemplate``): the
     covariance term is one ``matchTemplate`` with the zero-mean template, the window means and
     variances come from integral images.  The placement with top-left ``(x0, y0)`` is the state
-    ``(x0 + w / 2, y0 + h / 2, 1)`` of :func:`ssim_global_stack`."""
+    ``(x0 + w / 2, y0 + h / 2, 1)`` of :func:`ssim_global_stack`.
+
+    ``work``: a dict the caller keeps between calls; the integral images, the correlation and the returned
+    map are written into arrays cached there while the sizes stay the same (the returned array is then
+    overwritten by the next call).  A search repeated every frame saves the allocation and first touch of
+    megabytes of fresh memory per call, which cost more than the arithmetic."""
     img = np.ascontiguousarray(image, dtype=np.float32)
     t = np.asarray(template, dtype=np.float64)
     h, w = t.shape
@@ -241,21 +247,43 @@ def ssim_global_map(image: np.ndarray, template: np.ndarray, *, c1: float = C1, 
     mt = t.mean()
     dt = t - mt
     vt = float(np.sum(dt * dt)) / (n - 1)
-    cxt = cv2.matchTemplate(img, dt.astype(np.float32), cv2.TM_CCORR).astype(np.float64) / (n - 1)
-    s1, s2 = cv2.integral2(img, sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
+    H, W = img.shape
+    mh, mw = H - h + 1, W - w + 1
+    if work is None:
+        cxt = cv2.matchTemplate(img, dt.astype(np.float32), cv2.TM_CCORR)
+        s1, s2 = cv2.integral2(img, sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
+        out = np.empty(cxt.shape)
+    else:
+        if work.get("shape") != (H, W, h, w):
+            work.update(shape=(H, W, h, w), sum=np.empty((H + 1, W + 1)), sqsum=np.empty((H + 1, W + 1)),
+                        corr=np.empty((max(mh, 1), max(mw, 1)), np.float32), out=np.empty((max(mh, 1), max(mw, 1))))
+        cxt = cv2.matchTemplate(img, dt.astype(np.float32), cv2.TM_CCORR, result=work["corr"])
+        s1, s2 = cv2.integral2(img, sum=work["sum"], sqsum=work["sqsum"], sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
+        out = work["out"]
+    _global_map(s1, s2, cxt, h, w, float(mt), vt, float(c1), float(c2), out)
+    return out
 
-    def window(ii):
-        return ii[h:, w:] - ii[:-h, w:] - ii[h:, :-w] + ii[:-h, :-w]
 
-    mx = window(s1) / n
-    vx = np.maximum(window(s2) - n * mx * mx, 0.0) / (n - 1)
-    return (2 * mx * mt + c1) * (2 * cxt + c2) / ((mx * mx + mt * mt + c1) * (vx + vt + c2))
+@njit
+def _global_map(s1, s2, cxt, h, w, mt, vt, c1, c2, out):
+    """The per-placement part of :func:`ssim_global_map` in one pass: window means and variances from the
+    integral images, the covariance from the correlation map (float64 throughout)."""
+    n = h * w
+    for r in range(out.shape[0]):
+        for c in range(out.shape[1]):
+            a = s1[r + h, c + w] - s1[r, c + w] - s1[r + h, c] + s1[r, c]
+            b = s2[r + h, c + w] - s2[r, c + w] - s2[r + h, c] + s2[r, c]
+            mx = a / n
+            vx = max(b - n * mx * mx, 0.0) / (n - 1)
+            cx = np.float64(cxt[r, c]) / (n - 1)
+            out[r, c] = (2 * mx * mt + c1) * (2 * cx + c2) / ((mx * mx + mt * mt + c1) * (vx + vt + c2))
 
 
-def top_peaks(score: np.ndarray, k: int, radius: tuple[int, int]) -> np.ndarray:
+def top_peaks(score: np.ndarray, k: int, radius: tuple[int, int], *, inplace: bool = False) -> np.ndarray:
     """Row-major ``(row, col)`` of up to ``k`` maxima of ``score``, each at least ``radius = (ry, rx)`` from
-    the ones before it (greedy non-maximum suppression)."""
-    a = np.array(score, dtype=np.float64, copy=True)
+    the ones before it (greedy non-maximum suppression).  ``inplace``: suppress in ``score`` itself (a
+    float64 array the caller no longer needs) instead of a copy."""
+    a = score if inplace and score.dtype == np.float64 else np.array(score, dtype=np.float64, copy=True)
     ry, rx = max(int(radius[0]), 0), max(int(radius[1]), 0)
     out = []
     for _ in range(k):

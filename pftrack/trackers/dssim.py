@@ -67,6 +67,7 @@ class DSSIMTracker(Tracker):
         gray = self._gray(frame)
         self.template = S.sample_patches(gray, np.array([[*self.c, self.pix]]), self.tshape)[0].astype(np.float64)
         self.mode = "tracking"
+        self._work: dict = {}  # the search's buffers, reused while the reduced frame keeps its size
         self.loss.reset(1.0, sd=p.history_prior_sd)
         self._since_bg = 0
         self._background(gray)
@@ -177,7 +178,7 @@ class DSSIMTracker(Tracker):
             return np.array([[fw / 2.0, fh / 2.0, self.s * self.pix]])
         small = cv2.resize(gray[:sh * k, :sw * k], (sw, sh), interpolation=cv2.INTER_AREA)
         half = cv2.resize(self.template.astype(np.float32), (hw, hh), interpolation=cv2.INTER_AREA)
-        peaks = S.top_peaks(S.ssim_global_map(small, half), n, (hh // 2, hw // 2))
+        peaks = S.top_peaks(S.ssim_global_map(small, half, work=self._work), n, (hh // 2, hw // 2), inplace=True)
         return np.column_stack([(peaks[:, 1] + hw / 2.0) * k, (peaks[:, 0] + hh / 2.0) * k,
                                 np.full(len(peaks), self.s * self.pix)])
 
