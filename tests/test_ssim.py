@@ -224,3 +224,8 @@ def test_global_ssim_map_equals_the_batched_global_ssim_at_every_placement():
     assert tuple(peaks[0]) == (10, 20)
     assert np.all(np.abs(peaks[1:] - peaks[0]).max(axis=1) > 0)
     assert all(abs(r - 10) > 4 or abs(c - 20) > 6 for r, c in peaks[1:])  # suppressed neighbourhood
+    # reused buffers give the same map, also after a call of another size; in-place suppression the same peaks
+    work: dict = {}
+    for a, t in ((img, tpl), (img[:30], tpl[:7]), (img, tpl)):
+        assert np.array_equal(ssim_global_map(a, t, work=work), ssim_global_map(a, t))
+    assert np.array_equal(top_peaks(ssim_global_map(img, tpl, work=work), 3, (4, 6), inplace=True), peaks)

@@ -387,26 +387,18 @@ def _bilinear(img, x, y):
 
 
 @njit
-def _region_ssim_grad(gray, gx, gy, tmpl, cx, cy, s, c1, c2, want_grad):
-    """Global SSIM (21) of the region at ``(cx, cy)``, scale ``s``, and (optionally) grad rho (39)."""
+def _region_value(gray, tmpl, cx, cy, s, c1, c2, vals):
+    """Global SSIM (21) of the region at ``(cx, cy)``, scale ``s``; the samples are left in ``vals``.
+
+    Returns ``(S, mi, mj, vi, vj, cij)``, the statistics (18)-(20) the gradient needs."""
     h, w = tmpl.shape
     n = h * w
-    vals = np.empty(n)
-    dxs = np.empty(n)
-    dys = np.empty(n)
     k = 0
     for r in range(h):
         yy = cy + s * (r - (h - 1) / 2.0)
         for c in range(w):
             xx = cx + s * (c - (w - 1) / 2.0)
             vals[k] = _bilinear(gray, xx, yy)
-            if want_grad:
-                if gx.shape[0] == 0:  # no gradient images: central differences of the bilinear image
-                    dxs[k] = 0.5 * (_bilinear(gray, xx + 1.0, yy) - _bilinear(gray, xx - 1.0, yy))
-                    dys[k] = 0.5 * (_bilinear(gray, xx, yy + 1.0) - _bilinear(gray, xx, yy - 1.0))
-                else:
-                    dxs[k] = _bilinear(gx, xx, yy)
-                    dys[k] = _bilinear(gy, xx, yy)
             k += 1
     mi = 0.0
     mj = 0.0
@@ -428,26 +420,61 @@ def _region_ssim_grad(gray, gx, gy, tmpl, cx, cy, s, c1, c2, want_grad):
     vj /= n - 1
     cij /= n - 1
     sv = (2 * mi * mj + c1) * (2 * cij + c2) / ((mi * mi + mj * mj + c1) * (vi + vj + c2))
+    return sv, mi, mj, vi, vj, cij
+
+
+@njit
+def _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, sv, mi, mj, vi, vj, cij):
+    """grad rho (39) at the region of :func:`_region_value` (its samples ``vals`` and statistics).
+
+    The image derivative at each sample is read from ``gx, gy``, or, when they are empty, is the central
+    difference of the bilinear image there."""
+    h, w = tmpl.shape
+    n = h * w
+    sign = 1.0 if sv >= 0 else -1.0
+    a1 = 2 * mj / (2 * mi * mj + c1) - 2 * mi / (mi * mi + mj * mj + c1)
+    a2 = -1.0 / (vi + vj + c2)
+    a3 = 2.0 / (2 * cij + c2)
+    dense = gx.shape[0] != 0
     gxo = 0.0
     gyo = 0.0
-    if want_grad:
-        sign = 1.0 if sv >= 0 else -1.0
-        a1 = 2 * mj / (2 * mi * mj + c1) - 2 * mi / (mi * mi + mj * mj + c1)
-        a2 = -1.0 / (vi + vj + c2)
-        a3 = 2.0 / (2 * cij + c2)
-        for k in range(n):
+    k = 0
+    for r in range(h):
+        yy = cy + s * (r - (h - 1) / 2.0)
+        for c in range(w):
+            xx = cx + s * (c - (w - 1) / 2.0)
+            if dense:
+                dx = _bilinear(gx, xx, yy)
+                dy = _bilinear(gy, xx, yy)
+            else:
+                dx = 0.5 * (_bilinear(gray, xx + 1.0, yy) - _bilinear(gray, xx - 1.0, yy))
+                dy = 0.5 * (_bilinear(gray, xx, yy + 1.0) - _bilinear(gray, xx, yy - 1.0))
             coef = a1 / n + (2 * a2 * (vals[k] - mi) + a3 * (tmpl.flat[k] - mj)) / (n - 1)
-            gxo += coef * dxs[k]
-            gyo += coef * dys[k]
-        gxo *= sign
-        gyo *= sign
+            gxo += coef * dx
+            gyo += coef * dy
+            k += 1
+    return sign * gxo, sign * gyo
+
+
+@njit
+def _region_ssim_grad(gray, gx, gy, tmpl, cx, cy, s, c1, c2, want_grad):
+    """Global SSIM (21) of the region at ``(cx, cy)``, scale ``s``, and (optionally) grad rho (39)."""
+    vals = np.empty(tmpl.shape[0] * tmpl.shape[1])
+    sv, mi, mj, vi, vj, cij = _region_value(gray, tmpl, cx, cy, s, c1, c2, vals)
+    if not want_grad:
+        return sv, 0.0, 0.0
+    gxo, gyo = _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, sv, mi, mj, vi, vj, cij)
     return sv, gxo, gyo
 
 
 @njit
 def _ascent(gray, gx, gy, tmpl, cx, cy, s, max_iter, c1, c2):
-    """Table 3: one-pixel steps to the 8-neighbour nearest the gradient direction while S does not drop."""
-    s0, g_x, g_y = _region_ssim_grad(gray, gx, gy, tmpl, cx, cy, s, c1, c2, True)
+    """Table 3: one-pixel steps to the 8-neighbour nearest the gradient direction while S does not drop.
+
+    The gradient is computed only at the points the ascent moves to (a rejected step needs only S)."""
+    vals = np.empty(tmpl.shape[0] * tmpl.shape[1])
+    s0, mi, mj, vi, vj, cij = _region_value(gray, tmpl, cx, cy, s, c1, c2, vals)
+    g_x, g_y = _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, s0, mi, mj, vi, vj, cij)
     it = 0
     while it < max_iter:
         if abs(s0) < 1e-6 or (g_x == 0.0 and g_y == 0.0):
@@ -458,14 +485,15 @@ def _ascent(gray, gx, gy, tmpl, cx, cy, s, max_iter, c1, c2):
         dy = round(math.sin(sector * math.pi / 4.0))
         nx = cx + dx
         ny = cy + dy
-        s1, g1x, g1y = _region_ssim_grad(gray, gx, gy, tmpl, nx, ny, s, c1, c2, True)
+        s1, mi, mj, vi, vj, cij = _region_value(gray, tmpl, nx, ny, s, c1, c2, vals)
         it += 1
         if s1 < s0:
             break
         if s1 == s0 and it > 1:  # a plateau: stop rather than wander
             cx, cy = nx, ny
             break
-        cx, cy, s0, g_x, g_y = nx, ny, s1, g1x, g1y
+        g_x, g_y = _region_gradient(gray, gx, gy, tmpl, nx, ny, s, c1, c2, vals, s1, mi, mj, vi, vj, cij)
+        cx, cy, s0 = nx, ny, s1
     return cx, cy, s0, it
 
 
