@@ -229,3 +229,46 @@ def test_global_ssim_map_equals_the_batched_global_ssim_at_every_placement():
     for a, t in ((img, tpl), (img[:30], tpl[:7]), (img, tpl)):
         assert np.array_equal(ssim_global_map(a, t, work=work), ssim_global_map(a, t))
     assert np.array_equal(top_peaks(ssim_global_map(img, tpl, work=work), 3, (4, 6), inplace=True), peaks)
+    from pftrack._numba import set_numba_enabled
+
+    previous = set_numba_enabled(False)  # the NumPy path: the same map
+    try:
+        assert np.allclose(ssim_global_map(img, tpl), m, rtol=0, atol=1e-12)
+    finally:
+        set_numba_enabled(previous)
+
+
+def test_region_samples_are_the_clamped_bilinear_image_on_the_scaled_grid():
+    """The ascent's grid sampling (per-axis taps) equals a point-by-point bilinear interpolation with the
+    coordinates clamped to the image, also for a region hanging over the border; with offsets +-1 it gives
+    the central differences."""
+    rng = np.random.default_rng(5)
+    img = rng.uniform(0, 255, (23, 31)).astype(np.float32)
+    tmpl = rng.uniform(0, 255, (7, 9))
+
+    def bilinear(x, y):
+        fx = np.clip(x - 0.5, 0, img.shape[1] - 1)
+        fy = np.clip(y - 0.5, 0, img.shape[0] - 1)
+        x0 = np.minimum(fx.astype(int), img.shape[1] - 2)
+        y0 = np.minimum(fy.astype(int), img.shape[0] - 2)
+        ax, ay = fx - x0, fy - y0
+        i = img.astype(np.float64)
+        return ((1 - ay) * ((1 - ax) * i[y0, x0] + ax * i[y0, x0 + 1])
+                + ay * ((1 - ax) * i[y0 + 1, x0] + ax * i[y0 + 1, x0 + 1]))
+
+    for cx, cy, s in ((15.3, 11.7, 1.0), (2.2, 20.9, 1.7), (29.5, 1.1, 0.6)):
+        u, v = S.patch_grid(tmpl.shape)
+        xx, yy = np.meshgrid(cx + s * u, cy + s * v)
+        vals = np.empty(tmpl.size)
+        ti, ta = np.empty((2, 2, 9), np.int64), np.empty((2, 9))
+        sv = S._region_value(img, tmpl, cx, cy, s, S.C1, S.C2, vals, ti, ta)[0]
+        assert np.allclose(vals, bilinear(xx, yy).ravel(), rtol=0, atol=1e-9)
+        i, j = bilinear(xx, yy).ravel(), tmpl.ravel()
+        ref = ((2 * i.mean() * j.mean() + S.C1) * (2 * np.cov(i, j)[0, 1] + S.C2)
+               / ((i.mean() ** 2 + j.mean() ** 2 + S.C1) * (i.var(ddof=1) + j.var(ddof=1) + S.C2)))
+        assert sv == pytest.approx(ref, abs=1e-9)
+        e = np.empty((0, 0), np.float32)
+        g = S._region_ssim_grad(img, e, e, tmpl, cx, cy, s, S.C1, S.C2, True)[1:]
+        dx = 0.5 * (bilinear(xx + 1, yy) - bilinear(xx - 1, yy)).ravel()
+        dy = 0.5 * (bilinear(xx, yy + 1) - bilinear(xx, yy - 1)).ravel()
+        assert np.allclose(g, S.grad_rho(i, j, dx, dy), rtol=1e-9, atol=1e-12)

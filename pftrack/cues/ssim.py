@@ -153,8 +153,10 @@ def ssim_batch(patches: np.ndarray, template: np.ndarray, *, crop: bool = True, 
     p = np.asarray(patches, dtype=np.float32)
     if p.shape[0] == 0:
         return np.empty(0)
-    return ssim_stack(np.ascontiguousarray(p.transpose(1, 2, 0)), template, crop=crop, sigma=sigma, size=size,
-                      c1=c1, c2=c2, border=border)
+    n, h, w = p.shape
+    # (N, h*w) -> (h*w, N): OpenCV's blocked transpose is ~14x faster than NumPy's strided copy here
+    stack = cv2.transpose(np.ascontiguousarray(p).reshape(n, h * w)).reshape(h, w, n)
+    return ssim_stack(stack, template, crop=crop, sigma=sigma, size=size, c1=c1, c2=c2, border=border)
 
 
 def ssim_stack(stack: np.ndarray, template: np.ndarray, *, crop: bool = True, sigma: float = WINDOW_SIGMA,
@@ -193,7 +195,7 @@ def ssim_stack(stack: np.ndarray, template: np.ndarray, *, crop: bool = True, si
     return smap[r:h - r, r:w - r].mean(axis=(0, 1), dtype=np.float64)
 
 
-@njit
+@njit(fastmath=True)
 def _combine(mu_p, e_pp, e_pt, mu_t, e_tt, r, c1, c2, out):
     """Eq. (21) per pixel from the filtered statistics, averaged over the cropped map, in one pass."""
     h, w, n = mu_p.shape
@@ -260,6 +262,12 @@ def ssim_global_map(image: np.ndarray, template: np.ndarray, *, c1: float = C1, 
         cxt = cv2.matchTemplate(img, dt.astype(np.float32), cv2.TM_CCORR, result=work["corr"])
         s1, s2 = cv2.integral2(img, sum=work["sum"], sqsum=work["sqsum"], sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
         out = work["out"]
+    if not numba_enabled():  # the same arithmetic, array by array
+        mx = (s1[h:, w:] - s1[:-h, w:] - s1[h:, :-w] + s1[:-h, :-w]) / n
+        vx = np.maximum(s2[h:, w:] - s2[:-h, w:] - s2[h:, :-w] + s2[:-h, :-w] - n * mx * mx, 0.0) / (n - 1)
+        cx = cxt.astype(np.float64) / (n - 1)
+        out[...] = (2 * mx * mt + c1) * (2 * cx + c2) / ((mx * mx + mt * mt + c1) * (vx + vt + c2))
+        return out
     _global_map(s1, s2, cxt, h, w, float(mt), vt, float(c1), float(c2), out)
     return out
 
@@ -371,34 +379,48 @@ def grad_rho(i: np.ndarray, j: np.ndarray, gix: np.ndarray, giy: np.ndarray, *, 
 
 
 @njit
-def _bilinear(img, x, y):
-    """Bilinear value at continuous pixel-centre coordinates (clamped to the image)."""
-    h, w = img.shape
-    fx = min(max(x - 0.5, 0.0), w - 1.0)
-    fy = min(max(y - 0.5, 0.0), h - 1.0)
-    x0 = min(int(fx), w - 2) if w > 1 else 0
-    y0 = min(int(fy), h - 2) if h > 1 else 0
-    ax = fx - x0
-    ay = fy - y0
-    x1 = min(x0 + 1, w - 1)
-    y1 = min(y0 + 1, h - 1)
+def _axis_taps(n, centre, s, size, off, idx, frac):
+    """Bilinear taps along one axis of a regular sample grid: for sample ``k`` at
+    ``centre + s * (k - (n - 1) / 2) + off``, the two pixel indices ``idx[0, k], idx[1, k]`` and the weight
+    ``frac[k]`` of the second.  Coordinates are pixel-centre based (pixel ``i`` has its centre at ``i + 0.5``)
+    and clamped to the image, so samples beyond the border repeat the edge pixels."""
+    half = (n - 1) / 2.0
+    for k in range(n):
+        p = (centre + s * (k - half)) + off
+        f = min(max(p - 0.5, 0.0), size - 1.0)
+        i0 = min(int(f), size - 2) if size > 1 else 0
+        frac[k] = f - i0
+        idx[0, k] = i0
+        idx[1, k] = min(i0 + 1, size - 1)
+
+
+@njit
+def _grid_value(img, xi, xa, yi, ya, r, c):
+    """Bilinear value at grid sample ``(r, c)`` from the x and y taps of :func:`_axis_taps`."""
+    ax = xa[c]
+    ay = ya[r]
+    x0 = xi[0, c]
+    x1 = xi[1, c]
+    y0 = yi[0, r]
+    y1 = yi[1, r]
     return ((1 - ay) * ((1 - ax) * img[y0, x0] + ax * img[y0, x1])
             + ay * ((1 - ax) * img[y1, x0] + ax * img[y1, x1]))
 
 
 @njit
-def _region_value(gray, tmpl, cx, cy, s, c1, c2, vals):
+def _region_value(gray, tmpl, cx, cy, s, c1, c2, vals, ti, ta):
     """Global SSIM (21) of the region at ``(cx, cy)``, scale ``s``; the samples are left in ``vals``.
 
+    ``ti, ta``: tap workspaces ``(2, 2, max(h, w))`` int64 and ``(2, max(h, w))``, for x and y.
     Returns ``(S, mi, mj, vi, vj, cij)``, the statistics (18)-(20) the gradient needs."""
     h, w = tmpl.shape
     n = h * w
+    _axis_taps(w, cx, s, gray.shape[1], 0.0, ti[0], ta[0])
+    _axis_taps(h, cy, s, gray.shape[0], 0.0, ti[1], ta[1])
     k = 0
     for r in range(h):
-        yy = cy + s * (r - (h - 1) / 2.0)
         for c in range(w):
-            xx = cx + s * (c - (w - 1) / 2.0)
-            vals[k] = _bilinear(gray, xx, yy)
+            vals[k] = _grid_value(gray, ti[0], ta[0], ti[1], ta[1], r, c)
             k += 1
     mi = 0.0
     mj = 0.0
@@ -424,11 +446,12 @@ def _region_value(gray, tmpl, cx, cy, s, c1, c2, vals):
 
 
 @njit
-def _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, sv, mi, mj, vi, vj, cij):
+def _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, sv, mi, mj, vi, vj, cij, gi, ga):
     """grad rho (39) at the region of :func:`_region_value` (its samples ``vals`` and statistics).
 
     The image derivative at each sample is read from ``gx, gy``, or, when they are empty, is the central
-    difference of the bilinear image there."""
+    difference of the bilinear image there.  ``gi, ga``: tap workspaces ``(3, 2, 2, m)`` and ``(3, 2, m)``
+    for the offsets -1, 0, +1 along x (``[., 0]``) and y (``[., 1]``)."""
     h, w = tmpl.shape
     n = h * w
     sign = 1.0 if sv >= 0 else -1.0
@@ -436,19 +459,24 @@ def _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, sv, mi, mj, vi
     a2 = -1.0 / (vi + vj + c2)
     a3 = 2.0 / (2 * cij + c2)
     dense = gx.shape[0] != 0
+    for o in range(3):
+        if dense and o != 1:
+            continue
+        _axis_taps(w, cx, s, gray.shape[1], o - 1.0, gi[o, 0], ga[o, 0])
+        _axis_taps(h, cy, s, gray.shape[0], o - 1.0, gi[o, 1], ga[o, 1])
     gxo = 0.0
     gyo = 0.0
     k = 0
     for r in range(h):
-        yy = cy + s * (r - (h - 1) / 2.0)
         for c in range(w):
-            xx = cx + s * (c - (w - 1) / 2.0)
             if dense:
-                dx = _bilinear(gx, xx, yy)
-                dy = _bilinear(gy, xx, yy)
+                dx = _grid_value(gx, gi[1, 0], ga[1, 0], gi[1, 1], ga[1, 1], r, c)
+                dy = _grid_value(gy, gi[1, 0], ga[1, 0], gi[1, 1], ga[1, 1], r, c)
             else:
-                dx = 0.5 * (_bilinear(gray, xx + 1.0, yy) - _bilinear(gray, xx - 1.0, yy))
-                dy = 0.5 * (_bilinear(gray, xx, yy + 1.0) - _bilinear(gray, xx, yy - 1.0))
+                dx = 0.5 * (_grid_value(gray, gi[2, 0], ga[2, 0], gi[1, 1], ga[1, 1], r, c)
+                            - _grid_value(gray, gi[0, 0], ga[0, 0], gi[1, 1], ga[1, 1], r, c))
+                dy = 0.5 * (_grid_value(gray, gi[1, 0], ga[1, 0], gi[2, 1], ga[2, 1], r, c)
+                            - _grid_value(gray, gi[1, 0], ga[1, 0], gi[0, 1], ga[0, 1], r, c))
             coef = a1 / n + (2 * a2 * (vals[k] - mi) + a3 * (tmpl.flat[k] - mj)) / (n - 1)
             gxo += coef * dx
             gyo += coef * dy
@@ -460,10 +488,13 @@ def _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, sv, mi, mj, vi
 def _region_ssim_grad(gray, gx, gy, tmpl, cx, cy, s, c1, c2, want_grad):
     """Global SSIM (21) of the region at ``(cx, cy)``, scale ``s``, and (optionally) grad rho (39)."""
     vals = np.empty(tmpl.shape[0] * tmpl.shape[1])
-    sv, mi, mj, vi, vj, cij = _region_value(gray, tmpl, cx, cy, s, c1, c2, vals)
+    m = max(tmpl.shape[0], tmpl.shape[1])
+    ti, ta = np.empty((2, 2, m), np.int64), np.empty((2, m))
+    sv, mi, mj, vi, vj, cij = _region_value(gray, tmpl, cx, cy, s, c1, c2, vals, ti, ta)
     if not want_grad:
         return sv, 0.0, 0.0
-    gxo, gyo = _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, sv, mi, mj, vi, vj, cij)
+    gi, ga = np.empty((3, 2, 2, m), np.int64), np.empty((3, 2, m))
+    gxo, gyo = _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, sv, mi, mj, vi, vj, cij, gi, ga)
     return sv, gxo, gyo
 
 
@@ -473,8 +504,11 @@ def _ascent(gray, gx, gy, tmpl, cx, cy, s, max_iter, c1, c2):
 
     The gradient is computed only at the points the ascent moves to (a rejected step needs only S)."""
     vals = np.empty(tmpl.shape[0] * tmpl.shape[1])
-    s0, mi, mj, vi, vj, cij = _region_value(gray, tmpl, cx, cy, s, c1, c2, vals)
-    g_x, g_y = _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, s0, mi, mj, vi, vj, cij)
+    m = max(tmpl.shape[0], tmpl.shape[1])
+    ti, ta = np.empty((2, 2, m), np.int64), np.empty((2, m))
+    gi, ga = np.empty((3, 2, 2, m), np.int64), np.empty((3, 2, m))
+    s0, mi, mj, vi, vj, cij = _region_value(gray, tmpl, cx, cy, s, c1, c2, vals, ti, ta)
+    g_x, g_y = _region_gradient(gray, gx, gy, tmpl, cx, cy, s, c1, c2, vals, s0, mi, mj, vi, vj, cij, gi, ga)
     it = 0
     while it < max_iter:
         if abs(s0) < 1e-6 or (g_x == 0.0 and g_y == 0.0):
@@ -485,14 +519,14 @@ def _ascent(gray, gx, gy, tmpl, cx, cy, s, max_iter, c1, c2):
         dy = round(math.sin(sector * math.pi / 4.0))
         nx = cx + dx
         ny = cy + dy
-        s1, mi, mj, vi, vj, cij = _region_value(gray, tmpl, nx, ny, s, c1, c2, vals)
+        s1, mi, mj, vi, vj, cij = _region_value(gray, tmpl, nx, ny, s, c1, c2, vals, ti, ta)
         it += 1
         if s1 < s0:
             break
         if s1 == s0 and it > 1:  # a plateau: stop rather than wander
             cx, cy = nx, ny
             break
-        g_x, g_y = _region_gradient(gray, gx, gy, tmpl, nx, ny, s, c1, c2, vals, s1, mi, mj, vi, vj, cij)
+        g_x, g_y = _region_gradient(gray, gx, gy, tmpl, nx, ny, s, c1, c2, vals, s1, mi, mj, vi, vj, cij, gi, ga)
         cx, cy, s0 = nx, ny, s1
     return cx, cy, s0, it
 
