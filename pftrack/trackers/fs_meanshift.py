@@ -67,6 +67,10 @@ class FSMeanShiftParams(Params):
     scale_step: float = param(0.0, ge=0, lt=0.5, doc=(
         "0: fixed size (the chapter). > 0: also try sizes (1 +- step) and keep the best rho, smoothed with gamma 0.1 "
         "(as meanshift)."))
+    predict: bool = param(False, doc=(
+        "Start each frame's mean shift from the position extrapolated by the last confident frame's displacement "
+        "(constant velocity) instead of the last position (the chapter). Mean shift only climbs to the nearest "
+        "mode, and its damped steps (Eq. 20) leave a moving target's centre behind."))
     occlusion_test: Literal["llr", "sigma"] = param("llr", doc=(
         "When the local result counts as occluded (and the model is not updated). 'llr' (default): the two-class "
         "test of pftrack.filtering.loss on rho, target history vs the rho of background windows around the box: the "
@@ -121,6 +125,7 @@ class FSMeanShift(Tracker):
                                  sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor)
         self.miss = 0
         self.lost = False
+        self.vel = np.zeros(2)  # displacement of the last confident frame (used with predict)
         self.rho = 1.0
         self.d = 0.0
         self.iterations = 0
@@ -231,11 +236,12 @@ class FSMeanShift(Tracker):
 
     def _local_step(self, frame: np.ndarray):
         p = self.params
-        best = self._local(frame, self.c, self.size)
+        start = self.c + self.vel if p.predict else self.c
+        best = self._local(frame, start, self.size)
         size = self.size
         if p.scale_step > 0:
             for f in (1.0 - p.scale_step, 1.0 + p.scale_step):
-                cand = self._local(frame, self.c, self.size * f)
+                cand = self._local(frame, start, self.size * f)
                 if cand[1] > best[1] + 1e-12:
                     best, size = cand, self.size * f
             size = 0.1 * size + 0.9 * self.size  # Comaniciu's gamma = 0.1, as meanshift
@@ -276,12 +282,14 @@ class FSMeanShift(Tracker):
         p = self.params
         self._new_frame(frame)
         (c, rho, H_c, it, mass), size = self._local_step(frame)
+        prev = self.c
         self.c, self.size = c, np.asarray(size, dtype=np.float64)
         self.rho, self.iterations = rho, it
         self.d = float(np.sqrt(max(1.0 - rho, 0.0)))
         occluded, confident, score = self._occlusion_test(rho, c, self.size)
         self.miss = self.miss + 1 if occluded else 0
         self.lost = self.miss >= p.lost_frames
+        self.vel = np.asarray(c - prev, dtype=np.float64) if confident else np.zeros(2)
         if confident:
             self._update_model(frame, H_c)
             if p.reselect_every and self.frame_index % p.reselect_every == 0:

@@ -44,6 +44,10 @@ from .fs_meanshift import FSMeanShift, FSMeanShiftParams
 
 @dataclass(frozen=True, kw_only=True)
 class SwitchingParams(FSMeanShiftParams):
+    predict: bool = param(True, doc=(
+        "Start the local mean shift from the constant-velocity extrapolation of the last confident local frame "
+        "(see fs-meanshift). Chosen on the tune split: mean AUC 0.511 vs 0.497 without (55 sequences, paired "
+        "difference +0.014 +- 0.011), and 1.4x the update rate, as fewer frames switch to the global search."))
     features: Literal["porikli9", "first_order"] = param("porikli9", doc=(
         "Covariance features z of Eq. 27 (restored from Porikli 2006; see the covariance tracker)."))
     history: int = param(10, ge=1, le=200, doc="T of Eq. 31: confident covariances averaged into the model.")
@@ -214,12 +218,15 @@ class Switching(FSMeanShift):
                 else:
                     self.miss += 1
         self.lost = self.miss >= p.lost_frames
+        prev = self.c
         if not self.lost:
             self.c, self.size = np.asarray(c, dtype=np.float64), np.asarray(size, dtype=np.float64)
         self.rho, self.d, self.iterations = rho, d, it
+        self.vel = np.zeros(2)  # extrapolate (predict) only from a confident local frame
         if self.mode == "global":
             score = confidence(self.loss.evaluate(rho))
         elif confident and reason is None:
+            self.vel = self.c - prev
             self._learn(frame, d_le, C_loc, H_c, mass)
         return self._state(score=score, info={"pair": self.pair, "d": d, "d_le": d_le, "mode": self.mode,
                                               "switch": reason, "llr": self.loss.llr,
@@ -251,6 +258,7 @@ class Switching(FSMeanShift):
             self.c, self.size, self.rho = found[0], found[1], found[2]
             ok = True
         self.d = float(np.sqrt(max(1.0 - self.rho, 0.0)))
+        self.vel = np.zeros(2)
         if ok:
             self.lost, self.miss = False, 0
             self.loss.acquire(self.rho)
