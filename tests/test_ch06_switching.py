@@ -134,3 +134,18 @@ def test_switching_recovers_teleports_that_local_mean_shift_loses():
         wins += sw_rates[-1] > fs_rates[-1]
     assert np.mean(sw_rates) >= np.mean(fs_rates) + 0.3, (sw_rates, fs_rates)
     assert wins >= 3
+
+
+@pytest.mark.parametrize("name", ["fs-meanshift", "switching"])
+def test_working_resolution_reports_frame_coordinates(name):
+    """max_pixels: a tracker run on reduced frames reports boxes in the frame's coordinates and follows the
+    target about as well as at full resolution."""
+    spec = teleport_scene(5, n_frames=30)
+    full, truth = _run(name, spec, max_pixels=0)
+    small, _ = _run(name, spec, max_pixels=150)
+    w, h = truth[0].boxes[0][2:]
+    assert w * h > 3 * 150  # the reduced run works at less than 60 % of the frame's width
+    assert np.allclose([s.box[2:] for s in small[:5]], [s.box[2:] for s in full[:5]], rtol=0.1)
+    vis = [k for k, tr in enumerate(truth[:10]) if tr.visible[0] > 0.9 and tr.present[0]]
+    assert len(vis) >= 5
+    assert np.mean([iou(np.array(small[k].box), truth[k].boxes[0]) for k in vis]) > 0.5

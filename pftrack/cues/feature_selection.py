@@ -65,7 +65,10 @@ def bin_images(region: np.ndarray, names: tuple[str, ...] = FEATURES, *, bins: i
             out[..., k] = (hsv[..., 1].astype(np.uint16) * bins) >> 8
         elif name in ("r", "g"):
             if total is None:
-                total = region.astype(np.float32).sum(axis=2)
+                # B + G + R (exact in float32); NumPy's reduction over a 3-long last axis is ~6x slower
+                total = region[..., 0].astype(np.float32)
+                total += region[..., 1]
+                total += region[..., 2]
             ch = region[..., 2 if name == "r" else 1].astype(np.float32)
             frac = np.where(total > 0, ch / np.maximum(total, 1.0), 1.0 / 3.0)
             out[..., k] = np.minimum((frac * bins).astype(np.int32), bins - 1)

@@ -67,6 +67,13 @@ class FSMeanShiftParams(Params):
     scale_step: float = param(0.0, ge=0, lt=0.5, doc=(
         "0: fixed size (the chapter). > 0: also try sizes (1 +- step) and keep the best rho, smoothed with gamma 0.1 "
         "(as meanshift)."))
+    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=(
+        "Working resolution: when the initial box has more pixels than this, every frame is reduced (area "
+        "resize) by the factor that brings the box to this many pixels, and the tracker runs on the reduced "
+        "frames; 0: full resolution (the chapter). The cost of a frame is linear in the search region's pixels. "
+        "Chosen on the tune split (55 sequences): fs-meanshift 0.443 AUC at 2000 against 0.438 at full "
+        "resolution (paired +0.005 +- 0.003; 1000: 0.441, 4000: 0.434), switching 0.512 against 0.511, and "
+        "davis16_dog 95 -> 427 fps (fs-meanshift), 81 -> 240 fps (switching)."))
     predict: bool = param(False, doc=(
         "Start each frame's mean shift from the position extrapolated by the last confident frame's displacement "
         "(constant velocity) instead of the last position (the chapter). Mean shift only climbs to the nearest "
@@ -95,7 +102,27 @@ class FSMeanShift(Tracker):
     stochastic = False
 
     # -- initialisation ------------------------------------------------------------------------
+    # -- working resolution (max_pixels): the subclasses' _init_at / _update_at see reduced frames --------
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        p = self.params
+        fh, fw = frame.shape[:2]
+        area = float(box[2]) * float(box[3])
+        zoom = min(1.0, (p.max_pixels / area) ** 0.5) if p.max_pixels > 0 and area > 0 else 1.0
+        self._work_size = (max(1, int(round(fw * zoom))), max(1, int(round(fh * zoom))))
+        self._zx, self._zy = self._work_size[0] / fw, self._work_size[1] / fh
+        x, y, w, h = (float(v) for v in box)
+        st = self._init_at(self._zoomed(frame), (x * self._zx, y * self._zy, w * self._zx, h * self._zy))
+        return TrackState(box=(x, y, w, h), score=st.score, lost=st.lost, info=st.info)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        return self._update_at(self._zoomed(frame))
+
+    def _zoomed(self, frame: np.ndarray) -> np.ndarray:
+        if self._zx == 1.0 and self._zy == 1.0:
+            return frame
+        return cv2.resize(frame, self._work_size, interpolation=cv2.INTER_AREA)
+
+    def _init_at(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
         x, y, w, h = box
         self.c = np.array([x + w / 2.0, y + h / 2.0])
@@ -278,7 +305,7 @@ class FSMeanShift(Tracker):
             self._update_model(frame, H_c)
 
     # -- protocol ----------------------------------------------------------------------------------
-    def _update(self, frame: np.ndarray) -> TrackState:
+    def _update_at(self, frame: np.ndarray) -> TrackState:
         p = self.params
         self._new_frame(frame)
         (c, rho, H_c, it, mass), size = self._local_step(frame)
@@ -298,10 +325,11 @@ class FSMeanShift(Tracker):
                                               "llr": self.loss.llr})
 
     def _state(self, *, info: dict, score: float | None = None) -> TrackState:
-        w, h = self.size
+        """The state in frame coordinates (the tracker works at the reduced resolution of max_pixels)."""
+        w, h = self.size[0] / self._zx, self.size[1] / self._zy
         fh, fw = self._shape
-        cx = float(np.clip(self.c[0], 0, fw))
-        cy = float(np.clip(self.c[1], 0, fh))
+        cx = float(np.clip(self.c[0] / self._zx, 0, fw))
+        cy = float(np.clip(self.c[1] / self._zy, 0, fh))
         box = (cx - w / 2, cy - h / 2, float(w), float(h))
         return TrackState(box=box, score=float(np.clip(self.rho if score is None else score, 0, 1)), lost=self.lost,
                           info=info)

@@ -79,8 +79,8 @@ class Switching(FSMeanShift):
     name = "switching"
     Params = SwitchingParams
 
-    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
-        st = super()._init(frame, box)
+    def _init_at(self, frame: np.ndarray, box: Box) -> TrackState:
+        st = super()._init_at(frame, box)
         p = self.params
         self.gray = is_gray(frame)
         self.pitch = cs.pitch_for(box[2:], p.refine_side)
@@ -176,7 +176,7 @@ class Switching(FSMeanShift):
                 return c, size, rho, H_c, float(np.sqrt(max(1.0 - rho, 0.0))), float(dist)
         return None
 
-    def _update(self, frame: np.ndarray) -> TrackState:
+    def _update_at(self, frame: np.ndarray) -> TrackState:
         p = self.params
         self._new_frame(frame)
         if self.lost:
