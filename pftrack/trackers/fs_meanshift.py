@@ -68,9 +68,9 @@ class FSMeanShiftParams(Params):
         "0: fixed size (the chapter). > 0: also try sizes (1 +- step) and keep the best rho, smoothed with gamma 0.1 "
         "(as meanshift)."))
     max_pixels: int = param(2000, ge=0, le=10_000_000, doc=(
-        "Working resolution: when the initial box has more pixels than this, every frame is reduced (area "
-        "resize) by the factor that brings the box to this many pixels, and the tracker runs on the reduced "
-        "frames; 0: full resolution (the chapter). The cost of a frame is linear in the search region's pixels. "
+        "Working resolution: when the initial box has more than 4x this many pixels, every frame is reduced to "
+        "the means of k x k blocks, with the integer k that leaves the box 1-4x this many pixels, and the "
+        "tracker runs on the reduced frames; 0: full resolution (the chapter). The cost of a frame is linear in the search region's pixels. "
         "Chosen on the tune split (55 sequences): fs-meanshift 0.443 AUC at 2000 against 0.438 at full "
         "resolution (paired +0.005 +- 0.003; 1000: 0.441, 4000: 0.434), switching 0.512 against 0.511, and "
         "davis16_dog 95 -> 427 fps (fs-meanshift), 81 -> 240 fps (switching)."))
@@ -107,9 +107,12 @@ class FSMeanShift(Tracker):
         p = self.params
         fh, fw = frame.shape[:2]
         area = float(box[2]) * float(box[3])
-        zoom = min(1.0, (p.max_pixels / area) ** 0.5) if p.max_pixels > 0 and area > 0 else 1.0
-        self._work_size = (max(1, int(round(fw * zoom))), max(1, int(round(fh * zoom))))
-        self._zx, self._zy = self._work_size[0] / fw, self._work_size[1] / fh
+        # an integer block size k (exact block means, OpenCV's fast area path): the box keeps
+        # max_pixels to 4 max_pixels pixels
+        k = max(1, int((area / p.max_pixels) ** 0.5)) if p.max_pixels > 0 else 1
+        self._k = k = min(k, max(1, min(fw, fh) // 8))
+        self._work_size = (fw // k, fh // k)
+        self._zx = self._zy = 1.0 / k
         x, y, w, h = (float(v) for v in box)
         st = self._init_at(self._zoomed(frame), (x * self._zx, y * self._zy, w * self._zx, h * self._zy))
         return TrackState(box=(x, y, w, h), score=st.score, lost=st.lost, info=st.info)
@@ -118,9 +121,11 @@ class FSMeanShift(Tracker):
         return self._update_at(self._zoomed(frame))
 
     def _zoomed(self, frame: np.ndarray) -> np.ndarray:
-        if self._zx == 1.0 and self._zy == 1.0:
+        k = self._k
+        if k == 1:
             return frame
-        return cv2.resize(frame, self._work_size, interpolation=cv2.INTER_AREA)
+        w, h = self._work_size
+        return cv2.resize(frame[:h * k, :w * k], (w, h), interpolation=cv2.INTER_AREA)
 
     def _init_at(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
