@@ -70,10 +70,10 @@ class FSMeanShiftParams(Params):
     max_pixels: int = param(2000, ge=0, le=10_000_000, doc=(
         "Working resolution: when the initial box has more than 4x this many pixels, every frame is reduced to "
         "the means of k x k blocks, with the integer k that leaves the box 1-4x this many pixels, and the "
-        "tracker runs on the reduced frames; 0: full resolution (the chapter). The cost of a frame is linear in the search region's pixels. "
-        "Chosen on the tune split (55 sequences): fs-meanshift 0.443 AUC at 2000 against 0.438 at full "
-        "resolution (paired +0.005 +- 0.003; 1000: 0.441, 4000: 0.434), switching 0.512 against 0.511, and "
-        "davis16_dog 95 -> 427 fps (fs-meanshift), 81 -> 240 fps (switching)."))
+        "tracker runs on the reduced frames; 0: full resolution (the chapter). The cost of a frame is linear in "
+        "the search region's pixels. Chosen on the tune split (55 sequences): at 2000 the mean AUC equals full "
+        "resolution's (fs-meanshift 0.438, paired +0.0001 +- 0.0003; switching 0.511, +0.0002 +- 0.0001; 1000 "
+        "and 500 within 0.004), and davis16_dog runs at 505 instead of 92 fps (fs-meanshift)."))
     predict: bool = param(False, doc=(
         "Start each frame's mean shift from the position extrapolated by the last confident frame's displacement "
         "(constant velocity) instead of the last position (the chapter). Mean shift only climbs to the nearest "
