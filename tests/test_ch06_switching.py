@@ -149,3 +149,27 @@ def test_working_resolution_reports_frame_coordinates(name):
     vis = [k for k, tr in enumerate(truth[:10]) if tr.visible[0] > 0.9 and tr.present[0]]
     assert len(vis) >= 5
     assert np.mean([iou(np.array(small[k].box), truth[k].boxes[0]) for k in vis]) > 0.5
+
+
+def test_compiled_kernel_histogram_and_mean_shift_equal_the_numpy_reference():
+    from pftrack._numba import set_numba_enabled
+
+    rng = np.random.default_rng(2)
+    joint = rng.integers(0, 144, (60, 80))
+    weights = rng.uniform(0, 1, (60, 80))
+    weights[20:35, 30:50] += 3.0
+    cases = [((5, 4, 50, 41), 21.3, 17.8, 20.0, 15.5), ((0, 0, 80, 60), 70.0, 3.0, 12.0, 30.0)]
+    compiled = [fs.kernel_histogram(joint, 144, *c) for c in cases]
+    ms = fs.weighted_meanshift(weights, (45.0, 22.0), (8.0, 6.0), origin=(0, 0))
+    ms_off = fs.weighted_meanshift(weights, (145.0, 222.0), (8.0, 6.0), origin=(100, 200), max_iter=3)
+    previous = set_numba_enabled(False)
+    try:
+        for c, h in zip(cases, compiled):
+            assert np.array_equal(h, fs.kernel_histogram(joint, 144, *c))
+        for got, kw in ((ms, {}), (ms_off, {"origin": (100, 200), "max_iter": 3})):
+            ref = fs.weighted_meanshift(weights, (45.0, 22.0) if not kw else (145.0, 222.0), (8.0, 6.0), **kw)
+            assert np.allclose(got[0], ref[0], rtol=0, atol=1e-9) and got[1] == ref[1]
+            assert got[2] == pytest.approx(ref[2], rel=1e-12)
+    finally:
+        set_numba_enabled(previous)
+    assert ms[0][0] < 45.0 and ms[0][1] > 22.0  # moved towards the heavy block

@@ -30,6 +30,8 @@ import math
 import cv2
 import numpy as np
 
+from .._numba import njit, numba_enabled
+
 FEATURES = ("R", "G", "B", "H", "S", "r", "g", "orient")
 #: Candidates beyond the chapter's: "Ieq", the grey level after the frame's histogram equalisation (its
 #: rank in the frame), which a global monotonic lighting change leaves almost unchanged.
@@ -181,6 +183,68 @@ def backproject(pd: np.ndarray, joint: np.ndarray) -> np.ndarray:
     return pd.astype(np.float32)[joint]
 
 
+def kernel_histogram(joint: np.ndarray, n_joint: int, window: tuple[int, int, int, int], cx: float, cy: float,
+                     hx: float, hy: float) -> np.ndarray:
+    """Eqs. 16-17 with the Epanechnikov kernel: the normalised kernel-weighted histogram of the flat joint bins
+    in ``joint[j0:j1, i0:i1]`` (``window = (i0, j0, i1, j1)``), the ellipse centred at ``(cx, cy)`` in window
+    coordinates with half-axes ``hx, hy``.  The same as ``joint_histogram(joint[j0:j1, i0:i1], n_joint,
+    epanechnikov(j1 - j0, i1 - i0, cx, cy, hx, hy))``, without the kernel image."""
+    i0, j0, i1, j1 = (int(v) for v in window)
+    if not numba_enabled():
+        k = epanechnikov(j1 - j0, i1 - i0, cx, cy, hx, hy)
+        return joint_histogram(joint[j0:j1, i0:i1], n_joint, k)
+    h = np.zeros(n_joint)
+    _kernel_hist(joint, i0, j0, i1, j1, float(cx), float(cy), float(hx), float(hy), h)
+    s = h.sum()
+    return h / s if s > 0 else h
+
+
+@njit
+def _kernel_hist(joint, i0, j0, i1, j1, cx, cy, hx, hy, h):
+    for r in range(j1 - j0):
+        dy = (r + 0.5 - cy) / hy
+        for c in range(i1 - i0):
+            dx = (c + 0.5 - cx) / hx
+            r2 = dx ** 2 + dy ** 2
+            h[joint[j0 + r, i0 + c]] += 1.0 - r2 if r2 <= 1.0 else 0.0
+
+
+def kernel_rhos(joint: np.ndarray, model: np.ndarray, windows: np.ndarray, centres: np.ndarray, hx: float,
+                hy: float) -> np.ndarray:
+    """Bhattacharyya coefficient of ``model`` with :func:`kernel_histogram` at each of ``M`` windows:
+    ``windows`` ``(M, 4)`` rows ``(i0, j0, i1, j1)``, ``centres`` ``(M, 2)`` in window coordinates; NaN where
+    a window holds no kernel weight."""
+    windows = np.asarray(windows, dtype=np.int64).reshape(-1, 4)
+    centres = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
+    out = np.empty(len(windows))
+    if not numba_enabled():
+        for m, (w, c) in enumerate(zip(windows, centres)):
+            h = kernel_histogram(joint, len(model), tuple(w), c[0], c[1], hx, hy)
+            out[m] = float(np.sum(np.sqrt(h * model))) if h.sum() > 0 else np.nan
+        return out
+    _kernel_rhos(joint, np.ascontiguousarray(model, dtype=np.float64), windows, centres, float(hx), float(hy), out)
+    return out
+
+
+@njit
+def _kernel_rhos(joint, model, windows, centres, hx, hy, out):
+    h = np.empty(model.shape[0])
+    for m in range(windows.shape[0]):
+        h[:] = 0.0
+        _kernel_hist(joint, windows[m, 0], windows[m, 1], windows[m, 2], windows[m, 3], centres[m, 0], centres[m, 1],
+                     hx, hy, h)
+        s = 0.0
+        for b in range(h.shape[0]):
+            s += h[b]
+        if s > 0:
+            r = 0.0
+            for b in range(h.shape[0]):
+                r += math.sqrt(h[b] / s * model[b])
+            out[m] = r
+        else:
+            out[m] = np.nan
+
+
 def epanechnikov(h: int, w: int, cx: float, cy: float, hx: float, hy: float) -> np.ndarray:
     """Eq. 1 up to its constant: ``1 - r^2`` inside the ellipse (pixel centres), 0 outside."""
     dx = (np.arange(w) + 0.5 - cx) / hx
@@ -201,6 +265,10 @@ def weighted_meanshift(weights: np.ndarray, center: tuple[float, float], half_ax
     """
     hgt, wid = weights.shape
     hx, hy = max(float(half_axes[0]), 0.5), max(float(half_axes[1]), 0.5)
+    if numba_enabled():
+        cx, cy, it, mass = _meanshift(np.ascontiguousarray(weights), float(center[0]), float(center[1]), hx, hy,
+                                      float(origin[0]), float(origin[1]), int(max_iter), float(eps), float(damping))
+        return np.array([cx, cy]), it, mass
     y = np.array(center, dtype=np.float64)
     it = 0
     mass = 0.0
@@ -227,6 +295,47 @@ def weighted_meanshift(weights: np.ndarray, center: tuple[float, float], half_ax
         if moved < eps:
             break
     return y, it, mass
+
+
+@njit
+def _meanshift(weights, x, y, hx, hy, ox, oy, max_iter, eps, damping):
+    """:func:`weighted_meanshift`'s loop, compiled (sums in row order instead of NumPy's pairwise order)."""
+    hgt, wid = weights.shape
+    it = 0
+    mass = 0.0
+    for it in range(1, max_iter + 1):
+        lcx, lcy = x - ox, y - oy
+        i0, i1 = max(int(math.floor(lcx - hx)), 0), min(int(math.ceil(lcx + hx)) + 1, wid)
+        j0, j1 = max(int(math.floor(lcy - hy)), 0), min(int(math.ceil(lcy + hy)) + 1, hgt)
+        if i1 <= i0 or j1 <= j0:
+            return x, y, it, 0.0
+        s = 0.0
+        sx = 0.0
+        sy = 0.0
+        n_in = 0
+        for j in range(j0, j1):
+            yy = j + 0.5
+            dy = ((yy - lcy) / hy) ** 2
+            for i in range(i0, i1):
+                xx = i + 0.5
+                if ((xx - lcx) / hx) ** 2 + dy <= 1.0:
+                    v = weights[j, i]
+                    s += v
+                    sx += v * xx
+                    sy += v * yy
+                    n_in += 1
+        mass = s / max(n_in, 1)
+        if s <= 0:
+            return x, y, it, 0.0
+        cx = sx / s + ox
+        cy = sy / s + oy
+        nx = (1.0 - damping) * x + damping * cx
+        ny = (1.0 - damping) * y + damping * cy
+        moved = math.hypot(nx - x, ny - y)
+        x, y = nx, ny
+        if moved < eps:
+            break
+    return x, y, it, mass
 
 
 def ring_masks(shape: tuple[int, int], box: tuple[float, float, float, float], *, inner: float = 1.1,
