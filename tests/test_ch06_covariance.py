@@ -37,6 +37,30 @@ def test_integral_covariance_equals_np_cov_on_random_windows_and_masks():
             np.testing.assert_allclose(C[0], ref, rtol=1e-8, atol=1e-8 * np.abs(ref).max())
 
 
+@pytest.mark.parametrize("numba", [True, False])
+def test_one_window_covariance_equals_the_integral_images(numba):
+    """window_covariance (direct, one window) equals the integral-image covariance of the same level window,
+    with and without soft weights, inside the frame and at its edge, compiled and in NumPy."""
+    from pftrack._numba import set_numba_enabled
+
+    rng = np.random.default_rng(4)
+    frame = rng.integers(0, 256, (70, 90, 3), dtype=np.uint8)
+    soft = rng.uniform(0.0, 1.0, (70, 90)).astype(np.float32)
+    previous = set_numba_enabled(numba)
+    try:
+        for weights in (None, soft):
+            lv = cs.Level(frame, 1, cs.derivative_scales(frame, kind="porikli9", gray=False), weights)
+            for box in ((20.3, 15.2, 31.0, 24.6), (0.0, 50.0, 25.0, 20.0), (70.0, 0.0, 30.0, 30.0)):
+                win = lv.to_level(box)
+                ic = lv.integral(win, kind="porikli9", gray=False)
+                C, _ = ic.cov(np.array([win]))
+                ref = cv.standardize(C, np.array([[win[2] - win[0], win[3] - win[1]]]), lv.scales)[0]
+                got = cs.window_covariance(lv, box, kind="porikli9", gray=False)
+                np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12 * np.abs(ref).max())
+    finally:
+        set_numba_enabled(previous)
+
+
 def test_features_coordinates_and_grey_channels():
     frame = np.zeros((5, 7, 3), np.uint8)
     z = cv.covariance_features(frame, origin=(3, 4), pitch=2)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from .._numba import njit, numba_enabled
 from .covariance import EPS, IntegralCovariance, SPDModel, covariance_features, standardize
 
 
@@ -130,17 +131,61 @@ def window_distances(icov: IntegralCovariance, boxes: np.ndarray, model: SPDMode
     return out
 
 
-def window_covariance(level: Level, box, *, kind: str, gray: bool, eps: float = EPS) -> np.ndarray | None:
-    """The standardised covariance of the level window nearest to the frame ``box`` (None if empty)."""
+def window_covariance(level: Level, box, *, kind: str, gray: bool, eps: float = EPS,
+                      margin: int = 2) -> np.ndarray | None:
+    """The standardised covariance of the level window nearest to the frame ``box`` (None if empty).
+
+    One window needs no integral images: the features of the window plus ``margin`` (as
+    :meth:`Level.integral` computes them, so derivatives at the window's edge see real pixels), then the
+    weighted covariance of the window's pixels, centred on their weighted mean (two passes)."""
     win = level.to_level(box)
     x0, y0, x1, y1 = win
     if x1 - x0 < 2 or y1 - y0 < 2:
         return None
-    ic = level.integral(win, kind=kind, gray=gray)
-    C, W = ic.cov(np.array([win]))
-    if not np.all(np.isfinite(C)) or W[0] < ic.d + 1:
+    hh, ww = level.image.shape[:2]
+    px0, py0, px1, py1 = max(x0 - margin, 0), max(y0 - margin, 0), min(x1 + margin, ww), min(y1 + margin, hh)
+    z = covariance_features(level.image[py0:py1, px0:px1], kind=kind, gray=gray, origin=(px0, py0))
+    d = z.shape[-1]
+    zw = z[y0 - py0:y1 - py0, x0 - px0:x1 - px0].reshape(-1, d).astype(np.float64)
+    m = np.ones(zw.shape[0]) if level.weights is None else level.weights[y0:y1, x0:x1].astype(np.float64).ravel()
+    W = float(m.sum())
+    if not W > d:
         return None
-    return standardize(C, np.array([[x1 - x0, y1 - y0]]), level.scales, eps=eps)[0]
+    C = _weighted_cov(zw, m, W)
+    if not np.all(np.isfinite(C)):
+        return None
+    return standardize(C[None], np.array([[x1 - x0, y1 - y0]]), level.scales, eps=eps)[0]
+
+
+def _weighted_cov(z: np.ndarray, m: np.ndarray, W: float) -> np.ndarray:
+    """``sum m (z - mu)(z - mu)^T / (W - 1)`` with ``mu`` the weighted mean: element-wise sums in pixel order,
+    not BLAS, so the result does not depend on the thread count."""
+    if numba_enabled():
+        C = np.zeros((z.shape[1], z.shape[1]))
+        _weighted_cov_kernel(np.ascontiguousarray(z), np.ascontiguousarray(m), W, C)
+        return C
+    zc = z - np.einsum("n,ni->i", m, z) / W
+    return np.einsum("ni,nj->ij", zc * m[:, None], zc) / (W - 1.0)
+
+
+@njit
+def _weighted_cov_kernel(z, m, W, C):
+    n, d = z.shape
+    mu = np.zeros(d)
+    for k in range(n):
+        for i in range(d):
+            mu[i] += m[k] * z[k, i]
+    for i in range(d):
+        mu[i] /= W
+    for k in range(n):
+        for i in range(d):
+            a = m[k] * (z[k, i] - mu[i])
+            for j in range(i, d):
+                C[i, j] += a * (z[k, j] - mu[j])
+    for i in range(d):
+        for j in range(i, d):
+            C[i, j] /= W - 1.0
+            C[j, i] = C[i, j]
 
 
 @dataclass(frozen=True)
