@@ -31,6 +31,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from .._numba import njit, numba_enabled
+
 FEATURE_KINDS = ("porikli9", "first_order")
 
 #: The SPD regulariser added after standardisation (ch06.md §1.6 proposes 1e-6).  A constant
@@ -129,6 +131,19 @@ def region_covariance(z: np.ndarray, weights: np.ndarray | None = None) -> np.nd
     return (Q - np.outer(S, S) / W) / (W - 1.0)
 
 
+@njit
+def _fill_channels(zc, m, iu, ju, chans):
+    h, w, d = zc.shape
+    for y in range(h):
+        for x in range(w):
+            mm = m[y, x]
+            chans[y, x, 0] = mm
+            for i in range(d):
+                chans[y, x, 1 + i] = zc[y, x, i] * mm
+            for k in range(iu.shape[0]):
+                chans[y, x, 1 + d + k] = zc[y, x, iu[k]] * zc[y, x, ju[k]] * mm
+
+
 class IntegralCovariance:
     """Covariances of many rectangular windows from integral images (Tuzel et al. 2006).
 
@@ -149,9 +164,12 @@ class IntegralCovariance:
         self._iu, self._ju = iu, ju
         m = np.ones((h, w)) if weights is None else np.asarray(weights, dtype=np.float64)
         chans = np.empty((h, w, 1 + d + iu.size))
-        chans[..., 0] = m
-        chans[..., 1:1 + d] = zc * m[..., None]
-        chans[..., 1 + d:] = zc[..., iu] * zc[..., ju] * m[..., None]
+        if numba_enabled():  # the same products, without NumPy's strided gathers (~20x faster)
+            _fill_channels(np.ascontiguousarray(zc, dtype=np.float64), np.ascontiguousarray(m), iu, ju, chans)
+        else:
+            chans[..., 0] = m
+            chans[..., 1:1 + d] = zc * m[..., None]
+            chans[..., 1 + d:] = zc[..., iu] * zc[..., ju] * m[..., None]
         if chans.shape[-1] <= 512:  # OpenCV's channel limit; its integral is ~5x faster than two cumsums
             table = cv2.integral(chans, sdepth=cv2.CV_64F)
             self._table = table.reshape(h + 1, w + 1, -1)
