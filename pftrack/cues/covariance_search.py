@@ -149,7 +149,7 @@ def window_covariance(level: Level, box, *, kind: str, gray: bool, eps: float = 
     zw = z[y0 - py0:y1 - py0, x0 - px0:x1 - px0].reshape(-1, d).astype(np.float64)
     m = np.ones(zw.shape[0]) if level.weights is None else level.weights[y0:y1, x0:x1].astype(np.float64).ravel()
     W = float(m.sum())
-    if not W > d:
+    if not W >= d + 1:  # too little weight for a d x d covariance
         return None
     C = _weighted_cov(zw, m, W)
     if not np.all(np.isfinite(C)):

@@ -101,8 +101,7 @@ class FSMeanShift(Tracker):
     Params = FSMeanShiftParams
     stochastic = False
 
-    # -- initialisation ------------------------------------------------------------------------
-    # -- working resolution (max_pixels): the subclasses' _init_at / _update_at see reduced frames --------
+    # -- working resolution (max_pixels): _init_at / _update_at (and the subclasses') see reduced frames ----
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
         fh, fw = frame.shape[:2]
@@ -127,6 +126,7 @@ class FSMeanShift(Tracker):
         w, h = self._work_size
         return cv2.resize(frame[:h * k, :w * k], (w, h), interpolation=cv2.INTER_AREA)
 
+    # -- initialisation ------------------------------------------------------------------------
     def _init_at(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
         x, y, w, h = box
