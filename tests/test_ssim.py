@@ -8,6 +8,7 @@ import pytest
 
 import pftrack
 from pftrack.cues import ssim as S
+from pftrack.cues import ssim_ascent as A
 from pftrack.geometry import center_error
 from pftrack.synth import Scene, camouflage_scene
 
@@ -60,9 +61,9 @@ def test_global_ssim_closed_form_and_properties():
     i = a * j + b
     mi, mj, vj = i.mean(), j.mean(), j.var(ddof=1)
     expected = (2 * mi * mj + S.C1) / (mi ** 2 + mj ** 2 + S.C1) * (2 * a * vj + S.C2) / ((1 + a * a) * vj + S.C2)
-    assert S.ssim_global(i, j) == pytest.approx(expected, abs=1e-12)
-    assert S.ssim_global(j, j) == pytest.approx(1.0, abs=1e-15)
-    assert S.ssim_global(255 - j, j) < 0
+    assert A.ssim_global(i, j) == pytest.approx(expected, abs=1e-12)
+    assert A.ssim_global(j, j) == pytest.approx(1.0, abs=1e-15)
+    assert A.ssim_global(255 - j, j) < 0
     d = S.dissimilarity(np.array([1.0, 0.0, -1.0]))
     assert list(d) == [0.0, 0.5, 1.0]
     ll = S.log_likelihood_dmin(np.array([0.2, 0.1, 0.4]))
@@ -91,7 +92,7 @@ def test_dssim_gradient_matches_finite_differences():
     tmpl = f(80 + uu, 60 + vv)
 
     def rho(cx, cy):
-        s = S.ssim_global(f(cx + uu, cy + vv), tmpl)
+        s = A.ssim_global(f(cx + uu, cy + vv), tmpl)
         return np.sign(s) * np.log(abs(s))
 
     rng = np.random.default_rng(2)
@@ -99,8 +100,8 @@ def test_dssim_gradient_matches_finite_differences():
     for _ in range(20):
         cx, cy = 80 + rng.uniform(-6, 6), 60 + rng.uniform(-6, 6)
         gx, gy = grad(cx + uu, cy + vv)
-        g = S.grad_rho(f(cx + uu, cy + vv), tmpl, gx, gy)
-        gp = S.grad_rho(f(cx + uu, cy + vv), tmpl, gx, gy, a3_paper=True)
+        g = A.grad_rho(f(cx + uu, cy + vv), tmpl, gx, gy)
+        gp = A.grad_rho(f(cx + uu, cy + vv), tmpl, gx, gy, a3_paper=True)
         e = 1e-4
         fd = np.array([(rho(cx + e, cy) - rho(cx - e, cy)) / (2 * e), (rho(cx, cy + e) - rho(cx, cy - e)) / (2 * e)])
         cos = g @ fd / np.linalg.norm(g) / np.linalg.norm(fd)
@@ -112,7 +113,7 @@ def test_dssim_gradient_matches_finite_differences():
 def test_dssim_ascent_converges_to_the_template_position():
     rng = np.random.default_rng(4)
     img = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)), (0, 0), 3).astype(np.float32)
-    gx, gy = S.image_gradients(img)
+    gx, gy = A.image_gradients(img)
     star = (80.0, 60.0)
     tmpl = S.sample_patches(img, np.array([[*star, 1.0]]), (30, 40))[0].astype(np.float64)
     hits = total = 0
@@ -120,14 +121,14 @@ def test_dssim_ascent_converges_to_the_template_position():
         for dy in range(-4, 5):
             if dx == dy == 0:
                 continue
-            cx, cy, s, it = S.dssim_ascent(img, gx, gy, tmpl, (star[0] + dx, star[1] + dy))
+            cx, cy, s, it = A.dssim_ascent(img, gx, gy, tmpl, (star[0] + dx, star[1] + dy))
             total += 1
             hits += (cx, cy) == star
             assert it <= max(abs(dx), abs(dy)) + 2
     assert hits / total >= 0.95
     flat = np.full((60, 80), 100, np.float32)
     z = np.zeros_like(flat)
-    assert S.dssim_ascent(flat, z, z, np.full((10, 12), 90.0), (40, 30))[3] == 0  # no gradient: stops at once
+    assert A.dssim_ascent(flat, z, z, np.full((10, 12), 90.0), (40, 30))[3] == 0  # no gradient: stops at once
 
 
 def _track(name, spec, seed, **kw):
@@ -198,12 +199,12 @@ def test_region_ssim_and_sparse_gradients_agree_with_the_dense_ones():
     rng = np.random.default_rng(9)
     img = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)), (0, 0), 3).astype(np.float32)
     tmpl = S.sample_patches(img, np.array([[80.0, 60.0, 2.0]]), (15, 20))[0].astype(np.float64)
-    assert S.region_ssim(img, tmpl, (80.0, 60.0), scale=2.0) == pytest.approx(1.0, abs=1e-9)
+    assert A.region_ssim(img, tmpl, (80.0, 60.0), scale=2.0) == pytest.approx(1.0, abs=1e-9)
     patch = S.sample_patches(img, np.array([[83.0, 57.0, 2.0]]), (15, 20))[0]
-    assert S.region_ssim(img, tmpl, (83.0, 57.0), scale=2.0) == pytest.approx(S.ssim_global(patch, tmpl), abs=1e-4)
-    gx, gy = S.image_gradients(img)
-    dense = S.dssim_ascent(img, gx, gy, tmpl, (84, 58), scale=2.0)
-    sparse = S.dssim_ascent(img, None, None, tmpl, (84, 58), scale=2.0)
+    assert A.region_ssim(img, tmpl, (83.0, 57.0), scale=2.0) == pytest.approx(A.ssim_global(patch, tmpl), abs=1e-4)
+    gx, gy = A.image_gradients(img)
+    dense = A.dssim_ascent(img, gx, gy, tmpl, (84, 58), scale=2.0)
+    sparse = A.dssim_ascent(img, None, None, tmpl, (84, 58), scale=2.0)
     assert dense[:2] == sparse[:2] == (80.0, 60.0)
 
 
@@ -261,14 +262,14 @@ def test_region_samples_are_the_clamped_bilinear_image_on_the_scaled_grid():
         xx, yy = np.meshgrid(cx + s * u, cy + s * v)
         vals = np.empty(tmpl.size)
         ti, ta = np.empty((2, 2, 9), np.int64), np.empty((2, 9))
-        sv = S._region_value(img, tmpl, cx, cy, s, S.C1, S.C2, vals, ti, ta)[0]
+        sv = A._region_value(img, tmpl, cx, cy, s, S.C1, S.C2, vals, ti, ta)[0]
         assert np.allclose(vals, bilinear(xx, yy).ravel(), rtol=0, atol=1e-9)
         i, j = bilinear(xx, yy).ravel(), tmpl.ravel()
         ref = ((2 * i.mean() * j.mean() + S.C1) * (2 * np.cov(i, j)[0, 1] + S.C2)
                / ((i.mean() ** 2 + j.mean() ** 2 + S.C1) * (i.var(ddof=1) + j.var(ddof=1) + S.C2)))
         assert sv == pytest.approx(ref, abs=1e-9)
         e = np.empty((0, 0), np.float32)
-        g = S._region_ssim_grad(img, e, e, tmpl, cx, cy, s, S.C1, S.C2, True)[1:]
+        g = A._region_ssim_grad(img, e, e, tmpl, cx, cy, s, S.C1, S.C2, True)[1:]
         dx = 0.5 * (bilinear(xx + 1, yy) - bilinear(xx - 1, yy)).ravel()
         dy = 0.5 * (bilinear(xx, yy + 1) - bilinear(xx, yy - 1)).ravel()
-        assert np.allclose(g, S.grad_rho(i, j, dx, dy), rtol=1e-9, atol=1e-12)
+        assert np.allclose(g, A.grad_rho(i, j, dx, dy), rtol=1e-9, atol=1e-12)

@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 
 from ..cues import ssim as S
+from ..cues import ssim_ascent as A
 from ..filtering.loss import LossDetector, confidence
 from ..geometry import Box
 from ..params import param
@@ -94,18 +95,18 @@ class DSSIMTracker(Tracker):
         if p.scale_search == "after" and len(scales) == 3:
             # ascend at the current size, then test the two other sizes at the end point (ch02.md P8's
             # cheaper order)
-            cx, cy, sv, it = S.dssim_ascent(gray, gx, gy, self.template, centre, scale=self.s * self.pix,
+            cx, cy, sv, it = A.dssim_ascent(gray, gx, gy, self.template, centre, scale=self.s * self.pix,
                                             max_iter=p.max_iter)
             best = (np.array([cx, cy]), sv, self.s, it)
             for sc in (scales[0], scales[2]):
                 sc = min(max(sc, p.min_scale), p.max_scale)
-                v = S.region_ssim(gray, self.template, (cx, cy), scale=sc * self.pix)
+                v = A.region_ssim(gray, self.template, (cx, cy), scale=sc * self.pix)
                 if v > best[1]:
                     best = (np.array([cx, cy]), v, sc, it)
             return best
         for sc in scales:
             sc = min(max(sc, p.min_scale), p.max_scale)
-            cx, cy, sv, it = S.dssim_ascent(gray, gx, gy, self.template, centre, scale=sc * self.pix,
+            cx, cy, sv, it = A.dssim_ascent(gray, gx, gy, self.template, centre, scale=sc * self.pix,
                                             max_iter=p.max_iter)
             if best is None or sv > best[1]:
                 best = (np.array([cx, cy]), sv, sc, it)
@@ -117,7 +118,7 @@ class DSSIMTracker(Tracker):
             gray = self._gray(frame)
             if self.pix > 1.5:  # sparse samples: central differences at the samples, no gradient images
                 return self._search(gray, None, None)
-            return self._search(gray, *S.image_gradients(gray))
+            return self._search(gray, *A.image_gradients(gray))
         # only the region the ascent can reach: the box at the largest scale tried, plus max_iter steps
         fh, fw = self._shape
         m = p.max_iter + 2
@@ -131,7 +132,7 @@ class DSSIMTracker(Tracker):
         if self.pix > 1.5:  # sparse samples: gradients by central differences at the samples only
             gx = gy = None
         else:
-            gx, gy = S.image_gradients(roi)
+            gx, gy = A.image_gradients(roi)
         c, sv, sc, it = self._ascend(roi, gx, gy, self.c - np.array([x0, y0]))
         c = c + np.array([x0, y0])
         self.c, self.s = c, sc
@@ -158,7 +159,7 @@ class DSSIMTracker(Tracker):
         starts = self._coarse_starts(gray, self.params.search_starts)
         if gx is None:
             gx = gy = np.empty((0, 0), np.float32)
-        res = S.dssim_ascent_batch(gray, gx, gy, self.template, starts, max_iter=self.params.max_iter)
+        res = A.dssim_ascent_batch(gray, gx, gy, self.template, starts, max_iter=self.params.max_iter)
         k = int(np.argmax(res[:, 2]))
         if self.loss.acquire(float(res[k, 2])):
             self.mode = "tracking"

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..cues import patch_histograms as ph
 from ..cues import ssim as S
+from ..cues import ssim_ascent as A
 from ..cues import template as T
 from ..errors import ParameterError
 from ..filtering.loss import LossDetector, confidence
@@ -267,8 +268,8 @@ class HybridSSIMPF(SSIMPF):
         p = self.params
         # DSSIM on the sampled reference grid: positions in frame pixels, scale in reference pixels
         if p.max_iter > 0:
-            gx, gy = S.image_gradients(gray)
-            opt = S.dssim_ascent_batch(gray, gx, gy, self.template.astype(np.float64), self._scaled(states),
+            gx, gy = A.image_gradients(gray)
+            opt = A.dssim_ascent_batch(gray, gx, gy, self.template.astype(np.float64), self._scaled(states),
                                        max_iter=p.max_iter)
         else:
             opt = np.column_stack([states[:, :2], np.zeros((len(states), 2))])
