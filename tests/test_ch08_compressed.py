@@ -291,3 +291,35 @@ def test_compiled_field_energy_and_hole_filling_equal_their_references():
     for _ in range(50):
         m = (rng.random((30, 40)) < rng.uniform(0.2, 0.8)).astype(np.uint8)
         assert np.array_equal(C.fill_holes(m), binary_fill_holes(m).astype(np.uint8))
+
+
+def test_prefetch_keeps_order_raises_the_producers_error_and_stops_when_closed():
+    import threading
+
+    from pftrack.io.motion_vectors import prefetch
+
+    assert list(prefetch(iter(range(50)), depth=3)) == list(range(50))
+    assert list(prefetch(iter(range(5)), depth=0)) == list(range(5))
+
+    def failing():
+        yield 1
+        raise ValueError("broken stream")
+
+    with pytest.raises(ValueError, match="broken stream"):
+        list(prefetch(failing(), depth=2))
+
+    produced = []
+
+    def endless():
+        k = 0
+        while True:
+            produced.append(k)
+            yield k
+            k += 1
+
+    g = prefetch(endless(), depth=2)
+    assert [next(g) for _ in range(3)] == [0, 1, 2]
+    g.close()  # the consumer stops early: the producer must stop too
+    n = len(produced)
+    assert not any(t.name == "pftrack-prefetch" and t.is_alive() for t in threading.enumerate())
+    assert len(produced) == n and n <= 3 + 2 + 2

@@ -85,6 +85,60 @@ def iter_mv_frames(path, *, bgr: bool = False, threads: bool = False) -> Iterato
         container.close()
 
 
+def prefetch(items: Iterator, depth: int = 4) -> Iterator:
+    """Yield ``items`` in order while a background thread produces up to ``depth`` of them ahead.
+
+    FFmpeg decodes and converts with the GIL released, so the decoding overlaps the caller's work on a
+    second core.  An exception in the producer is raised in the caller; closing the generator stops the
+    producer.  ``depth`` 0 iterates in the caller's thread."""
+    if depth <= 0:
+        yield from items
+        return
+    import queue
+    import threading
+
+    q: queue.Queue = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+    done = object()
+
+    def put(item) -> bool:
+        while not stop.is_set():
+            try:
+                q.put(item, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def produce() -> None:
+        try:
+            for item in items:
+                if not put((None, item)):
+                    return
+        except BaseException as exc:  # noqa: BLE001 - handed to the consumer
+            put((exc, None))
+            return
+        finally:
+            close = getattr(items, "close", None)
+            if stop.is_set() and close is not None:
+                close()
+        put((None, done))
+
+    worker = threading.Thread(target=produce, name="pftrack-prefetch", daemon=True)
+    worker.start()
+    try:
+        while True:
+            exc, item = q.get()
+            if exc is not None:
+                raise exc
+            if item is done:
+                return
+            yield item
+    finally:
+        stop.set()
+        worker.join(timeout=5.0)
+
+
 class MVSource:
     """A frame source over a compressed video that also keeps each frame's motion vectors in ``current``
     (for the ``mv`` detector); the same interface as :class:`pftrack.io.sources.FrameSource`."""
@@ -111,6 +165,7 @@ class MVSource:
         if codec not in ("h264", "mpeg4", "h263", "mpeg2video", "mpeg1video", "hevc"):
             raise SourceError(f"{path}: codec {codec} exports no motion vectors (use H.264 or MPEG-4 Part 2)")
         self.current: MVFrame | None = None
+        self.prefetch = 4  # frames decoded ahead on a second thread (0: decode in the caller's thread)
         self.size = None
         self.sequence = None
         self.skipped: list[int] = []
@@ -125,7 +180,7 @@ class MVSource:
         return self._len
 
     def numbered(self):
-        for f in iter_mv_frames(self.name, bgr=True, threads=True):
+        for f in prefetch(iter_mv_frames(self.name, bgr=True, threads=True), depth=self.prefetch):
             self.current = f
             if self.size is None:
                 self.size = (f.y.shape[1], f.y.shape[0])
