@@ -296,7 +296,7 @@ def test_compiled_field_energy_and_hole_filling_equal_their_references():
 def test_prefetch_keeps_order_raises_the_producers_error_and_stops_when_closed():
     import threading
 
-    from pftrack.io.motion_vectors import prefetch
+    from pftrack.io.prefetch import prefetch
 
     assert list(prefetch(iter(range(50)), depth=3)) == list(range(50))
     assert list(prefetch(iter(range(5)), depth=0)) == list(range(5))

@@ -44,6 +44,31 @@ def test_video_file_roundtrip(tmp_path):
     assert abs(int(frames[3].mean()) - 120) < 6
 
 
+def test_file_sources_read_ahead_on_a_thread_that_stops_with_the_source(tmp_path):
+    """Frames decoded ahead (pftrack.io.prefetch) are the same frames in the same order; stopping early and
+    closing the source ends the reading thread."""
+    import threading
+
+    path = tmp_path / "clip.avi"
+    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10, (64, 48))
+    for i in range(12):
+        vw.write(np.full((48, 64, 3), 20 * i, np.uint8))
+    vw.release()
+    with open_source(str(path)) as src:
+        assert src.prefetch > 0
+        ahead = list(src.numbered())
+    with open_source(str(path)) as src:
+        src.prefetch = 0
+        inline = list(src.numbered())
+    assert [n for n, _ in ahead] == list(range(1, 13))
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(ahead, inline, strict=True))
+    src = open_source(str(path))
+    it = src.numbered()
+    assert next(it)[0] == 1 and next(it)[0] == 2
+    src.close()  # the consumer stops early: the reader stops before the decoder is released
+    assert not any(t.name == "pftrack-prefetch" and t.is_alive() for t in threading.enumerate())
+
+
 def test_missing_empty_and_fake_sources(tmp_path):
     with pytest.raises(SourceError, match="no such file"):
         open_source(tmp_path / "nope.mp4")

@@ -24,6 +24,7 @@ import numpy as np
 
 from .._numba import njit, numba_enabled
 from ..errors import ParameterError, SourceError
+from .prefetch import prefetch
 
 BLOCK = 4
 
@@ -83,60 +84,6 @@ def iter_mv_frames(path, *, bgr: bool = False, threads: bool = False) -> Iterato
                           frame.to_ndarray(format="bgr24") if bgr else None)
     finally:
         container.close()
-
-
-def prefetch(items: Iterator, depth: int = 4) -> Iterator:
-    """Yield ``items`` in order while a background thread produces up to ``depth`` of them ahead.
-
-    FFmpeg decodes and converts with the GIL released, so the decoding overlaps the caller's work on a
-    second core.  An exception in the producer is raised in the caller; closing the generator stops the
-    producer.  ``depth`` 0 iterates in the caller's thread."""
-    if depth <= 0:
-        yield from items
-        return
-    import queue
-    import threading
-
-    q: queue.Queue = queue.Queue(maxsize=depth)
-    stop = threading.Event()
-    done = object()
-
-    def put(item) -> bool:
-        while not stop.is_set():
-            try:
-                q.put(item, timeout=0.1)
-                return True
-            except queue.Full:
-                continue
-        return False
-
-    def produce() -> None:
-        try:
-            for item in items:
-                if not put((None, item)):
-                    return
-        except BaseException as exc:  # noqa: BLE001 - handed to the consumer
-            put((exc, None))
-            return
-        finally:
-            close = getattr(items, "close", None)
-            if stop.is_set() and close is not None:
-                close()
-        put((None, done))
-
-    worker = threading.Thread(target=produce, name="pftrack-prefetch", daemon=True)
-    worker.start()
-    try:
-        while True:
-            exc, item = q.get()
-            if exc is not None:
-                raise exc
-            if item is done:
-                return
-            yield item
-    finally:
-        stop.set()
-        worker.join(timeout=5.0)
 
 
 class MVSource:

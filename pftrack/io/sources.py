@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import FrameError, SourceError
 from ..frames import as_bgr_uint8
 from .datasets import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, read_sequence
+from .prefetch import prefetch
 
 
 def read_image(path: Path) -> np.ndarray | None:
@@ -47,6 +48,9 @@ class FrameSource:
         self.size: tuple[int, int] | None = None  # (width, height) once known
         self.sequence: Sequence | None = None
         self.skipped: list[int] = []
+        #: frames decoded ahead on a second thread (pftrack.io.prefetch); 0 reads in the caller's thread
+        self.prefetch = 4
+        self._reading: Iterator | None = None
 
     # -- overridden by subclasses -------------------------------------------------------
     def _raw(self) -> Iterator[tuple[int, np.ndarray | None, str]]:
@@ -74,7 +78,15 @@ class FrameSource:
 
     def numbered(self) -> Iterator[tuple[int, np.ndarray]]:
         """Yield ``(frame_number, frame)`` with numbers from 1, skipped frames left out."""
-        for number, img, desc in self._raw():
+        self._reading = raw = prefetch(self._raw(), depth=self.prefetch)
+        try:
+            yield from self._checked(raw)
+        finally:
+            raw.close()
+            self._reading = None
+
+    def _checked(self, raw) -> Iterator[tuple[int, np.ndarray]]:
+        for number, img, desc in raw:
             if img is None:
                 if self.skip_bad_frames:
                     self.skipped.append(number)
@@ -101,7 +113,9 @@ class FrameSource:
             yield frame
 
     def close(self) -> None:
-        pass
+        if self._reading is not None:  # stop the reading thread before the decoder goes away
+            self._reading.close()
+            self._reading = None
 
     def __enter__(self):
         return self
@@ -155,6 +169,8 @@ class VideoSource(FrameSource):
         self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else None
         count = int(self.cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         self._count = count if count > 0 and not isinstance(target, int) else None
+        if isinstance(target, int):
+            self.prefetch = 0  # a live camera: frames read ahead would be stale
 
     def __len__(self) -> int:
         if self._count is None:
@@ -175,6 +191,7 @@ class VideoSource(FrameSource):
             yield number, img, "video frame"
 
     def close(self) -> None:
+        super().close()
         self.cap.release()
 
 
