@@ -32,12 +32,17 @@ def test_image_folder_in_natural_order(tmp_path):
     assert [int(f[0, 0, 0]) for f in src] == [1, 2, 10]
 
 
-def test_video_file_roundtrip(tmp_path):
-    path = tmp_path / "clip.avi"
+def _write_clip(path, n: int, step: int):
+    """An MJPG clip of ``n`` flat 64x48 frames of levels 0, step, 2 step, ..."""
     vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10, (64, 48))
-    for i in range(6):
-        vw.write(np.full((48, 64, 3), 40 * i, np.uint8))
+    for i in range(n):
+        vw.write(np.full((48, 64, 3), step * i, np.uint8))
     vw.release()
+    return path
+
+
+def test_video_file_roundtrip(tmp_path):
+    path = _write_clip(tmp_path / "clip.avi", 6, 40)
     with open_source(str(path)) as src:
         frames = list(src)
     assert len(frames) == 6 and frames[0].shape == (48, 64, 3) and frames[0].dtype == np.uint8
@@ -49,11 +54,7 @@ def test_file_sources_read_ahead_on_a_thread_that_stops_with_the_source(tmp_path
     closing the source ends the reading thread."""
     import threading
 
-    path = tmp_path / "clip.avi"
-    vw = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10, (64, 48))
-    for i in range(12):
-        vw.write(np.full((48, 64, 3), 20 * i, np.uint8))
-    vw.release()
+    path = _write_clip(tmp_path / "clip.avi", 12, 20)
     with open_source(str(path)) as src:
         assert src.prefetch > 0
         ahead = list(src.numbered())
