@@ -22,8 +22,8 @@ from .ssim import C1, C2
 
 # ------------------------------------------------------------------------------ global SSIM and its gradient
 
-def ssim_global(i: np.ndarray, j: np.ndarray, *, c1: float = C1, c2: float = C2) -> float:
-    """Eq. (21) with the global statistics (18)-(20) over all L pixels (``L - 1`` denominators)."""
+def _global_stats(i: np.ndarray, j: np.ndarray, c1: float, c2: float):
+    """``(i, j, mi, mj, vi, vj, cij, S)``: the flattened regions, statistics (18)-(20) and Eq. (21)."""
     i = np.asarray(i, dtype=np.float64).ravel()
     j = np.asarray(j, dtype=np.float64).ravel()
     n = i.size
@@ -31,7 +31,13 @@ def ssim_global(i: np.ndarray, j: np.ndarray, *, c1: float = C1, c2: float = C2)
     vi = ((i - mi) ** 2).sum() / (n - 1)
     vj = ((j - mj) ** 2).sum() / (n - 1)
     cij = ((i - mi) * (j - mj)).sum() / (n - 1)
-    return float((2 * mi * mj + c1) * (2 * cij + c2) / ((mi * mi + mj * mj + c1) * (vi + vj + c2)))
+    s = (2 * mi * mj + c1) * (2 * cij + c2) / ((mi * mi + mj * mj + c1) * (vi + vj + c2))
+    return i, j, mi, mj, vi, vj, cij, s
+
+
+def ssim_global(i: np.ndarray, j: np.ndarray, *, c1: float = C1, c2: float = C2) -> float:
+    """Eq. (21) with the global statistics (18)-(20) over all L pixels (``L - 1`` denominators)."""
+    return float(_global_stats(i, j, c1, c2)[-1])
 
 
 def grad_rho(i: np.ndarray, j: np.ndarray, gix: np.ndarray, giy: np.ndarray, *, c1: float = C1, c2: float = C2,
@@ -42,16 +48,10 @@ def grad_rho(i: np.ndarray, j: np.ndarray, gix: np.ndarray, giy: np.ndarray, *, 
     gradient at the region's pixels.  ``a3_paper`` uses the printed ``A3 = 1/(2 sigma_IJ + C2)``
     instead of the analytic ``2/(2 sigma_IJ + C2)``.
     """
-    i = np.asarray(i, dtype=np.float64).ravel()
-    j = np.asarray(j, dtype=np.float64).ravel()
+    i, j, mi, mj, vi, vj, cij, s = _global_stats(i, j, c1, c2)
     gx = np.asarray(gix, dtype=np.float64).ravel()
     gy = np.asarray(giy, dtype=np.float64).ravel()
     n = i.size
-    mi, mj = i.mean(), j.mean()
-    vi = ((i - mi) ** 2).sum() / (n - 1)
-    vj = ((j - mj) ** 2).sum() / (n - 1)
-    cij = ((i - mi) * (j - mj)).sum() / (n - 1)
-    s = (2 * mi * mj + c1) * (2 * cij + c2) / ((mi * mi + mj * mj + c1) * (vi + vj + c2))
     sign = 1.0 if s >= 0 else -1.0
     a1 = 2 * mj / (2 * mi * mj + c1) - 2 * mi / (mi * mi + mj * mj + c1)
     a2 = -1.0 / (vi + vj + c2)
