@@ -36,6 +36,7 @@ from ..filtering.loss import LossDetector, RunningThreshold, confidence
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
+from .working_resolution import WorkingResolution
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -94,7 +95,7 @@ class FSMeanShiftParams(Params):
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive frames above the threshold before lost is raised.")
 
 
-class FSMeanShift(Tracker):
+class FSMeanShift(WorkingResolution, Tracker):
     """Local mode of the switching tracker: feature-selecting mean shift (deterministic)."""
 
     name = "fs-meanshift"
@@ -103,28 +104,13 @@ class FSMeanShift(Tracker):
 
     # -- working resolution (max_pixels): _init_at / _update_at (and the subclasses') see reduced frames ----
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
-        p = self.params
-        fh, fw = frame.shape[:2]
-        area = float(box[2]) * float(box[3])
-        # an integer block size k (exact block means, OpenCV's fast area path): the box keeps
-        # max_pixels to 4 max_pixels pixels
-        k = max(1, int((area / p.max_pixels) ** 0.5)) if p.max_pixels > 0 else 1
-        self._k = k = min(k, max(1, min(fw, fh) // 8))
-        self._work_size = (fw // k, fh // k)
-        self._zx = self._zy = 1.0 / k
-        x, y, w, h = (float(v) for v in box)
-        st = self._init_at(self._zoomed(frame), (x * self._zx, y * self._zy, w * self._zx, h * self._zy))
-        return TrackState(box=(x, y, w, h), score=st.score, lost=st.lost, info=st.info)
+        zbox = self._set_resolution(frame, box, self.params.max_pixels)
+        self._zx = self._zy = 1.0 / self._k
+        st = self._init_at(self._zoomed(frame), zbox)
+        return TrackState(box=tuple(float(v) for v in box), score=st.score, lost=st.lost, info=st.info)
 
     def _update(self, frame: np.ndarray) -> TrackState:
         return self._update_at(self._zoomed(frame))
-
-    def _zoomed(self, frame: np.ndarray) -> np.ndarray:
-        k = self._k
-        if k == 1:
-            return frame
-        w, h = self._work_size
-        return cv2.resize(frame[:h * k, :w * k], (w, h), interpolation=cv2.INTER_AREA)
 
     # -- initialisation ------------------------------------------------------------------------
     def _init_at(self, frame: np.ndarray, box: Box) -> TrackState:

@@ -1,0 +1,40 @@
+"""Working resolution for trackers whose cost grows with the target's pixels: frames are reduced to
+k x k block means (OpenCV's exact area path) with the integer k that leaves the initial box between
+``max_pixels`` and 4 ``max_pixels`` pixels, and the tracker works on the reduced frames."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from ..geometry import Box
+
+
+class WorkingResolution:
+    """Mixin: :meth:`_set_resolution` at init, :meth:`_zoomed` for every frame, :meth:`_to_frame` for boxes."""
+
+    _k: int = 1
+    _work_size: tuple[int, int] = (0, 0)
+
+    def _set_resolution(self, frame: np.ndarray, box: Box, max_pixels: int) -> tuple[float, float, float, float]:
+        """Choose ``k`` for ``box`` (0 ``max_pixels``: full resolution) and return the box in reduced pixels."""
+        fh, fw = frame.shape[:2]
+        area = float(box[2]) * float(box[3])
+        k = max(1, int((area / max_pixels) ** 0.5)) if max_pixels > 0 else 1
+        self._k = k = min(k, max(1, min(fw, fh) // 8))
+        self._work_size = (fw // k, fh // k)
+        z = 1.0 / k
+        x, y, w, h = (float(v) for v in box)
+        return x * z, y * z, w * z, h * z
+
+    def _zoomed(self, frame: np.ndarray) -> np.ndarray:
+        k = self._k
+        if k == 1:
+            return frame
+        w, h = self._work_size
+        return cv2.resize(frame[:h * k, :w * k], (w, h), interpolation=cv2.INTER_AREA)
+
+    def _to_frame(self, box) -> tuple[float, float, float, float]:
+        """A box in reduced pixels -> frame pixels."""
+        z = 1.0 / self._k
+        return tuple(float(v) / z for v in box)
