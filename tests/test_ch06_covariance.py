@@ -35,6 +35,8 @@ def test_integral_covariance_equals_np_cov_on_random_windows_and_masks():
                 m = mask[y0:y1, x0:x1].ravel() > 0
                 ref = np.cov(sub[m].T)
             np.testing.assert_allclose(C[0], ref, rtol=1e-8, atol=1e-8 * np.abs(ref).max())
+            direct = cv.region_covariance(z[y0:y1, x0:x1], None if weights is None else mask[y0:y1, x0:x1])
+            np.testing.assert_allclose(direct, ref, rtol=1e-8, atol=1e-8 * np.abs(ref).max())
 
 
 @pytest.mark.parametrize("numba", [True, False])

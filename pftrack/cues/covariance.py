@@ -117,18 +117,39 @@ def standardize(C: np.ndarray, sizes: np.ndarray, scales: np.ndarray, *, eps: fl
 
 
 def region_covariance(z: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
-    """Eq. 27 directly on the pixels of one region (the reference for :class:`IntegralCovariance`).
+    """Eq. 27 directly on the pixels of one region (``z`` ``(..., d)``; the reference for
+    :class:`IntegralCovariance`): ``sum m (z - mu)(z - mu)^T / (W - 1)`` with ``mu`` the weighted mean and
+    ``W = sum m`` (all ones by default).  Two passes, element-wise sums in pixel order, not BLAS, so the
+    result does not depend on the thread count; compiled when Numba is on."""
+    zz = np.ascontiguousarray(z, dtype=np.float64).reshape(-1, z.shape[-1])
+    m = np.ones(zz.shape[0]) if weights is None else np.ascontiguousarray(weights, dtype=np.float64).ravel()
+    W = float(m.sum())
+    if numba_enabled():
+        C = np.zeros((zz.shape[1], zz.shape[1]))
+        _weighted_cov(zz, m, W, C)
+        return C
+    zc = zz - np.einsum("n,ni->i", m, zz) / W
+    return np.einsum("ni,nj->ij", zc * m[:, None], zc) / (W - 1.0)
 
-    With ``weights`` it is the weighted covariance ``(Q - S S^T / W) / (W - 1)``.
-    """
-    zz = z.reshape(-1, z.shape[-1]).astype(np.float64)
-    if weights is None:
-        return np.cov(zz.T)
-    m = np.asarray(weights, dtype=np.float64).ravel()
-    W = m.sum()
-    S = m @ zz
-    Q = (zz * m[:, None]).T @ zz
-    return (Q - np.outer(S, S) / W) / (W - 1.0)
+
+@njit
+def _weighted_cov(z, m, W, C):
+    n, d = z.shape
+    mu = np.zeros(d)
+    for k in range(n):
+        for i in range(d):
+            mu[i] += m[k] * z[k, i]
+    for i in range(d):
+        mu[i] /= W
+    for k in range(n):
+        for i in range(d):
+            a = m[k] * (z[k, i] - mu[i])
+            for j in range(i, d):
+                C[i, j] += a * (z[k, j] - mu[j])
+    for i in range(d):
+        for j in range(i, d):
+            C[i, j] /= W - 1.0
+            C[j, i] = C[i, j]
 
 
 @njit

@@ -26,8 +26,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .._numba import njit, numba_enabled
-from .covariance import EPS, IntegralCovariance, SPDModel, covariance_features, standardize
+from .covariance import EPS, IntegralCovariance, SPDModel, covariance_features, region_covariance, standardize
 
 
 def pitch_for(size: tuple[float, float], side: int) -> int:
@@ -151,41 +150,10 @@ def window_covariance(level: Level, box, *, kind: str, gray: bool, eps: float = 
     W = float(m.sum())
     if not W >= d + 1:  # too little weight for a d x d covariance
         return None
-    C = _weighted_cov(zw, m, W)
+    C = region_covariance(zw, m)
     if not np.all(np.isfinite(C)):
         return None
     return standardize(C[None], np.array([[x1 - x0, y1 - y0]]), level.scales, eps=eps)[0]
-
-
-def _weighted_cov(z: np.ndarray, m: np.ndarray, W: float) -> np.ndarray:
-    """``sum m (z - mu)(z - mu)^T / (W - 1)`` with ``mu`` the weighted mean: element-wise sums in pixel order,
-    not BLAS, so the result does not depend on the thread count."""
-    if numba_enabled():
-        C = np.zeros((z.shape[1], z.shape[1]))
-        _weighted_cov_kernel(np.ascontiguousarray(z), np.ascontiguousarray(m), W, C)
-        return C
-    zc = z - np.einsum("n,ni->i", m, z) / W
-    return np.einsum("ni,nj->ij", zc * m[:, None], zc) / (W - 1.0)
-
-
-@njit
-def _weighted_cov_kernel(z, m, W, C):
-    n, d = z.shape
-    mu = np.zeros(d)
-    for k in range(n):
-        for i in range(d):
-            mu[i] += m[k] * z[k, i]
-    for i in range(d):
-        mu[i] /= W
-    for k in range(n):
-        for i in range(d):
-            a = m[k] * (z[k, i] - mu[i])
-            for j in range(i, d):
-                C[i, j] += a * (z[k, j] - mu[j])
-    for i in range(d):
-        for j in range(i, d):
-            C[i, j] /= W - 1.0
-            C[j, i] = C[i, j]
 
 
 @dataclass(frozen=True)
