@@ -105,7 +105,6 @@ class FSMeanShift(WorkingResolution, Tracker):
     # -- working resolution (max_pixels): _init_at / _update_at (and the subclasses') see reduced frames ----
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         zbox = self._set_resolution(frame, box, self.params.max_pixels)
-        self._zx = self._zy = 1.0 / self._k
         st = self._init_at(self._zoomed(frame), zbox)
         return TrackState(box=tuple(float(v) for v in box), score=st.score, lost=st.lost, info=st.info)
 
@@ -327,10 +326,10 @@ class FSMeanShift(WorkingResolution, Tracker):
 
     def _state(self, *, info: dict, score: float | None = None) -> TrackState:
         """The state in frame coordinates (the tracker works at the reduced resolution of max_pixels)."""
-        w, h = self.size[0] / self._zx, self.size[1] / self._zy
+        w, h = self._to_frame(self.size[0]), self._to_frame(self.size[1])
         fh, fw = self._shape
-        cx = float(np.clip(self.c[0] / self._zx, 0, fw))
-        cy = float(np.clip(self.c[1] / self._zy, 0, fh))
+        cx = float(np.clip(self._to_frame(self.c[0]), 0, fw))
+        cy = float(np.clip(self._to_frame(self.c[1]), 0, fh))
         box = (cx - w / 2, cy - h / 2, float(w), float(h))
         return TrackState(box=box, score=float(np.clip(self.rho if score is None else score, 0, 1)), lost=self.lost,
                           info=info)

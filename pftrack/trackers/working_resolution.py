@@ -11,7 +11,7 @@ from ..geometry import Box
 
 
 class WorkingResolution:
-    """Mixin: :meth:`_set_resolution` at init, :meth:`_zoomed` for every frame, :meth:`_to_frame` for boxes."""
+    """Mixin: :meth:`_set_resolution` at init, :meth:`_zoomed` for every frame, :meth:`_to_frame` for results."""
 
     _k: int = 1
     _work_size: tuple[int, int] = (0, 0)
@@ -34,7 +34,6 @@ class WorkingResolution:
         w, h = self._work_size
         return cv2.resize(frame[:h * k, :w * k], (w, h), interpolation=cv2.INTER_AREA)
 
-    def _to_frame(self, box) -> tuple[float, float, float, float]:
-        """A box in reduced pixels -> frame pixels."""
-        z = 1.0 / self._k
-        return tuple(float(v) / z for v in box)
+    def _to_frame(self, v):
+        """Lengths or coordinates in reduced pixels -> frame pixels."""
+        return v / (1.0 / self._k)
