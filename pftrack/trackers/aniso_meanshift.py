@@ -11,6 +11,7 @@ followed but flagged (``lost`` after ``lost_frames`` such frames).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
@@ -20,6 +21,7 @@ from ..cues import anisotropic as an
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
+from .working_resolution import WORKING_RESOLUTION_DOC, WorkingResolution
 from .sift_ransac import ColorModel, RBox, ReinitGate, colour_roi, corner_distance, hull
 
 
@@ -37,6 +39,11 @@ class AnisoMeanShiftParams(Params):
         "Refuse or halve a bandwidth step (Eq. 8) that lowers the true objective |Sigma|^(gamma/2) rho (design: on "
         "backgrounds sharing the target's colours the linearised step inflates the kernel). False is the literal "
         "chapter."))
+    max_scale_step: float = param(0.0, ge=0, le=10, doc=(
+        "Bound on the kernel's size change in one frame: |Sigma|^(1/4) within a factor 1 + this of the frame's "
+        "start (Sigma scaled uniformly; shape and angle free). Design, not in the chapter: Eq. 8 inflates the "
+        "kernel on backgrounds sharing the target's colours, and every later step then sums over more pixels. "
+        "0: unbounded (the chapter)."))
     max_iterations: int = param(10, ge=1, le=100, doc="Mean-shift iterations (L4993).")
     shift_tol: float = param(0.5, gt=0, doc="Stop when the shift is below this (px) ...")
     sigma_tol: float = param(1e-3, gt=0, doc="... and ||dSigma||/||Sigma|| below this (proposed).")
@@ -48,6 +55,7 @@ class AnisoMeanShiftParams(Params):
     auto_frames: int = param(10, ge=3, le=100, doc="'auto': frames whose rho and dist set the thresholds.")
     color_space: Literal["auto", "rgb", "gray"] = param("auto", doc="Histogram features, as sift-ransac.")
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive re-initialisations before lost is raised.")
+    max_pixels: int = param(0, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC)
 
 
 class AnisoCore:
@@ -73,12 +81,13 @@ class AnisoCore:
         f = color.feats
         y, S, it = an.aniso_mean_shift(f.bins, (f.x0, f.y0), q, (start[0], start[1]), self.kernel_of(start),
                                        gamma=p.gamma, max_iter=p.max_iterations, shift_tol=p.shift_tol,
-                                       sigma_tol=p.sigma_tol, safeguard=p.safeguard)
+                                       sigma_tol=p.sigma_tol, safeguard=p.safeguard,
+                                       max_scale_step=p.max_scale_step)
         v = self.box_of(S, y)
         return v, an.bhattacharyya(color.hist(v), q), it
 
 
-class AnisoMeanShift(Tracker):
+class AnisoMeanShift(WorkingResolution, Tracker):
     """Tracker B alone (the chapter's Tracker-1); deterministic."""
 
     name = "anisotropic-meanshift"
@@ -86,17 +95,26 @@ class AnisoMeanShift(Tracker):
     stochastic = False
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        zbox = self._set_resolution(frame, box, self.params.max_pixels)
+        self._init_at(self._zoomed(frame), zbox)
+        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        st = self._update_at(self._zoomed(frame))
+        return dataclasses.replace(st, box=self._box_to_frame(st.box))
+
+    def _init_at(self, frame: np.ndarray, box: Box) -> None:
         p = self.params
         self.v = an.axis_box_to_rotated(box)
-        self.core = AnisoCore(p, self.v)
+        # the pixel thresholds in working pixels
+        self.core = AnisoCore(dataclasses.replace(p, t3_dist=p.t3_dist / self._k), self.v)
         self.color = ColorModel(p.color_space)
         self.color.adapt(frame)
         self.color.prepare(frame, colour_roi(self.v))
         self.q = self.color.hist(self.v)
         self.fail = 0
-        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
 
-    def _update(self, frame: np.ndarray) -> TrackState:
+    def _update_at(self, frame: np.ndarray) -> TrackState:
         p = self.params
         self.color.prepare(frame, colour_roi(self.v))
         v, rho, it = self.core.step(self.color, self.q, self.v)

@@ -23,6 +23,7 @@ Per frame:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -37,6 +38,7 @@ from ..params import param
 from .aniso_meanshift import AnisoCore, AnisoMeanShiftParams
 from .base import Tracker, TrackState
 from .sift_ransac import ColorModel, RBox, SiftRansacCore, SiftRansacParams, colour_roi, corner_distance, hull
+from .working_resolution import WorkingResolution
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -45,6 +47,9 @@ class KeypointAMSParams(SiftRansacParams):
     K: float = param(0.9, gt=0, le=2, doc="Tracker B: the box is the kernel ellipse scaled by K (L4327).")
     k_mode: Literal["box", "kernel"] = param("box", doc="Tracker B: the reading of the K-scaling (ch05.md §1.0).")
     safeguard: bool = param(False, doc="Tracker B: refuse bandwidth steps that lower the true objective (design).")
+    max_scale_step: float = param(0.0, ge=0, le=10, doc=(
+        "Tracker B: bound on the kernel's size change in one frame (anisotropic-meanshift's max_scale_step; 0: "
+        "unbounded, the chapter)."))
     ms_iterations: int = param(10, ge=1, le=100, doc="Tracker B: mean-shift iterations (L4993).")
     t3_dist: float = param(15.0, gt=0, doc="'paper' thresholds: T(2)_3, B's corner jump (Table 2 median).")
     t4_rho: float = param(0.975, ge=0, le=1, doc="'paper' thresholds: T(2)_4, B's rho (Table 2 median).")
@@ -61,7 +66,7 @@ class KeypointAMSParams(SiftRansacParams):
         "one spread is used instead."))
 
 
-class KeypointAMS(Tracker):
+class KeypointAMS(WorkingResolution, Tracker):
     """The hybrid tracker (deterministic)."""
 
     name = "keypoint-ams"
@@ -69,11 +74,24 @@ class KeypointAMS(Tracker):
     stochastic = False
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
-        p = self.params
+        zbox = self._set_resolution(frame, box, self.params.max_pixels)
+        self._init_at(self._zoomed(frame), zbox)
+        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        st = self._update_at(self._zoomed(frame))
+        return dataclasses.replace(st, box=self._box_to_frame(st.box))
+
+    def _init_at(self, frame: np.ndarray, box: Box) -> None:
+        q = self.params
+        k = self._k
+        # the pixel thresholds in working pixels
+        self.wp = p = dataclasses.replace(q, t1_dist=q.t1_dist / k, t3_dist=q.t3_dist / k,
+                                          learn_dist=q.learn_dist / k)
         v = an.axis_box_to_rotated(box)
         self.A = SiftRansacCore(p)
         bp = AnisoMeanShiftParams(gamma=p.gamma, K=p.K, k_mode=p.k_mode, max_iterations=p.ms_iterations,
-                                  safeguard=p.safeguard,
+                                  safeguard=p.safeguard, max_scale_step=p.max_scale_step,
                                   thresholds=p.thresholds, t3_dist=p.t3_dist, t4_rho=p.t4_rho,
                                   auto_frames=p.auto_frames, color_space=p.color_space)
         self.B = AnisoCore(bp, v)
@@ -88,7 +106,6 @@ class KeypointAMS(Tracker):
         self.v_obj = self.v1 = self.v2 = v
         self._out_rho: list[float] = []
         self.both_fail = 0
-        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
 
     @property
     def q(self) -> np.ndarray:
@@ -111,8 +128,8 @@ class KeypointAMS(Tracker):
         c = sum(w * math.cos(2 * t) for w, t in zip(ws, th))
         return float(cx), float(cy), float(h), float(wd), 0.5 * math.atan2(s, c)
 
-    def _update(self, frame: np.ndarray) -> TrackState:
-        p = self.params
+    def _update_at(self, frame: np.ndarray) -> TrackState:
+        p = self.wp
         prev = self.v_obj
         self.color.prepare(frame, colour_roi(prev))
         gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)

@@ -22,6 +22,7 @@ after ``lost_frames`` such frames), since alone it has no better estimate.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -36,6 +37,7 @@ from ..filtering.loss import LossDetector, RunningThreshold
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
+from .working_resolution import WORKING_RESOLUTION_DOC, WorkingResolution
 
 #: A rotated box: centre x, centre y, long side h, short side w, angle of the long side.
 RBox = tuple[float, float, float, float, float]
@@ -69,6 +71,7 @@ class SiftRansacParams(Params):
     color_space: Literal["auto", "rgb", "gray"] = param("auto", doc=(
         "Histogram features for rho: 32^3 RGB (L4992), or intensity x orientation on grey input ('auto')."))
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive failed frames before lost is raised.")
+    max_pixels: int = param(0, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC)
 
 
 class ReinitGate:
@@ -308,7 +311,7 @@ class SiftRansacCore:
         self.v = v_obj
 
 
-class SiftRansac(Tracker):
+class SiftRansac(WorkingResolution, Tracker):
     """Tracker A alone (the chapter's Tracker-2); deterministic."""
 
     name = "sift-ransac"
@@ -316,8 +319,19 @@ class SiftRansac(Tracker):
     stochastic = False
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        zbox = self._set_resolution(frame, box, self.params.max_pixels)
+        self._init_at(self._zoomed(frame), zbox)
+        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        st = self._update_at(self._zoomed(frame))
+        return dataclasses.replace(st, box=self._box_to_frame(st.box))
+
+    def _init_at(self, frame: np.ndarray, box: Box) -> None:
         p = self.params
-        self.core = SiftRansacCore(p)
+        # the pixel thresholds in working pixels
+        self.wp = dataclasses.replace(p, t1_dist=p.t1_dist / self._k)
+        self.core = SiftRansacCore(self.wp)
         self.color = ColorModel(p.color_space)
         self.color.adapt(frame)
         v = an.axis_box_to_rotated(box)
@@ -326,10 +340,9 @@ class SiftRansac(Tracker):
         self.core.init(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), v)
         self.v = v
         self.fail = 0
-        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
 
-    def _update(self, frame: np.ndarray) -> TrackState:
-        p = self.params
+    def _update_at(self, frame: np.ndarray) -> TrackState:
+        p = self.wp
         self.color.prepare(frame, colour_roi(self.v))
         gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
         res = self.core.step(gray, lambda v: an.bhattacharyya(self.color.hist(v), self.q))

@@ -10,6 +10,13 @@ import numpy as np
 from ..geometry import Box
 
 
+WORKING_RESOLUTION_DOC = (
+    "Working resolution: when the initial box has more than 4x this many pixels, every frame is reduced to the "
+    "means of k x k blocks, with the integer k that leaves the box 1-4x this many pixels, and the tracker runs on "
+    "the reduced frames (its pixel thresholds divided by k); 0: full resolution (the chapter). The cost of a "
+    "frame grows with the target's pixels.")
+
+
 class WorkingResolution:
     """Mixin: :meth:`_set_resolution` at init, :meth:`_zoomed` for every frame, :meth:`_to_frame` for results."""
 
@@ -37,3 +44,7 @@ class WorkingResolution:
     def _to_frame(self, v):
         """Lengths or coordinates in reduced pixels -> frame pixels."""
         return v / (1.0 / self._k)
+
+    def _box_to_frame(self, box) -> tuple[float, float, float, float]:
+        """An ``(x, y, w, h)`` box in reduced pixels -> frame pixels."""
+        return tuple(float(self._to_frame(float(v))) for v in box)
