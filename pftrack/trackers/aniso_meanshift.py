@@ -39,7 +39,7 @@ class AnisoMeanShiftParams(Params):
         "Refuse or halve a bandwidth step (Eq. 8) that lowers the true objective |Sigma|^(gamma/2) rho (design: on "
         "backgrounds sharing the target's colours the linearised step inflates the kernel). False is the literal "
         "chapter."))
-    max_scale_step: float = param(0.0, ge=0, le=10, doc=(
+    max_scale_step: float = param(0.1, ge=0, le=10, doc=(
         "Bound on the kernel's size change in one frame: |Sigma|^(1/4) within a factor 1 + this of the frame's "
         "start (Sigma scaled uniformly; shape and angle free). Design, not in the chapter: Eq. 8 inflates the "
         "kernel on backgrounds sharing the target's colours, and every later step then sums over more pixels. "
@@ -55,7 +55,7 @@ class AnisoMeanShiftParams(Params):
     auto_frames: int = param(10, ge=3, le=100, doc="'auto': frames whose rho and dist set the thresholds.")
     color_space: Literal["auto", "rgb", "gray"] = param("auto", doc="Histogram features, as sift-ransac.")
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive re-initialisations before lost is raised.")
-    max_pixels: int = param(0, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC)
+    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC)
 
 
 class AnisoCore:

@@ -51,8 +51,11 @@ class SiftRansacParams(Params):
     ransac_threshold: float = param(3.0, gt=0, doc="T_e, RANSAC reprojection error in px (OpenCV's default).")
     ransac_iters: int = param(2000, ge=10, le=100000, doc="T_iter, RANSAC iterations (OpenCV's default).")
     min_side: float = param(64.0, ge=0, le=1024, doc=(
-        "SIFT runs on the search area enlarged (up to 4x) so the target's shorter side spans at least this many "
-        "pixels: small targets otherwise yield too few keypoints (design; 0 disables)."))
+        "SIFT runs on the search area enlarged (up to 4x, fixed at the first frame) so the target's shorter side "
+        "spans at least this many pixels: small targets otherwise yield too few keypoints (design; 0 disables)."))
+    sift_budget: float = param(4.0, ge=1, le=10000, doc=(
+        "The image SIFT runs on has at most this many times the first frame's pixels: a region that grew far "
+        "(a failing track) is searched at a lower enlargement instead of at ever higher cost (design)."))
     min_matches: int = param(3, ge=2, le=100, doc="Matched foreground points below which A fails (L4439).")
     max_fg: int = param(1000, ge=10, le=100000, doc="L_F, foreground set size (L4540).")
     max_bg: int = param(1500, ge=0, le=100000, doc="L_B, background set size (L4619).")
@@ -71,7 +74,7 @@ class SiftRansacParams(Params):
     color_space: Literal["auto", "rgb", "gray"] = param("auto", doc=(
         "Histogram features for rho: 32^3 RGB (L4992), or intensity x orientation on grey input ('auto')."))
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive failed frames before lost is raised.")
-    max_pixels: int = param(0, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC)
+    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC)
 
 
 class ReinitGate:
@@ -191,6 +194,16 @@ class SiftRansacCore:
         t2 = self.p.t2_rho if self.p.thresholds == "paper" else self.gate.loss.threshold()
         return 0.5 * (1.0 + t2)
 
+    def upsample(self, area: tuple[int, int, int, int]) -> float:
+        """The enlargement of the search area for SIFT: the first region's, so that the scale space stays the
+        one the stored descriptors came from, unless the enlarged area would exceed ``sift_budget`` times the
+        first one's pixels (a region that has grown far: the factor then keeps the area at the budget)."""
+        px = max((area[2] - area[0]) * (area[3] - area[1]), 1)
+        if self._sift_px is None:
+            self._sift_px = px * self.up0 ** 2
+        cap = math.sqrt(self.p.sift_budget * self._sift_px / px)
+        return min(self.up0, cap)
+
     def search_area(self, v: RBox, shape) -> tuple[int, int, int, int]:
         x, y, w, h = hull(v)
         fh, fw = shape
@@ -205,10 +218,11 @@ class SiftRansacCore:
         self.v = v
         self.gate = ReinitGate(self.p.thresholds, t_rho=self.p.t2_rho, t_dist=self.p.t1_dist,
                                size=0.5 * (v[2] + v[3]), n_seed=self.p.auto_frames)
-        self.upsample = 1.0 if self.p.min_side <= 0 else float(np.clip(self.p.min_side / max(min(v[2], v[3]), 1.0),
-                                                                        1.0, 4.0))
+        self.up0 = 1.0 if self.p.min_side <= 0 else float(np.clip(self.p.min_side / max(min(v[2], v[3]), 1.0),
+                                                                   1.0, 4.0))
+        self._sift_px = None
         area = self.search_area(v, gray.shape)
-        xy, desc = kp.detect(gray, area, upsample=self.upsample)
+        xy, desc = kp.detect(gray, area, upsample=self.upsample(area))
         inside = (kp.points_in_ellipse(xy, *v) if self.p.fg_ellipse else kp.points_in_rotated_box(xy, *v))
         in_box = kp.points_in_rotated_box(xy, *v)
         self.PF = kp.PointSet(xy[inside], desc[inside], np.zeros(int(inside.sum())), np.zeros(int(inside.sum()), np.int64))
@@ -220,7 +234,7 @@ class SiftRansacCore:
         """Steps 1-5: the candidate region ``v`` and ``rho``; the maintenance waits for :meth:`maintain`."""
         p = self.p
         area = self.search_area(self.v, gray.shape)
-        xy, desc = kp.detect(gray, area, upsample=self.upsample)
+        xy, desc = kp.detect(gray, area, upsample=self.upsample(area))
         stored = kp.PointSet.concat(self.PF, self.PB)
         nf = len(self.PF)
         qi, ti = kp.match(desc, stored.desc, ratio=p.ratio)
