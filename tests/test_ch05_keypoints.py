@@ -211,3 +211,41 @@ def test_chapter_metrics():
     assert d1[0] == pytest.approx(5.0) and d1[1] == pytest.approx(5.0) and np.isnan(d1[2])
     np.testing.assert_allclose(param_mae(pred, gt), [(3 + 5) / 2, 2, 5, 0])
     assert tracking_percentage(pred, gt) == pytest.approx(1.0)  # IoUs 0.68 and 0.67; the NaN row skipped
+
+
+def test_clamp_scale_bounds_the_size_and_keeps_the_shape():
+    S0 = an.sigma_from_box(40, 20, 0.4)
+    S = an.sigma_from_box(120, 30, 0.7)  # 3x and 1.5x the axes: linear size 2.12x
+    C = an.clamp_scale(S, float(np.linalg.det(S0)), 0.1)
+    assert (np.linalg.det(C) / np.linalg.det(S0)) ** 0.25 == pytest.approx(1.1)
+    h, w, th = an.box_from_sigma(C)
+    assert h / w == pytest.approx(4.0) and th == pytest.approx(0.7)  # shape and angle untouched
+    np.testing.assert_array_equal(an.clamp_scale(S0 * 1.1, float(np.linalg.det(S0)), 0.1), S0 * 1.1)  # inside
+
+
+def test_max_scale_step_bounds_one_frames_growth():
+    bins, A, q = _ellipse_scene()
+    start = 0.5 * A  # kernel far smaller than the object: Eq. 8 grows it
+    _, S_free, _ = an.aniso_mean_shift(bins, (0, 0), q, (100, 80), start, gamma=0.33)
+    _, S_step, _ = an.aniso_mean_shift(bins, (0, 0), q, (100, 80), start, gamma=0.33, max_scale_step=0.1)
+    size = lambda M: np.linalg.det(M) ** 0.25  # noqa: E731
+    assert size(S_free) / size(start) > 1.3
+    assert size(S_step) / size(start) == pytest.approx(1.1, abs=1e-9)
+
+
+@pytest.mark.parametrize("name", ["keypoint-ams", "sift-ransac", "anisotropic-meanshift"])
+def test_working_resolution_reports_frame_pixels(name):
+    """A large target is tracked on frames reduced k x k; the boxes come back in frame pixels and follow the
+    target as at full resolution."""
+    from pftrack.eval.metrics import frame_ious
+
+    small = _textured_scene(12)
+    up = [(cv2.resize(f, None, fx=5, fy=5, interpolation=cv2.INTER_LINEAR), np.asarray(b) * 5) for f, b in small]
+    gt = np.array([b for _, b in up[1:]])
+    ious = {}
+    for mp in (0, 2000):
+        t = pftrack.create_tracker(name, max_pixels=mp)
+        t.init(up[0][0], tuple(up[0][1]))
+        assert (t._k > 1) == (mp > 0)
+        ious[mp] = float(np.mean(frame_ious(np.array([t.update(f).box for f, _ in up[1:]]), gt)))
+    assert ious[2000] > 0.5 and ious[2000] > ious[0] - 0.15
