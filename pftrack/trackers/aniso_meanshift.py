@@ -43,7 +43,8 @@ class AnisoMeanShiftParams(Params):
         "Bound on the kernel's size change in one frame: |Sigma|^(1/4) within a factor 1 + this of the frame's "
         "start (Sigma scaled uniformly; shape and angle free). Design, not in the chapter: Eq. 8 inflates the "
         "kernel on backgrounds sharing the target's colours, and every later step then sums over more pixels. "
-        "0: unbounded (the chapter)."))
+        "0: unbounded (the chapter). 0.1 chosen on the tune split (55 sequences): mean AUC 0.295 against 0.286 "
+        "unbounded (0.05: 0.283; 0.2: 0.285)."))
     max_iterations: int = param(10, ge=1, le=100, doc="Mean-shift iterations (L4993).")
     shift_tol: float = param(0.5, gt=0, doc="Stop when the shift is below this (px) ...")
     sigma_tol: float = param(1e-3, gt=0, doc="... and ||dSigma||/||Sigma|| below this (proposed).")
