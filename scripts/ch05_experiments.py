@@ -61,6 +61,8 @@ def run(seq, item: str) -> dict:
     tracker.init(frames[0], box0)
     color = ColorModel("auto")
     color.adapt(frames[0])
+    own = ColorModel("auto")
+    own.adapt(frames[0])
     boxes, d2_q0, d2_qt, times = [box0], [], [], []
     v0 = an.axis_box_to_rotated(box0)
     color.prepare(frames[0], (0, 0, frames[0].shape[1], frames[0].shape[0]))
@@ -75,7 +77,10 @@ def run(seq, item: str) -> dict:
         p = color.hist(v)
         d2_q0.append(np.sqrt(max(1 - an.bhattacharyya(p, q0), 0.0)))
         if hasattr(tracker, "learner"):
-            d2_qt.append(np.sqrt(max(1 - an.bhattacharyya(p, tracker.q), 0.0)))
+            # the learned reference lives at the tracker's working resolution: compare like with like
+            zf = tracker._zoomed(f)
+            own.prepare(zf, (0, 0, zf.shape[1], zf.shape[0]))
+            d2_qt.append(np.sqrt(max(1 - an.bhattacharyya(own.hist(tracker.v_obj), tracker.q), 0.0)))
     pred, gt = np.array(boxes), seq.groundtruth
     mae = param_mae(pred, gt)
     return {"sequence": seq.name, "tracker": item, "auc": ope_scores(pred, gt).auc,
