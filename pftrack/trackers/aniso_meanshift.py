@@ -21,7 +21,7 @@ from ..cues import anisotropic as an
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
-from .working_resolution import WORKING_RESOLUTION_DOC, WorkingResolution
+from .working_resolution import WORKING_RESOLUTION_DOC, ReducedFrames
 from .sift_ransac import ColorModel, RBox, ReinitGate, colour_roi, corner_distance, hull
 
 
@@ -88,21 +88,12 @@ class AnisoCore:
         return v, an.bhattacharyya(color.hist(v), q), it
 
 
-class AnisoMeanShift(WorkingResolution, Tracker):
+class AnisoMeanShift(ReducedFrames, Tracker):
     """Tracker B alone (the chapter's Tracker-1); deterministic."""
 
     name = "anisotropic-meanshift"
     Params = AnisoMeanShiftParams
     stochastic = False
-
-    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
-        zbox = self._set_resolution(frame, box, self.params.max_pixels)
-        self._init_at(self._zoomed(frame), zbox)
-        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
-
-    def _update(self, frame: np.ndarray) -> TrackState:
-        st = self._update_at(self._zoomed(frame))
-        return dataclasses.replace(st, box=self._box_to_frame(st.box))
 
     def _init_at(self, frame: np.ndarray, box: Box) -> None:
         p = self.params

@@ -38,7 +38,7 @@ from ..params import param
 from .aniso_meanshift import AnisoCore, AnisoMeanShiftParams
 from .base import Tracker, TrackState
 from .sift_ransac import ColorModel, RBox, SiftRansacCore, SiftRansacParams, colour_roi, corner_distance, hull
-from .working_resolution import WorkingResolution
+from .working_resolution import ReducedFrames
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -67,21 +67,12 @@ class KeypointAMSParams(SiftRansacParams):
         "one spread is used instead."))
 
 
-class KeypointAMS(WorkingResolution, Tracker):
+class KeypointAMS(ReducedFrames, Tracker):
     """The hybrid tracker (deterministic)."""
 
     name = "keypoint-ams"
     Params = KeypointAMSParams
     stochastic = False
-
-    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
-        zbox = self._set_resolution(frame, box, self.params.max_pixels)
-        self._init_at(self._zoomed(frame), zbox)
-        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
-
-    def _update(self, frame: np.ndarray) -> TrackState:
-        st = self._update_at(self._zoomed(frame))
-        return dataclasses.replace(st, box=self._box_to_frame(st.box))
 
     def _init_at(self, frame: np.ndarray, box: Box) -> None:
         q = self.params

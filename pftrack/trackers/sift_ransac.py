@@ -37,7 +37,7 @@ from ..filtering.loss import LossDetector, RunningThreshold
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
-from .working_resolution import WORKING_RESOLUTION_DOC, WorkingResolution
+from .working_resolution import WORKING_RESOLUTION_DOC, ReducedFrames
 
 #: A rotated box: centre x, centre y, long side h, short side w, angle of the long side.
 RBox = tuple[float, float, float, float, float]
@@ -328,21 +328,12 @@ class SiftRansacCore:
         self.v = v_obj
 
 
-class SiftRansac(WorkingResolution, Tracker):
+class SiftRansac(ReducedFrames, Tracker):
     """Tracker A alone (the chapter's Tracker-2); deterministic."""
 
     name = "sift-ransac"
     Params = SiftRansacParams
     stochastic = False
-
-    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
-        zbox = self._set_resolution(frame, box, self.params.max_pixels)
-        self._init_at(self._zoomed(frame), zbox)
-        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
-
-    def _update(self, frame: np.ndarray) -> TrackState:
-        st = self._update_at(self._zoomed(frame))
-        return dataclasses.replace(st, box=self._box_to_frame(st.box))
 
     def _init_at(self, frame: np.ndarray, box: Box) -> None:
         p = self.params

@@ -4,10 +4,13 @@ k x k block means (OpenCV's exact area path) with the integer k that leaves the 
 
 from __future__ import annotations
 
+import dataclasses
+
 import cv2
 import numpy as np
 
 from ..geometry import Box
+from .base import TrackState
 
 
 WORKING_RESOLUTION_DOC = (
@@ -48,3 +51,17 @@ class WorkingResolution:
     def _box_to_frame(self, box) -> tuple[float, float, float, float]:
         """An ``(x, y, w, h)`` box in reduced pixels -> frame pixels."""
         return tuple(float(self._to_frame(float(v))) for v in box)
+
+
+class ReducedFrames(WorkingResolution):
+    """Mixin for trackers that run wholly on the reduced frames: they implement ``_init_at(frame, box)``
+    and ``_update_at(frame) -> TrackState`` in reduced pixels, with ``params.max_pixels``."""
+
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        zbox = self._set_resolution(frame, box, self.params.max_pixels)
+        self._init_at(self._zoomed(frame), zbox)
+        return TrackState(box=tuple(float(x) for x in box), score=1.0, lost=False)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        st = self._update_at(self._zoomed(frame))
+        return dataclasses.replace(st, box=self._box_to_frame(st.box))
