@@ -62,7 +62,8 @@ def test_eval_reports_both_lost_flag_rates(tmp_path, capsys):
                  "--report", str(rep)]) == 0
     out = capsys.readouterr().out
     assert "lost recall" in out and "false-lost rate" in out
-    rows = list(csv.DictReader(open(rep / "results.csv", encoding="utf-8")))
+    with open(rep / "results.csv", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
     assert rows and rows[0]["lost_recall"] != "" and rows[0]["false_lost"] != ""
     assert float(rows[0]["absent_frames"]) > 0
     assert "lost recall" in (rep / "index.html").read_text(encoding="utf-8")
