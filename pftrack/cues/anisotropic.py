@@ -153,7 +153,7 @@ def aniso_mean_shift(bins: np.ndarray, origin: tuple[int, int], q: np.ndarray, y
     n_bins = q.shape[0]
     y = np.asarray(y0, dtype=np.float64).copy()
     sigma = np.asarray(sigma0, dtype=np.float64).copy()
-    det0 = float(np.linalg.det(sigma))
+    det0 = float(np.linalg.det(sigma)) if max_scale_step > 0 else 0.0
     it = 0
     for it in range(1, max_iter + 1):
         sup = _support(bins.shape, origin, y, sigma)

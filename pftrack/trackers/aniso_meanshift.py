@@ -56,7 +56,8 @@ class AnisoMeanShiftParams(Params):
     auto_frames: int = param(10, ge=3, le=100, doc="'auto': frames whose rho and dist set the thresholds.")
     color_space: Literal["auto", "rgb", "gray"] = param("auto", doc="Histogram features, as sift-ransac.")
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive re-initialisations before lost is raised.")
-    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC)
+    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC + (
+        " The pixel thresholds of thresholds='paper' are divided by k. Chosen on the tune split (docs/keypoints.md)."))
 
 
 class AnisoCore:

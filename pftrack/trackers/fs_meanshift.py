@@ -36,7 +36,7 @@ from ..filtering.loss import LossDetector, RunningThreshold, confidence
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
-from .working_resolution import WorkingResolution
+from .working_resolution import WORKING_RESOLUTION_DOC, WorkingResolution
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -68,11 +68,8 @@ class FSMeanShiftParams(Params):
     scale_step: float = param(0.0, ge=0, lt=0.5, doc=(
         "0: fixed size (the chapter). > 0: also try sizes (1 +- step) and keep the best rho, smoothed with gamma 0.1 "
         "(as meanshift)."))
-    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=(
-        "Working resolution: when the initial box has more than 4x this many pixels, every frame is reduced to "
-        "the means of k x k blocks, with the integer k that leaves the box 1-4x this many pixels, and the "
-        "tracker runs on the reduced frames; 0: full resolution (the chapter). The cost of a frame is linear in "
-        "the search region's pixels. Chosen on the tune split (55 sequences): at 2000 the mean AUC equals full "
+    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC + (
+        " Chosen on the tune split (55 sequences): at 2000 the mean AUC equals full "
         "resolution's (fs-meanshift 0.438, paired +0.0001 +- 0.0003; switching 0.511, +0.0002 +- 0.0001; 1000 "
         "and 500 within 0.004), and davis16_dog runs at 505 instead of 92 fps (fs-meanshift)."))
     predict: bool = param(False, doc=(

@@ -77,7 +77,8 @@ class SiftRansacParams(Params):
     color_space: Literal["auto", "rgb", "gray"] = param("auto", doc=(
         "Histogram features for rho: 32^3 RGB (L4992), or intensity x orientation on grey input ('auto')."))
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive failed frames before lost is raised.")
-    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC)
+    max_pixels: int = param(2000, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC + (
+        " The pixel thresholds of thresholds='paper' are divided by k. Chosen on the tune split (docs/keypoints.md)."))
 
 
 class ReinitGate:

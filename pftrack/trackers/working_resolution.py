@@ -16,8 +16,7 @@ from .base import TrackState
 WORKING_RESOLUTION_DOC = (
     "Working resolution: when the initial box has more than 4x this many pixels, every frame is reduced to the "
     "means of k x k blocks, with the integer k that leaves the box 1-4x this many pixels, and the tracker runs on "
-    "the reduced frames (its pixel thresholds divided by k); 0: full resolution (the chapter). The cost of a "
-    "frame grows with the target's pixels.")
+    "the reduced frames; 0: full resolution (the chapter). The cost of a frame grows with the target's pixels.")
 
 
 class WorkingResolution:
@@ -45,7 +44,8 @@ class WorkingResolution:
         return cv2.resize(frame[:h * k, :w * k], (w, h), interpolation=cv2.INTER_AREA)
 
     def _to_frame(self, v):
-        """Lengths or coordinates in reduced pixels -> frame pixels."""
+        """Lengths or coordinates in reduced pixels -> frame pixels (divided by the zoom 1/k, the arithmetic
+        the tracks were validated with, rather than multiplied by k)."""
         return v / (1.0 / self._k)
 
     def _box_to_frame(self, box) -> tuple[float, float, float, float]:
