@@ -95,8 +95,9 @@ def _pixel_span(c, h, n_pixels):
 
 
 @njit
-def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1):
-    """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)).
+def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark):
+    """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)), and set
+    ``mark[u >> 3]`` for every bin ``u`` touched (groups of 8 bins, so that a scan can skip the rest).
 
     Even and odd pixels of a row go to two separate histograms so that runs of the
     same bin do not serialise on one memory location, and the weight, a quadratic
@@ -128,22 +129,28 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1):
         d0 = -(2.0 * dx + 1.0) * scale  # w(i + 1) - w(i)
         i = a
         while i < b:
-            acc0[row[i]] += w0
+            u0 = row[i]
+            u1 = row[i + 1]
+            acc0[u0] += w0
+            mark[u0 >> 3] = 1
             w1 = w0 + d0
-            acc1[row[i + 1]] += w1
+            acc1[u1] += w1
+            mark[u1 >> 3] = 1
             w0 = w1 + d0 + dd
             d0 += 2.0 * dd
             i += 2
         if i == b:
             acc0[row[i]] += w0
+            mark[row[i] >> 3] = 1
 
 
 @njit
 def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc):
     n_part = ell.shape[0]
     n_bins = out.shape[1]
+    mark = np.zeros((n_bins + 7) >> 3, np.uint8)  # not needed here: every bin is read
     for n in range(n_part):
-        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1])
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1], mark)
         total = 0.0
         for u in range(n_bins):
             h = acc[0, u] + acc[1, u]
@@ -239,25 +246,31 @@ def _row_span(cx, hx, ihx2, ry, lo, hi):
 
 
 @njit
-def _rho_from_acc(acc0, acc1, sqrt_q):
-    """sum_u sqrt(h_u) sqrt(q_u) and sum_u h_u of h = acc0 + acc1, resetting both.
+def _rho_from_acc(acc0, acc1, sqrt_q, mark):
+    """sum_u sqrt(h_u) sqrt(q_u) and sum_u h_u of h = acc0 + acc1, resetting both (and ``mark``).
 
     No fastmath: the summation order must not depend on how the code was compiled or cached.
     Empty bins are skipped (most of them: an ellipse touches a few dozen of 512), which gives
-    the same sums bit for bit, since they would add exact zeros.
+    the same sums bit for bit, since they would add exact zeros; groups of 8 bins that no pixel
+    touched (``mark``) are skipped without reading them.
     """
     total = 0.0
     s = 0.0
-    for u in range(sqrt_q.shape[0]):
-        a0 = acc0[u]
-        a1 = acc1[u]
-        if a0 != 0.0 or a1 != 0.0:
-            acc0[u] = 0.0
-            acc1[u] = 0.0
-            h = a0 + a1
-            if h > 0.0:  # a tiny negative sum is rounding at the kernel's boundary: an empty bin
-                total += h
-                s += math.sqrt(h) * sqrt_q[u]
+    n = sqrt_q.shape[0]
+    for g in range(mark.shape[0]):
+        if mark[g] == 0:
+            continue
+        mark[g] = 0
+        for u in range(g << 3, min((g << 3) + 8, n)):
+            a0 = acc0[u]
+            a1 = acc1[u]
+            if a0 != 0.0 or a1 != 0.0:
+                acc0[u] = 0.0
+                acc1[u] = 0.0
+                h = a0 + a1
+                if h > 0.0:  # a tiny negative sum is rounding at the kernel's boundary: an empty bin
+                    total += h
+                    s += math.sqrt(h) * sqrt_q[u]
     return s, total
 
 
@@ -270,9 +283,10 @@ def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc):
     """
     acc0 = acc[0]
     acc1 = acc[1]
+    mark = np.zeros((sqrt_q.shape[0] + 7) >> 3, np.uint8)
     for n in range(ell.shape[0]):
-        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1)
-        s, total = _rho_from_acc(acc0, acc1, sqrt_q)
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1, mark)
+        s, total = _rho_from_acc(acc0, acc1, sqrt_q, mark)
         totals[n] = total
         if total > 0.0:
             r = s / math.sqrt(total)

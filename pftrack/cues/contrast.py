@@ -53,13 +53,34 @@ def box_counts(bins: np.ndarray, x0: int, y0: int, box, n_bins: int, *, ring: fl
 
     ix0, ix1 = span(bx, bx + bw, w, x0)
     iy0, iy1 = span(by, by + bh, h, y0)
-    inside = np.bincount(bins[iy0:iy1, ix0:ix1].ravel(), minlength=n_bins).astype(np.float64)
     if ring <= 0:
-        return inside, np.zeros(n_bins)
+        return _counts(bins, ix0, iy0, ix1, iy1, n_bins), np.zeros(n_bins)
     ox0, ox1 = span(bx - ring * bw, bx + bw + ring * bw, w, x0)
     oy0, oy1 = span(by - ring * bh, by + bh + ring * bh, h, y0)
-    outer = np.bincount(bins[oy0:oy1, ox0:ox1].ravel(), minlength=n_bins).astype(np.float64)
+    if numba_enabled():
+        inside, outer = np.zeros(n_bins), np.zeros(n_bins)
+        _ring_counts_numba(bins, ix0, iy0, ix1, iy1, ox0, oy0, ox1, oy1, inside, outer)
+        return inside, outer
+    inside = _counts(bins, ix0, iy0, ix1, iy1, n_bins)
+    outer = _counts(bins, ox0, oy0, ox1, oy1, n_bins)
     return inside, np.maximum(outer - inside, 0.0)
+
+
+def _counts(bins: np.ndarray, x0: int, y0: int, x1: int, y1: int, n_bins: int) -> np.ndarray:
+    return np.bincount(bins[y0:y1, x0:x1].ravel(), minlength=n_bins).astype(np.float64)
+
+
+@njit(cache=True)
+def _ring_counts_numba(bins, ix0, iy0, ix1, iy1, ox0, oy0, ox1, oy1, inside, ring):
+    """Bin counts of the box ``[ix0, ix1) x [iy0, iy1)`` and of the rest of ``[ox0, ox1) x [oy0, oy1)`` (one pass)."""
+    for j in range(oy0, oy1):
+        row = bins[j]
+        in_row = iy0 <= j < iy1
+        for i in range(ox0, ox1):
+            if in_row and ix0 <= i < ix1:
+                inside[row[i]] += 1.0
+            else:
+                ring[row[i]] += 1.0
 
 
 def foreground_lut(obj_counts: np.ndarray, surround_counts: np.ndarray, *, prior: float = 0.5) -> np.ndarray:
