@@ -196,3 +196,20 @@ def test_prepare_with_a_mapped_table_undoes_a_gain_without_touching_the_frame_fe
     assert np.array_equal(frame_feats.bins, held)  # a mapped table quantises into its own array
     with pytest.raises(ValueError):
         ColorCue("gray").prepare(img, roi, lut=cue.lut)
+
+
+@pytest.mark.skipif(not NUMBA_INSTALLED, reason="numba not installed")
+def test_fused_rho_with_a_bin_count_not_a_multiple_of_eight(rng):
+    """The compiled sum skips groups of 8 bins no pixel touched; the last group is partial here (153 bins, the
+    grey features' 17 x 9)."""
+    bins = rng.integers(0, 153, (70, 90)).astype(np.uint16)
+    bins[:, :30] = 152  # the last, partial group carries much of the mass
+    ell = np.column_stack([rng.uniform(0, 90, 100), rng.uniform(0, 70, 100), rng.uniform(0.5, 25, 100),
+                           rng.uniform(0.5, 25, 100)])
+    q = rng.random(153) ** 3
+    q /= q.sum()
+    hist, tot = ellipse_histograms(bins, 0, 0, ell, 153, backend="numpy")
+    expected = np.where(tot > 0, bhattacharyya_coefficient(hist, q), 0.0)
+    rho, tot2 = ellipse_rho(bins, 0, 0, ell, np.sqrt(q), backend="numba")
+    assert np.allclose(rho, expected, rtol=0, atol=1e-12)
+    assert np.allclose(tot2, tot, rtol=1e-12, atol=1e-12)

@@ -57,6 +57,30 @@ def test_contrast_kernels_match_reference(rng):
     assert np.allclose(out[True][1], out[False][1], atol=1e-12)
 
 
+@pytest.mark.skipif(not NUMBA_INSTALLED, reason="numba not installed")
+def test_compiled_counts_and_ellipse_contrast_equal_the_numpy_paths(rng):
+    """The one-pass object/surround counts and the contrast of ellipses give exactly the NumPy paths' numbers."""
+    from pftrack._numba import set_numba_enabled
+    from pftrack.cues.contrast import contrast_scores_ellipses
+    from pftrack.geometry import ellipse_to_box
+
+    bins = rng.integers(0, 512, (60, 90)).astype(np.uint16)
+    ii = probability_integral(bins, rng.random(512).astype(np.float32))
+    ell = np.column_stack([rng.uniform(-10, 200, 60), rng.uniform(-10, 140, 60), rng.uniform(1, 30, 60),
+                           rng.uniform(1, 30, 60)])
+    fast = contrast_scores_ellipses(ii, 5, 7, ell, ring=0.5, pitch=2)
+    assert np.array_equal(fast, contrast_scores(ii, 5, 7, ellipse_to_box(ell), ring=0.5, pitch=2))
+    boxes = [(10.3, 8.7, 31.2, 22.9), (-5.0, -3.0, 20.0, 18.0), (150.0, 100.0, 60.0, 60.0), (40.0, 30.0, 0.5, 0.5)]
+    for box in boxes:
+        compiled = box_counts(bins, 3, 4, box, 512, ring=0.5, pitch=2)
+        prev = set_numba_enabled(False)
+        try:
+            ref = box_counts(bins, 3, 4, box, 512, ring=0.5, pitch=2)
+        finally:
+            set_numba_enabled(prev)
+        assert np.array_equal(compiled[0], ref[0]) and np.array_equal(compiled[1], ref[1]), box
+
+
 def run(name, spec, seed=0, **params):
     scene, frames, _ = render_scene(spec)
     gt = scene.groundtruth(0)

@@ -72,6 +72,28 @@ def test_compiled_ncc_matches_the_remap_path(kind):
     assert np.max(np.abs(fast - ref)) < 0.02
 
 
+def test_ncc_reads_8_bit_and_float_levels_alike():
+    """The compiled NCC gives the same numbers from the 8-bit region and from its float64 copy (which it reads
+    when the region is small next to the samples)."""
+    from pftrack.cues.structure import Reduced
+
+    rng = np.random.default_rng(5)
+    img = rng.integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    red = reduce_region(img, (0, 0, 160, 120), 2)
+    assert red.gray.dtype == np.uint8
+    ell = np.column_stack([rng.uniform(0, 160, 40), rng.uniform(0, 120, 40), rng.uniform(3, 30, 40),
+                           rng.uniform(3, 30, 40)])
+    t = standardize(rng.uniform(0, 255, (2, 120)).astype(np.float32))
+    small = ncc_reduced(red, ell, (12, 10), t)          # 40 x 120 samples: the float64 copy
+    assert red.levels_for(40 * 120).dtype == np.float64
+    big = Reduced(red.gray, red.x0, red.y0, red.k, red.frame_size)
+    assert big.levels_for(10).dtype == np.uint8        # a region much larger than the samples: read as is
+    # one box at a time: each region is large next to its 120 samples, so the 8-bit levels are read
+    one = [ncc_reduced(Reduced(red.gray, red.x0, red.y0, red.k, red.frame_size), e[None], (12, 10), t)[0]
+           for e in ell]
+    assert np.array_equal(small, np.array(one))
+
+
 def test_sampled_box_equals_the_area_resized_crop():
     img = _texture()
     box = (40, 30, 64, 48)  # x, y, w, h: a 4x reduction to a 16x12 patch

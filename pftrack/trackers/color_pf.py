@@ -52,7 +52,7 @@ from ..filtering.loss import LossDetector
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..filtering.seir import seir
-from ..geometry import Box, box_to_ellipse, ellipse_to_box
+from ..geometry import Box, box_to_ellipse
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
@@ -340,7 +340,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         p_e = hist_e[0].copy()
         # element-wise sums, not BLAS: results must not depend on the BLAS thread count of the process
         rho_e = float(np.clip(np.sum(np.sqrt(p_e) * self._sqrt_q), 0.0, 1.0)) if tot_e[0] > 0 else 0.0
-        box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
+        cx, cy, hx, hy = (float(v) for v in e_ell[0])
+        box = (cx - hx, cy - hy, 2.0 * hx, 2.0 * hy)  # ellipse_to_box
         # appearance condition (Eq. 15) -> lost detection (§6)
         thr = self._threshold()
         n_pass = int(np.count_nonzero(rho > thr))

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..cues.contrast import (
     box_counts,
-    contrast_scores,
+    contrast_scores_ellipses,
     foreground_lut,
     probability_integral,
 )
@@ -135,6 +135,7 @@ class FusionPF(ColorPF):
         self._obj = None
         self._sur = None
         self._lut = None
+        self._ii: np.ndarray | None = None  # the integral image's buffer, reused between frames
         self._prev_gray = None
         self._gray = None
         self._flow = None
@@ -164,7 +165,7 @@ class FusionPF(ColorPF):
             feats = self.cue.prepare_frame(frame, pitch)
             self._obj, self._sur = box_counts(feats.bins, feats.x0, feats.y0, box, self.cue.n_bins, ring=p.ring,
                                               pitch=pitch)
-            self._lut = foreground_lut(self._obj, self._sur)
+            self._lut = foreground_lut(self._obj, self._sur).astype(np.float64)  # exact: the integral's type
         self.v_ref = None
         self._prev_gray = to_gray(frame) if p.motion else None
         return st
@@ -197,8 +198,8 @@ class FusionPF(ColorPF):
         if w_col != 1.0:
             log_lik = log_lik * w_col
         if p.contrast and self._lut is not None:
-            ii = probability_integral(feats.bins, self._lut)
-            c = contrast_scores(ii, feats.x0, feats.y0, ellipse_to_box(ell), ring=p.ring, pitch=feats.pitch)
+            ii = self._ii = probability_integral(feats.bins, self._lut, out=self._ii)
+            c = contrast_scores_ellipses(ii, feats.x0, feats.y0, ell, ring=p.ring, pitch=feats.pitch)
             log_lik = log_lik + p.contrast_gain * c
         if p.structure and p.structure_gain > 0 and self.structure.ready:
             log_lik = log_lik + (w_str * p.structure_gain) * self.structure.scores(frame, roi, ell)
@@ -282,7 +283,7 @@ class FusionPF(ColorPF):
         self._obj = (1 - a) * self._obj + a * obj * (self._obj.sum() / obj.sum())
         if sur.sum() > 0 and self._sur.sum() > 0:
             self._sur = (1 - a) * self._sur + a * sur * (self._sur.sum() / sur.sum())
-        self._lut = foreground_lut(self._obj, self._sur)
+        self._lut = foreground_lut(self._obj, self._sur).astype(np.float64)
 
     def _on_frame(self, frame):
         self.structure.new_frame()
