@@ -199,13 +199,15 @@ def test_prepare_with_a_mapped_table_undoes_a_gain_without_touching_the_frame_fe
 
 
 @pytest.mark.skipif(not NUMBA_INSTALLED, reason="numba not installed")
-def test_fused_rho_with_a_bin_count_not_a_multiple_of_eight(rng):
-    """The compiled sum skips groups of 8 bins no pixel touched; the last group is partial here (153 bins, the
-    grey features' 17 x 9)."""
-    bins = rng.integers(0, 153, (70, 90)).astype(np.uint16)
+@pytest.mark.parametrize("n, shape", [(100, (70, 90)), (6, (300, 400))])
+def test_fused_rho_with_a_bin_count_not_a_multiple_of_eight(rng, n, shape):
+    """The compiled sum visits only the bins that can be non-zero: those of the region (many ellipses over a
+    small region) or the groups of 8 bins each ellipse touched (a few ellipses in a large one); the last
+    group is partial here (153 bins, the grey features' 17 x 9)."""
+    bins = rng.integers(0, 153, shape).astype(np.uint16)
     bins[:, :30] = 152  # the last, partial group carries much of the mass
-    ell = np.column_stack([rng.uniform(0, 90, 100), rng.uniform(0, 70, 100), rng.uniform(0.5, 25, 100),
-                           rng.uniform(0.5, 25, 100)])
+    ell = np.column_stack([rng.uniform(0, 90, n), rng.uniform(0, 70, n), rng.uniform(0.5, 25, n),
+                           rng.uniform(0.5, 25, n)])
     q = rng.random(153) ** 3
     q /= q.sum()
     hist, tot = ellipse_histograms(bins, 0, 0, ell, 153, backend="numpy")

@@ -96,8 +96,8 @@ def _pixel_span(c, h, n_pixels):
 
 @njit
 def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark):
-    """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)), and set
-    ``mark[u >> 3]`` for every bin ``u`` touched (groups of 8 bins, so that a scan can skip the rest).
+    """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)); with ``mark`` not
+    empty, also set ``mark[u >> 3]`` for every bin ``u`` touched (groups of 8 bins, for a scan to skip the rest).
 
     Even and odd pixels of a row go to two separate histograms so that runs of the
     same bin do not serialise on one memory location, and the weight, a quadratic
@@ -106,6 +106,7 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark):
     hgt, wid = bins.shape
     if not (hx > 0.0 and hy > 0.0):
         return
+    marking = mark.shape[0] > 0
     ihx2 = 1.0 / (hx * hx)
     ihy2 = 1.0 / (hy * hy)
     ia2 = 1.0 / (hx * hx + hy * hy)
@@ -128,29 +129,27 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark):
         w0 = base - dx * dx * scale  # weight of pixel i
         d0 = -(2.0 * dx + 1.0) * scale  # w(i + 1) - w(i)
         i = a
+        if marking:
+            for t in range(a, b + 1):
+                mark[row[t] >> 3] = 1
         while i < b:
-            u0 = row[i]
-            u1 = row[i + 1]
-            acc0[u0] += w0
-            mark[u0 >> 3] = 1
+            acc0[row[i]] += w0
             w1 = w0 + d0
-            acc1[u1] += w1
-            mark[u1 >> 3] = 1
+            acc1[row[i + 1]] += w1
             w0 = w1 + d0 + dd
             d0 += 2.0 * dd
             i += 2
         if i == b:
             acc0[row[i]] += w0
-            mark[row[i] >> 3] = 1
 
 
 @njit
 def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc):
     n_part = ell.shape[0]
     n_bins = out.shape[1]
-    mark = np.zeros((n_bins + 7) >> 3, np.uint8)  # not needed here: every bin is read
+    no_mark = np.empty(0, np.uint8)
     for n in range(n_part):
-        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1], mark)
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1], no_mark)
         total = 0.0
         for u in range(n_bins):
             h = acc[0, u] + acc[1, u]
@@ -246,32 +245,36 @@ def _row_span(cx, hx, ihx2, ry, lo, hi):
 
 
 @njit
-def _rho_from_acc(acc0, acc1, sqrt_q, mark):
-    """sum_u sqrt(h_u) sqrt(q_u) and sum_u h_u of h = acc0 + acc1, resetting both (and ``mark``).
+def _present_bins(bins, n_bins, out):
+    """The bin indices that occur in ``bins``, ascending, in ``out[:m]``; returns ``m``."""
+    seen = np.zeros(n_bins, np.uint8)
+    h, w = bins.shape
+    for j in range(h):
+        row = bins[j]
+        for i in range(w):
+            seen[row[i]] = 1
+    m = 0
+    for u in range(n_bins):
+        if seen[u]:
+            out[m] = u
+            m += 1
+    return m
 
-    No fastmath: the summation order must not depend on how the code was compiled or cached.
-    Empty bins are skipped (most of them: an ellipse touches a few dozen of 512), which gives
-    the same sums bit for bit, since they would add exact zeros; groups of 8 bins that no pixel
-    touched (``mark``) are skipped without reading them.
-    """
-    total = 0.0
-    s = 0.0
-    n = sqrt_q.shape[0]
-    for g in range(mark.shape[0]):
-        if mark[g] == 0:
-            continue
-        mark[g] = 0
-        for u in range(g << 3, min((g << 3) + 8, n)):
-            a0 = acc0[u]
-            a1 = acc1[u]
-            if a0 != 0.0 or a1 != 0.0:
-                acc0[u] = 0.0
-                acc1[u] = 0.0
-                h = a0 + a1
-                if h > 0.0:  # a tiny negative sum is rounding at the kernel's boundary: an empty bin
-                    total += h
-                    s += math.sqrt(h) * sqrt_q[u]
-    return s, total
+
+@njit
+def _rho_from_acc(acc0, acc1, sqrt_q, u):
+    """Bin ``u``'s terms of rho: ``(sqrt(h_u) sqrt(q_u), h_u)`` of ``h = acc0 + acc1``, resetting both (zeros for an
+    empty bin; a tiny negative sum is rounding at the kernel's boundary: an empty bin too)."""
+    a0 = acc0[u]
+    a1 = acc1[u]
+    if a0 == 0.0 and a1 == 0.0:
+        return 0.0, 0.0
+    acc0[u] = 0.0
+    acc1[u] = 0.0
+    h = a0 + a1
+    if h > 0.0:
+        return math.sqrt(h) * sqrt_q[u], h
+    return 0.0, 0.0
 
 
 @njit
@@ -280,13 +283,44 @@ def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc):
 
     ``acc`` (2, n_bins) must be zero on entry and is zero on exit.  Normalisation is
     folded into the coefficient: rho = sum_u sqrt(h_u) sqrt(q_u) / sqrt(sum_u h_u).
+
+    No fastmath: the summation order must not depend on how the code was compiled or cached.
+    The sums run over the bins in ascending order and skip empty ones (most of them: an ellipse
+    touches a few dozen of 512), which gives the same sums bit for bit as a scan of every bin, since
+    the others would add exact zeros.  Which bins can be non-zero is known in one of two ways,
+    whichever reads fewer pixels: the bins that occur in the region (one pass over it, when the
+    ellipses cover it many times over, as a particle set does), or the groups of 8 bins each
+    ellipse touched (marked while accumulating, when they are sparse in a large region: the
+    background grid, the search samples).
     """
     acc0 = acc[0]
     acc1 = acc[1]
-    mark = np.zeros((sqrt_q.shape[0] + 7) >> 3, np.uint8)
+    n_bins = sqrt_q.shape[0]
+    covered = 0.0
+    for n in range(ell.shape[0]):
+        covered += 4.0 * max(ell[n, 2], 0.0) * max(ell[n, 3], 0.0)
+    by_region = bins.shape[0] * bins.shape[1] <= covered
+    present = np.empty(n_bins, np.int64)
+    m = _present_bins(bins, n_bins, present) if by_region else 0
+    mark = np.zeros(0 if by_region else (n_bins + 7) >> 3, np.uint8)
     for n in range(ell.shape[0]):
         _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1, mark)
-        s, total = _rho_from_acc(acc0, acc1, sqrt_q, mark)
+        total = 0.0
+        s = 0.0
+        if by_region:
+            for t in range(m):
+                a, h = _rho_from_acc(acc0, acc1, sqrt_q, present[t])
+                s += a
+                total += h
+        else:
+            for g in range(mark.shape[0]):
+                if mark[g] == 0:
+                    continue
+                mark[g] = 0
+                for u in range(g << 3, min((g << 3) + 8, n_bins)):
+                    a, h = _rho_from_acc(acc0, acc1, sqrt_q, u)
+                    s += a
+                    total += h
         totals[n] = total
         if total > 0.0:
             r = s / math.sqrt(total)
