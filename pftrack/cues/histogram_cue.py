@@ -30,6 +30,9 @@ FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 DEFAULT_GRAY_BINS = (16, 8)
 
 
+_HALF_XY = np.array([0.5, 0.5, 0.0, 0.0])
+
+
 @dataclass
 class ColorFeatures:
     """A frame region quantised to colour bins (the output of :meth:`ColorCue.prepare`).
@@ -60,11 +63,11 @@ class ColorFeatures:
         if self.pitch == 1:
             return ellipses, self.x0, self.y0
         p = float(self.pitch)
-        e = np.empty_like(ellipses)
-        e[:, 0] = (ellipses[:, 0] - self.x0 - 0.5) / p + 0.5
-        e[:, 1] = (ellipses[:, 1] - self.y0 - 0.5) / p + 0.5
-        e[:, 2] = ellipses[:, 2] / p
-        e[:, 3] = ellipses[:, 3] / p
+        # the same operations, on the whole (N, 4) array at once (adding or subtracting 0 leaves a number as it is)
+        e = ellipses - np.array([self.x0, self.y0, 0.0, 0.0])
+        e -= _HALF_XY
+        e /= p
+        e += _HALF_XY
         return e, 0, 0
 
 

@@ -97,7 +97,7 @@ class ParticleSet:
 
     def resample(self, indices: np.ndarray) -> None:
         """Replace the set by the selected particles with uniform weights (in place)."""
-        np.take(self.states, indices, axis=0, out=self._scratch)
+        np.take(self.states, indices, axis=0, out=self._scratch, mode="clip")  # valid indices; "raise" buffers out
         self.states, self._scratch = self._scratch, self.states
         n = self.n
         self.log_weights.fill(-np.log(n))

@@ -127,8 +127,10 @@ class ColorParticleFilter(SearchMixin, Tracker):
         n = states.shape[0]
         if self._ell.shape[0] != n:
             self._ell = np.empty((n, 4))
-        np.take(states, _ELL_COLS, axis=1, out=self._ell)
-        return self._ell
+        ell = self._ell  # columns X, Y, HX, HY (two slice copies: np.take with out= buffers a copy)
+        ell[:, 0:2] = states[:, X:Y + 1]
+        ell[:, 2:4] = states[:, HX:HY + 1]
+        return ell
 
     def _rho(self, frame: np.ndarray, ellipses: np.ndarray, roi=None):
         """Bhattacharyya coefficients and kernel masses of a batch of ellipses, plus the features."""
@@ -149,7 +151,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
 
     def _log_lik(self, rho: np.ndarray, tot: np.ndarray, s2: float | None = None) -> np.ndarray:
         """Eq. 10 in the log domain, ``-(1 - rho) / (2 sigma^2)`` (``s2`` given: that sigma^2)."""
-        ll = -(1.0 - rho) / (2.0 * (self._sigma2(rho, tot) if s2 is None else s2))
+        ll = (rho - 1.0) / (2.0 * (self._sigma2(rho, tot) if s2 is None else s2))  # = -(1 - rho) / (2 s2), exactly
         ll[tot <= 0] = -np.inf  # the ellipse has no pixel in the image: zero likelihood
         return ll
 

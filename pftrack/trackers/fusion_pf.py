@@ -238,7 +238,9 @@ class FusionPF(ColorPF):
             return rho
         if not self.structure.ready:  # started from a histogram (init_auto): no reference patch, no evidence
             return np.column_stack([rho, np.full(len(rho), np.nan)])
-        s = 0.5 * (self.structure.scores(frame, roi, ellipses) + 1.0)
+        s = self.structure.scores(frame, roi, ellipses)
+        s += 1.0
+        s *= 0.5
         if (self.mode == "searching" and len(rho) == 1 and self.params.relit_colour and self._ref_levels is not None
                 and frame.ndim == 3 and self.cue.color_space == "rgb"):
             col, st = self.loss.members
@@ -246,7 +248,10 @@ class FusionPF(ColorPF):
             if ((float(rho[0]) - col.mu_t) / col.sd_t <= -col.learn_z
                     and st.evaluate(float(s[0])) - self.loss.cue_floor > self.loss.reacquire_margin):
                 rho = np.maximum(rho, self._relit_rho(frame, ellipses[0]))
-        return np.column_stack([rho, s])
+        out = np.empty((len(s), 2))
+        out[:, 0] = rho
+        out[:, 1] = s
+        return out
 
     def _appearance_pass(self, rho, threshold, log_lik):
         if not self._fused:
