@@ -176,3 +176,14 @@ def test_adaptive_reference_follows_confident_frames_only():
     before = cue._ref_levels.copy()
     cue.confirm(0.5)
     assert np.all(cue._ref_levels > before)  # moved half-way towards the new light
+
+
+def test_short_median_equals_numpys():
+    """The background statistics' median (sort-based, for about a hundred scores) is np.median's number."""
+    from pftrack.filtering.loss import _median
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 3, 8, 99, 100, 101):
+        for _ in range(20):
+            x = np.round(rng.random(n), int(rng.integers(1, 6)))
+            assert _median(x) == float(np.median(x))

@@ -56,8 +56,17 @@ def robust_background(scores: np.ndarray, *, sd_floor: float) -> tuple[float, fl
         return 0.0, sd_floor
     mu = float(s.mean())
     sd = float(s.std())
-    mad = 1.4826 * float(np.median(np.abs(s - np.median(s))))
+    mad = 1.4826 * _median(np.abs(s - _median(s)))
     return mu, max(sd, mad, sd_floor)
+
+
+def _median(x: np.ndarray) -> float:
+    """``np.median`` of a short 1-D array, the same number, without its per-call overhead (the background
+    statistics are refreshed every few frames on about a hundred scores)."""
+    v = np.sort(x)
+    n = v.size
+    h = n // 2
+    return float(v[h]) if n % 2 else float((v[h - 1] + v[h]) / 2.0)
 
 
 def absent_distribution(scores: np.ndarray, *, tail: float, sd_floor: float) -> tuple[float, float]:
