@@ -141,3 +141,30 @@ def test_match_surface_numpy_loop(benchmark, method):
     rng = np.random.default_rng(0)
     search, tmpl = rng.uniform(0, 255, (64, 64)), rng.uniform(0, 255, (24, 24))
     benchmark.pedantic(lambda: match_surface_reference(search, tmpl, method), rounds=3, iterations=1)
+
+
+# ---------------------------------------------------------------------------- fusion-pf's structural cue
+
+@pytest.mark.parametrize("levels", ["uint8", "float64"])
+def test_structure_ncc_100_boxes(benchmark, region, levels):
+    """The compiled NCC of 100 boxes on a reduced region read as 8-bit levels or as their float64 copy (the
+    cue reads the copy when the region is small next to the samples; the numbers are the same)."""
+    from pftrack.cues.structure import StructureCue, _grid, _ncc_boxes, reduce_region
+
+    frame, _, ell, _ = region
+    cue = StructureCue(256, weighting="uniform")
+    cue.init(frame, ell.mean(axis=0))
+    red = reduce_region(frame, (150, 150, 420, 330), 2)
+    gray = red.gray if levels == "uint8" else red.gray.astype(np.float64)
+    u, v = _grid(cue.shape)
+    tw, w = cue._prepared
+    out = np.empty(ell.shape[0])
+    benchmark(_ncc_boxes, gray, ell, float(red.x0), float(red.y0), float(red.k), u, v, tw, w, 1.0, out)
+
+
+def test_fusion_pf_update(benchmark, clip):
+    frames, gt = clip
+    tr = pftrack.create_tracker("fusion-pf", seed=0)
+    tr.init(frames[0], gt[0])
+    it = iter(frames[1:] * 1000)
+    benchmark(lambda: tr.update(next(it)))
