@@ -8,7 +8,7 @@ import pftrack
 from pftrack.cues import feature_selection as fs
 from pftrack.filtering.loss import RunningThreshold
 from pftrack.geometry import iou
-from pftrack.synth import Scene, teleport_scene
+from pftrack.synth import Scene, camouflage_scene, teleport_scene
 
 
 def test_llr_and_variance_ratio_worked_example():
@@ -55,6 +55,41 @@ def test_only_the_second_feature_is_replaced(previous, ranking, expected):
     if previous is not None:
         assert fs.select_pair(previous, ranking)[0] == previous[0]
         assert fs.select_pair(previous, ranking, replace="all") == ranking[:2]
+
+
+def test_partner_ranking_skips_a_copy_of_the_first_feature():
+    """On grey frames R = G = B: Eq. 12 alone ranks the copies first and second; the joint ranking
+    (partner="joint") pairs the first feature with one that adds information."""
+    rng = np.random.default_rng(1)
+    h, w = 60, 80
+    obj = np.zeros((h, w), bool)
+    obj[20:40, 30:50] = True
+    ring = ~obj
+    inten = np.where(obj, rng.integers(2, 5, (h, w)), rng.integers(3, 10, (h, w)))  # overlapping ranges
+    other = np.where(obj, rng.integers(0, 6, (h, w)), rng.integers(0, 12, (h, w)))  # weaker alone, independent
+    bins = np.stack([inten, inten, other], axis=-1).astype(np.uint8)
+    names = ("R", "G", "S")
+    ranking, vr = fs.rank_features(bins, obj, ring, names)
+    assert ranking[:2] == ("R", "G")  # the copy ranks second alone
+    partners, pvr = fs.rank_partners(bins, obj, ring, names, "R")
+    assert partners[0] == "S" and list(pvr) == sorted(pvr, reverse=True)
+    assert pvr[partners.index("G")] == pytest.approx(vr[0])  # a copy adds nothing to the pair
+
+
+def test_joint_partner_keeps_grey_camouflaged_targets():
+    """Grey camouflage scenes (target textured like the background): with the partner ranked alone the
+    pair is two intensities and the window slides off; ranked jointly it holds (ch06.md §1.2)."""
+    rates = {"single": [], "joint": []}
+    for seed in (1, 2, 3):
+        frames = list(Scene(camouflage_scene(seed, gray=1.0, n_frames=60)))
+        for partner in rates:
+            t = pftrack.create_tracker("switching", partner=partner)
+            t.init(frames[0][0], tuple(frames[0][1].boxes[0]))
+            hits = [iou(np.array(t.update(f).box), tr.boxes[0]) >= 0.5 for f, tr in frames[1:]
+                    if tr.present[0] and tr.visible[0] > 0.9]
+            rates[partner].append(np.mean(hits))
+    assert min(rates["joint"]) >= 0.8, rates
+    assert np.mean(rates["joint"]) >= np.mean(rates["single"]) + 0.3, rates
 
 
 def test_weighted_meanshift_finds_a_gaussian_blob():

@@ -19,8 +19,10 @@ Book *Object Tracking*, ch. 6 (``shared/seeds/002_*`` lines 5370-6238; specifica
   constant: the weighted centroid of the ellipse) and a damped step ``y1 <- (y0 + y1)/2`` —
   :func:`weighted_meanshift`.
 
-Grey input needs no special case: R = G = B, H, S, r and g are constant, their variance
-ratios are 0, and the ranking picks intensity and orientation.
+Grey input needs no special case: H, S, r and g are constant and their variance ratios are 0.  R, G, B
+and the equalised grey level are then one intensity, so Eq. 12 alone would pair two copies of it;
+:func:`rank_partners` ranks the second feature by the pair's joint histogram instead, which prefers
+one that adds information (orientation, on grey frames).
 """
 
 from __future__ import annotations
@@ -136,6 +138,32 @@ def rank_features(bins: np.ndarray, obj_mask: np.ndarray, bg_mask: np.ndarray,
     vr = np.array([variance_ratio(*log_likelihood_ratio(f, b, delta=delta, clip=clip)) for f, b in zip(cf, cb)])
     order = np.argsort(-vr, kind="stable")
     return tuple(names[i] for i in order), vr
+
+
+def rank_partners(bins: np.ndarray, obj_mask: np.ndarray, bg_mask: np.ndarray, names: tuple[str, ...], first: str,
+                  *, n: int = 12, delta: float = 1e-3, clip: float | None = 1.0) -> tuple[tuple[str, ...], np.ndarray]:
+    """The candidates other than ``first``, sorted by the variance ratio (Eq. 12) of the *joint* histogram of
+    ``(first, candidate)`` (Eq. 16's pair), and those ratios in the returned order.
+
+    Eq. 12 ranks each feature alone, so the second pick can repeat the first: on grey frames R, G, B and the
+    equalised grey level are all functions of one intensity, and the pair adds nothing.  Ranking the partner by
+    the pair's own separability keeps the chapter's rule (the first feature stays, the second is replaced) and
+    prefers a partner that adds information (pftrack's choice, ``partner="joint"``)."""
+    k0 = names.index(first)
+    n0 = n_bins(first, n)
+    base = bins[..., k0].astype(np.int32)
+    sel_f, sel_b = base[obj_mask], base[bg_mask]
+    others, vr = [], []
+    for k, name in enumerate(names):
+        if name == first:
+            continue
+        nk = n_bins(name, n)
+        cf = np.bincount(sel_f * nk + bins[..., k][obj_mask], minlength=n0 * nk)
+        cb = np.bincount(sel_b * nk + bins[..., k][bg_mask], minlength=n0 * nk)
+        others.append(name)
+        vr.append(variance_ratio(*log_likelihood_ratio(cf, cb, delta=delta, clip=clip)))
+    order = np.argsort(-np.asarray(vr), kind="stable")
+    return tuple(others[i] for i in order), np.asarray(vr)[order]
 
 
 def select_pair(previous: tuple[str, ...] | None, ranking: tuple[str, ...], *, k: int = 2,
