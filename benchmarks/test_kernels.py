@@ -168,3 +168,33 @@ def test_fusion_pf_update(benchmark, clip):
     tr.init(frames[0], gt[0])
     it = iter(frames[1:] * 1000)
     benchmark(lambda: tr.update(next(it)))
+
+
+# -- book ch. 6, C6.3: the Log-Euclidean mean against the affine-invariant (Karcher) mean -------------
+@pytest.fixture(scope="module")
+def covariances():
+    """T = 10 SPD matrices (d = 9) of the kind a track produces: one covariance, slightly perturbed."""
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(9, 40))
+    base = A @ A.T / 40 + 0.1 * np.eye(9)
+    out = []
+    for _ in range(10):
+        E = rng.normal(scale=0.15, size=(9, 9))
+        out.append(base + 0.5 * (E @ base + base @ E.T) + 0.01 * np.eye(9))
+    return np.stack(out)
+
+
+@pytest.mark.benchmark(group="spd-mean")
+@pytest.mark.parametrize("mean", ["log-euclidean", "affine-invariant", "pyriemann-riemann"])
+def test_spd_means(benchmark, covariances, mean):
+    from pftrack.cues import covariance as cv
+
+    if mean == "log-euclidean":
+        fn = cv.le_mean
+    elif mean == "affine-invariant":
+        fn = cv.airm_mean
+    else:
+        riemann = pytest.importorskip("pyriemann.utils.mean")
+        fn = riemann.mean_riemann
+    M = benchmark(fn, covariances)
+    assert np.all(np.linalg.eigvalsh(M) > 0)
