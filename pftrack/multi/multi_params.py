@@ -1,0 +1,99 @@
+"""Parameters of ``multi-pf`` (Sugandi et al., ``shared/seeds/001_*``; see :mod:`pftrack.multi.tracker`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from ..params import Params, param
+
+__all__ = ["MultiPFParams"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class MultiPFParams(Params):
+    """Parameters of ``multi-pf``; the paper gives none of the numbers, so each is chosen and documented."""
+
+    detector: Literal["mog2", "motion", "hog"] = param("mog2", doc=(
+        "Built-in detector (a callable given as detector_fn overrides it)."))
+    object_aspect: float = param(0.4, ge=0, le=10, doc=(
+        "Expected width/height of one target (0.4: standing people); the blob detectors split wider blobs "
+        "(people walking together). 0 disables splitting."))
+    n_particles: int = param(100, ge=1, le=100_000, doc="Particles per target.")
+    max_pixels: int = param(600, ge=0, le=1_000_000, doc=(
+        "Colour histograms of larger boxes are sampled on a lattice of about this many pixels (speed)."))
+    sigma: float = param(0.2, gt=0, le=10, doc="sigma of the colour weighting (Eq. 10).")
+    contrast_gain: float = param(10.0, ge=0, le=1000, doc=(
+        "Weight of fusion-pf's background-aware contrast cue (object vs surrounding-ring colour probabilities, "
+        "pftrack.cues.contrast) in each target's likelihood; it observes the target's extent and sharpens the "
+        "boxes. 0 disables it (the paper's colour-only likelihood)."))
+    ring: float = param(0.5, gt=0, le=3, doc="Surrounding ring width of the contrast cue, fraction of the box size.")
+    foreground_gain: float = param(0.0, ge=0, le=1000, doc=(
+        "Weight of the foreground cue: mean of the detector's foreground mask inside a particle's box minus in "
+        "its surrounding ring (the same contrast form as the colour contrast). It lets several targets share "
+        "one merged blob while the colour models tell them apart. 0 disables it."))
+    position_noise: float = param(0.1, ge=0, le=10, doc="Std of the position noise xi_x (Eq. 4), fraction of the box width.")
+    velocity_noise: float = param(0.05, ge=0, le=10, doc="Std of the speed noise xi_xdot, fraction of the box width.")
+    size_noise: float = param(0.02, ge=0, le=1, doc="Std of the size noise xi_w, fraction of the size.")
+    size_rate_noise: float = param(0.005, ge=0, le=1, doc="Std of the size-rate noise xi_wdot, fraction of the size.")
+    alpha_x: float = param(0.8, ge=0, le=1, doc="Adaptation rate of the position (Eq. 12).")
+    alpha_v: float = param(0.3, ge=0, le=1, doc="Adaptation rate of the speed (Eq. 12).")
+    alpha_w: float = param(0.3, ge=0, le=1, doc="Adaptation rate of the size (Eq. 12).")
+    alpha_vw: float = param(0.1, ge=0, le=1, doc="Adaptation rate of the size rate (Eq. 12).")
+    alpha_q: float = param(0.05, ge=0, le=1, doc="Learning rate of the colour model (Eq. 13).")
+    alpha_u: float = param(0.1, gt=0, le=1, doc="Learning rate of the expected likelihood lambda (Eq. 14).")
+    normalize: Literal["per-target", "global"] = param("per-target", doc=(
+        "Weight normalisation: 'per-target' to 1/L (Eq. 11), or 'global' over the pooled samples (ablation)."))
+    occlusion: bool = param(True, doc=(
+        "Occlusion handling: the merged-detection reasoning (group_merges) and, if occlusion_predict, the "
+        "predicted-occlusion state of §3.7. False turns both off (the ablation)."))
+    group_merges: Literal["auto", "on", "off"] = param("auto", doc=(
+        "With occlusion: a detection that covers group_cover of two or more distinct targets' predicted boxes is "
+        "one blob for targets occluding each other. It is the detection of none of them (it would pull one box "
+        "over the whole group and leave the others without support); its members are reported and kept for up "
+        "to max_occluded frames, each following its own colour with its size frozen, until the blob splits. "
+        "'auto': on, except with the motion detector, whose blobs are fragments of objects rather than whole "
+        "ones (there it measured worse, docs/mot.md)."))
+    group_cover: float = param(0.5, gt=0, le=1, doc=(
+        "Fraction of a target's predicted box inside a detection for the target to be part of that detection's "
+        "group."))
+    group_fit: float = param(0.6, gt=0, le=1, doc=(
+        "A member whose predicted box overlaps a group's detection by at least this IoU explains it alone: it is "
+        "in front and takes the detection; the other members are behind it."))
+    occlusion_predict: bool = param(False, doc=(
+        "With occlusion: also the predicted-occlusion state of §3.7 (Eq. 15 and the likelihood test below). Off by "
+        "default: on PETS it did not reduce identity switches, alone or with group_merges (docs/mot.md)."))
+    occlusion_radius: float = param(0.8, gt=0, le=10, doc=(
+        "R of Eq. 15 as a fraction of the pair's mean box width: occlusion is predicted when the predicted "
+        "centres are closer than R."))
+    occlusion_drop: float = param(0.6, gt=0, le=1, doc=(
+        "A target in a predicted occlusion is occluded when its maximum sample likelihood falls below this "
+        "fraction of its recent history; it recovers when it exceeds it again."))
+    report_occluded: bool = param(False, doc=(
+        "Also report occluded targets at their coasting position (annotations such as MOTChallenge's include "
+        "hidden people). Off by default: on PETS the coasting boxes were more often wrong than right (docs/mot.md)."))
+    history_rate: float = param(0.1, gt=0, le=1, doc="Rate of the running mean of each target's maximum likelihood.")
+    detection_sigma: float = param(0.15, gt=0, le=10, doc=(
+        "Std of the detection term: position and size offsets from the associated detection, as fractions of "
+        "the detection's size."))
+    detection_proposal: float = param(0.5, ge=0, le=1, doc=(
+        "Fraction of a target's particles drawn around its associated detection instead of from the dynamics "
+        "(a mixture proposal, as in the boosted particle filter of Okuma et al. 2004), so that samples exist "
+        "near a detection the prediction missed."))
+    match_iou: float = param(0.2, ge=0, le=1, doc="Minimum IoU to associate a detection with a track.")
+    appearance_weight: float = param(1.0, ge=0, le=100, doc=(
+        "Weight of the colour dissimilarity 1 - rho(q_track, p_detection) beside 1 - IoU in the association cost "
+        "(Hungarian assignment among the pairs with IoU >= match_iou); 0 associates by overlap alone."))
+    birth_frames: int = param(3, ge=1, le=1000, doc="k: frames a detection must stay unexplained before a track is born.")
+    max_misses: int = param(12, ge=1, le=10_000, doc="m: a track dies after this many frames without a detection.")
+    max_occluded: int = param(40, ge=1, le=10_000, doc="... or this many while it is occluded or in a group.")
+    report_misses: int = param(1, ge=0, le=10_000, doc=(
+        "Tracks are reported while they matched a detection within this many frames, or are in a group (or "
+        "occluded, with report_occluded)."))
+    min_size: float = param(6.0, gt=0, doc="Smallest box side (pixels) of a track.")
+    exit_fraction: float = param(0.4, ge=0, le=1, doc="A track whose box is less than this fraction inside the image dies.")
+    identify: bool = param(False, doc=(
+        "Book ch. 1 identification: a new track takes the identity of an ended one when their upper/lower-body "
+        "colour and spatial features are similar enough (pftrack.multi.identify; reconstructed Eqs. 16-19)."))
+    identify_threshold: float = param(0.8, ge=0, le=1, doc="Least similarity (Eq. 16) to give an old identity back.")
+    identify_memory: int = param(300, ge=1, le=1_000_000, doc="Frames an ended identity is remembered.")
