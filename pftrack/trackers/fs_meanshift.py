@@ -15,7 +15,9 @@ Per frame (ch06.md §1.11, local mode):
    confident frames the model is updated, ``H_m = (1 - s) H_i + s H_c`` (Eq. 21) with ``s`` the
    NCC of the current and initial grey patches;
 5. every ``reselect_every`` frames the candidate features are re-ranked by their variance
-   ratio (Eq. 12) and only the second one is replaced (§3.3.2).
+   ratio (Eq. 12) and only the second one is replaced (§3.3.2); by default (``partner``) the
+   second is ranked by the variance ratio of its joint histogram with the first, so that it is
+   not a copy of the first (on grey frames R, G, B and ``Ieq`` are one intensity).
 
 ``lost`` is raised after ``lost_frames`` consecutive occluded frames; the tracker keeps following
 its mode (the local tracker has no recovery: that is what ``switching`` adds).  The box size is fixed unless
