@@ -9,6 +9,7 @@ from pftrack.cues import feature_selection as fs
 from pftrack.filtering.loss import RunningThreshold
 from pftrack.geometry import iou
 from pftrack.synth import Scene, camouflage_scene, teleport_scene
+from pftrack.trackers.fs_meanshift import FSMeanShift
 
 
 def test_llr_and_variance_ratio_worked_example():
@@ -74,6 +75,23 @@ def test_partner_ranking_skips_a_copy_of_the_first_feature():
     partners, pvr = fs.rank_partners(bins, obj, ring, names, "R")
     assert partners[0] == "S" and list(pvr) == sorted(pvr, reverse=True)
     assert pvr[partners.index("G")] == pytest.approx(vr[0])  # a copy adds nothing to the pair
+
+
+def test_refine_centre_moves_to_the_best_matching_window():
+    """The local rho search returns the window whose kernel histogram matches the model, from a start
+    two grid steps off, and stays put where no grid point is better."""
+    rng = np.random.default_rng(4)
+    joint = rng.integers(0, 16, (120, 160)).astype(np.int32)  # clutter of 16 bins
+    joint[40:80, 60:100] = rng.integers(16, 24, (40, 40))  # the target: its own 8 bins, 40 x 40 at (80, 60)
+    size = np.array([40.0, 40.0])
+    true = np.array([80.0, 60.0])
+    win, cx, cy = FSMeanShift._window(joint, (0, 0), true, size)
+    model = fs.kernel_histogram(joint, 24, win, cx, cy, 20.0, 20.0)
+    got = fs.refine_centre(joint, model, (0, 0), true + [4.0, -4.0], size, radius=2, step=0.05)
+    np.testing.assert_allclose(got, true)
+    np.testing.assert_allclose(fs.refine_centre(joint, model, (0, 0), true, size), true)
+    far = true + [30.0, 0.0]  # beyond the grid: the best reachable point is two steps towards the target
+    np.testing.assert_allclose(fs.refine_centre(joint, model, (0, 0), far, size), far - [4.0, 0.0])
 
 
 def test_joint_partner_keeps_grey_camouflaged_targets():

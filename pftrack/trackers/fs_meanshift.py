@@ -64,6 +64,13 @@ class FSMeanShiftParams(Params):
     llr_clip: float = param(1.0, gt=0, doc="The clamp of Eq. 11's log-likelihood ratio to [-1, 1].")
     grad_threshold: float = param(64.0, ge=0, doc=(
         "T_D of Eq. 6 in Scharr units (a unit ramp is 32): weaker gradients go to the flat orientation bin."))
+    refine_radius: int = param(2, ge=0, le=10, doc=(
+        "After mean shift, move to the centre of highest rho (Eqs. 13-14) on a grid of +-refine_radius steps "
+        "(pftrack's addition; 0: the chapter's mode). Mean shift on the back-projection leans towards the target's "
+        "most discriminative part. Chosen on the tune split (55 sequences): switching 0.641 vs 0.574 (paired +0.067 "
+        "+- 0.021), fs-meanshift 0.588 vs 0.477 (+0.111 +- 0.027); on 67 fresh synthetic scenes of neither split "
+        "switching +0.073 +- 0.021. A radius of 1 at steps of a tenth of the box: +0.033."))
+    refine_step: float = param(0.05, gt=0, le=0.5, doc="Grid step of refine_radius, as a fraction of the box (>= 1 px).")
     search_scale: float = param(2.5, ge=1.2, le=6, doc="R_b of Eq. 17: the search region is the box times this.")
     ring_inner: float = param(1.1, ge=1, le=3, doc="Background ring for Eq. 12: from the box times this ...")
     ring_outer: float = param(2.0, ge=1.2, le=5, doc="... to the box times this (ch06.md §1.3, proposed).")
@@ -213,6 +220,8 @@ class FSMeanShift(WorkingResolution, Tracker):
         pw = fs.backproject(fs.division_histogram(self.H_m, zeta_b, delta=p.delta), joint)
         c, it, mass = fs.weighted_meanshift(pw, start, size / 2, origin=(x0, y0), max_iter=p.max_iterations,
                                             eps=p.epsilon, damping=p.damping)
+        if p.refine_radius > 0:
+            c = fs.refine_centre(joint, self.H_m, (x0, y0), c, size, radius=p.refine_radius, step=p.refine_step)
         H_c = self._kernel_hist(joint, (x0, y0), c, size)
         rho = float(np.sum(np.sqrt(H_c * self.H_m)))
         self._last_region = (joint, (x0, y0), pw)
