@@ -55,8 +55,8 @@ BUILTIN: list[tuple[str, type, str, dict]] = [
      "the first frame's blocks, insensitive to monotonic brightness change (book ch. 1)", {}),
     ("fs-meanshift", FSMeanShift,
      "Mean shift on the back-projection of the two most discriminative of 9 colour/orientation/grey features, "
-     "reselected online by Collins' variance ratio (the second by the pair's joint histogram), similarity-weighted "
-     "model update (book ch. 6)", {}),
+     "reselected online by Collins' variance ratio (the second by the pair's joint histogram), the mode refined on "
+     "the Bhattacharyya coefficient, similarity-weighted model update (book ch. 6)", {}),
     ("keypoint-ams", KeypointAMS,
      "Hybrid of SIFT-RANSAC and anisotropic mean shift: the candidate (A, B or their rho-weighted mix) with the "
      "highest Bhattacharyya coefficient, reference learned from the best stable frame every 25 (book ch. 5)", {}),

@@ -5,7 +5,9 @@ Per frame (ch06.md §1.11, local mode):
 
 1. the two selected features are binned over the search region (the box x ``search_scale``);
    the target model ``H_m`` divided by the region's histogram (Eq. 18) is back-projected;
-2. damped mean shift on that weight image (Eqs. 19-20), at most 15 iterations;
+2. damped mean shift on that weight image (Eqs. 19-20), at most 15 iterations; by default
+   (``refine_radius``) the mode is then moved to the centre of highest ``rho`` on a small grid
+   around it (the mode of the back-projection leans towards the target's most discriminative part);
 3. the Bhattacharyya coefficient ``rho`` of the candidate's kernel histogram against ``H_m`` and
    its distance ``d = sqrt(1 - rho)`` (Eqs. 13-14);
 4. the occlusion test (``occlusion_test``): by default the project's two-class loss test on
