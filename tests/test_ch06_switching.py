@@ -9,7 +9,6 @@ from pftrack.cues import feature_selection as fs
 from pftrack.filtering.loss import RunningThreshold
 from pftrack.geometry import iou
 from pftrack.synth import Scene, camouflage_scene, teleport_scene
-from pftrack.trackers.fs_meanshift import FSMeanShift
 
 
 def test_llr_and_variance_ratio_worked_example():
@@ -85,8 +84,8 @@ def test_refine_centre_moves_to_the_best_matching_window():
     joint[40:80, 60:100] = rng.integers(16, 24, (40, 40))  # the target: its own 8 bins, 40 x 40 at (80, 60)
     size = np.array([40.0, 40.0])
     true = np.array([80.0, 60.0])
-    win, cx, cy = FSMeanShift._window(joint, (0, 0), true, size)
-    model = fs.kernel_histogram(joint, 24, win, cx, cy, 20.0, 20.0)
+    i0, j0, i1, j1, cx, cy = fs.kernel_window(joint.shape, *true, *size)
+    model = fs.kernel_histogram(joint, 24, (i0, j0, i1, j1), cx, cy, 20.0, 20.0)
     got = fs.refine_centre(joint, model, (0, 0), true + [4.0, -4.0], size, radius=2, step=0.05)
     np.testing.assert_allclose(got, true)
     np.testing.assert_allclose(fs.refine_centre(joint, model, (0, 0), true, size), true)

@@ -157,8 +157,8 @@ def _contrast_ellipses_numba(ii, ox, oy, pitch, ell, ring, outside, out):
     lattice of origin ``(ox, oy)`` and ``pitch`` (the same arithmetic as :func:`contrast_scores`)."""
     for k in range(ell.shape[0]):
         cx, cy, hx, hy = ell[k, 0], ell[k, 1], ell[k, 2], ell[k, 3]
-        out[k] = _contrast_one(ii, 0, 0, (cx - hx - ox) / pitch, (cy - hy - oy) / pitch, (2.0 * hx - 0.0) / pitch,
-                               (2.0 * hy - 0.0) / pitch, ring, outside)
+        out[k] = _contrast_one(ii, 0, 0, (cx - hx - ox) / pitch, (cy - hy - oy) / pitch, 2.0 * hx / pitch,
+                               2.0 * hy / pitch, ring, outside)
     return out
 
 

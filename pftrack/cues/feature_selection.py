@@ -237,6 +237,29 @@ def _kernel_hist(joint, i0, j0, i1, j1, cx, cy, hx, hy, h):
             h[joint[j0 + r, i0 + c]] += 1.0 - r2 if r2 <= 1.0 else 0.0
 
 
+def kernel_window(shape: tuple[int, int], cx: float, cy: float, sx: float, sy: float):
+    """The pixels of a region of ``shape`` ``(h, w)`` under the ellipse of size ``(sx, sy)`` centred at ``(cx, cy)``
+    (region coordinates): ``(i0, j0, i1, j1, wcx, wcy)``, the window and the centre in window coordinates.  A window
+    partly outside the region keeps its inside part; an empty one has ``i1 <= i0`` or ``j1 <= j0``."""
+    h, w = shape
+    i0, i1 = max(int(cx - sx / 2), 0), min(int(math.ceil(cx + sx / 2)) + 1, w)
+    j0, j1 = max(int(cy - sy / 2), 0), min(int(math.ceil(cy + sy / 2)) + 1, h)
+    return i0, j0, i1, j1, cx - i0, cy - j0
+
+
+def kernel_rhos_at(joint: np.ndarray, model: np.ndarray, centres: np.ndarray, sx: float, sy: float) -> np.ndarray:
+    """:func:`kernel_rhos` of the ellipses of size ``(sx, sy)`` at ``centres`` ``(M, 2)`` (region coordinates); NaN
+    where the window is empty or holds no kernel weight."""
+    out = np.full(len(centres), np.nan)
+    wins = [kernel_window(joint.shape, float(cx), float(cy), sx, sy) for cx, cy in centres]
+    ok = np.array([i1 > i0 and j1 > j0 for i0, j0, i1, j1, _, _ in wins], dtype=bool)
+    if ok.any():
+        sel = [wn for wn, good in zip(wins, ok) if good]
+        out[ok] = kernel_rhos(joint, model, np.array([wn[:4] for wn in sel]), np.array([wn[4:] for wn in sel]),
+                              sx / 2, sy / 2)
+    return out
+
+
 def refine_centre(joint: np.ndarray, model: np.ndarray, origin: tuple[int, int], c, size, *, radius: int = 2,
                   step: float = 0.05) -> np.ndarray:
     """The centre of highest Bhattacharyya coefficient (Eqs. 13-14) on a ``(2 radius + 1)^2`` grid around ``c``,
@@ -247,22 +270,12 @@ def refine_centre(joint: np.ndarray, model: np.ndarray, origin: tuple[int, int],
     local search on rho itself corrects that (pftrack's addition)."""
     c = np.asarray(c, dtype=np.float64)
     size = np.asarray(size, dtype=np.float64)
-    h, w = joint.shape
     d = np.maximum(size * step, 1.0)
     offs = np.arange(-radius, radius + 1, dtype=np.float64)
     gx, gy = np.meshgrid(c[0] + offs * d[0], c[1] + offs * d[1])
     cands = np.column_stack([gx.ravel(), gy.ravel()])
-    lcx, lcy = cands[:, 0] - origin[0], cands[:, 1] - origin[1]
-    i0 = np.maximum((lcx - size[0] / 2).astype(np.int64), 0)
-    i1 = np.minimum(np.ceil(lcx + size[0] / 2).astype(np.int64) + 1, w)
-    j0 = np.maximum((lcy - size[1] / 2).astype(np.int64), 0)
-    j1 = np.minimum(np.ceil(lcy + size[1] / 2).astype(np.int64) + 1, h)
-    ok = (i1 > i0) & (j1 > j0)
-    rho = np.full(len(cands), -1.0)
-    if ok.any():
-        r = kernel_rhos(joint, model, np.column_stack([i0, j0, i1, j1])[ok],
-                        np.column_stack([lcx - i0, lcy - j0])[ok], size[0] / 2, size[1] / 2)
-        rho[ok] = np.where(np.isfinite(r), r, -1.0)
+    rho = kernel_rhos_at(joint, model, cands - np.asarray(origin, dtype=np.float64), float(size[0]), float(size[1]))
+    rho = np.where(np.isfinite(rho), rho, -1.0)
     k = int(np.argmax(rho))
     centre = len(cands) // 2
     return cands[k].copy() if rho[k] > rho[centre] else c

@@ -229,20 +229,10 @@ class FSMeanShift(WorkingResolution, Tracker):
         self._last_region = (joint, (x0, y0), pw)
         return c, rho, H_c, it, mass
 
-    @staticmethod
-    def _window(joint, origin, c, size) -> tuple[tuple[int, int, int, int], float, float]:
-        """The pixels of ``joint`` under the ellipse of ``size`` at ``c``: ``(i0, j0, i1, j1)`` and the centre in
-        window coordinates (a window partly outside the region keeps its inside part)."""
-        h, w = joint.shape
-        lcx, lcy = c[0] - origin[0], c[1] - origin[1]
-        i0, i1 = max(int(lcx - size[0] / 2), 0), min(int(np.ceil(lcx + size[0] / 2)) + 1, w)
-        j0, j1 = max(int(lcy - size[1] / 2), 0), min(int(np.ceil(lcy + size[1] / 2)) + 1, h)
-        return (i0, j0, i1, j1), lcx - i0, lcy - j0
-
     def _kernel_hist(self, joint, origin, c, size) -> np.ndarray:
         """Kernel-weighted joint histogram (Eq. 16) of the ellipse of ``size`` at ``c`` (pixels of ``joint``
         only: a window partly outside the region uses its inside part)."""
-        (i0, j0, i1, j1), cx, cy = self._window(joint, origin, c, size)
+        i0, j0, i1, j1, cx, cy = fs.kernel_window(joint.shape, c[0] - origin[0], c[1] - origin[1], size[0], size[1])
         if i1 <= i0 or j1 <= j0:
             return np.zeros(self._n_joint)
         return fs.kernel_histogram(joint, self._n_joint, (i0, j0, i1, j1), cx, cy, size[0] / 2, size[1] / 2)
@@ -251,18 +241,9 @@ class FSMeanShift(WorkingResolution, Tracker):
         """rho of the model at the 8 windows ``background_offset`` box sizes around ``c`` (last region)."""
         joint, origin, _ = self._last_region
         off = self.params.background_offset
-        windows, centres = [], []
-        for dx in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                if dx or dy:
-                    win, cx, cy = self._window(joint, origin, (c[0] + dx * off * size[0], c[1] + dy * off * size[1]),
-                                               size)
-                    if win[2] > win[0] and win[3] > win[1]:
-                        windows.append(win)
-                        centres.append((cx, cy))
-        if not windows:
-            return np.empty(0)
-        rho = fs.kernel_rhos(joint, self.H_m, np.array(windows), np.array(centres), size[0] / 2, size[1] / 2)
+        centres = [(c[0] + dx * off * size[0] - origin[0], c[1] + dy * off * size[1] - origin[1])
+                   for dx in (-1, 0, 1) for dy in (-1, 0, 1) if dx or dy]
+        rho = fs.kernel_rhos_at(joint, self.H_m, np.array(centres), size[0], size[1])
         return rho[np.isfinite(rho)]
 
     def _passes(self, rho: float) -> bool:
