@@ -92,6 +92,25 @@ def test_numba_and_numpy_paths_identical(rng):
     assert np.allclose(a, b, rtol=0, atol=1e-12) and np.allclose(ta, tb, rtol=1e-12, atol=0)
 
 
+@pytest.mark.skipif(not NUMBA_INSTALLED, reason="numba not installed")
+def test_compiled_rows_take_exactly_the_pixels_inside_on_the_pixel_grid(rng):
+    """Ellipses whose ends fall on pixel centres (centres and half-axes on the half-pixel grid, the rows' spans
+    then end exactly at a centre) and random ones: the compiled path's analytic row spans, with its exact
+    fallback near pixel centres, select exactly the pixels of the exact test (one bin per pixel)."""
+    h, w = 60, 80
+    bins = np.arange(h * w, dtype=np.int64).reshape(h, w)
+    snapped = np.column_stack([rng.integers(0, 160, 300) / 2.0, rng.integers(0, 120, 300) / 2.0,
+                               rng.integers(1, 60, 300) / 2.0, rng.integers(1, 60, 300) / 2.0])
+    snapped[:100, 3] = snapped[:100, 2]  # circles: rows whose span ends at a centre in both directions
+    free = np.column_stack([rng.uniform(0, 80, 200), rng.uniform(0, 60, 200), rng.uniform(0.3, 30, 200),
+                            rng.uniform(0.3, 30, 200)])
+    ell = np.concatenate([snapped, free])
+    a, _ = ellipse_histograms(bins, 0, 0, ell, h * w, backend="numba")
+    b, _ = ellipse_histograms(bins, 0, 0, ell, h * w, backend="numpy")
+    assert np.array_equal(a > 0, b > 0)
+    assert np.allclose(a, b, rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("kernel", ["nummiaro", "epanechnikov"])
 @pytest.mark.parametrize("backend", ["numpy", "numba"])
 def test_fused_rho_equals_histogram_then_bhattacharyya(rng, kernel, backend):

@@ -94,10 +94,56 @@ def _pixel_span(c, h, n_pixels):
     return lo, hi
 
 
+#: A row's analytic span (from a square root) is trusted when both its ends lie further than ``_SNAP`` pixels
+#: from a pixel centre and ``1 - ry`` exceeds ``_GRAZE``: rounding moves them by far less (~1e-12 px for
+#: half-axes below 10^4; near the ellipse's top and bottom the root amplifies the error of ``ry``, hence
+#: the second bound).  Other rows take the exact test of :func:`_row_span`.
+_SNAP = 1e-5
+_GRAZE = 1e-4
+
+
 @njit
-def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark):
+def _row_spans(cx, cy, hx, hy, j_lo, n_rows, wid, span_a, span_b, fix):
+    """Pixel spans ``[span_a[r], span_b[r]]`` of rows ``j_lo + r`` inside the ellipse, exactly those of
+    :func:`_row_span` (clipped to ``[0, wid - 1]``).  The analytic spans are computed for all rows first (a
+    branch-free loop the compiler vectorises); only rows whose ends lie within rounding error of a pixel
+    centre are redone with the exact test (almost never)."""
+    ihx2 = 1.0 / (hx * hx)
+    ihy2 = 1.0 / (hy * hy)
+    n_fix = 0
+    for r in range(n_rows):
+        dy = j_lo + r + 0.5 - cy
+        slack = 1.0 - dy * dy * ihy2
+        half = hx * math.sqrt(max(slack, 0.0))
+        t_a = cx - half - 0.5
+        t_b = cx + half - 0.5
+        fa = math.ceil(t_a)
+        fb = math.floor(t_b)
+        span_a[r] = max(int(fa), 0)
+        span_b[r] = min(int(fb), wid - 1)
+        da = fa - t_a
+        db = t_b - fb
+        trusted = (slack > _GRAZE) & (da > _SNAP) & (da < 1.0 - _SNAP) & (db > _SNAP) & (db < 1.0 - _SNAP)
+        fix[r] = not trusted
+        n_fix += 0 if trusted else 1
+    if n_fix == 0:
+        return
+    for r in range(n_rows):
+        if fix[r]:
+            dy = j_lo + r + 0.5 - cy
+            ry = dy * dy * ihy2
+            if ry > 1.0:
+                span_a[r] = 1
+                span_b[r] = 0
+            else:
+                span_a[r], span_b[r] = _row_span(cx, hx, ihx2, ry, 0, wid - 1)
+
+
+@njit
+def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans):
     """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)); with ``mark`` not
     empty, also set ``mark[u >> 3]`` for every bin ``u`` touched (groups of 8 bins, for a scan to skip the rest).
+    ``spans``: (3, bins.shape[0]) int64 scratch for the rows' pixel spans.
 
     Even and odd pixels of a row go to two separate histograms so that runs of the
     same bin do not serialise on one memory location, and the weight, a quadratic
@@ -107,24 +153,28 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark):
     if not (hx > 0.0 and hy > 0.0):
         return
     marking = mark.shape[0] > 0
-    ihx2 = 1.0 / (hx * hx)
     ihy2 = 1.0 / (hy * hy)
     ia2 = 1.0 / (hx * hx + hy * hy)
-    scale = ia2 if kernel == 0 else ihx2
+    scale = ia2 if kernel == 0 else 1.0 / (hx * hx)
     dd = -2.0 * scale
     j_lo = max(0, int(math.ceil(cy - hy - 0.5)))
     j_hi = min(hgt - 1, int(math.floor(cy + hy - 0.5)))
-    for j in range(j_lo, j_hi + 1):
-        dy = j + 0.5 - cy
-        dy2 = dy * dy
-        ry = dy2 * ihy2
-        if ry > 1.0:
-            continue
-        a, b = _row_span(cx, hx, ihx2, ry, 0, wid - 1)
+    n_rows = j_hi - j_lo + 1
+    if n_rows <= 0:
+        return
+    span_a = spans[0]
+    span_b = spans[1]
+    _row_spans(cx, cy, hx, hy, j_lo, n_rows, wid, span_a, span_b, spans[2])
+    for r in range(n_rows):
+        a = span_a[r]
+        b = span_b[r]
         if a > b:
             continue
+        j = j_lo + r
+        dy = j + 0.5 - cy
+        dy2 = dy * dy
         row = bins[j]
-        base = 1.0 - dy2 * ia2 if kernel == 0 else 1.0 - ry
+        base = 1.0 - dy2 * ia2 if kernel == 0 else 1.0 - dy2 * ihy2
         dx = a + 0.5 - cx
         w0 = base - dx * dx * scale  # weight of pixel i
         d0 = -(2.0 * dx + 1.0) * scale  # w(i + 1) - w(i)
@@ -148,8 +198,10 @@ def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc):
     n_part = ell.shape[0]
     n_bins = out.shape[1]
     no_mark = np.empty(0, np.uint8)
+    spans = np.empty((3, bins.shape[0]), np.int64)
     for n in range(n_part):
-        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1], no_mark)
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1], no_mark,
+                            spans)
         total = 0.0
         for u in range(n_bins):
             h = acc[0, u] + acc[1, u]
@@ -303,8 +355,10 @@ def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc):
     present = np.empty(n_bins if by_region else 0, np.int64)
     m = _present_bins(bins, n_bins, present) if by_region else 0
     mark = np.zeros(0 if by_region else (n_bins + 7) >> 3, np.uint8)
+    spans = np.empty((3, bins.shape[0]), np.int64)
     for n in range(ell.shape[0]):
-        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1, mark)
+        _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1, mark,
+                            spans)
         total = 0.0
         s = 0.0
         if by_region:
