@@ -61,6 +61,35 @@ def test_full_occlusion_is_flagged_lost_and_target_reacquired(seed):
     assert center_error(boxes(states)[tail], gt[tail]).mean() < 5.0
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_search_interval_searches_every_kth_frame_after_the_dense_ones_and_still_reacquires(seed):
+    dense, every = 3, 3
+    gt, truths, states, _ = run(occlusion_scene(seed, full=True), seed, search_interval=every, search_dense=dense)
+    vis = np.array([t.visible[0] for t in truths])
+    modes = [s.info.get("mode") for s in states]
+    lost = np.array([s.lost for s in states])
+    start = modes.index("lost")  # the frame the loss was declared; the search starts on the next one
+    run_end = start + 1
+    while run_end < len(modes) and modes[run_end] in ("searching", "waiting"):
+        run_end += 1
+    assert run_end - start > dense + 2 * every  # long enough to see the pattern
+    for t in range(start + 1, run_end):
+        k = t - start
+        assert modes[t] == ("searching" if k <= dense or k % every == 0 else "waiting"), (t, k, modes[t])
+        assert lost[t]
+        if modes[t] == "waiting":  # the last search's result again
+            assert states[t].box == states[t - 1].box and states[t].score == states[t - 1].score
+    # re-acquired on a searched frame, within a few frames of reappearing, on the right spot
+    k = run_end - start
+    assert modes[run_end] == "acquired" and (k <= dense or k % every == 0)
+    hidden = vis < 0.05
+    back = int(np.nonzero(hidden)[0][-1]) + 1
+    visible_again = back + int(np.argmax(vis[back:] > 0.6))
+    assert run_end - visible_again <= 4 + every - 1
+    tail = slice(run_end + 2, len(states))
+    assert center_error(boxes(states)[tail], gt[tail]).mean() < 5.0
+
+
 def test_model_update_beats_no_update_under_illumination_drift():
     errs = {}
     for gate in ("threshold", "never"):

@@ -121,6 +121,14 @@ class ColorModelParams(Params):
         "Fraction of the new search samples drawn around the position predicted from the target's last "
         "confident velocity (constant-velocity extrapolation, spread growing with the time lost); the rest "
         "are spread over the frame. 0: uniform search only (the paper)."))
+    search_interval: int = param(1, ge=1, le=1000, doc=(
+        "Once a loss has lasted search_dense frames, search only on every search_interval-th frame; the frames "
+        "between report the last search's result (still lost). A target that reappears after a long absence is "
+        "found up to search_interval - 1 frames later; the search is most of a lost frame's cost. 1: search "
+        "every frame."))
+    search_dense: int = param(15, ge=0, le=100_000, doc=(
+        "Frames after a loss (or after the start of an automatic initialisation) that are all searched, "
+        "whatever search_interval: a target coming out of a short occlusion is looked for on every frame."))
     acquire_samples: int = param(3, ge=1, le=1_000_000, doc=(
         "With the likelihood loss test: search samples near the best candidate that must pass the appearance "
         "condition before the candidate is tested against the target's history (at most the paper's b N)."))

@@ -114,6 +114,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self.regions: np.ndarray | None = None
         self._search_states: np.ndarray | None = None
         self._search_loglik: np.ndarray | None = None
+        self._search_since = 0  # frame index at which the current search began
+        self._last_search: TrackState | None = None  # its latest result (re-reported between searches)
         self._ell = np.empty((0, 4))
 
     def _set_model(self, q: np.ndarray) -> None:
@@ -210,6 +212,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self._lost_at = None
         self._search_states = None
         self._search_loglik = None
+        self._last_search = None
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         self._reset()
@@ -236,8 +239,10 @@ class ColorParticleFilter(SearchMixin, Tracker):
             box = self._best_detection(frame)
             state = (self._state(box=(0.0, 0.0, 0.0, 0.0), score=0.0, lost=True) if box is None
                      else self._init(frame, box))
+        elif self._search_due():
+            state = self._last_search = self._search(frame)
         else:
-            state = self._search(frame)
+            state = self._waiting_state()
         self._on_frame(frame)
         return state
 
@@ -376,6 +381,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
             self.loss.lost = True
             self._lost_at = self._confident_motion
             self._search_states = None
+            self._search_since = self.frame_index
             return self._state(box=self.last_box or box, score=min(score, 0.5) if p.loss_test == "likelihood"
                                else score, lost=True, info={**info, "mode": "lost"})
         if not p.search:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -142,6 +143,20 @@ class SearchMixin:
             cy = (cell // nx + rng.random(c)) * (h / ny) + y
             out.append(np.column_stack([cx, cy]))
         return np.concatenate(out) if out else np.empty((0, 2))
+
+    def _search_due(self) -> bool:
+        """Search on this frame? Every frame for the first ``search_dense`` frames of a search, then every
+        ``search_interval``-th."""
+        p = self.params
+        if p.search_interval <= 1 or self._last_search is None:
+            return True
+        k = self.frame_index - self._search_since
+        return k <= p.search_dense or k % p.search_interval == 0
+
+    def _waiting_state(self) -> TrackState:
+        """A frame between two searches: the last search's result again (the target is still lost)."""
+        last = self._last_search
+        return replace(last, info={**last.info, "mode": "waiting"})
 
     def _search(self, frame: np.ndarray) -> TrackState:
         """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
