@@ -106,6 +106,30 @@ def test_sampled_box_equals_the_area_resized_crop():
     assert ncc_scores(got.reshape(1, -1), standardize(ref.reshape(1, -1)))[0] > 0.94  # 2 px off: 0.88
 
 
+@pytest.mark.parametrize("k", [2, 3, 4, 5, 6, 7])
+def test_compiled_block_means_equal_opencvs_area_resize(k):
+    """Blocks of 3..7 px are summed by a compiled pass and rounded as OpenCV rounds them: the same numbers as its
+    integer-factor area resize, on textured, flat and noisy frames at any offset (and OpenCV's own for k = 2 or
+    a size that k does not divide)."""
+    from pftrack.cues.reduced_region import block_means
+    rng = np.random.default_rng(k)
+    for trial in range(40):
+        hgt, wid = int(rng.integers(k, 300)), int(rng.integers(k, 400))
+        img = rng.integers(0, 256, (hgt, wid, 3), dtype=np.uint8)
+        if trial % 3 == 1:
+            img = cv2.GaussianBlur(img, (7, 7), 3)
+        elif trial % 3 == 2:
+            img[:] = rng.integers(0, 256)
+        x0, y0 = int(rng.integers(0, wid // 2 + 1)), int(rng.integers(0, hgt // 2 + 1))
+        w, h = (wid - x0) // k * k, (hgt - y0) // k * k
+        if trial % 5 == 4:
+            w = max(w - 1, 1)  # not a multiple of k: OpenCV's own path
+        if w < k or h < k:
+            continue
+        ref = cv2.resize(img[y0:y0 + h, x0:x0 + w], (w // k, h // k), interpolation=cv2.INTER_AREA)
+        assert np.array_equal(block_means(img, x0, y0, w, h, k), ref), (k, trial)
+
+
 @pytest.mark.parametrize("k", [4, 8, 12, 16])
 def test_large_block_reduction_is_close_to_the_block_means(k):
     """k >= 8 averages a spread subset of each block's pixels instead of all k x k (exact below)."""

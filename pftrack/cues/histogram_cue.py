@@ -233,7 +233,8 @@ class ColorCue:
         if self.max_pixels <= 0:
             return 1
         e = np.asarray(ellipses).reshape(-1, 4)
-        area = math.pi * float(np.mean(e[:, 2] * e[:, 3]))
+        a = e[:, 2] * e[:, 3]
+        area = math.pi * float(a.sum() / a.size)  # np.mean's numbers without its dispatch
         return max(1, int(math.ceil(math.sqrt(area / self.max_pixels))))
 
     def histograms(self, features: ColorFeatures, ellipses: np.ndarray, *, reuse: bool = True

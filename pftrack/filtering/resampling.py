@@ -16,6 +16,7 @@ systematic) and in cost.
 
 from __future__ import annotations
 
+import math
 from typing import Callable
 
 import numpy as np
@@ -29,7 +30,7 @@ def _cumulative(weights: np.ndarray) -> np.ndarray:
         raise ValueError("weights must be a non-empty 1-D array")
     c = np.cumsum(w)
     total = c[-1]
-    if not np.isfinite(total) or total <= 0:
+    if not math.isfinite(total) or total <= 0:
         raise ValueError("weights must be finite with a positive sum")
     c /= total  # c'(n) = c(n) / c(N)
     c[-1] = 1.0  # guard against round-off so every r in [0, 1) finds an index

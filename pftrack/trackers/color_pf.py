@@ -346,7 +346,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         hist_e, tot_e = self.cue.histograms(feats, e_ell)
         p_e = hist_e[0].copy()
         # element-wise sums, not BLAS: results must not depend on the BLAS thread count of the process
-        rho_e = float(np.clip(np.sum(np.sqrt(p_e) * self._sqrt_q), 0.0, 1.0)) if tot_e[0] > 0 else 0.0
+        rho_e = min(max(float((np.sqrt(p_e) * self._sqrt_q).sum()), 0.0), 1.0) if tot_e[0] > 0 else 0.0
         cx, cy, hx, hy = (float(v) for v in e_ell[0])
         box = (cx - hx, cy - hy, 2.0 * hx, 2.0 * hy)  # ellipse_to_box
         # appearance condition (Eq. 15) -> lost detection (§6)

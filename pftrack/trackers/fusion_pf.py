@@ -175,8 +175,8 @@ class FusionPF(ColorPF):
         x0, y0, x1, y1 = super()._propagate(states)
         if self.params.contrast:  # the rings must be inside the quantised region too
             r = self.params.ring
-            mx = 2.0 * r * float(np.max(states[:, HX])) + 1.0
-            my = 2.0 * r * float(np.max(states[:, HY])) + 1.0
+            mx = 2.0 * r * float(states[:, HX].max()) + 1.0
+            my = 2.0 * r * float(states[:, HY].max()) + 1.0
             return x0 - mx, y0 - my, x1 + mx, y1 + my
         return x0, y0, x1, y1
 
