@@ -92,6 +92,24 @@ def test_numba_and_numpy_paths_identical(rng):
     assert np.allclose(a, b, rtol=0, atol=1e-12) and np.allclose(ta, tb, rtol=1e-12, atol=0)
 
 
+@pytest.mark.parametrize("bins", [(8, 8, 8), (16, 4, 2), (6, 6, 6)])
+def test_region_quantisation_by_shifts_equals_the_table(rng, bins):
+    """Power-of-two RGB bins are quantised by shifts on the frame's rows: the same bins as the table lookup,
+    for any region (and the table itself when the bins are not powers of two)."""
+    from pftrack.cues.color import quantize_region, shift_form
+    lut = make_lut("rgb", bins)
+    shifts = shift_form(lut)
+    assert (shifts is None) == (bins == (6, 6, 6))
+    img = rng.integers(0, 256, (70, 90, 3), dtype=np.uint8)
+    for x0, y0, x1, y1 in [(0, 0, 90, 70), (13, 7, 61, 52), (89, 69, 90, 70), (5, 60, 90, 70)]:
+        expected = quantize(np.ascontiguousarray(img[y0:y1, x0:x1]), lut)
+        out = np.empty((y1 - y0, x1 - x0), np.uint16)
+        assert np.array_equal(quantize_region(img, x0, y0, x1, y1, lut, out, shifts), expected)
+    cue = ColorCue(bins=bins)
+    feats = cue.prepare(img, (13, 7, 61, 52))
+    assert np.array_equal(feats.bins, quantize(np.ascontiguousarray(img[7:52, 13:61]), lut))
+
+
 @pytest.mark.skipif(not NUMBA_INSTALLED, reason="numba not installed")
 def test_compiled_rows_take_exactly_the_pixels_inside_on_the_pixel_grid(rng):
     """Ellipses whose ends fall on pixel centres (centres and half-axes on the half-pixel grid, the rows' spans

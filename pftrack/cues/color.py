@@ -85,6 +85,49 @@ def quantize(img: np.ndarray, lut: np.ndarray, out: np.ndarray | None = None) ->
     return out
 
 
+def shift_form(lut: np.ndarray) -> tuple[int, int, int, int, int, int] | None:
+    """``(s0, s1, s2, t0, t1, t2)`` when every channel's table is ``lut[c][v] == (v >> s_c) << t_c`` (RGB with
+    power-of-two bins, as :func:`make_lut` builds it), else None."""
+    v = np.arange(256, dtype=np.int64)
+    out = []
+    for c in range(3):
+        row = np.asarray(lut[c], dtype=np.int64)
+        for sh in range(9):
+            base = v >> sh
+            t = int(row[255]).bit_length() - int(base[255]).bit_length() if base[255] > 0 else 0
+            if t >= 0 and np.array_equal(row, base << t):
+                out.append((sh, t))
+                break
+        else:
+            return None
+    return out[0][0], out[1][0], out[2][0], out[0][1], out[1][1], out[2][1]
+
+
+@njit
+def _quantize_shift(rows, x0, y0, h, w, s0, s1, s2, t0, t1, t2, out):
+    """:func:`quantize` of the ``h x w`` region at ``(x0, y0)`` of a BGR uint8 frame given as its ``(H, W*3)``
+    rows, for a table of shift form (:func:`shift_form`): shifts on contiguous rows, which the compiler
+    vectorises (twice as fast as the three table lookups per pixel)."""
+    for j in range(h):
+        seg = rows[y0 + j, 3 * x0:3 * (x0 + w)]
+        o = out[j]
+        for i in range(w):
+            o[i] = np.uint16(((seg[3 * i] >> s0) << t0) + ((seg[3 * i + 1] >> s1) << t1)
+                             + ((seg[3 * i + 2] >> s2) << t2))
+    return out
+
+
+def quantize_region(frame: np.ndarray, x0: int, y0: int, x1: int, y1: int, lut: np.ndarray, out: np.ndarray,
+                    shifts: tuple[int, int, int, int, int, int] | None = None) -> np.ndarray:
+    """:func:`quantize` of ``frame[y0:y1, x0:x1]`` into ``out`` (its shape); with ``shifts`` (the table's
+    :func:`shift_form`) and a contiguous uint8 BGR frame, the same numbers by shifts."""
+    if (shifts is not None and numba_enabled() and frame.ndim == 3 and frame.shape[2] == 3
+            and frame.dtype == np.uint8 and frame.flags.c_contiguous):
+        h, w = out.shape
+        return _quantize_shift(frame.reshape(frame.shape[0], -1), int(x0), int(y0), h, w, *shifts, out)
+    return quantize(frame[y0:y1, x0:x1], lut, out)
+
+
 # --------------------------------------------------------------------------- histograms
 
 def _pixel_span(c, h, n_pixels):

@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 
 from .color import (DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, make_lut,
-                    quantize, reachable_roi)
+                    quantize, quantize_region, reachable_roi, shift_form)
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
 
@@ -173,6 +173,7 @@ class ColorCue:
                 raise ValueError(f"bins must be 3 integers in [1, 256], got {self.user_bins!r}")
             self.lut = make_lut(space, self.bins)
         self._base_lut = self.lut
+        self._shifts = shift_form(self.lut) if space == "rgb" else None
         self.n_bins = int(np.prod(self.bins))
         self._qbuf = np.empty(0, dtype=np.uint16)
         self._hbuf = np.empty((0, self.n_bins))
@@ -221,7 +222,10 @@ class ColorCue:
             self._qbuf = np.empty(h * w, dtype=np.uint16)
         out = self._qbuf[: h * w].reshape(h, w)  # contiguous: rows of the region are adjacent in memory
         if h and w:
-            quantize(region, self.lut, out)
+            if pitch == 1 and self.color_space == "rgb" and self.lut is self._base_lut:
+                quantize_region(frame, x0, y0, x1, y1, self.lut, out, self._shifts)
+            else:
+                quantize(region, self.lut, out)
         return ColorFeatures(out, x0, y0, pitch)
 
     def prepare_frame(self, frame: np.ndarray, pitch: int = 1) -> ColorFeatures:
