@@ -28,7 +28,7 @@ from typing import Literal
 
 import numpy as np
 
-from .._numba import njit, numba_enabled
+from .._numba import njit, np_sum, numba_enabled
 
 KERNELS = {"nummiaro": 0, "epanechnikov": 1}
 KernelName = Literal["nummiaro", "epanechnikov"]
@@ -506,6 +506,30 @@ def kernel_weights(offsets: np.ndarray, hx: float, hy: float, *, kernel: KernelN
     else:
         w = 1.0 - r2e
     return np.where((r2e <= 1.0) & (w > 0), w, 0.0)
+
+
+@njit
+def _blend_model_numba(q, p, alpha, out_q, out_sqrt):
+    for u in range(q.shape[0]):
+        out_q[u] = (1.0 - alpha) * q[u] + alpha * p[u]
+    s = np_sum(out_q)
+    n = q.shape[0]
+    for u in range(n):
+        out_q[u] = out_q[u] / s if s > 0 else 1.0 / n
+        out_sqrt[u] = math.sqrt(out_q[u])
+
+
+def blend_model(q: np.ndarray, p: np.ndarray, alpha: float) -> tuple[np.ndarray, np.ndarray]:
+    """The model update of Nummiaro et al. (Eq. 12), ``q <- (1 - alpha) q + alpha p``, renormalised (uniform if
+    empty), and its square root: ``(q, sqrt(q))`` as new arrays; the compiled path gives NumPy's numbers."""
+    if numba_enabled():
+        out_q, out_sqrt = np.empty(q.shape[0]), np.empty(q.shape[0])
+        _blend_model_numba(np.asarray(q, np.float64), np.asarray(p, np.float64), float(alpha), out_q, out_sqrt)
+        return out_q, out_sqrt
+    t = (1.0 - alpha) * q + alpha * p
+    s = t.sum()
+    t = t / s if s > 0 else np.full_like(t, 1.0 / t.size)
+    return t, np.sqrt(t)
 
 
 _WARM = False

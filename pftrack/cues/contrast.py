@@ -32,7 +32,7 @@ import math
 import cv2
 import numpy as np
 
-from .._numba import njit, numba_enabled
+from .._numba import njit, np_sum, numba_enabled
 
 
 def box_counts(bins: np.ndarray, x0: int, y0: int, box, n_bins: int, *, ring: float = 0.0, pitch: int = 1
@@ -89,6 +89,47 @@ def foreground_lut(obj_counts: np.ndarray, surround_counts: np.ndarray, *, prior
     s = np.asarray(surround_counts, dtype=np.float64)
     tot = o + s
     return np.where(tot > 0, o / np.where(tot > 0, tot, 1.0), prior).astype(np.float32)
+
+
+@njit
+def _blend_counts_numba(obj_ref, obj, sur_ref, sur, a, prior, lut):
+    """:func:`blend_counts` compiled: the same operations in the same order, element by element."""
+    s_new = np_sum(obj)
+    if s_new <= 0:
+        return False
+    ratio = np_sum(obj_ref) / s_new
+    for u in range(obj.shape[0]):
+        obj_ref[u] = (1 - a) * obj_ref[u] + a * obj[u] * ratio
+    s_new = np_sum(sur)
+    s_ref = np_sum(sur_ref)
+    if s_new > 0 and s_ref > 0:
+        ratio = s_ref / s_new
+        for u in range(sur.shape[0]):
+            sur_ref[u] = (1 - a) * sur_ref[u] + a * sur[u] * ratio
+    for u in range(obj.shape[0]):
+        tot = obj_ref[u] + sur_ref[u]
+        lut[u] = np.float64(np.float32(obj_ref[u] / tot if tot > 0 else prior))
+    return True
+
+
+def blend_counts(obj_ref: np.ndarray, obj: np.ndarray, sur_ref: np.ndarray, sur: np.ndarray, a: float,
+                 *, prior: float = 0.5) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Blend a frame's object and surround counts into the reference counts at rate ``a``, each scaled to the
+    reference's total (``ref <- (1 - a) ref + a new sum(ref) / sum(new)``; the surround only when both are
+    non-empty), and the new :func:`foreground_lut` as float64.  None (nothing changed) when the object counts
+    are empty.  Returns new arrays; the compiled path gives the NumPy path's numbers to the last bit."""
+    if numba_enabled():
+        o, s, lut = obj_ref.astype(np.float64), sur_ref.astype(np.float64), np.empty(obj_ref.shape[0])
+        ok = _blend_counts_numba(o, np.asarray(obj, np.float64), s, np.asarray(sur, np.float64), float(a),
+                                 float(prior), lut)
+        return (o, s, lut) if ok else None
+    if obj.sum() <= 0:
+        return None
+    o = (1 - a) * obj_ref + a * obj * (obj_ref.sum() / obj.sum())
+    s = sur_ref
+    if sur.sum() > 0 and sur_ref.sum() > 0:
+        s = (1 - a) * sur_ref + a * sur * (sur_ref.sum() / sur.sum())
+    return o, s, foreground_lut(o, s, prior=prior).astype(np.float64)
 
 
 @njit

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from .._numba import njit, numba_enabled
 from .color import (DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, make_lut,
                     quantize, quantize_region, reachable_roi, shift_form)
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
@@ -63,12 +64,26 @@ class ColorFeatures:
         if self.pitch == 1:
             return ellipses, self.x0, self.y0
         p = float(self.pitch)
+        if numba_enabled():
+            e = np.asarray(ellipses, dtype=np.float64)
+            return _to_lattice(e, float(self.x0), float(self.y0), p, np.empty(e.shape)), 0, 0
         # the same operations, on the whole (N, 4) array at once (adding or subtracting 0 leaves a number as it is)
         e = ellipses - np.array([self.x0, self.y0, 0.0, 0.0])
         e -= _HALF_XY
         e /= p
         e += _HALF_XY
         return e, 0, 0
+
+
+@njit
+def _to_lattice(e, x0, y0, p, out):
+    """:meth:`ColorFeatures.to_lattice`'s operations, element by element (the same numbers)."""
+    for i in range(e.shape[0]):
+        out[i, 0] = (e[i, 0] - x0 - 0.5) / p + 0.5
+        out[i, 1] = (e[i, 1] - y0 - 0.5) / p + 0.5
+        out[i, 2] = (e[i, 2] - 0.0 - 0.0) / p + 0.0
+        out[i, 3] = (e[i, 3] - 0.0 - 0.0) / p + 0.0
+    return out
 
 
 class ColorCue:

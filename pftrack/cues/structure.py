@@ -60,7 +60,11 @@ def _maps(red: Reduced, ell: np.ndarray, shape: tuple[int, int]) -> tuple[np.nda
         e = ell[0]
         mx1 = ((e[0] - red.x0) / k - 0.5 + u * (e[2] / k)).astype(np.float32)
         my1 = ((e[1] - red.y0) / k - 0.5 + v * (e[3] / k)).astype(np.float32)
-        return np.broadcast_to(mx1, (ph, pw)).reshape(1, -1), np.repeat(my1, pw).reshape(1, -1)
+        mx = np.empty((ph, pw), np.float32)
+        my = np.empty((ph, pw), np.float32)
+        mx[:] = mx1
+        my[:] = my1[:, None]
+        return mx.reshape(1, -1), my.reshape(1, -1)
     cx = (ell[:, 0] - red.x0) / k - 0.5
     cy = (ell[:, 1] - red.y0) / k - 0.5
     mx = np.empty((n, ph, pw), np.float32)

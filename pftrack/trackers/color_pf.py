@@ -44,7 +44,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..cues.color import reachable_roi, warmup
+from ..cues.color import blend_model, reachable_roi, warmup
 from ..cues.histogram_cue import ColorCue
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
@@ -392,7 +392,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
             if gate == "confident" and p.loss_test != "likelihood":
                 gate = "threshold"
             if (gate == "confident" and confident) or (gate == "threshold" and rho_e > p.update_rho):
-                self._set_model((1.0 - p.alpha) * self.q + p.alpha * p_e)
+                self.q, self._sqrt_q = blend_model(self.q, p_e, p.alpha)
                 self._update_models(frame, est, feats, rho_e)
             elif gate == "lambda":
                 pi_e = self._pi(rho_e)
@@ -400,7 +400,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
                     self.lam = pi_e
                 else:
                     if pi_e > self.lam and self.miss == 0:
-                        self._set_model((1.0 - p.alpha) * self.q + p.alpha * p_e)
+                        self.q, self._sqrt_q = blend_model(self.q, p_e, p.alpha)
                     self.lam = (1.0 - p.lambda_rate) * self.lam + p.lambda_rate * pi_e
         if p.background_interval and confident:
             self._since_bg += 1

@@ -29,6 +29,7 @@ from typing import Literal
 import numpy as np
 
 from ..cues.contrast import (
+    blend_counts,
     box_counts,
     contrast_scores_ellipses,
     foreground_lut,
@@ -281,14 +282,10 @@ class FusionPF(ColorPF):
             return
         box = ellipse_to_box(estimate[_ELL_COLS])
         obj, sur = box_counts(feats.bins, feats.x0, feats.y0, box, self.cue.n_bins, ring=p.ring, pitch=feats.pitch)
-        if obj.sum() <= 0:
-            return
-        a = p.contrast_alpha
         # counts are compared as distributions scaled to the reference areas
-        self._obj = (1 - a) * self._obj + a * obj * (self._obj.sum() / obj.sum())
-        if sur.sum() > 0 and self._sur.sum() > 0:
-            self._sur = (1 - a) * self._sur + a * sur * (self._sur.sum() / sur.sum())
-        self._lut = foreground_lut(self._obj, self._sur).astype(np.float64)
+        blended = blend_counts(self._obj, obj, self._sur, sur, p.contrast_alpha)
+        if blended is not None:
+            self._obj, self._sur, self._lut = blended
 
     def _on_frame(self, frame):
         self.structure.new_frame()

@@ -1,0 +1,69 @@
+"""Compiled replacements of NumPy steps in the tracking loop give NumPy's numbers to the last bit."""
+
+import numpy as np
+import pytest
+
+from pftrack._numba import NUMBA_INSTALLED, np_sum, set_numba_enabled
+from pftrack.cues.color import blend_model
+from pftrack.cues.contrast import blend_counts
+from pftrack.cues.histogram_cue import ColorFeatures
+
+pytestmark = pytest.mark.skipif(not NUMBA_INSTALLED, reason="numba not installed")
+
+
+def both_paths(fn):
+    """``fn()`` with the compiled kernels, then with the NumPy reference path."""
+    compiled = fn()
+    previous = set_numba_enabled(False)
+    try:
+        reference = fn()
+    finally:
+        set_numba_enabled(previous)
+    return compiled, reference
+
+
+def test_np_sum_is_numpys_pairwise_sum(rng):
+    for n in [*range(1, 260), 511, 512, 513, 1000, 4096, 9000, 65536]:
+        x = rng.random(n) * 10.0 ** rng.uniform(-6, 6, n)
+        assert np_sum(x) == x.sum(), n
+    # a sequential sum differs from NumPy's on such data: the test can tell the two apart
+    x = rng.random(512) * 10.0 ** rng.uniform(-6, 6, 512)
+    seq = 0.0
+    for v in x:
+        seq += v
+    assert seq != x.sum()
+
+
+def test_contrast_count_blend_matches_numpy(rng):
+    for trial in range(20):
+        obj_ref, sur_ref = rng.random(512) * 50, rng.random(512) * 80
+        obj = rng.integers(0, 30, 512).astype(np.float64) * (rng.random(512) < 0.3)
+        sur = rng.integers(0, 30, 512).astype(np.float64) * (rng.random(512) < (0.0 if trial == 3 else 0.5))
+        if trial == 5:
+            obj[:] = 0.0  # nothing to learn
+        a, b = both_paths(lambda: blend_counts(obj_ref, obj, sur_ref, sur, 0.02))
+        if trial == 5:
+            assert a is None and b is None
+            continue
+        for x, y in zip(a, b):
+            assert x.dtype == y.dtype == np.float64 and np.array_equal(x, y)
+
+
+def test_model_blend_matches_numpy(rng):
+    q = rng.random(512) ** 4
+    q /= q.sum()
+    for alpha in (0.0, 0.02, 0.1, 1.0):
+        p = rng.random(512) ** 3
+        p /= p.sum()
+        (qa, sa), (qb, sb) = both_paths(lambda: blend_model(q, p, alpha))
+        assert np.array_equal(qa, qb) and np.array_equal(sa, sb)
+    (qa, _), (qb, _) = both_paths(lambda: blend_model(np.zeros(8), np.zeros(8), 0.5))
+    assert np.array_equal(qa, np.full(8, 1 / 8)) and np.array_equal(qb, qa)
+
+
+def test_lattice_coordinates_match_numpy(rng):
+    feats = ColorFeatures(np.zeros((10, 10), np.uint16), 17, 9, 3)
+    ell = np.column_stack([rng.uniform(0, 300, 50), rng.uniform(0, 200, 50), rng.uniform(1, 60, 50),
+                           rng.uniform(1, 60, 50)])
+    (ea, xa, ya), (eb, xb, yb) = both_paths(lambda: feats.to_lattice(ell))
+    assert np.array_equal(ea, eb) and (xa, ya) == (xb, yb) == (0, 0)
