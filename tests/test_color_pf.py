@@ -64,7 +64,7 @@ def test_full_occlusion_is_flagged_lost_and_target_reacquired(seed):
 @pytest.mark.parametrize("seed", [0, 1])
 def test_search_interval_searches_every_kth_frame_after_the_dense_ones_and_still_reacquires(seed):
     dense, every = 3, 3
-    gt, truths, states, _ = run(occlusion_scene(seed, full=True), seed, search_interval=every, search_dense=dense)
+    gt, truths, states, tr = run(occlusion_scene(seed, full=True), seed, search_interval=every, search_dense=dense)
     vis = np.array([t.visible[0] for t in truths])
     modes = [s.info.get("mode") for s in states]
     lost = np.array([s.lost for s in states])
@@ -88,6 +88,8 @@ def test_search_interval_searches_every_kth_frame_after_the_dense_ones_and_still
     assert run_end - visible_again <= 4 + every - 1
     tail = slice(run_end + 2, len(states))
     assert center_error(boxes(states)[tail], gt[tail]).mean() < 5.0
+    # nothing of this search is re-reported after a later loss
+    assert tr.mode == "tracking" and tr._last_search is None
 
 
 def test_model_update_beats_no_update_under_illumination_drift():

@@ -121,7 +121,7 @@ def quantize_region(frame: np.ndarray, x0: int, y0: int, x1: int, y1: int, lut: 
                     shifts: tuple[int, int, int, int, int, int] | None = None) -> np.ndarray:
     """:func:`quantize` of ``frame[y0:y1, x0:x1]`` into ``out`` (its shape); with ``shifts`` (the table's
     :func:`shift_form`) and a contiguous uint8 BGR frame, the same numbers by shifts."""
-    if (shifts is not None and numba_enabled() and frame.ndim == 3 and frame.shape[2] == 3
+    if (shifts is not None and numba_enabled() and x0 >= 0 and y0 >= 0 and frame.ndim == 3 and frame.shape[2] == 3
             and frame.dtype == np.uint8 and frame.flags.c_contiguous):
         h, w = out.shape
         return _quantize_shift(frame.reshape(frame.shape[0], -1), int(x0), int(y0), h, w, *shifts, out)

@@ -240,7 +240,9 @@ class ColorParticleFilter(SearchMixin, Tracker):
             state = (self._state(box=(0.0, 0.0, 0.0, 0.0), score=0.0, lost=True) if box is None
                      else self._init(frame, box))
         elif self._search_due():
-            state = self._last_search = self._search(frame)
+            state = self._search(frame)
+            # kept for the frames between searches, while the search goes on
+            self._last_search = state if self.mode == "searching" else None
         else:
             state = self._waiting_state()
         self._on_frame(frame)
@@ -382,6 +384,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
             self._lost_at = self._confident_motion
             self._search_states = None
             self._search_since = self.frame_index
+            self._last_search = None
             return self._state(box=self.last_box or box, score=min(score, 0.5) if p.loss_test == "likelihood"
                                else score, lost=True, info={**info, "mode": "lost"})
         if not p.search:
