@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack._numba import NUMBA_INSTALLED
+from pftrack._numba import NUMBA_INSTALLED, numba_enabled
 from pftrack.cues.structure import (StructureCue, kernel_weights, ncc_reduced, ncc_scores, patch_shape, reduce_region,
                                     sample_boxes, standardize)
 from pftrack.filtering.loss import FusedLoss, LossDetector
@@ -72,6 +72,7 @@ def test_compiled_ncc_matches_the_remap_path(kind):
     assert np.max(np.abs(fast - ref)) < 0.02
 
 
+@pytest.mark.skipif(not numba_enabled(), reason="a property of the compiled NCC")
 def test_ncc_reads_8_bit_and_float_levels_alike():
     """The compiled NCC gives the same numbers from the 8-bit region and from its float64 copy (which it reads
     when the region is small next to the samples)."""
