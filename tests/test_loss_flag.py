@@ -77,6 +77,31 @@ def test_grey_frames_are_detected_and_get_grey_features():
     assert cue.adapt_to(colour) == "rgb" and cue.n_bins == 512
 
 
+@pytest.mark.parametrize("pitch", [4, 5, 8, 11])
+def test_grey_features_from_lattice_neighbourhoods_equal_the_whole_region(rng, pitch):
+    """From pitch 4 on, the grey features are computed on the lattice points' 3x3 neighbourhoods only: the same
+    bins as the whole-region computation, including at the frame's edges and past them."""
+    import cv2
+
+    import pftrack.cues.intensity as it
+
+    frames = [rng.integers(0, 256, (97, 131, 3), dtype=np.uint8),
+              cv2.GaussianBlur(rng.integers(0, 256, (97, 131, 3), dtype=np.uint8), (9, 9), 3)]
+    frames.append(np.repeat(frames[1][..., :1], 3, axis=2))  # grey input
+    lut = equalization_lut(frames[1])
+    kw = dict(n_intensity=16, n_orientation=8, gradient_threshold=40.0)
+    for f in frames:
+        for roi in [(0, 0, 131, 97), (0, 0, 150, 120), (pitch, 2 * pitch, 90, 60), (3 * pitch, pitch, 131, 97)]:
+            got = quantize_gray(f, roi, pitch, lut, **kw)
+            previous = it._NEIGHBOURHOOD_PITCH
+            it._NEIGHBOURHOOD_PITCH = 10 ** 9  # the whole-region computation
+            try:
+                expected = quantize_gray(f, roi, pitch, lut, **kw)
+            finally:
+                it._NEIGHBOURHOOD_PITCH = previous
+            assert got.shape == expected.shape and np.array_equal(got, expected), roi
+
+
 def test_grey_features_ignore_a_global_gain():
     """Equalised intensity x orientation: a monotonic brightness change leaves the bins nearly unchanged."""
     rng = np.random.default_rng(3)

@@ -27,6 +27,8 @@ import math
 import cv2
 import numpy as np
 
+from .._numba import njit, numba_enabled
+
 
 def is_gray(frame: np.ndarray, *, tolerance: int = 2, stride: int = 4) -> bool:
     """True when a BGR frame carries no colour (every channel within ``tolerance`` of the others).
@@ -67,6 +69,46 @@ def equalization_lut(frame: np.ndarray, *, stride: int = 4) -> np.ndarray:
     return np.clip(np.round(mid * 255.0), 0, 255).astype(np.uint8)
 
 
+#: From this lattice pitch on, the grey features are computed on the 3x3 neighbourhoods of the lattice points only
+#: (9 / pitch^2 of the region's pixels) instead of on the whole region.
+_NEIGHBOURHOOD_PITCH = 4
+_OFFSETS = np.array([-1, 0, 1])
+
+
+@njit
+def _gather(frame, rows, cols, out):
+    """``out[i, j] = frame[rows[i], cols[j]]`` (all channels)."""
+    for i in range(rows.shape[0]):
+        src = frame[rows[i]]
+        dst = out[i]
+        for j in range(cols.shape[0]):
+            dst[j] = src[cols[j]]
+    return out
+
+
+def _lattice_gradients(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int, lut: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The equalised grey level and its 3x3 Sobel gradient at every ``pitch``-th pixel of ``roi``, from the
+    lattice points' 3x3 neighbourhoods alone: they are gathered side by side (rows and columns beyond the frame
+    repeat its edge, as the whole-region computation's replicated border does), converted and filtered, and
+    the centres kept.  A 3x3 Sobel at a centre reads only its own neighbourhood, so the numbers are those of
+    the whole-region computation."""
+    x0, y0, x1, y1 = roi
+    fh, fw = frame.shape[:2]
+    ys = np.arange(y0, min(y1, fh), pitch)
+    xs = np.arange(x0, min(x1, fw), pitch)
+    rows = np.clip((ys[:, None] + _OFFSETS).ravel(), 0, fh - 1)
+    cols = np.clip((xs[:, None] + _OFFSETS).ravel(), 0, fw - 1)
+    if numba_enabled() and frame.flags.c_contiguous:
+        sub = _gather(frame, rows, cols, np.empty((rows.size, cols.size) + frame.shape[2:], frame.dtype))
+    else:
+        sub = frame[rows[:, None], cols[None, :]]
+    g = cv2.LUT(to_gray(sub), lut)
+    dx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    dy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    return g[1::3, 1::3], dx[1::3, 1::3], dy[1::3, 1::3]
+
+
 def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int, lut: np.ndarray, *,
                   n_intensity: int, n_orientation: int, gradient_threshold: float,
                   out: np.ndarray | None = None) -> np.ndarray:
@@ -78,12 +120,15 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
     """
     x0, y0, x1, y1 = roi
     fh, fw = frame.shape[:2]
-    gx0, gy0, gx1, gy1 = max(x0 - 1, 0), max(y0 - 1, 0), min(x1 + 1, fw), min(y1 + 1, fh)
-    g = cv2.LUT(to_gray(frame[gy0:gy1, gx0:gx1]), lut)
-    dx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    dy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    sl = (slice(y0 - gy0, y1 - gy0, pitch), slice(x0 - gx0, x1 - gx0, pitch))
-    g, dx, dy = g[sl], dx[sl], dy[sl]
+    if pitch >= _NEIGHBOURHOOD_PITCH:
+        g, dx, dy = _lattice_gradients(frame, roi, pitch, lut)
+    else:
+        gx0, gy0, gx1, gy1 = max(x0 - 1, 0), max(y0 - 1, 0), min(x1 + 1, fw), min(y1 + 1, fh)
+        g = cv2.LUT(to_gray(frame[gy0:gy1, gx0:gx1]), lut)
+        dx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+        dy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+        sl = (slice(y0 - gy0, y1 - gy0, pitch), slice(x0 - gx0, x1 - gx0, pitch))
+        g, dx, dy = g[sl], dx[sl], dy[sl]
     mag, ang = cv2.cartToPolar(np.ascontiguousarray(dx), np.ascontiguousarray(dy))
     ob = (ang * np.float32(n_orientation / (2.0 * math.pi))).astype(np.int32)
     ob[ob >= n_orientation] = 0  # the angle 2 pi wraps to 0
@@ -120,3 +165,9 @@ def channel_equalization_maps(frame: np.ndarray, *, stride: int = 4) -> np.ndarr
     """``(3, 256)`` uint8 maps: global histogram equalisation of each channel (ranks, see :func:`equalization_lut`)."""
     return np.stack([equalization_lut(np.ascontiguousarray(frame[::stride, ::stride, c]), stride=1)
                      for c in range(3)])
+
+
+def warmup() -> None:
+    """Compile (or load) the neighbourhood gather, which the small clips of
+    :func:`pftrack.trackers.warmup.warm_up` do not reach (their lattice pitch is 1)."""
+    _lattice_gradients(np.zeros((12, 12, 3), np.uint8), (0, 0, 12, 12), 4, np.arange(256, dtype=np.uint8))

@@ -14,7 +14,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..cues import reduced_region
+from ..cues import intensity, reduced_region
 from .registry import create_tracker, get_spec
 
 _WARMED: set[tuple[str, tuple]] = set()
@@ -42,6 +42,7 @@ def warm_up(name: str, params: Mapping[str, Any] | None = None, *, frames: int =
         return 0.0
     t0 = time.perf_counter()
     reduced_region.warmup()
+    intensity.warmup()
     clip = _frames(frames)
     for gray in (False, True):
         tracker = create_tracker(name, seed=0, params=dict(params or {}))
