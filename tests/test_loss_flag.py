@@ -77,21 +77,23 @@ def test_grey_frames_are_detected_and_get_grey_features():
     assert cue.adapt_to(colour) == "rgb" and cue.n_bins == 512
 
 
-@pytest.mark.parametrize("pitch", [4, 5, 8, 11])
-def test_grey_features_from_lattice_neighbourhoods_equal_the_whole_region(rng, pitch):
-    """From pitch 4 on, the grey features are computed on the lattice points' 3x3 neighbourhoods only: the same
-    bins as the whole-region computation, including at the frame's edges and past them."""
+@pytest.mark.parametrize("pitch, size", [(5, (97, 131)), (8, (97, 131)), (11, (97, 131)), (4, (364, 380))])
+def test_grey_features_from_lattice_neighbourhoods_equal_the_whole_region(rng, pitch, size):
+    """From pitch 5 on (4 on large regions), the grey features are computed on the lattice points' 3x3
+    neighbourhoods only: the same bins as the whole-region computation, at the frame's edges and past them."""
     import cv2
 
     import pftrack.cues.intensity as it
 
-    frames = [rng.integers(0, 256, (97, 131, 3), dtype=np.uint8),
-              cv2.GaussianBlur(rng.integers(0, 256, (97, 131, 3), dtype=np.uint8), (9, 9), 3)]
+    h, w = size
+    frames = [rng.integers(0, 256, (h, w, 3), dtype=np.uint8),
+              cv2.GaussianBlur(rng.integers(0, 256, (h, w, 3), dtype=np.uint8), (9, 9), 3)]
     frames.append(np.repeat(frames[1][..., :1], 3, axis=2))  # grey input
+    frames.append(np.ascontiguousarray(frames[1][..., 0]))  # one channel
     lut = equalization_lut(frames[1])
     kw = dict(n_intensity=16, n_orientation=8, gradient_threshold=40.0)
     for f in frames:
-        for roi in [(0, 0, 131, 97), (0, 0, 150, 120), (pitch, 2 * pitch, 90, 60), (3 * pitch, pitch, 131, 97)]:
+        for roi in [(0, 0, w, h), (0, 0, w + 19, h + 23), (pitch, 2 * pitch, w - 41, h - 37), (3 * pitch, pitch, w, h)]:
             got = quantize_gray(f, roi, pitch, lut, **kw)
             previous = it._NEIGHBOURHOOD_PITCH
             it._NEIGHBOURHOOD_PITCH = 10 ** 9  # the whole-region computation
