@@ -77,6 +77,14 @@ def test_grey_frames_are_detected_and_get_grey_features():
     assert cue.adapt_to(colour) == "rgb" and cue.n_bins == 512
 
 
+def test_strided_lattice_copy_equals_numpy_slicing(rng):
+    from pftrack.cues.intensity import _lattice
+
+    for f in [rng.integers(0, 256, (97, 131, 3), dtype=np.uint8), rng.integers(0, 256, (40, 41), dtype=np.uint8)]:
+        for stride in (1, 2, 3, 4, 7):
+            assert np.array_equal(_lattice(f, stride), f[::stride, ::stride])
+
+
 @pytest.mark.parametrize("pitch, size", [(5, (97, 131)), (8, (97, 131)), (11, (97, 131)), (4, (364, 380))])
 def test_grey_features_from_lattice_neighbourhoods_equal_the_whole_region(rng, pitch, size):
     """From pitch 5 on (4 on large regions), the grey features are computed on the lattice points' 3x3
