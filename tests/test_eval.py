@@ -315,3 +315,26 @@ def test_bench_cli_writes_table_and_plot(tmp_path):
     assert "### Update fps against frame size" not in text  # the reference size only: no one-column table
     assert (out / "scaling.png").stat().st_size > 1000
     assert main(["bench", "--trackers", "no-such-tracker", "--quiet", "--out", str(out)]) == 2
+
+
+def test_summary_gives_speed_ratios_to_the_opencv_peer_in_the_run():
+    from pftrack.eval.report import speed_peer, strict_speed_ratios, summary_markdown
+
+    records = []
+    for s, (fast, peer) in enumerate([(1000.0, 10.0), (1200.0, 40.0), (900.0, 60.0)]):
+        for seed in range(3):
+            records.append(dict(tracker="fusion-pf", sequence=f"s{s}", seed=seed, protocol="ope", auc=0.5,
+                                fps=fast + 100.0 * seed))
+        records.append(dict(tracker="opencv-csrt", sequence=f"s{s}", seed=0, protocol="ope", auc=0.4, fps=peer))
+    assert speed_peer(["fusion-pf", "opencv-csrt", "opencv-mil"]) == "opencv-csrt"
+    assert speed_peer(["fusion-pf", "opencv-mil"]) == "opencv-mil"
+    assert speed_peer(["fusion-pf"]) is None and speed_peer(["opencv-kcf", "opencv-mil"]) is None
+    # strict: upper median of the 9 fusion-pf rates (1100) over that of the 3 CSRT rates (40)
+    assert strict_speed_ratios(records, "opencv-csrt")["fusion-pf"] == pytest.approx(1100.0 / 40.0)
+    md = summary_markdown(records)
+    header = next(line for line in md.splitlines() if line.startswith("| tracker |"))
+    assert header.endswith("| median fps | × CSRT |")
+    row = next(line for line in md.splitlines() if line.startswith("| `fusion-pf` |"))
+    # the median over sequences of the per-sequence medians: 1100 against 40
+    assert row.endswith("| 1100 | 27.5 |")
+    assert "`fusion-pf` 27.5×" in md

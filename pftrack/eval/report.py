@@ -134,6 +134,30 @@ def _mot_markdown(records: list[dict], agg: dict, lines: list[str]) -> str:
     return "\n".join(lines)
 
 
+def speed_peer(trackers: list[str]) -> str | None:
+    """The OpenCV tracker that speed ratios are taken against: CSRT when it is in the run, else the first OpenCV
+    tracker; None without one (or without another tracker to compare)."""
+    opencv = [t for t in trackers if t.startswith("opencv-")]
+    if not opencv or len(opencv) == len(trackers):
+        return None
+    return "opencv-csrt" if "opencv-csrt" in opencv else opencv[0]
+
+
+def _upper_median(values: list[float]) -> float:
+    v = sorted(x for x in values if math.isfinite(x))
+    return v[len(v) // 2] if v else float("nan")
+
+
+def strict_speed_ratios(records: list[dict], peer: str) -> dict[str, float]:
+    """Each tracker's upper median update rate over all its (sequence, seed) runs, divided by the peer's: a
+    reading that no single slow or fast sequence moves, and that never averages two middle values."""
+    rates: dict[str, list[float]] = defaultdict(list)
+    for r in records:
+        rates[r["tracker"]].append(_num(r.get("fps")))
+    ref = _upper_median(rates.get(peer, []))
+    return {t: _upper_median(v) / ref for t, v in rates.items()}
+
+
 def summary_markdown(records: list[dict], *, command: str | None = None, title: str = "Evaluation") -> str:
     agg = aggregate(records)
     protocols = sorted({r["protocol"] for r in records})
@@ -161,6 +185,9 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
     if vot:
         head += ["failures (sum)", "accuracy"]
     head += ["median fps"]
+    peer = speed_peer(agg["trackers"])
+    if peer is not None:
+        head += [f"× {peer.removeprefix('opencv-').upper()}"]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     order = sorted(agg["trackers"], key=lambda t: -np.nan_to_num(agg["overall"][t]["auc"], nan=-1)) if ope else agg["trackers"]
     for t in order:
@@ -172,8 +199,15 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         if vot:
             row += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
         row += [_fmt(o["fps"], 0)]
+        if peer is not None:
+            row += [_fmt(o["fps"] / agg["overall"][peer]["fps"], 1)]
         lines.append("| " + " | ".join(row) + " |")
     lines.append("")
+    if peer is not None:
+        strict = strict_speed_ratios(records, peer)
+        lines += [f"× {peer}: the ratio of the median fps in this run. The strictest reading, the upper median of "
+                  "all (sequence, seed) update rates of each tracker against the same of the peer's: "
+                  + ", ".join(f"`{t}` {strict[t]:.1f}×" for t in order if t != peer) + ".", ""]
     metric = "auc" if ope else "failures"
     label = "AUC" if ope else "failures"
     lines += [f"## {label} per sequence (mean over seeds)", ""]
