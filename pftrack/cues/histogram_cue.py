@@ -21,10 +21,10 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
-from .color import (DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, make_lut,
-                    quantize, quantize_region, reachable_roi, shift_form)
+from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, reachable_roi
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
+from .quantize import make_lut, quantize, quantize_region, shift_form
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Default grey features: intensity bins, orientation bins (plus one "flat" bin).

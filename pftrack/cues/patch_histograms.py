@@ -20,7 +20,7 @@ import math
 import cv2
 import numpy as np
 
-from .color import make_lut
+from .quantize import make_lut
 
 
 def ellipse_kernel(shape: tuple[int, int]) -> np.ndarray:
