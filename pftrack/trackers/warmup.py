@@ -14,7 +14,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..cues import intensity, reduced_region
+from ..cues import histogram_cue, intensity, reduced_region
 from .registry import create_tracker, get_spec
 
 _WARMED: set[tuple[str, tuple]] = set()
@@ -43,6 +43,7 @@ def warm_up(name: str, params: Mapping[str, Any] | None = None, *, frames: int =
     t0 = time.perf_counter()
     reduced_region.warmup()
     intensity.warmup()
+    histogram_cue.warmup()
     clip = _frames(frames)
     for gray in (False, True):
         tracker = create_tracker(name, seed=0, params=dict(params or {}))
