@@ -338,3 +338,12 @@ def test_summary_gives_speed_ratios_to_the_opencv_peer_in_the_run():
     # the median over sequences of the per-sequence medians: 1100 against 40
     assert row.endswith("| 1100 | 27.5 |")
     assert "`fusion-pf` 27.5×" in md
+
+
+def test_speed_ratios_without_a_peer_rate_are_undefined_not_an_error():
+    from pftrack.eval.report import strict_speed_ratios, summary_markdown
+
+    records = [dict(tracker="fusion-pf", sequence="s", seed=0, protocol="ope", auc=0.5, fps=1000.0),
+               dict(tracker="opencv-csrt", sequence="s", seed=0, protocol="ope", auc=0.4, fps=0.0)]
+    assert np.isnan(strict_speed_ratios(records, "opencv-csrt")["fusion-pf"])
+    assert "| `fusion-pf` |" in summary_markdown(records)

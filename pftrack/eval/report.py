@@ -155,7 +155,11 @@ def strict_speed_ratios(records: list[dict], peer: str) -> dict[str, float]:
     for r in records:
         rates[r["tracker"]].append(_num(r.get("fps")))
     ref = _upper_median(rates.get(peer, []))
-    return {t: _upper_median(v) / ref for t, v in rates.items()}
+    return {t: _ratio(_upper_median(v), ref) for t, v in rates.items()}
+
+
+def _ratio(a: float, b: float) -> float:
+    return a / b if math.isfinite(b) and b > 0 else float("nan")
 
 
 def summary_markdown(records: list[dict], *, command: str | None = None, title: str = "Evaluation") -> str:
@@ -200,7 +204,7 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
             row += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
         row += [_fmt(o["fps"], 0)]
         if peer is not None:
-            row += [_fmt(o["fps"] / agg["overall"][peer]["fps"], 1)]
+            row += [_fmt(_ratio(o["fps"], agg["overall"][peer]["fps"]), 1)]
         lines.append("| " + " | ".join(row) + " |")
     lines.append("")
     if peer is not None:
