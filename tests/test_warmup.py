@@ -20,9 +20,11 @@ SCRIPT = textwrap.dedent("""
         return {o.py_func.__module__ + "." + o.py_func.__name__: len(o.signatures) for o in gc.get_objects()
                 if isinstance(o, CPUDispatcher) and o.py_func.__module__.startswith("pftrack")}
 
-    big = ((0, 120.0, 110.0), (29, 190.0, 130.0))  # a 160 x 200 target: lattice pitch 5 for fusion-pf
+    path = ((0, 120.0, 110.0), (29, 190.0, 130.0))
     scenes = [occlusion_scene(0, full=True)]  # tracking, loss, search, re-acquisition
-    scenes += [SceneSpec(n_frames=30, targets=(Target(path=big, size=(160.0, 200.0)),), gray=g) for g in (False, True)]
+    # a 160 x 200 target (lattice pitch 6 for fusion-pf: grey neighbourhoods) and a 70 x 90 one (grey blocks of 4 px)
+    scenes += [SceneSpec(n_frames=30, targets=(Target(path=path, size=size),), gray=g)
+               for size in ((160.0, 200.0), (70.0, 90.0)) for g in (False, True)]
     clips = [Scene(s) for s in scenes]
     frames = [[c.render(t)[0] for t in range(s.n_frames)] for c, s in zip(clips, scenes)]
     for name in ("fusion-pf", "color-pf"):

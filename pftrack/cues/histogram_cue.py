@@ -295,10 +295,3 @@ class ColorCue:
         feats = self.prepare(frame, roi, self.step_for(e))
         hist, _ = self.histograms(feats, e, reuse=False)
         return hist[0]
-
-
-def warmup() -> None:
-    """Compile (or load) what the small clips of :func:`pftrack.trackers.warmup.warm_up` do not reach (their
-    lattice pitch is 1): the lattice coordinates and the table quantisation of a strided region."""
-    ColorFeatures(np.zeros((2, 2), np.uint16), 0, 0, 2).to_lattice(np.ones((1, 4)))
-    ColorCue().prepare(np.zeros((8, 8, 3), np.uint8), (0, 0, 8, 8), 2)

@@ -192,10 +192,3 @@ def channel_equalization_maps(frame: np.ndarray, *, stride: int = 4) -> np.ndarr
     """``(3, 256)`` uint8 maps: global histogram equalisation of each channel (ranks, see :func:`equalization_lut`)."""
     return np.stack([equalization_lut(np.ascontiguousarray(frame[::stride, ::stride, c]), stride=1)
                      for c in range(3)])
-
-
-def warmup() -> None:
-    """Compile (or load) the neighbourhood gather, which the small clips of
-    :func:`pftrack.trackers.warmup.warm_up` do not reach (their lattice pitch is 1)."""
-    _lattice_gradients(np.zeros((12, 12, 3), np.uint8), (0, 0, 12, 12), 4, np.arange(256, dtype=np.uint8))
-    _lattice_gradients(np.zeros((12, 12), np.uint8), (0, 0, 12, 12), 4, np.arange(256, dtype=np.uint8))

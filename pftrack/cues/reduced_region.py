@@ -192,9 +192,3 @@ def _box_roi(ell: np.ndarray, width: int, height: int) -> tuple[int, int, int, i
     y1 = int(math.ceil(by1)) + 1
     x0, y0 = min(max(x0, 0), max(width - 1, 0)), min(max(y0, 0), max(height - 1, 0))
     return x0, y0, max(min(x1, width), x0 + 1), max(min(y1, height), y0 + 1)
-
-
-def warmup() -> None:
-    """Compile (or load) the block-sum kernel, which the small synthetic clips of
-    :func:`pftrack.trackers.warmup.warm_up` do not reach (their blocks are under 3 px)."""
-    block_means(np.zeros((6, 6, 3), np.uint8), 0, 0, 6, 6, 3)
