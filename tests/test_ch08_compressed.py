@@ -241,12 +241,12 @@ def test_the_analyser_trims_a_moving_object_to_its_current_position():
     mvs["source"], mvs["w"], mvs["h"], mvs["motion_scale"] = -1, 8, 8, 4
     mvs["dst_x"], mvs["dst_y"] = xs.ravel() + 4, ys.ravel() + 4
     mvs["motion_x"] = -32                                 # a forward displacement of +8 px
-    an = C.BlockAnalyser(C.CDParams(n_min=4))
+    an = C.BlockAnalyser(C.CDParams(n_min=4, shape="blocks"))
     assert an(MVFrame(1, "P", mvs, prev)) == []
     (g,) = an(MVFrame(2, "P", mvs, cur))
     assert g.box[0] == pytest.approx(108.0) and g.box[0] + g.box[2] == pytest.approx(128.0)
     assert g.box[1] == pytest.approx(40.0) and g.box[3] == pytest.approx(40.0)
-    untrimmed = C.BlockAnalyser(C.CDParams(n_min=4, trim=False))
+    untrimmed = C.BlockAnalyser(C.CDParams(n_min=4, trim=False, shape="blocks"))
     untrimmed(MVFrame(1, "P", mvs, prev))
     (u,) = untrimmed(MVFrame(2, "P", mvs, cur))
     assert u.box[0] == pytest.approx(100.0) and u.box[2] == pytest.approx(28.0)

@@ -52,15 +52,22 @@ def _components(mask: np.ndarray, scale: float, min_area: float, max_area_fracti
         if full_area < min_area or bw * bh > max_area_fraction * w * h:
             continue
         fill = min(1.0, area / float(bw * bh))
-        parts = 1
-        # only blobs tall enough to be whole objects are split, into at most 3 (a wide, flat blob is a
-        # fragment -- legs, a shadow -- not several objects side by side)
-        if split_aspect > 0 and bw > 1.6 * split_aspect * bh and bh * scale >= 32:
-            parts = min(3, max(1, int(round(bw / (split_aspect * bh)))))
-        pw = bw / parts
-        for i in range(parts):
-            out.append(((x + i * pw) * scale, y * scale, pw * scale, bh * scale, fill))
+        for b in split_wide((x * scale, y * scale, bw * scale, bh * scale), split_aspect):
+            out.append((*b, fill))
     return np.array(out, dtype=np.float64).reshape(-1, 5)
+
+
+def split_wide(box, aspect: float, min_height: float = 32.0) -> list[tuple[float, float, float, float]]:
+    """A blob box ``(x, y, w, h)`` in pixels as ``round(w / (aspect h))`` (at most 3) side-by-side boxes when
+    it is at least ``min_height`` tall and wider than 1.6 ``aspect h`` (people walking together form one
+    blob); otherwise the box itself.  ``aspect`` 0 never splits.  Only blobs tall enough to be whole
+    objects are split: a wide, flat blob is a fragment (legs, a shadow), not several objects."""
+    x, y, w, h = (float(v) for v in box)
+    parts = 1
+    if aspect > 0 and w > 1.6 * aspect * h and h >= min_height:
+        parts = min(3, max(1, int(round(w / (aspect * h)))))
+    pw = w / parts
+    return [(x + i * pw, y, pw, h) for i in range(parts)]
 
 
 @dataclass(frozen=True, kw_only=True)
