@@ -153,6 +153,9 @@ def mv_field(mvs: np.ndarray | None, shape: tuple[int, int]) -> tuple[np.ndarray
     has = np.zeros((I, J), bool)
     if mvs is None or len(mvs) == 0:
         return fwd, has
+    if numba_enabled() and _RECORD_FIELDS <= set(mvs.dtype.names):
+        _paint_records(mvs, np.ascontiguousarray(mvs["source"]), fwd, has)
+        return fwd, has
     m = mvs[mvs["source"] < 0] if "source" in mvs.dtype.names else mvs
     scale = np.maximum(m["motion_scale"].astype(np.float32), 1)
     vx = -m["motion_x"].astype(np.float32) / scale
@@ -161,10 +164,6 @@ def mv_field(mvs: np.ndarray | None, shape: tuple[int, int]) -> tuple[np.ndarray
     y0 = (m["dst_y"].astype(np.int64) - m["h"].astype(np.int64) // 2) // BLOCK
     bw = np.maximum(m["w"].astype(np.int64) // BLOCK, 1)
     bh = np.maximum(m["h"].astype(np.int64) // BLOCK, 1)
-    if numba_enabled():  # the same painting order: by partition size (w, then h), then as exported
-        order = np.lexsort((np.arange(len(m)), bh, bw))
-        _paint(order, x0, y0, bw, bh, vx, vy, fwd, has)
-        return fwd, has
     for k in np.unique(np.stack([bw, bh], 1), axis=0):     # vectorised per partition size
         sel = (bw == k[0]) & (bh == k[1])
         dy, dx = np.meshgrid(np.arange(k[1]), np.arange(k[0]), indexing="ij")
@@ -178,21 +177,48 @@ def mv_field(mvs: np.ndarray | None, shape: tuple[int, int]) -> tuple[np.ndarray
     return fwd, has
 
 
+_RECORD_FIELDS = {"source", "w", "h", "dst_x", "dst_y", "motion_x", "motion_y", "motion_scale"}
+
+
 @njit(cache=True)
-def _paint(order, x0, y0, bw, bh, vx, vy, fwd, has):
+def _paint_records(mvs, source, fwd, has):
+    """:func:`mv_field` in one compiled pass over FFmpeg's records: the past-referencing partitions painted
+    in the same order (by width, then height in blocks, then as exported), with the same float32 vectors."""
     I, J = has.shape
-    for t in range(order.shape[0]):
-        k = order[t]
-        for dy in range(bh[k]):
-            yy = y0[k] + dy
-            if yy < 0 or yy >= I:
+    n = mvs.shape[0]
+    bws = np.empty(n, np.int64)
+    bhs = np.empty(n, np.int64)
+    mw = mh = 1
+    for t in range(n):
+        bws[t] = max(np.int64(mvs[t].w) // 4, 1)
+        bhs[t] = max(np.int64(mvs[t].h) // 4, 1)
+        mw, mh = max(mw, bws[t]), max(mh, bhs[t])
+    count = np.zeros((mw + 1, mh + 1), np.int64)
+    for t in range(n):
+        count[bws[t], bhs[t]] += 1
+    for cw in range(1, mw + 1):
+        for ch in range(1, mh + 1):
+            if count[cw, ch] == 0:
                 continue
-            for dx in range(bw[k]):
-                xx = x0[k] + dx
-                if 0 <= xx < J:
-                    fwd[yy, xx, 0] = vx[k]
-                    fwd[yy, xx, 1] = vy[k]
-                    has[yy, xx] = True
+            for t in range(n):
+                if bws[t] != cw or bhs[t] != ch or source[t] >= 0:
+                    continue
+                r = mvs[t]
+                sc = np.float32(max(np.int64(r.motion_scale), 1))
+                vx = -np.float32(r.motion_x) / sc
+                vy = -np.float32(r.motion_y) / sc
+                x0 = (np.int64(r.dst_x) - np.int64(r.w) // 2) // 4
+                y0 = (np.int64(r.dst_y) - np.int64(r.h) // 2) // 4
+                for dy in range(ch):
+                    yy = y0 + dy
+                    if yy < 0 or yy >= I:
+                        continue
+                    for dx in range(cw):
+                        xx = x0 + dx
+                        if 0 <= xx < J:
+                            fwd[yy, xx, 0] = vx
+                            fwd[yy, xx, 1] = vy
+                            has[yy, xx] = True
 
 
 def pseudo_residual(y_cur: np.ndarray, y_prev: np.ndarray, fwd: np.ndarray) -> np.ndarray:

@@ -21,17 +21,43 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from .._numba import njit, numba_enabled
 from .detectors import split_wide
 
 BLOCK = 4
 
 
 def reduce_luma(y: np.ndarray, scale: int) -> np.ndarray:
-    """The luma at 1/``scale`` resolution (area mean), float32."""
+    """The luma at 1/``scale`` resolution: the float32 means of its ``scale x scale`` blocks (a partial block
+    at the right or bottom edge is dropped).  Compiled for uint8 input, OpenCV's area resize of the float
+    image otherwise (the same means; exact for power-of-two scales)."""
     if scale == 1:
         return y.astype(np.float32)
     h, w = y.shape[:2]
-    return cv2.resize(y, (w // scale, h // scale), interpolation=cv2.INTER_AREA).astype(np.float32)
+    if numba_enabled() and y.dtype == np.uint8 and y.ndim == 2:
+        return _grey_block_means(np.ascontiguousarray(y), int(scale), np.empty((h // scale, w // scale), np.float32))
+    return cv2.resize(y[:h // scale * scale, :w // scale * scale].astype(np.float32), (w // scale, h // scale),
+                      interpolation=cv2.INTER_AREA)
+
+
+@njit(cache=True)
+def _grey_block_means(y, k, out):
+    oh, ow = out.shape
+    acc = np.empty(ow * k, np.int32)
+    inv = np.float32(1.0) / np.float32(k * k)
+    for j in range(oh):
+        r0 = j * k
+        for t in range(ow * k):
+            acc[t] = y[r0, t]
+        for r in range(1, k):
+            for t in range(ow * k):
+                acc[t] += y[r0 + r, t]
+        for i in range(ow):
+            s = 0
+            for q in range(k):
+                s += acc[i * k + q]
+            out[j, i] = np.float32(s) * inv
+    return out
 
 
 def foreground_pixels(y: np.ndarray, background: np.ndarray, tau: float) -> np.ndarray:
@@ -92,6 +118,8 @@ def union_box(boxes) -> tuple[float, float, float, float]:
 def block_mask_at(mask: np.ndarray, scale: int, shape: tuple[int, int]) -> np.ndarray:
     """A 4x4-block mask ``(I, J)`` drawn at 1/``scale`` resolution, cut or zero-padded to ``shape``."""
     k = BLOCK // scale if BLOCK % scale == 0 else 0
+    if k == 1 and mask.shape == tuple(shape):
+        return mask.view(np.uint8) if mask.dtype == np.bool_ else mask.astype(np.uint8)
     if k >= 1:
         up = np.repeat(np.repeat(mask.astype(np.uint8), k, axis=0), k, axis=1)
     else:
