@@ -323,3 +323,24 @@ def test_prefetch_keeps_order_raises_the_producers_error_and_stops_when_closed()
     n = len(produced)
     assert not any(t.name == "pftrack-prefetch" and t.is_alive() for t in threading.enumerate())
     assert len(produced) == n and n <= 3 + 2 + 2
+
+
+def test_bgr_pixels_from_the_planes_match_ffmpegs_scaler(tmp_path):
+    """The reader converts yuv420p frames to BGR with OpenCV: the luma is the decoded plane, and the colours
+    are within a grey level or two of FFmpeg's own scaler (what OpenCV's video reader returns)."""
+    import av
+
+    from pftrack.io.motion_vectors import encode_h264, iter_mv_frames
+
+    rng = np.random.default_rng(3)
+    base = cv2.GaussianBlur(rng.integers(0, 255, (96, 128, 3)).astype(np.uint8), (7, 7), 0)
+    frames = [np.roll(base, 2 * i, axis=1) for i in range(6)]
+    path = encode_h264(frames, tmp_path / "col.mp4", qp=20)
+    ours = list(iter_mv_frames(path, bgr=True))
+    with av.open(str(path)) as c:
+        ref = [(f.to_ndarray(format="bgr24"), f.to_ndarray()[:96]) for f in c.decode(c.streams.video[0])]
+    assert len(ours) == len(ref) == 6
+    for f, (bgr, y) in zip(ours, ref):
+        assert np.array_equal(f.y, y)
+        d = np.abs(f.bgr.astype(int) - bgr)
+        assert d.mean() < 2.0 and d.max() <= 16

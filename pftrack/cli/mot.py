@@ -14,8 +14,10 @@ def add_mot(sub) -> None:
                                    "MOTChallenge text rows frame,id,x,y,w,h,score,-1,-1,-1, flushed per frame.")
     p.add_argument("source", help="video file, frame folder, MOTChallenge folder or camera index")
     p.add_argument("--detector", choices=["motion", "mog2", "hog", "mv"], default="mog2",
-                   help="detector (default mog2); mv: groups of moving 4x4 blocks from the stream's motion vectors and "
-                        "pseudo-residuals (book ch. 8; SOURCE must be an H.264 or MPEG-4 file; needs PyAV)")
+                   help="detector (default mog2); mv: groups of moving 4x4 blocks from the stream's motion vectors "
+                        "(book ch. 8), each drawn as the silhouettes of a background learnt away from the moving "
+                        "blocks (--param shape=blocks: the chapter's block boxes); SOURCE must be an H.264 or MPEG-4 "
+                        "file; needs PyAV")
     p.add_argument("--tracker", choices=["multi-pf", "cd"], default="multi-pf",
                    help="multi-pf: per-target colour particle filters (default); cd: the compressed-domain labelling "
                         "of book ch. 8 (motion-vector groups, 5-frame refinement, labels kept through occlusions by "

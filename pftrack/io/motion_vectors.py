@@ -53,6 +53,13 @@ def _luma(frame) -> np.ndarray:
     return buf.reshape(-1, plane.line_size)[:h, :w].copy()
 
 
+def _luma_bgr(frame) -> tuple[np.ndarray, np.ndarray]:
+    """Luma and BGR pixels of an even-sized yuv420p frame: the planes once, converted by OpenCV (BT.601, as
+    FFmpeg's default scaler; within a grey level or two of it) in about a quarter of the scaler's time."""
+    yuv = frame.to_ndarray()                                 # (3h/2, w): Y, then U and V
+    return yuv[:frame.height], cv2.cvtColor(yuv, cv2.COLOR_YUV2BGR_I420)
+
+
 def _pict_type(pt) -> str:
     name = getattr(pt, "name", None)
     if isinstance(name, str):
@@ -80,8 +87,11 @@ def iter_mv_frames(path, *, bgr: bool = False, threads: bool = False) -> Iterato
         for n, frame in enumerate(container.decode(stream), start=1):
             sd = frame.side_data.get("MOTION_VECTORS") if hasattr(frame.side_data, "get") else None
             mvs = sd.to_ndarray() if sd is not None else None
-            yield MVFrame(n, _pict_type(frame.pict_type), mvs, _luma(frame),
-                          frame.to_ndarray(format="bgr24") if bgr else None)
+            if bgr and frame.format.name == "yuv420p" and frame.width % 2 == 0 and frame.height % 2 == 0:
+                y, pix = _luma_bgr(frame)
+            else:
+                y, pix = _luma(frame), (frame.to_ndarray(format="bgr24") if bgr else None)
+            yield MVFrame(n, _pict_type(frame.pict_type), mvs, y, pix)
     finally:
         container.close()
 
