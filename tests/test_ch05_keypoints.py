@@ -249,3 +249,21 @@ def test_working_resolution_reports_frame_pixels(name):
         assert (t._k > 1) == (mp > 0)
         ious[mp] = float(np.mean(frame_ious(np.array([t.update(f).box for f, _ in up[1:]]), gt)))
     assert ious[2000] > 0.5 and ious[2000] > ious[0] - 0.15
+
+
+def test_pooled_selection_histograms():
+    """32^3 RGB histograms pooled to 8^3 keep the mass of each 4x4x4 cell; a grey (intensity x orientation)
+    histogram pools its intensity axis only; an axis the size does not divide is kept."""
+    from pftrack.trackers.keypoint_meanshift import pool_histogram
+
+    rng = np.random.default_rng(0)
+    h = rng.random(32 ** 3)
+    p = pool_histogram(h, (32, 32, 32), 8)
+    assert p.shape == (512,)
+    assert p[0] == pytest.approx(h.reshape(32, 32, 32)[:4, :4, :4].sum())
+    assert p[8 * 8 * 7 + 8 * 2 + 5] == pytest.approx(h.reshape(32, 32, 32)[28:, 8:12, 20:24].sum())
+    g = rng.random(16 * 9)
+    pg = pool_histogram(g, (16, 9, 1), 8)
+    assert pg.shape == (72,) and pg.sum() == pytest.approx(g.sum())
+    assert pg[0] == pytest.approx(g.reshape(16, 9)[:2, 0].sum())
+    assert pool_histogram(h, (32, 32, 32), 32) is h

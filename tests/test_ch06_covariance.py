@@ -205,3 +205,21 @@ def test_spd_model_distances_match_the_pairwise_functions():
         assert le[k] == pytest.approx(cv.le_distance(cv.spd_log(M), cv.spd_log(Cs[k])), rel=1e-10)
         assert ai[k] == pytest.approx(cv.airm_distance(M, Cs[k]), rel=1e-8)
     np.testing.assert_allclose(cv.SPDModel.from_log(cv.spd_log(M)).distance(Cs), le, rtol=1e-9)
+
+
+def test_compiled_le_mean_equals_the_numpy_form():
+    from pftrack import _numba
+
+    rng = np.random.default_rng(5)
+    A = rng.normal(size=(10, 9, 40))
+    Cs = A @ A.transpose(0, 2, 1) / 40 + 1e-3 * np.eye(9)
+    w = rng.random(10)
+    got = cv.le_mean(Cs, w)
+    ref = cv.spd_exp(np.tensordot(w / w.sum(), cv.spd_log(Cs), axes=1))
+    np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12)
+    was = _numba.numba_enabled()
+    _numba.set_numba_enabled(False)
+    try:
+        np.testing.assert_allclose(cv.le_mean(Cs, w), ref, rtol=1e-12, atol=1e-14)
+    finally:
+        _numba.set_numba_enabled(was)

@@ -58,6 +58,13 @@ class KeypointAMSParams(SiftRansacParams):
     guide_rho: float = param(0.95, ge=0, le=1, doc=(
         "Eq. 12: T(2)_2, A's rho needed to start B from A (L4999); with thresholds='auto' the mean of A's rho over "
         "the first frames is used instead."))
+    select_bins: int = param(8, ge=1, le=32, doc=(
+        "Bins per channel of the histograms on which the candidates are compared (Eqs. 22-23) and the output's rho "
+        "is taken (learning, score). 32 is the chapter's 32^3 (L4992); fewer bins pool each axis of the "
+        "histograms that it divides (32^3 RGB; the intensity axis of grey input). On 32^3 bins a few hundred "
+        "pixels leave most bins empty, and the comparison favoured Tracker B's inflated kernel; pooled to 8^3 "
+        "the tune split's real sequences gave mean AUC 0.348 against 0.266 (16: 0.326, 4: 0.308), better or "
+        "equal on each of the five."))
     learn: bool = param(True, doc="Online learning of the reference (Eqs. 17-19).")
     learn_interval: int = param(25, ge=1, le=10000, doc="S: frames per learning interval (L4658).")
     kappa: float = param(0.1, ge=0, le=1, doc="kappa of Eq. 18 (L4677).")
@@ -65,6 +72,17 @@ class KeypointAMSParams(SiftRansacParams):
     learn_rho: float = param(0.95, ge=0, le=1, doc=(
         "T2 of Eq. 17 (Table 3); with thresholds='auto' the mean of the output's rho over the first frames minus "
         "one spread is used instead."))
+
+
+def pool_histogram(h: np.ndarray, bins, s: int) -> np.ndarray:
+    """A flattened histogram of shape ``bins`` with each axis of more than ``s`` bins pooled to ``s`` bins (when
+    ``s`` divides it; other axes are kept): 32^3 RGB to s^3, or the intensity axis of a grey histogram."""
+    bins = tuple(int(b) for b in bins)
+    f = [b // s if (b > s and b % s == 0) else 1 for b in bins]
+    if max(f) == 1 or h.size != int(np.prod(bins)):
+        return h
+    shape = [d for b, k in zip(bins, f) for d in (b // k, k)]
+    return h.reshape(shape).sum(axis=tuple(range(1, 2 * len(bins), 2))).ravel()
 
 
 class KeypointAMS(ReducedFrames, Tracker):
@@ -105,6 +123,14 @@ class KeypointAMS(ReducedFrames, Tracker):
 
     def _rho(self, v: RBox) -> float:
         return an.bhattacharyya(self.color.hist(v), self.q)
+
+    def _pool(self, h: np.ndarray) -> np.ndarray:
+        return pool_histogram(h, self.color.cue.bins, self.params.select_bins)
+
+    def _select_rho(self, v: RBox) -> float:
+        if self.params.select_bins >= 32:
+            return self._rho(v)
+        return an.bhattacharyya(self._pool(self.color.hist(v)), self._pool(self.q))
 
     @staticmethod
     def _mix(vs: list[RBox], ws: list[float]) -> RBox:
@@ -158,7 +184,7 @@ class KeypointAMS(ReducedFrames, Tracker):
         cands.append(("B", self.v2))
         if live:
             cands.append(("mix", self._mix([c[0] for c in live], [c[1] for c in live])))
-        scores = [self._rho(v) for _, v in cands]
+        scores = [self._select_rho(v) for _, v in cands]
         k = int(np.argmax(scores))
         chosen, self.v_obj = cands[k][0], cands[k][1]
         rho_obj = scores[k]
