@@ -17,7 +17,8 @@ Per frame (ch10.md §1.3–1.4):
 Proposed additions, each off with ``faithful=True`` (ch10.md §1.4, P9, P13): entries keep a
 first-seen and a last-seen time (T_th on the first, T_max on the last); a matched entry is
 consumed; an outer patch fires once until it is background again; an event where a
-recent one's motion has taken its object is merged into it (``group``); only patches of
+recent one's motion has taken its object, or that lies in one foreground blob with a very
+recent one (``group_blob``), is merged into it (``group``); only patches of
 the other side within ``max_lateral``·r of arc are compared; C_d asks for a motion of at
 least ``min_motion`` pointing within ``away_angle`` of straight away from the wire.
 """
@@ -81,6 +82,12 @@ class TripwireParams(Params):
                                   "would be by now (its position moved by its motion, within 2r) in the last "
                                   "group_time seconds")
     group_time: float = param(2.0, gt=0, doc="how long an emitted event can absorb later ones, in seconds")
+    group_blob: float = param(0.3, ge=0, doc=(
+        "merge events of one object by its pixels: an event of the same direction emitted in the last group_blob "
+        "seconds whose position (moved by its motion) lies in the same 8-connected foreground blob of the current "
+        "frame as the new one; an upright walker's head and legs fire apart on a vertical wire (0: off). 0.3 s "
+        "chosen on the PETS tune frames (precision 0.55 -> 0.60 at the same accuracy) and synthetic traffic seeds "
+        "0-2 (unchanged but for one dense-traffic crossing of 300)"))
 
 
 @dataclass
@@ -188,6 +195,7 @@ class TrackerlessTripwire:
         gray = cv2.cvtColor(roi, cv2.COLOR_BGR2GRAY)
         fg2d = self.foreground(roi, gray)
         self._fg = fg2d
+        self._labels = None
         fg = fg2d.ravel()
         t = number / self.fps
         frac = fg[self._disc].mean(1)
@@ -333,7 +341,27 @@ class TrackerlessTripwire:
             slack = 2.0 * r + 0.5 * np.hypot(e.vx, e.vy) * steps
             if np.hypot(*(guess - [ev.x, ev.y])) <= slack:
                 return True
+            if self.params.group_blob > 0 and ev.time_s - e.time_s <= self.params.group_blob and \
+                    self._same_blob(guess, (ev.x, ev.y)):
+                return True
         return False
+
+    def _same_blob(self, a, b) -> bool:
+        """Do frame points ``a`` and ``b`` lie in one 8-connected blob of this frame's foreground (each looked up
+        in the square of half-side r around it: an event's point is a patch centre, and its patch is only
+        partly foreground)?"""
+        if self._labels is None:
+            self._labels = cv2.connectedComponents(self._fg, connectivity=8)[1]
+        lab = self._labels
+        h, w = lab.shape
+        k = int(np.ceil(self.params.radius))
+
+        def blobs(pt):
+            x, y = int(round(pt[0])) - self.x0, int(round(pt[1])) - self.y0
+            win = lab[max(0, y - k):min(h, y + k + 1), max(0, x - k):min(w, x + k + 1)]
+            return set(np.unique(win[win > 0]).tolist())
+
+        return bool(blobs(a) & blobs(b))
 
 def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_area: int = 60,
                     default: float = 12.0) -> float:
