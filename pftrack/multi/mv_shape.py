@@ -147,21 +147,37 @@ class SilhouetteShaper:
         self.count: np.ndarray | None = None
 
     def __call__(self, y: np.ndarray, groups: list, moving: np.ndarray | None = None) -> list:
+        self.foreground(y, moving)
+        return self.shape(groups)
+
+    def foreground(self, y: np.ndarray, moving: np.ndarray | None = None) -> np.ndarray | None:
+        """This frame's foreground pixels at the reduced scale (uint8 0/1; near moving blocks when ``reach``),
+        or None on the first frame, which only starts the background."""
         small = reduce_luma(y, self.scale)
+        self._small = small
         if self.background is None:
             self.background = small.copy()
             self.count = np.ones(small.shape, np.float32)
             self.mask = np.zeros(small.shape, np.uint8)
-            return groups
+            self._fg = None
+            return None
         fg = foreground_pixels(small, self.background, self.tau)
         if self.close:
             fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, np.ones((self.close, self.close), np.uint8))
-        rois = np.zeros(small.shape, np.uint8)
         near = block_mask_at(moving, self.scale, small.shape) if moving is not None else None
         if self.reach and near is not None:
             k = 2 * self.reach * BLOCK // self.scale + 1
             near = cv2.dilate(near, np.ones((k, k), np.uint8))
             fg = fg & near
+        self._near, self._fg = near, fg
+        return fg
+
+    def shape(self, groups: list) -> list:
+        """Redraw the groups' boxes from the foreground of :meth:`foreground`, then learn the background."""
+        if self._fg is None:
+            return groups
+        small, fg, near = self._small, self._fg, self._near
+        rois = np.zeros(small.shape, np.uint8)
         for g in groups:
             x0, y0, x1, y1 = roi_of(g.box, self.margin, small.shape, self.scale)
             rois[y0:y1, x0:x1] = 1
