@@ -129,3 +129,22 @@ def test_a_first_frame_occupant_is_forgotten_within_a_few_frames():
         (out,) = shaper(f, [g], g.mask)
         if t >= 10:                        # the walker is on the sitter's place (x 60..88)
             assert out.box == (float(x), 60.0, 12.0, 40.0)
+
+
+def test_reduced_luma_is_the_block_mean():
+    """The compiled block means equal OpenCV's area resize of the float image (exact for power-of-two scales),
+    a partial block at the edge dropped."""
+    import cv2
+
+    from pftrack import _numba
+
+    y = np.random.default_rng(6).integers(0, 256, (147, 195)).astype(np.uint8)
+    ref = cv2.resize(y[:144, :192].astype(np.float32), (48, 36), interpolation=cv2.INTER_AREA)
+    np.testing.assert_array_equal(S.reduce_luma(y, 4), ref)
+    was = _numba.numba_enabled()
+    _numba.set_numba_enabled(False)
+    try:
+        np.testing.assert_array_equal(S.reduce_luma(y, 4), ref)
+    finally:
+        _numba.set_numba_enabled(was)
+    assert S.reduce_luma(y, 4)[2, 3] == pytest.approx(y[8:12, 12:16].mean())

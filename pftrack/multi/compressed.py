@@ -50,8 +50,8 @@ class CDParams(Params):
         "background, and the pseudo-residual of an ordinary encode is noisy."))
     tau_d: float = param(8192.0, ge=0, doc="Frame-difference energy per 4x4 block for refine='difference'.")
     trim: bool = param(True, doc=(
-        "With refine='difference' and shape='blocks': a frame difference marks the object where it was and where it is, so each "
-        "group's box is cut back on its trailing side by the object's displacement, the median vector of the "
+        "With refine='difference' and shape='blocks': a frame difference marks the object where it was and where "
+        "it is, so each group's box is cut back on its trailing side by the object's displacement, the median vector of the "
         "group's moving blocks (PETS frames 1-200: MOTA 0.02 -> 0.10)."))
     min_speed: float = param(1.0, ge=0, doc=(
         "Blocks whose vector is shorter than this (pixels) count as zero motion: the encoder's sub-pixel vectors on "
@@ -60,17 +60,18 @@ class CDParams(Params):
         "How a group's box is drawn. 'blocks': the bounding box of its 4x4 blocks (the chapter). 'background' (our "
         "addition, the default; pftrack.multi.mv_shape): the foreground pixels of a selectively updated "
         "running-average background, inside the group's widened box and connected to its blocks, one box per "
-        "silhouette (PETS frames 1-200, --detector mv: MOTA 0.10 -> 0.38-0.46 over seeds 0-3)."))
+        "silhouette (PETS frames 1-200, --detector mv: MOTA 0.10 -> 0.45-0.51 over seeds 0-3)."))
     bg_scale: int = param(4, ge=1, le=8, doc=(
         "shape='background': the background's resolution is 1/bg_scale (4: one pixel per 4x4 block; on PETS frames "
-        "1-200 MOTA 0.48-0.50 over seeds 0-3, against 0.38-0.46 at 2 and 0.21 at 1, where pixel noise splits "
+        "1-200 MOTA 0.45-0.51 over seeds 0-3, against 0.38-0.46 at 2 and 0.21 at 1, where pixel noise splits "
         "the silhouettes)."))
     bg_alpha: float = param(0.01, gt=0, le=1, doc=(
-        "shape='background': running-average rate of the background away from moving blocks (the first 1/alpha "
-        "frames are averaged with rate 1/t; 0.01 chosen on PETS frames 1-200)."))
+        "shape='background': running-average rate of the background away from moving blocks (each pixel's first "
+        "1/alpha updates are averaged with rate 1/n; 0.01 chosen on PETS frames 1-200)."))
     bg_tau: float = param(35.0, ge=0, doc=(
         "shape='background': |Y - B| above this (grey levels, at 1/bg_scale resolution) is foreground (35 chosen on "
-        "PETS frames 1-200, where 30-45 gave MOTA within 0.02)."))
+        "PETS frames 1-200 at bg_scale 2, where 30-45 gave MOTA within 0.02; at bg_scale 4, 45 was 0.02-0.08 lower "
+        "over seeds 0-3)."))
     bg_margin: float = param(0.5, ge=0, le=3, doc=(
         "shape='background': the region of interest is the group's box widened by this times its larger side."))
     bg_reach: int = param(2, ge=0, le=16, doc=(

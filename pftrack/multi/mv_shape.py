@@ -6,9 +6,11 @@ spans two or three macroblocks and the box is about 1.3x too wide; legs carry no
 low frame rates, so the box is too short; a frame difference marks the object twice.
 
 ``shape="background"`` keeps the groups as the motion-vector stage finds them and only redraws each
-group's box from the pixels: a running-average background of the decoded luma at a reduced scale,
-updated selectively (not inside the groups' regions of interest), and the foreground pixels
-``|Y - B| > tau`` inside the group's region of interest that are connected to the group's own blocks.
+group's box from the pixels: a running-average background of the decoded luma at a reduced scale
+(each pixel's first updates averaged, then a running average), updated selectively (not near moving
+blocks), and the foreground pixels ``|Y - B| > tau`` near moving blocks, inside the group's widened
+box, in components that touch the group's own blocks; one box per such silhouette, wide ones split
+side by side.
 This is the pixel-domain work of a background subtractor confined to the few regions where the stream
 says something moves; it decodes nothing extra, since the luma is decoded anyway for the
 pseudo-residual.
