@@ -13,7 +13,9 @@ Per frame:
    centre, sides (h >= w convention) and the doubled angle; renormalised when a tracker was
    re-initialised (ch05.md P7).
 4. **Output** (Eqs. 22-23): the candidate of highest Bhattacharyya coefficient against the
-   reference; a re-initialised tracker competes as the last output re-scored on this frame.
+   reference; a re-initialised tracker competes as the last output re-scored on this frame.  The
+   coefficient is taken on the histograms pooled to ``select_bins`` per channel (8 by default; 32 is the
+   chapter's rule, and with ``thresholds="paper"`` the only setting its Table 3 gates refer to).
 5. **Learning** (Eqs. 17-19, :class:`~pftrack.cues.reference.ReferenceLearner`): every 25 frames the
    reference moves 10 % towards the best stable frame's histogram.
 
