@@ -344,3 +344,42 @@ def test_bgr_pixels_from_the_planes_match_ffmpegs_scaler(tmp_path):
         assert np.array_equal(f.y, y)
         d = np.abs(f.bgr.astype(int) - bgr)
         assert d.mean() < 2.0 and d.max() <= 16
+
+
+def test_detections_found_on_the_decoding_thread_equal_those_found_on_call(tmp_path):
+    """MVSource runs the mv detector as it decodes (ahead of the tracker, on the prefetch thread); the boxes and
+    foreground each frame then carries equal those of the detector run in the caller's thread."""
+    from pftrack.io.motion_vectors import MVSource, encode_h264
+
+    bg = _texture(3, (240, 320))
+    obj = _texture(4, (60, 30))
+    frames = []
+    for t in range(25):
+        f = bg.copy()
+        f[90:150, 30 + 5 * t:60 + 5 * t] = obj
+        frames.append(cv2.cvtColor(f, cv2.COLOR_GRAY2BGR))
+    path = encode_h264(frames, tmp_path / "walk.mp4", qp=20)
+    params = C.CDParams(n_min=4)
+
+    ahead = MVSource(path)
+    det = C.MVDetector(ahead, params)
+    assert ahead.analyse == det.detect
+    got = []
+    for _, frame in ahead.numbered():
+        assert ahead.current.analysis is not None
+        got.append((det(frame), det.foreground))
+
+    inline = MVSource(path)
+    det2 = C.MVDetector(inline, params)
+    inline.analyse = None                          # found on call instead
+    ref = []
+    for _, frame in inline.numbered():
+        assert inline.current.analysis is None
+        ref.append((det2(frame), det2.foreground))
+    assert len(got) == len(ref) == 25
+    assert sum(len(b) for b, _ in got) >= 10
+    for (b1, f1), (b2, f2) in zip(got, ref):
+        np.testing.assert_array_equal(b1, b2)
+        assert (f1 is None) == (f2 is None)
+        if f1 is not None:
+            np.testing.assert_array_equal(f1[0], f2[0])

@@ -44,6 +44,7 @@ class MVFrame:
     mvs: np.ndarray | None         # the structured side data (None on intra frames)
     y: np.ndarray                  # decoded luma (h, w) uint8
     bgr: np.ndarray | None = None
+    analysis: object = None        # what MVSource.analyse returned for this frame (on the decoding thread)
 
 
 def _luma(frame) -> np.ndarray:
@@ -123,6 +124,9 @@ class MVSource:
             raise SourceError(f"{path}: codec {codec} exports no motion vectors (use H.264 or MPEG-4 Part 2)")
         self.current: MVFrame | None = None
         self.prefetch = 4  # frames decoded ahead on a second thread (0: decode in the caller's thread)
+        # an optional per-frame analysis run where the frames are decoded (with prefetch, on the second thread),
+        # its result kept in each frame's ``analysis``: the mv detector's groups are found there
+        self.analyse = None
         self.size = None
         self.sequence = None
         self.skipped: list[int] = []
@@ -136,8 +140,16 @@ class MVSource:
     def length(self):
         return self._len
 
+    def _analysed(self, frames):
+        for f in frames:
+            f.analysis = self.analyse(f)
+            yield f
+
     def numbered(self):
-        for f in prefetch(iter_mv_frames(self.name, bgr=True, threads=True), depth=self.prefetch):
+        frames = iter_mv_frames(self.name, bgr=True, threads=True)
+        if self.analyse is not None:      # on the decoding thread, ahead of the caller, frame by frame in order
+            frames = self._analysed(frames)
+        for f in prefetch(frames, depth=self.prefetch):
             self.current = f
             if self.size is None:
                 self.size = (f.y.shape[1], f.y.shape[0])

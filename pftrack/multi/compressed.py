@@ -225,19 +225,27 @@ class MVDetector:
         self.analyser = BlockAnalyser(params)
         self.history: deque[list[Group]] = deque(maxlen=2)
         self.foreground = None
+        if hasattr(source, "analyse"):
+            source.analyse = self.detect      # the source runs it as it decodes, ahead of the tracker
 
-    def __call__(self, frame: np.ndarray) -> np.ndarray:
-        mvf = self.source.current
+    def detect(self, mvf) -> tuple[np.ndarray, tuple | None]:
+        """One frame's detections and foreground ``(mask, scale)``, frames taken in order."""
         groups = self.analyser(mvf)
         keep = [g for g in groups if any(_exists(g, past, 1 + k) for k, past in enumerate(reversed(self.history)))]
         self.history.append(groups)
         fg, shaper = self.analyser.fg, self.analyser.shaper
         if shaper is not None and shaper.mask is not None:
-            self.foreground = (shaper.mask * 255, float(shaper.scale))
+            foreground = (shaper.mask * 255, float(shaper.scale))
         else:
-            self.foreground = ((fg.astype(np.uint8) * 255), float(BLOCK)) if fg is not None else None
+            foreground = ((fg.astype(np.uint8) * 255), float(BLOCK)) if fg is not None else None
         boxes = dict.fromkeys(b for g in keep for b in (g.parts or [g.box]))   # a silhouette shared by two groups once
-        return np.array(list(boxes), dtype=np.float64).reshape(-1, 4)
+        return np.array(list(boxes), dtype=np.float64).reshape(-1, 4), foreground
+
+    def __call__(self, frame: np.ndarray) -> np.ndarray:
+        mvf = self.source.current
+        res = mvf.analysis if getattr(mvf, "analysis", None) is not None else self.detect(mvf)
+        boxes, self.foreground = res
+        return boxes
 
 
 class TemporalRefiner:
