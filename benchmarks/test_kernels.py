@@ -5,8 +5,9 @@ import pytest
 
 import pftrack
 from pftrack._numba import set_numba_enabled
-from pftrack.cues.color import ellipse_histograms, ellipse_rho, make_lut, quantize
+from pftrack.cues.color import ellipse_histograms, ellipse_rho
 from pftrack.cues.histogram_cue import ColorCue
+from pftrack.cues.quantize import make_lut, quantize
 from pftrack.filtering.kernels import normalize_and_estimate, propagate_cv_scale
 from pftrack.synth import Scene, SceneSpec, Target
 

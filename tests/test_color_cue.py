@@ -3,8 +3,9 @@ import pytest
 
 from pftrack._numba import NUMBA_INSTALLED
 from pftrack.cues.color import (bhattacharyya_coefficient, bhattacharyya_distance, ellipse_histograms, ellipse_rho,
-                                kernel_weights, make_lut, quantize, reachable_roi)
+                                kernel_weights, reachable_roi)
 from pftrack.cues.histogram_cue import ColorCue
+from pftrack.cues.quantize import make_lut, quantize
 
 
 def reference_histogram(frame_bins, ellipse, n_bins, kernel="nummiaro"):
@@ -96,7 +97,7 @@ def test_numba_and_numpy_paths_identical(rng):
 def test_region_quantisation_by_shifts_equals_the_table(rng, bins):
     """Power-of-two RGB bins are quantised by shifts on the frame's rows: the same bins as the table lookup,
     for any region (and the table itself when the bins are not powers of two)."""
-    from pftrack.cues.color import quantize_region, shift_form
+    from pftrack.cues.quantize import quantize_region, shift_form
     lut = make_lut("rgb", bins)
     shifts = shift_form(lut)
     assert (shifts is None) == (bins == (6, 6, 6))

@@ -30,8 +30,7 @@ import numpy as np
 
 from .._numba import njit, np_sum, numba_enabled
 from .ellipse_rows import _row_spans
-# the quantisation lives in .quantize; its names stay importable from here
-from .quantize import make_lut, quantize, quantize_region, shift_form  # noqa: F401
+from .quantize import make_lut, quantize
 
 KERNELS = {"nummiaro": 0, "epanechnikov": 1}
 KernelName = Literal["nummiaro", "epanechnikov"]

@@ -176,7 +176,7 @@ def mv_field(mvs: np.ndarray | None, shape: tuple[int, int]) -> tuple[np.ndarray
     if mvs is None or len(mvs) == 0:
         return fwd, has
     if numba_enabled() and _RECORD_FIELDS <= set(mvs.dtype.names):
-        _paint_records(mvs, np.ascontiguousarray(mvs["source"]), fwd, has)
+        _paint_records(mvs, fwd, has)
         return fwd, has
     m = mvs[mvs["source"] < 0] if "source" in mvs.dtype.names else mvs
     scale = np.maximum(m["motion_scale"].astype(np.float32), 1)
@@ -203,7 +203,7 @@ _RECORD_FIELDS = {"source", "w", "h", "dst_x", "dst_y", "motion_x", "motion_y", 
 
 
 @njit(cache=True)
-def _paint_records(mvs, source, fwd, has):
+def _paint_records(mvs, fwd, has):
     """:func:`mv_field` in one compiled pass over FFmpeg's records: the past-referencing partitions painted
     in the same order (by width, then height in blocks, then as exported), with the same float32 vectors."""
     I, J = has.shape
@@ -223,9 +223,9 @@ def _paint_records(mvs, source, fwd, has):
             if count[cw, ch] == 0:
                 continue
             for t in range(n):
-                if bws[t] != cw or bhs[t] != ch or source[t] >= 0:
-                    continue
                 r = mvs[t]
+                if bws[t] != cw or bhs[t] != ch or r.source >= 0:
+                    continue
                 sc = np.float32(max(np.int64(r.motion_scale), 1))
                 vx = -np.float32(r.motion_x) / sc
                 vy = -np.float32(r.motion_y) / sc

@@ -129,10 +129,12 @@ class KeypointAMS(ReducedFrames, Tracker):
     def _pool(self, h: np.ndarray) -> np.ndarray:
         return pool_histogram(h, self.color.cue.bins, self.params.select_bins)
 
-    def _select_rho(self, v: RBox) -> float:
+    def _select_rho(self, v: RBox, q_pooled: np.ndarray) -> float:
+        """Eqs. 22-23's coefficient of candidate ``v`` on the pooled histograms (``q_pooled``: the pooled
+        reference, taken once per frame)."""
         if self.params.select_bins >= 32:
             return self._rho(v)
-        return an.bhattacharyya(self._pool(self.color.hist(v)), self._pool(self.q))
+        return an.bhattacharyya(self._pool(self.color.hist(v)), q_pooled)
 
     @staticmethod
     def _mix(vs: list[RBox], ws: list[float]) -> RBox:
@@ -186,7 +188,8 @@ class KeypointAMS(ReducedFrames, Tracker):
         cands.append(("B", self.v2))
         if live:
             cands.append(("mix", self._mix([c[0] for c in live], [c[1] for c in live])))
-        scores = [self._select_rho(v) for _, v in cands]
+        q_pooled = self._pool(self.q)
+        scores = [self._select_rho(v, q_pooled) for _, v in cands]
         k = int(np.argmax(scores))
         chosen, self.v_obj = cands[k][0], cands[k][1]
         rho_obj = scores[k]
