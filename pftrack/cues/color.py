@@ -436,10 +436,10 @@ def bhattacharyya_distance(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 def reachable_roi(ellipses: np.ndarray, width: int, height: int, margin: int = 1) -> tuple[int, int, int, int]:
     """Integer region ``(x0, y0, x1, y1)`` (exclusive end) that covers every ellipse, clipped to the image."""
     e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
-    x0 = int(math.floor(float(np.min(e[:, 0] - e[:, 2])))) - margin
-    y0 = int(math.floor(float(np.min(e[:, 1] - e[:, 3])))) - margin
-    x1 = int(math.ceil(float(np.max(e[:, 0] + e[:, 2])))) + margin
-    y1 = int(math.ceil(float(np.max(e[:, 1] + e[:, 3])))) + margin
+    x0 = int(math.floor(float((e[:, 0] - e[:, 2]).min()))) - margin
+    y0 = int(math.floor(float((e[:, 1] - e[:, 3]).min()))) - margin
+    x1 = int(math.ceil(float((e[:, 0] + e[:, 2]).max()))) + margin
+    y1 = int(math.ceil(float((e[:, 1] + e[:, 3]).max()))) + margin
     x0 = min(max(x0, 0), width)
     y0 = min(max(y0, 0), height)
     x1 = min(max(x1, x0), width)

@@ -47,14 +47,14 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from ..cues.color import warmup
+from ..cues.color import reachable_roi, warmup
 from ..cues.contrast import (
     box_counts,
     contrast_scores,
     foreground_lut,
     probability_integral,
 )
-from ..cues.histogram_cue import ColorCue
+from ..cues.histogram_cue import ColorCue, ColorFeatures
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
 from ..geometry import intersection_area, iou_matrix
@@ -97,6 +97,7 @@ class _Track:
     obj: np.ndarray | None = None  # object / surround colour counts of the contrast cue
     sur: np.ndarray | None = None
     lut: np.ndarray | None = None
+    feats: object = None  # this frame's quantised region of the particles (ColorFeatures, own bins)
 
     @property
     def box(self) -> np.ndarray:
@@ -117,7 +118,12 @@ def _box_to_state(box) -> np.ndarray:
 
 
 def _state_boxes(states: np.ndarray) -> np.ndarray:
-    return np.column_stack([states[:, 0] - states[:, 4] / 2, states[:, 1] - states[:, 5] / 2, states[:, 4], states[:, 5]])
+    out = np.empty((states.shape[0], 4))
+    out[:, 0] = states[:, 0] - states[:, 4] / 2
+    out[:, 1] = states[:, 1] - states[:, 5] / 2
+    out[:, 2] = states[:, 4]
+    out[:, 3] = states[:, 5]
+    return out
 
 
 def _cover_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -125,8 +131,41 @@ def _cover_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return intersection_area(a[:, None, :], b[None, :, :]) / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
 
 
+def _inside_fraction(box: np.ndarray, w: float, h: float) -> float:
+    """:func:`_cover_matrix` of one box against the image ``(0, 0, w, h)``, on Python floats."""
+    x, y, bw, bh = (float(v) for v in box)
+    iw = max(min(x + bw, 0.0 + w) - max(x, 0.0), 0.0)
+    ih = max(min(y + bh, 0.0 + h) - max(y, 0.0), 0.0)
+    return iw * ih / max(bw * bh, 1e-9)
+
+
 def _ellipses(states: np.ndarray) -> np.ndarray:
-    return np.column_stack([states[:, 0], states[:, 1], states[:, 4] / 2, states[:, 5] / 2])
+    out = np.empty((states.shape[0], 4))
+    out[:, 0:2] = states[:, 0:2]
+    out[:, 2] = states[:, 4] / 2
+    out[:, 3] = states[:, 5] / 2
+    return out
+
+
+def _cut(stored: ColorFeatures | None, roi: tuple[int, int, int, int], pitch: int,
+         shape: tuple[int, int]) -> ColorFeatures | None:
+    """The features :meth:`ColorCue.prepare` would give for ``roi`` at ``pitch``, cut from ``stored`` (the same
+    frame's features of a larger region on the same lattice), or None when ``stored`` does not cover them.
+
+    Quantisation is per pixel, so the cut holds the same bins; its origin is the one ``prepare`` would choose,
+    so the kernels see the same coordinates."""
+    if stored is None or stored.pitch != pitch:
+        return None
+    h, w = shape
+    x0, y0, x1, y1 = roi
+    x0 -= x0 % pitch
+    y0 -= y0 % pitch
+    nh, nw = len(range(y0, min(y1, h), pitch)), len(range(x0, min(x1, w), pitch))
+    r0, c0 = (y0 - stored.y0) // pitch, (x0 - stored.x0) // pitch
+    sh, sw = stored.bins.shape
+    if nh <= 0 or nw <= 0 or r0 < 0 or c0 < 0 or r0 + nh > sh or c0 + nw > sw:
+        return None
+    return ColorFeatures(np.ascontiguousarray(stored.bins[r0:r0 + nh, c0:c0 + nw]), x0, y0, pitch)
 
 
 class MultiPF:
@@ -157,21 +196,39 @@ class MultiPF:
         self._shape: tuple[int, int] | None = None
 
     # ------------------------------------------------------------------ helpers
-    def _histogram(self, frame: np.ndarray, box) -> np.ndarray:
+    def _histogram(self, frame: np.ndarray, box, stored: ColorFeatures | None = None) -> np.ndarray:
+        """Colour histogram of a box's ellipse (:meth:`ColorCue.histogram`); its region is cut from ``stored``
+        when that covers it."""
         st = _box_to_state(box)
-        return self.cue.histogram(frame, _ellipses(st[None, :])[0])
+        e = _ellipses(st[None, :])
+        feats = None
+        if stored is not None:
+            h, w = self._shape
+            feats = _cut(stored, reachable_roi(e, w, h), self.cue.step_for(e), self._shape)
+        if feats is None:
+            return self.cue.histogram(frame, e[0])
+        hist, _ = self.cue.histograms(feats, e, reuse=False)
+        return hist[0]
 
-    def _rho(self, frame: np.ndarray, states: np.ndarray, sqrt_q: np.ndarray, margin: float = 0.0):
-        """Colour coefficients of a batch of states, and the quantised region (with ``margin`` x size around)."""
+    def _rho(self, frame: np.ndarray, states: np.ndarray, sqrt_q: np.ndarray, margin: float = 0.0,
+             stored: ColorFeatures | None = None, own: bool = False):
+        """Colour coefficients of a batch of states, and the quantised region (with ``margin`` x size around),
+        cut from ``stored`` (this frame's features of a larger region) when that covers it.  The region's bins
+        are the cue's shared buffer, valid until its next ``prepare``, unless ``own`` (then a new array)."""
         h, w = self._shape
         ell = _ellipses(states)
-        mx = 2 * margin * float(np.max(ell[:, 2])) + 1
-        my = 2 * margin * float(np.max(ell[:, 3])) + 1
-        x0 = int(max(math.floor(float(np.min(ell[:, 0] - ell[:, 2]) - mx)), 0))
-        y0 = int(max(math.floor(float(np.min(ell[:, 1] - ell[:, 3]) - my)), 0))
-        x1 = int(min(math.ceil(float(np.max(ell[:, 0] + ell[:, 2]) + mx)), w))
-        y1 = int(min(math.ceil(float(np.max(ell[:, 1] + ell[:, 3]) + my)), h))
-        feats = self.cue.prepare(frame, (x0, y0, max(x1, x0), max(y1, y0)), self.cue.step_for(ell))
+        mx = 2 * margin * float(ell[:, 2].max()) + 1
+        my = 2 * margin * float(ell[:, 3].max()) + 1
+        x0 = int(max(math.floor(float((ell[:, 0] - ell[:, 2]).min()) - mx), 0))
+        y0 = int(max(math.floor(float((ell[:, 1] - ell[:, 3]).min()) - my), 0))
+        x1 = int(min(math.ceil(float((ell[:, 0] + ell[:, 2]).max()) + mx), w))
+        y1 = int(min(math.ceil(float((ell[:, 1] + ell[:, 3]).max()) + my), h))
+        roi, pitch = (x0, y0, max(x1, x0), max(y1, y0)), self.cue.step_for(ell)
+        feats = _cut(stored, roi, pitch, self._shape)
+        if feats is None:
+            feats = self.cue.prepare(frame, roi, pitch)
+            if own:
+                feats = ColorFeatures(feats.bins.copy(), feats.x0, feats.y0, feats.pitch)
         rho, tot = self.cue.rho(feats, ell, sqrt_q, reuse=False)
         return rho, tot, feats
 
@@ -236,6 +293,7 @@ class MultiPF:
         # 1. predict every track (constant velocity) and associate detections
         for tr in self.tracks:
             tr.age += 1
+            tr.feats = None
             pred = tr.state.copy()
             pred[0:2] += pred[2:4]
             pred[4:6] += pred[6:8]
@@ -259,7 +317,8 @@ class MultiPF:
                     s[pick, 4:6] = d[4:6]
                     s[pick] += self._noise(k, d[4], d[5]) * np.array([0.5, 0.5, 0, 0, 0.5, 0.5, 0, 0])
             np.maximum(s[:, 4:6], p.min_size, out=s[:, 4:6])
-            rho, tot, feats = self._rho(frame, s, tr.sqrt_q, margin=p.ring if p.contrast_gain > 0 else 0.0)
+            rho, tot, feats = self._rho(frame, s, tr.sqrt_q, margin=p.ring if p.contrast_gain > 0 else 0.0, own=True)
+            tr.feats = feats  # this frame's region of the track: the estimate's features are cut from it
             ll = -(1.0 - rho) / (2.0 * p.sigma ** 2)
             ll[tot <= 0] = -np.inf
             colour_max = float(np.exp(np.max(ll))) if np.isfinite(ll).any() else 0.0
@@ -316,7 +375,7 @@ class MultiPF:
             return used
         from scipy.optimize import linear_sum_assignment
 
-        pred_boxes = np.array([_state_boxes(t.pred[None, :])[0] for t in live])
+        pred_boxes = _state_boxes(np.array([t.pred for t in live]))
         m = iou_matrix(pred_boxes, dets[:, :4])
         gate = m >= p.match_iou
         if p.occlusion and self._group_merges and len(live) > 1:
@@ -445,13 +504,15 @@ class MultiPF:
         tr.occluded_frames = 0
         # gated model update (Eqs. 13-14)
         est = st[None, :]
-        rho, tot, feats = self._rho(frame, est, tr.sqrt_q, margin=p.ring if p.contrast_gain > 0 else 0.0)
+        # the estimate's own region (its bins must outlive the histogram below, which quantises again)
+        rho, tot, feats = self._rho(frame, est, tr.sqrt_q, margin=p.ring if p.contrast_gain > 0 else 0.0,
+                                    stored=tr.feats, own=True)
         pi_est = math.exp(-(1.0 - float(rho[0])) / (2 * p.sigma ** 2)) if tot[0] > 0 else 0.0
         tr.score = float(rho[0]) if tot[0] > 0 else 0.0
         if tr.lam is None:
             tr.lam = pi_est
         elif pi_est > tr.lam and p.alpha_q > 0:
-            q = (1 - p.alpha_q) * tr.q + p.alpha_q * self._histogram(frame, _state_boxes(est)[0])
+            q = (1 - p.alpha_q) * tr.q + p.alpha_q * self._histogram(frame, _state_boxes(est)[0], feats)
             tr.q = q / q.sum()
             tr.sqrt_q = np.sqrt(tr.q)
             if p.contrast_gain > 0:
@@ -497,10 +558,9 @@ class MultiPF:
     def _deaths(self) -> None:
         p = self.params
         h, w = self._shape
-        image = np.array([[0.0, 0.0, w, h]])
         keep = []
         for tr in self.tracks:
-            inside = _cover_matrix(tr.box[None, :], image)[0, 0]
+            inside = _inside_fraction(tr.box, w, h)
             limit = p.max_occluded if (tr.occluded or tr.grouped) else p.max_misses
             if inside < p.exit_fraction or tr.misses > limit or not np.all(np.isfinite(tr.state)):
                 if p.identify:
