@@ -56,6 +56,7 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
     prepare_output(out)
     if video_out:
         prepare_output(video_out)
+    cv_threads = None
     if detector == "mv":
         from ..io.motion_vectors import MVSource
         from ..multi.compressed import CDParams, MVDetector
@@ -65,6 +66,12 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
         cd = CDParams.from_mapping({k: params.pop(k) for k in list(params) if k in cd_keys})
         source = MVSource(source_spec)
         tracker = create_multi_tracker("multi-pf", seed=seed, detector_fn=MVDetector(source, cd), **params)
+        # the pipeline runs its own two threads (decoding with the block analysis, and tracking); OpenCV's pool
+        # on the same cores only adds hand-over cost to its calls on small images (restored on return)
+        import cv2
+
+        cv_threads = cv2.getNumThreads()
+        cv2.setNumThreads(1)
     else:
         tracker = create_multi_tracker("multi-pf", seed=seed, **{"detector": detector, **(params or {})})
         source = open_source(source_spec, skip_bad_frames=skip_bad_frames)
@@ -102,6 +109,8 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
         raise Interrupted(f"interrupted after {frames} frames; rows so far are in {out}") from None
     finally:
         close_all(bar, sinks, source)
+        if cv_threads is not None:
+            cv2.setNumThreads(cv_threads)
     total = _time.perf_counter() - t_start
     return {"frames": frames, "rows": rows, "identities": len(ids), "update_fps": frames / upd if upd > 0 else 0.0,
             "end_to_end_fps": frames / total if total > 0 else 0.0, "source": source}
