@@ -170,7 +170,9 @@ def test_cli_mot_mv_cd_and_activity(tmp_path, capsys):
         frames.append(cv2.cvtColor(f, cv2.COLOR_GRAY2BGR))
     path = encode_h264(frames, tmp_path / "obj.mp4", qp=20, exact=True)
     args = ["--param", "n_min=4", "--param", "tau_r=64"]
+    threads = cv2.getNumThreads()
     assert main(["mot", str(path), "--detector", "mv", "--out", str(tmp_path / "mv.txt"), "--quiet", *args]) == 0
+    assert cv2.getNumThreads() == threads  # the mv pipeline turns OpenCV's pool off only while it runs
     assert main(["mot", str(path), "--tracker", "cd", "--out", str(tmp_path / "cd.txt"), "--quiet",
                  "--mpeg7", str(tmp_path / "cd.xml"), *args]) == 0
     import xml.etree.ElementTree as ET
