@@ -6,7 +6,7 @@ import pytest
 
 from pftrack.cues.histogram_cue import ColorCue
 from pftrack.multi import create_multi_tracker
-from pftrack.multi.tracker import _cut
+from pftrack.multi.track_state import cut_features as _cut
 
 from .conftest import render_scene
 from .test_mot import movers

@@ -1,0 +1,108 @@
+"""Per-track state of ``multi-pf`` and the small array helpers on it (states, boxes, ellipses, regions).
+
+Pure functions on arrays and a plain record per track; :mod:`pftrack.multi.tracker` holds the filter.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..cues.histogram_cue import ColorFeatures
+from ..geometry import intersection_area
+
+
+@dataclass
+class Track:
+    """One target of the filter: its estimate, particles, colour model and life-cycle counters."""
+
+    id: int
+    state: np.ndarray  # (8,) estimate x, y, vx, vy, w, h, vw, vh
+    particles: np.ndarray  # (N, 8)
+    q: np.ndarray
+    sqrt_q: np.ndarray
+    lam: float | None = None
+    hist_max: float | None = None
+    occluded: bool = False
+    grouped: bool = False  # inside a merged detection this frame
+    misses: int = 0
+    occluded_frames: int = 0
+    age: int = 0
+    features: object = None  # ch. 1 identification features at the last detection
+    score: float = 0.0
+    det: np.ndarray | None = None
+    log_lik: np.ndarray | None = None
+    max_lik: float = 0.0
+    obj: np.ndarray | None = None  # object / surround colour counts of the contrast cue
+    sur: np.ndarray | None = None
+    lut: np.ndarray | None = None
+    feats: object = None  # this frame's quantised region of the particles (ColorFeatures, own bins)
+
+    @property
+    def box(self) -> np.ndarray:
+        x, y, w, h = self.state[0], self.state[1], self.state[4], self.state[5]
+        return np.array([x - w / 2, y - h / 2, w, h])
+
+
+@dataclass
+class Candidate:
+    box: np.ndarray
+    hits: int = 1
+    first_center: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+
+def box_to_state(box) -> np.ndarray:
+    x, y, w, h = (float(v) for v in box)
+    return np.array([x + w / 2, y + h / 2, 0.0, 0.0, w, h, 0.0, 0.0])
+
+
+def state_boxes(states: np.ndarray) -> np.ndarray:
+    out = np.empty((states.shape[0], 4))
+    out[:, 0] = states[:, 0] - states[:, 4] / 2
+    out[:, 1] = states[:, 1] - states[:, 5] / 2
+    out[:, 2] = states[:, 4]
+    out[:, 3] = states[:, 5]
+    return out
+
+
+def cover_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Fraction of each box of ``a`` (x, y, w, h) that lies inside each box of ``b``."""
+    return intersection_area(a[:, None, :], b[None, :, :]) / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
+
+
+def inside_fraction(box: np.ndarray, w: float, h: float) -> float:
+    """:func:`cover_matrix` of one box against the image ``(0, 0, w, h)``, on Python floats."""
+    x, y, bw, bh = (float(v) for v in box)
+    iw = max(min(x + bw, 0.0 + w) - max(x, 0.0), 0.0)
+    ih = max(min(y + bh, 0.0 + h) - max(y, 0.0), 0.0)
+    return iw * ih / max(bw * bh, 1e-9)
+
+
+def ellipses(states: np.ndarray) -> np.ndarray:
+    out = np.empty((states.shape[0], 4))
+    out[:, 0:2] = states[:, 0:2]
+    out[:, 2] = states[:, 4] / 2
+    out[:, 3] = states[:, 5] / 2
+    return out
+
+
+def cut_features(stored: ColorFeatures | None, roi: tuple[int, int, int, int], pitch: int,
+         shape: tuple[int, int]) -> ColorFeatures | None:
+    """The features :meth:`ColorCue.prepare` would give for ``roi`` at ``pitch``, cut from ``stored`` (the same
+    frame's features of a larger region on the same lattice), or None when ``stored`` does not cover them.
+
+    Quantisation is per pixel, so the cut holds the same bins; its origin is the one ``prepare`` would choose,
+    so the kernels see the same coordinates."""
+    if stored is None or stored.pitch != pitch:
+        return None
+    h, w = shape
+    x0, y0, x1, y1 = roi
+    x0 -= x0 % pitch
+    y0 -= y0 % pitch
+    nh, nw = len(range(y0, min(y1, h), pitch)), len(range(x0, min(x1, w), pitch))
+    r0, c0 = (y0 - stored.y0) // pitch, (x0 - stored.x0) // pitch
+    sh, sw = stored.bins.shape
+    if nh <= 0 or nw <= 0 or r0 < 0 or c0 < 0 or r0 + nh > sh or c0 + nw > sw:
+        return None
+    return ColorFeatures(np.ascontiguousarray(stored.bins[r0:r0 + nh, c0:c0 + nw]), x0, y0, pitch)
