@@ -298,10 +298,11 @@ class MultiPF:
         if not gate.any():
             return used
         cost = 1.0 - m
-        if p.appearance_weight > 0:
-            sq = np.sqrt(np.stack([self._histogram(frame, d[:4]) for d in dets]))
+        if p.appearance_weight > 0:  # the colour term of the detections some track may take (the others cost 1e6)
+            cols = np.flatnonzero(gate.any(axis=0))
+            sq = np.sqrt(np.stack([self._histogram(frame, dets[j, :4]) for j in cols]))
             rho = (np.stack([t.sqrt_q for t in live])[:, None, :] * sq[None, :, :]).sum(axis=-1)  # no BLAS: reproducible
-            cost = cost + p.appearance_weight * (1.0 - rho)
+            cost[:, cols] = cost[:, cols] + p.appearance_weight * (1.0 - rho)
         rows, cols = linear_sum_assignment(np.where(gate, cost, 1e6))
         for r, c in zip(rows, cols):
             if gate[r, c]:
