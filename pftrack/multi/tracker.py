@@ -372,7 +372,8 @@ class MultiPF:
             else:
                 logs.append(ll)
         pool = np.concatenate(logs)
-        owner = np.concatenate([np.full(t.particles.shape[0], k) for k, t in enumerate(active)])
+        # each target's samples are one block of the pool: bounds[k]:bounds[k + 1]
+        bounds = np.cumsum([0] + [t.particles.shape[0] for t in active])
         finite = np.isfinite(pool)
         pool = np.where(finite, pool, -np.inf)
         m = np.max(pool[finite]) if finite.any() else 0.0
@@ -382,16 +383,17 @@ class MultiPF:
         wts /= wts.sum()
         # estimates from each target's own (normalised) weights before resampling
         for k, t in enumerate(active):
-            wk = wts[owner == k]
+            wk = wts[bounds[k]:bounds[k + 1]]
             t.meas = ((wk / wk.sum())[:, None] * t.particles).sum(axis=0) if wk.sum() > 0 else t.pred.copy()
-        total = sum(t.particles.shape[0] for t in active)
+        total = int(bounds[-1])
         u = (np.arange(total) + self.rng.random()) / total  # systematic over the pool
         idx = np.searchsorted(np.cumsum(wts), u, side="left")
         np.minimum(idx, total - 1, out=idx)
         states = np.concatenate([t.particles for t in active])
-        new_owner = owner[idx]
+        # idx is sorted (systematic resampling), so each target's new samples are one block of it too
+        cut = np.searchsorted(idx, bounds, side="left")
         for k, t in enumerate(active):
-            t.particles = states[idx[new_owner == k]].copy()
+            t.particles = states[idx[cut[k]:cut[k + 1]]]
 
     def _estimate(self, frame: np.ndarray, tr: _Track) -> None:
         p = self.params
