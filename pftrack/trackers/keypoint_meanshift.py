@@ -131,9 +131,7 @@ class KeypointAMS(ReducedFrames, Tracker):
 
     def _select_rho(self, v: RBox, q_pooled: np.ndarray) -> float:
         """Eqs. 22-23's coefficient of candidate ``v`` on the pooled histograms (``q_pooled``: the pooled
-        reference, taken once per frame)."""
-        if self.params.select_bins >= 32:
-            return self._rho(v)
+        reference, taken once per frame; with nothing to pool, the chapter's coefficient)."""
         return an.bhattacharyya(self._pool(self.color.hist(v)), q_pooled)
 
     @staticmethod
