@@ -137,9 +137,10 @@ class SilhouetteShaper:
     """Redraws motion-vector group boxes from a selectively updated background (see the module doc).
 
     ``mask`` holds, after each call, the foreground pixels inside the regions of interest at
-    1/``scale`` resolution (the particle filters' foreground cue)."""
+    1/``scale`` resolution (the particle filters' foreground cue).  The defaults are
+    :class:`~pftrack.multi.compressed.CDParams`' ``bg_*`` values."""
 
-    def __init__(self, scale: int = 2, alpha: float = 0.05, tau: float = 20.0, margin: float = 0.5,
+    def __init__(self, scale: int = 4, alpha: float = 0.01, tau: float = 35.0, margin: float = 0.5,
                  close: int = 3, reach: int = 2, min_share: float = 0.3, split_aspect: float = 0.0):
         self.scale, self.alpha, self.tau, self.margin, self.close = int(scale), float(alpha), float(tau), \
             float(margin), int(close)
