@@ -104,6 +104,15 @@ def center_error(a, b) -> np.ndarray:
     return np.hypot(d[..., 0], d[..., 1])
 
 
+def in_frame_fraction(boxes, width: float, height: float) -> np.ndarray:
+    """Fraction of each box's area inside the image ``[0, width) x [0, height)`` (0 for an empty box)."""
+    b = as_boxes(boxes)
+    inside = intersection_area(b, np.array([0.0, 0.0, float(width), float(height)]))
+    area = box_area(b)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(area > 0, inside / np.where(area > 0, area, 1.0), 0.0)
+
+
 def clip_box(boxes, width: float, height: float) -> np.ndarray:
     """Clip boxes to the image ``[0, width) x [0, height)``; empty results get zero size."""
     b = as_boxes(boxes)

@@ -222,3 +222,34 @@ def test_short_median_equals_numpys():
         for _ in range(20):
             x = np.round(rng.random(n), int(rng.integers(1, 6)))
             assert _median(x) == float(np.median(x))
+
+
+def test_in_frame_fraction():
+    from pftrack.geometry import in_frame_fraction
+
+    f = in_frame_fraction([[-10, 0, 20, 10], [0, 0, 5, 5], [310, 230, 20, 20], [400, 0, 10, 10], [0, 0, 0, 0]], 320, 240)
+    np.testing.assert_allclose(f, [0.5, 1.0, 0.25, 0.0, 0.0])
+
+
+def test_out_of_view_is_reported_absent_without_searching():
+    """min_in_frame: a target walking out is reported lost while its box is mostly outside, and tracked on."""
+    from pftrack.geometry import in_frame_fraction
+
+    spec = leave_scene(201)
+    scene = Scene(spec)
+    gt = scene.groundtruth(0)
+    h, w = scene.render(0)[0].shape[:2]
+    runs = {}
+    for m in (0.0, 0.4):
+        t = pftrack.create_tracker("color-pf", seed=0, min_in_frame=m)
+        t.init(scene.render(0)[0], tuple(gt[0]))
+        runs[m] = [t.update(scene.render(k)[0]) for k in range(1, spec.n_frames)]
+    flagged = 0
+    for st in runs[0.4]:
+        if st.info.get("mode") == "tracking" and in_frame_fraction(st.box, w, h) < 0.4:
+            assert st.lost and st.score <= 0.5 and st.info["out_of_view"]
+            flagged += 1
+    assert flagged > 0  # the scene takes the box across the border
+    hid = hidden_frames(spec)[1:]
+    rec = {m: np.mean([s.lost for s, a in zip(r, hid) if a]) for m, r in runs.items()}
+    assert rec[0.4] >= rec[0.0]

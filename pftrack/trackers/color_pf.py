@@ -355,6 +355,12 @@ class ColorParticleFilter(SearchMixin, Tracker):
         thr = self._threshold()
         n_pass = int(np.count_nonzero(rho > thr))
         info = {"mode": "tracking", "n_pass": n_pass, "threshold": thr, "rho": rho_e}
+        # a target leaving the view still matches on its last visible sliver: out of view, it is reported absent
+        out = p.min_in_frame > 0 and (
+            max(min(cx + hx, fw) - max(cx - hx, 0.0), 0.0) * max(min(cy + hy, fh) - max(cy - hy, 0.0), 0.0)
+            < p.min_in_frame * 4.0 * hx * hy)  # in_frame_fraction(box) < min_in_frame, on floats
+        if out:
+            info["out_of_view"] = True
         if seir_info is not None:
             info["ess"], info["loops"] = seir_info.ess, seir_info.loops
         if p.loss_test == "likelihood":
@@ -371,6 +377,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
                 self.miss = 0
             lost_now, score = self.miss >= p.lost_frames or not ok, rho_e
             confident = self.miss == 0
+        confident = confident and not out  # no learning from a sliver
         if confident:
             self.cue.confirm(p.normalize_rate)
             self._confident_size = (float(est[HX]), float(est[HY]))
@@ -413,6 +420,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         if self.miss == 0:
             self.last_box = box
         self.last_score = rho_e
+        if out:  # reported absent, tracked on: the target comes back where it left, and no search is started
+            return self._state(box=box, score=min(score, 0.5), lost=True, info=info)
         return self._state(box=box, score=score, lost=False, info=info)
 
     # ------------------------------------------------------------------ output
