@@ -253,3 +253,37 @@ def test_out_of_view_is_reported_absent_without_searching():
     hid = hidden_frames(spec)[1:]
     rec = {m: np.mean([s.lost for s, a in zip(r, hid) if a]) for m, r in runs.items()}
     assert rec[0.4] >= rec[0.0]
+
+
+def test_acquire_adds_the_position_log_prior():
+    det = LossDetector(lost_frames=3)
+    det.reset(1.0)
+    det.set_background(np.random.default_rng(1).normal(0.3, 0.05, 200))
+    for _ in range(30):
+        det.step(0.92)
+    s = 0.9  # a candidate that ends the loss on its own evidence ...
+    assert det.evaluate(s) > det.reacquire_margin + 0.5
+    llr = det.evaluate(s)
+    assert not det.acquire(s, log_prior=-(llr - det.reacquire_margin) - 0.1)  # ... but not far from the prediction
+    assert det.llr == pytest.approx(llr - (llr - det.reacquire_margin) - 0.1)
+    assert det.acquire(s)
+
+
+def test_search_position_prior_penalises_only_far_candidates():
+    """fusion-pf's search_prior: log((1 - e) A N(x; m, s^2) + e), capped at 0: 0 at the prediction, log(e) far."""
+    t = pftrack.create_tracker("fusion-pf", seed=0)
+    frame = np.zeros((240, 320, 3), np.uint8)
+    frame[100:140, 100:120] = (0, 0, 200)
+    t.init(frame, (100, 100, 20, 40))
+    t.frame_index = 10
+    t._lost_at = (6, np.array([110.0, 120.0]), np.array([2.0, 0.0]))  # lost 4 frames ago, moving right
+    states = np.zeros((3, t.dim))
+    states[:, :2] = [[118.0, 120.0], [300.0, 20.0], [130.0, 120.0]]
+    lp = t._position_log_prior(states)
+    assert lp[0] == 0.0  # at the prediction (110 + 4 * 2, 120)
+    assert lp[1] == pytest.approx(math.log(t.params.search_prior), abs=1e-6)  # far away: log e
+    assert math.log(t.params.search_prior) < lp[2] <= 0.0
+    off = pftrack.create_tracker("color-pf", seed=0)
+    off.init(frame, (100, 100, 20, 40))
+    off._lost_at = t._lost_at
+    assert off._position_log_prior(states) is None  # color-pf: off by default

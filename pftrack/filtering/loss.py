@@ -218,10 +218,11 @@ class LossDetector:
         return (math.isfinite(s) and self.llr > self.reacquire_margin
                 and (s - self.mu_t) / self.sd_t > -self.learn_z)
 
-    def acquire(self, s: float) -> bool:
-        """While lost: does a candidate with score ``s`` end the loss (hysteresis margin)?"""
+    def acquire(self, s: float, log_prior: float = 0.0) -> bool:
+        """While lost: does a candidate with score ``s`` end the loss (hysteresis margin)?  ``log_prior``: the
+        log prior odds of the candidate's position, added to its ratio (posterior odds)."""
         self.unseen += 1
-        self.llr = self.evaluate(s)
+        self.llr = self.evaluate(s) + log_prior
         if self.confident(s):
             self.lost = False
             self.miss = 0
@@ -365,12 +366,13 @@ class FusedLoss:
         return not any((v - m.mu_t) / m.sd_t <= -m.learn_z and m.evaluate(v) < 0.0
                        for m, v in zip(self.members, s) if math.isfinite(v))
 
-    def acquire(self, s) -> bool:
-        """While lost: does a candidate with score vector ``s`` end the loss?"""
+    def acquire(self, s, log_prior: float = 0.0) -> bool:
+        """While lost: does a candidate with score vector ``s`` end the loss?  (``log_prior`` as in
+        :meth:`LossDetector.acquire`.)"""
         s = self._vector(s)
         for m in self.members:
             m.unseen += 1
-        self.llr = self.evaluate(s)
+        self.llr = self.evaluate(s) + log_prior
         if self.confident(s):
             self.lost = False
             self.miss = 0

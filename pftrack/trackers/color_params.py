@@ -138,6 +138,14 @@ class ColorModelParams(Params):
     search_dense: int = param(15, ge=0, le=100_000, doc=(
         "Frames after a loss (or after the start of an automatic initialisation) that are all searched, "
         "whatever search_interval: a target coming out of a short occlusion is looked for on every frame."))
+    search_prior: float = param(0.0, ge=0, le=1, doc=(
+        "Re-acquisition with a position prior: a candidate's ratio gets the log prior odds of its position, "
+        "log((1 - e) A N(x; m, s^2) + e), m the constant-velocity prediction from the last confident frame and s "
+        "the search spread; e is the chance the target reappears anywhere. A candidate far from where the target "
+        "can be needs e^-log(e) more evidence. 0: off (no prior)."))
+    search_prior_cap: bool = param(False, doc=(
+        "With search_prior, only penalise (the log prior odds capped at 0): a candidate near the prediction "
+        "needs the usual evidence, not less."))
     acquire_samples: int = param(3, ge=1, le=1_000_000, doc=(
         "With the likelihood loss test: search samples near the best candidate that must pass the appearance "
         "condition before the candidate is tested against the target's history (at most the paper's b N)."))

@@ -158,6 +158,24 @@ class SearchMixin:
         last = self._last_search
         return replace(last, info={**last.info, "mode": "waiting"})
 
+    def _position_log_prior(self, states: np.ndarray) -> np.ndarray | None:
+        """``search_prior``: log prior odds of each search sample's position, ``log((1 - e) A N(x; m, s^2 I) + e)``
+        with ``m`` the constant-velocity prediction from the last confident frame, ``s`` the search's spread
+        (growing with the time lost), ``A`` the frame's area and ``e = search_prior`` the chance that the target
+        reappears anywhere (uniform); ``None`` when off or nothing was seen moving."""
+        eps = self.params.search_prior
+        if eps <= 0 or self._lost_at is None:
+            return None
+        hx, hy = self.size
+        k = self.frame_index - self._lost_at[0]
+        centre = self._lost_at[1] + k * self._lost_at[2]
+        sd = 0.5 * (hx + hy) * (0.5 + 0.1 * k)
+        fh, fw = self._shape
+        d2 = ((states[:, X] - centre[0]) ** 2 + (states[:, Y] - centre[1]) ** 2) / (sd * sd)
+        dens = fw * fh * np.exp(-0.5 * d2) / (2.0 * math.pi * sd * sd)
+        out = np.log((1.0 - eps) * dens + eps)
+        return np.minimum(out, 0.0) if self.params.search_prior_cap else out
+
     def _search(self, frame: np.ndarray) -> TrackState:
         """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
         p = self.params
@@ -199,7 +217,10 @@ class SearchMixin:
         self._search_states = states
         self._search_loglik = loglik
         thr = self._threshold()
-        best = int(np.argmax(np.where(tot > 0, loglik, -np.inf))) if np.any(tot > 0) else 0
+        prior = self._position_log_prior(states)
+        rank = loglik if prior is None else loglik + prior
+        best = int(np.argmax(np.where(tot > 0, rank, -np.inf))) if np.any(tot > 0) else 0
+        lp = 0.0 if prior is None else float(prior[best])
         # samples belonging to the best candidate: within one target size of it
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
         found = False
@@ -211,7 +232,7 @@ class SearchMixin:
                 # the best candidate must look like the target's score history (hysteresis); that test is
                 # stricter than the count of passing samples, which then only needs a few supporters
                 found = cluster.sum() >= min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1) and \
-                    self.loss.acquire(s_best)
+                    self.loss.acquire(s_best, lp)
                 conf = confidence(self.loss.llr)
             else:
                 found = cluster.sum() > p.kickoff_fraction * p.n_particles

@@ -114,6 +114,14 @@ class FusionPFParams(ColorPFParams):
         "channel medians against those of the last background refresh, when the target was seen), and the "
         "better of the two is used: a target whose colours drifted with the light while it was hidden is not "
         "vetoed for that. Colour RGB input only."))
+    search_prior: float = param(0.05, ge=0, le=1, doc=(
+        "Re-acquisition with a position prior (color-pf: 0, off): a candidate far from the constant-velocity "
+        "prediction needs e^3 more evidence (see ColorModelParams.search_prior). Chosen on the tune split "
+        "(docs/fusion-pf.md): re-acquired 48 / 72 against 44 / 72, real sequences unchanged; 0.01 and 0.001 gave "
+        "the same, 0.2 less."))
+    search_prior_cap: bool = param(True, doc=(
+        "Only penalise far candidates (color-pf: False). Uncapped, a candidate near the prediction needed less "
+        "evidence and the real tune sequences lost 0.005 AUC."))
     lk_levels: int = param(2, ge=1, le=6, doc="Pyramid levels of the flow when motion is on.")
     max_features: int = param(150, ge=1, le=1_000_000, doc="Flow features per frame when motion is on.")
 
