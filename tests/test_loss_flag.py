@@ -287,3 +287,19 @@ def test_search_position_prior_penalises_only_far_candidates():
     off.init(frame, (100, 100, 20, 40))
     off._lost_at = t._lost_at
     assert off._position_log_prior(states) is None  # color-pf: off by default
+
+
+def test_llr_is_zero_when_the_means_do_not_separate_for_their_spreads():
+    # a camouflaged target: its history barely above the background's tail, its spread the wider
+    assert score_llr(0.99, 0.99, 0.05, 0.98, 0.02) == 0.0
+    assert score_llr(0.5, 0.99, 0.05, 0.98, 0.02) == 0.0
+    # separated means keep the ratio's sign change between them
+    assert score_llr(0.9, 0.9, 0.05, 0.5, 0.1) > 0 > score_llr(0.5, 0.9, 0.05, 0.5, 0.1)
+
+
+def test_color_pf_does_not_call_a_camouflaged_target_lost():
+    """A target drawn in the background's colours: the colour cannot tell, so the flag stays down (no evidence)."""
+    from pftrack.synth import camouflage_scene
+
+    res = [_run(camouflage_scene(seed), seed) for seed in (200, 201)]
+    assert max(r.false_rate for r in res) <= 0.05, [r.false_rate for r in res]

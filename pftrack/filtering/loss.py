@@ -91,11 +91,16 @@ def score_llr(s: float, mu_t: float, sd_t: float, mu_b: float, sd_b: float) -> f
     ``s`` above the target mean counts as the target mean and below the background
     mean as the background mean, so the ratio is monotone in ``s``.  When the
     target history is not above the background (``mu_t <= mu_b``) the ratio is
-    0: the score does not discriminate.
+    0: the score does not discriminate.  The same holds when the two means are too close for their
+    spreads, so that the ratio does not change sign between them (a score at the target's own mean
+    would count against it when the target's spread is the wider, as on a camouflaged target).
     """
     if not math.isfinite(s):
         return -_LOG_CLIP
     if mu_t <= mu_b:
+        return 0.0
+    log_sd = math.log(sd_b / sd_t)
+    if not (log_sd - 0.5 * ((mu_t - mu_b) / sd_t) ** 2 < 0.0 < log_sd + 0.5 * ((mu_t - mu_b) / sd_b) ** 2):
         return 0.0
     x = min(max(s, mu_b), mu_t)
     zt = (x - mu_t) / sd_t
