@@ -46,6 +46,7 @@ import numpy as np
 
 from ..cues.color import blend_model, reachable_roi, warmup
 from ..cues.histogram_cue import ColorCue
+from ..cues.intensity import channel_levels
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
 from ..filtering.loss import LossDetector
@@ -191,6 +192,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
             self.bg_mu = self.loss.app_mu
             self.bg_sd = self.loss.app_sd
         self._since_bg = 0
+        if self.params.relit_search != "off" and frame.ndim == 3 and self.cue.color_space == "rgb":
+            self._seen_levels = channel_levels(frame, stride=16)  # the light while the target is seen
 
     # ------------------------------------------------------------------ init
     def _start_tracking(self, states: np.ndarray, log_lik: np.ndarray | None = None) -> None:

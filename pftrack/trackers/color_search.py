@@ -17,6 +17,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, X, Y
+from ..cues.color import reachable_roi
+from ..cues.intensity import channel_levels, gain_maps
 from ..filtering.loss import confidence
 from ..frames import as_bgr_uint8
 from ..geometry import Box, box_to_ellipse, ellipse_to_box, validate_box
@@ -176,6 +178,27 @@ class SearchMixin:
         out = np.log((1.0 - eps) * dens + eps)
         return np.minimum(out, 0.0) if self.params.search_prior_cap else out
 
+    def _search_rho(self, frame: np.ndarray, ell: np.ndarray):
+        """The search samples' colour ``rho``, quantised features and masses (``_rho``).  With ``relit_search`` on
+        colour input, once a channel's level is 5 % or more away from the last background refresh while the
+        target was seen, the frame's per-channel gain is undone first (von Kries; ``"replace"``), or the better
+        of the two scores is kept (``"max"``): a target whose colours drifted with the light while it was hidden
+        is still recognised."""
+        ref = getattr(self, "_seen_levels", None)
+        if self.params.relit_search != "off" and ref is not None and frame.ndim == 3:
+            gain = ref / channel_levels(frame, stride=16)
+            if np.any(np.abs(gain - 1.0) >= 0.05):  # the light changed (5 % dead zone)
+                h, w = self._shape
+                roi = reachable_roi(ell, w, h)
+                lut = self.cue.mapped_lut(gain_maps(ref, ref / gain))
+                relit = self.cue.prepare(frame, roi, self.cue.step_for(ell), lut=lut)
+                rho, tot = self.cue.rho(relit, ell, self._sqrt_q, reuse=False)
+                if self.params.relit_search == "max":
+                    raw, _, feats = self._rho(frame, ell)
+                    return np.maximum(rho, raw), tot, feats
+                return rho, tot, relit
+        return self._rho(frame, ell)
+
     def _search(self, frame: np.ndarray) -> TrackState:
         """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
         p = self.params
@@ -210,7 +233,7 @@ class SearchMixin:
         states[n_keep:, HY] = hy * scale[:, 0]
         self._clip_states(states)
         ell = self._ellipses(states)
-        rho, tot, feats = self._rho(frame, ell)
+        rho, tot, feats = self._search_rho(frame, ell)
         loglik = self._search_log_lik(frame, states, self._log_lik(rho, tot), feats)
         if not np.isfinite(loglik).any():
             loglik = np.zeros_like(loglik)
