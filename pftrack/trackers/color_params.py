@@ -148,7 +148,7 @@ class ColorModelParams(Params):
         "Re-acquisition with a position prior: a candidate's ratio gets the log prior odds of its position, "
         "log((1 - e) A N(x; m, s^2) + e), m the constant-velocity prediction from the last confident frame and s "
         "the search spread; e is the chance the target reappears anywhere. A candidate far from where the target "
-        "can be needs e^-log(e) more evidence. 0: off (no prior)."))
+        "can be needs 1/e times the odds (log(1/e) more in its ratio). 0: off (no prior)."))
     search_prior_cap: bool = param(False, doc=(
         "With search_prior, only penalise (the log prior odds capped at 0): a candidate near the prediction "
         "needs the usual evidence, not less."))

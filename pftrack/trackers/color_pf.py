@@ -112,6 +112,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self._confident_size = (0.0, 0.0)  # half-axes when the loss test was last confident
         self._confident_motion = None  # (frame index, position, velocity) when last confident
         self._lost_at = None  # the same, for the current loss (search prediction)
+        self._seen_levels: np.ndarray | None = None  # channel levels while the target was seen (relit_search)
         self.regions: np.ndarray | None = None
         self._search_states: np.ndarray | None = None
         self._search_loglik: np.ndarray | None = None

@@ -15,10 +15,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..filtering.dynamics import HX, HY, X, Y
 from ..cues.color import reachable_roi
 from ..cues.intensity import channel_levels, gain_maps
+from ..errors import ParameterError
+from ..filtering.dynamics import HX, HY, X, Y
 from ..filtering.loss import confidence
 from ..frames import as_bgr_uint8
 from ..geometry import Box, box_to_ellipse, ellipse_to_box, validate_box
@@ -184,8 +184,8 @@ class SearchMixin:
         target was seen, the frame's per-channel gain is undone first (von Kries; ``"replace"``), or the better
         of the two scores is kept (``"max"``): a target whose colours drifted with the light while it was hidden
         is still recognised."""
-        ref = getattr(self, "_seen_levels", None)
-        if self.params.relit_search != "off" and ref is not None and frame.ndim == 3:
+        ref = self._seen_levels
+        if self.params.relit_search != "off" and ref is not None and frame.ndim == 3 and self.cue.color_space == "rgb":
             gain = ref / channel_levels(frame, stride=16)
             if np.any(np.abs(gain - 1.0) >= 0.05):  # the light changed (5 % dead zone)
                 h, w = self._shape
