@@ -227,7 +227,8 @@ def test_short_median_equals_numpys():
 def test_in_frame_fraction():
     from pftrack.geometry import in_frame_fraction
 
-    f = in_frame_fraction([[-10, 0, 20, 10], [0, 0, 5, 5], [310, 230, 20, 20], [400, 0, 10, 10], [0, 0, 0, 0]], 320, 240)
+    f = [in_frame_fraction(b, 320, 240)
+         for b in ([-10, 0, 20, 10], [0, 0, 5, 5], [310, 230, 20, 20], [400, 0, 10, 10], [0, 0, 0, 0])]
     np.testing.assert_allclose(f, [0.5, 1.0, 0.25, 0.0, 0.0])
 
 

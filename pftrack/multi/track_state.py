@@ -71,14 +71,6 @@ def cover_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return intersection_area(a[:, None, :], b[None, :, :]) / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
 
 
-def inside_fraction(box: np.ndarray, w: float, h: float) -> float:
-    """:func:`cover_matrix` of one box against the image ``(0, 0, w, h)``, on Python floats."""
-    x, y, bw, bh = (float(v) for v in box)
-    iw = max(min(x + bw, 0.0 + w) - max(x, 0.0), 0.0)
-    ih = max(min(y + bh, 0.0 + h) - max(y, 0.0), 0.0)
-    return iw * ih / max(bw * bh, 1e-9)
-
-
 def ellipses(states: np.ndarray) -> np.ndarray:
     out = np.empty((states.shape[0], 4))
     out[:, 0:2] = states[:, 0:2]

@@ -57,6 +57,7 @@ from ..cues.contrast import (
 from ..cues.histogram_cue import ColorCue, ColorFeatures
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
+from ..geometry import in_frame_fraction as _inside_fraction
 from ..geometry import iou_matrix
 from .detectors import as_detector, create_detector
 from .identify import IdentityMemory, person_features
@@ -67,7 +68,6 @@ from .track_state import box_to_state as _box_to_state
 from .track_state import cover_matrix as _cover_matrix
 from .track_state import cut_features as _cut
 from .track_state import ellipses as _ellipses
-from .track_state import inside_fraction as _inside_fraction
 from .track_state import state_boxes as _state_boxes
 
 STATE_NAMES = ("x", "y", "vx", "vy", "w", "h", "vw", "vh")

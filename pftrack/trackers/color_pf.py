@@ -53,7 +53,7 @@ from ..filtering.loss import LossDetector
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..filtering.seir import seir
-from ..geometry import Box, box_to_ellipse
+from ..geometry import Box, box_to_ellipse, in_frame_fraction
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
@@ -360,9 +360,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         n_pass = int(np.count_nonzero(rho > thr))
         info = {"mode": "tracking", "n_pass": n_pass, "threshold": thr, "rho": rho_e}
         # a target leaving the view still matches on its last visible sliver: out of view, it is reported absent
-        out = p.min_in_frame > 0 and (
-            max(min(cx + hx, fw) - max(cx - hx, 0.0), 0.0) * max(min(cy + hy, fh) - max(cy - hy, 0.0), 0.0)
-            < p.min_in_frame * 4.0 * hx * hy)  # in_frame_fraction(box) < min_in_frame, on floats
+        out = p.min_in_frame > 0 and in_frame_fraction(box, fw, fh) < p.min_in_frame
         if out:
             info["out_of_view"] = True
         if seir_info is not None:

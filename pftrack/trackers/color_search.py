@@ -186,11 +186,11 @@ class SearchMixin:
         is still recognised."""
         ref = self._seen_levels
         if self.params.relit_search != "off" and ref is not None and frame.ndim == 3 and self.cue.color_space == "rgb":
-            gain = ref / channel_levels(frame, stride=16)
-            if np.any(np.abs(gain - 1.0) >= 0.05):  # the light changed (5 % dead zone)
+            levels = channel_levels(frame, stride=16)
+            if np.any(np.abs(ref / levels - 1.0) >= 0.05):  # the light changed (5 % dead zone)
                 h, w = self._shape
                 roi = reachable_roi(ell, w, h)
-                lut = self.cue.mapped_lut(gain_maps(ref, ref / gain))
+                lut = self.cue.mapped_lut(gain_maps(ref, levels))
                 relit = self.cue.prepare(frame, roi, self.cue.step_for(ell), lut=lut)
                 rho, tot = self.cue.rho(relit, ell, self._sqrt_q, reuse=False)
                 if self.params.relit_search == "max":
