@@ -113,6 +113,18 @@ def in_frame_fraction(box, width: float, height: float) -> float:
     return iw * ih / max(bw * bh, 1e-9)
 
 
+def displacement_rate(track) -> tuple[float, float]:
+    """Mean displacement per frame of a short track of ``(frame index, x, y)`` points, from its first point to its
+    last (a target's observed velocity; a filter's velocity state lags behind it); ``(0, 0)`` with fewer than two
+    points."""
+    if len(track) < 2:
+        return 0.0, 0.0
+    f0, x0, y0 = track[0]
+    f1, x1, y1 = track[-1]
+    dt = max(float(f1 - f0), 1.0)
+    return (float(x1) - float(x0)) / dt, (float(y1) - float(y0)) / dt
+
+
 def clip_box(boxes, width: float, height: float) -> np.ndarray:
     """Clip boxes to the image ``[0, width) x [0, height)``; empty results get zero size."""
     b = as_boxes(boxes)

@@ -12,8 +12,9 @@ from pftrack.cues.histogram_cue import ColorCue
 from pftrack.cues.intensity import equalization_lut, is_gray, quantize_gray
 from pftrack.eval.metrics import lost_detection
 from pftrack.filtering.loss import LossDetector, absent_distribution, confidence, score_llr
-from pftrack.geometry import iou
+from pftrack.geometry import displacement_rate, iou
 from pftrack.synth import Scene, hidden_frames, leave_scene, vanish_scene, varied_scene
+from pftrack.synth.scenes import SceneSpec, Target
 
 
 # ------------------------------------------------------------------------------ pure functions
@@ -313,3 +314,60 @@ def test_relit_search_reacquires_a_target_whose_light_changed_while_hidden():
     got = {m: sum(_run(s, 200 + i, relit_search=m).reacquired for i, s in enumerate(specs)) for m in ("off", "max")}
     # measured 4 against 0 (scenes 200-215 with their own seed as run seed: 9 of 10 against 2)
     assert got["max"] >= 3 and got["max"] > got["off"], got
+
+
+def test_displacement_rate():
+    assert displacement_rate([]) == (0.0, 0.0)
+    assert displacement_rate([(3, 10.0, 5.0)]) == (0.0, 0.0)
+    assert displacement_rate([(3, 10.0, 5.0), (4, 18.0, 4.0), (7, 42.0, 1.0)]) == (8.0, -1.0)
+
+
+def _exit_scene(seed: int) -> SceneSpec:
+    """The target walks out through the right edge and stays out; its twin (same colours) stands in the left half."""
+    twin_x = 80.0 + 10.0 * seed
+    target = Target(path=((0, 230.0, 120.0), (30, 360.0, 120.0)), size=(26.0, 52.0))
+    twin = Target(path=((0, twin_x, 150.0),), size=(26.0, 52.0))
+    return SceneSpec(n_frames=70, seed=seed, targets=(target, twin), background="flat", kind="exit")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_target_that_left_the_view_is_not_replaced_by_its_twin_inside(seed):
+    """reenter_border: after the exit, the search may only re-acquire near the right edge (a strip that widens at
+    the target's speed, 4.3 px per frame here: it reaches the twin after about 45 frames of absence), so the twin
+    is not taken for the target (it is without the rule)."""
+    scene = Scene(_exit_scene(seed))
+    frames = scene.frames()
+    gt = scene.groundtruth()
+    runs = {}
+    for border in (0.0, 1.0):
+        t = pftrack.create_tracker("color-pf", seed=seed, reenter_border=border)
+        t.init(frames[0], tuple(gt[0]))
+        runs[border] = [t.update(f) for f in frames[1:]]
+    gone = [s for k, s in enumerate(runs[1.0], start=1) if k >= 30]  # the target is out of view from frame 27
+    assert all(s.lost for s in gone)
+    twin_box = scene.groundtruth(target=1)
+    taken = [iou(s.box, twin_box[k]) > 0.5 and not s.lost for k, s in enumerate(runs[0.0], start=1) if k >= 30]
+    assert any(taken)  # without the rule the twin is acquired
+
+
+def test_exit_band_is_the_strip_along_the_edge_left_through():
+    t = pftrack.create_tracker("color-pf", seed=0)
+    frame = np.zeros((240, 320, 3), np.uint8)
+    frame[100:140, 100:120] = (0, 0, 200)
+    t.init(frame, (100, 100, 20, 40))
+    hx, hy = t.size
+    t.frame_index = t._search_since = 20
+    t._lost_at = (16, np.array([310.0, 120.0]), np.zeros(2))
+    t._exit_velocity = (6.0, 0.0)  # predicted at 334: out through the right edge
+    band = t._exit_band()
+    np.testing.assert_allclose(band, [[320 - 3 * hx, 0.0, 3 * hx, 240.0]])
+    states = np.zeros((3, t.dim))
+    states[:, :2] = [[318.0, 50.0], [330.0, 200.0], [150.0, 120.0]]  # in the strip, beyond the edge, inside
+    np.testing.assert_array_equal(t._position_log_prior(states), [0.0, 0.0, -np.inf])
+    t.frame_index = 30  # ten frames later the target could have walked 60 px in
+    np.testing.assert_allclose(t._exit_band()[0, 2], 3 * hx + 60.0)
+    t._exit_velocity = (0.5, 0.0)  # slowly: predicted over half inside, not an exit
+    assert t._exit_band() is None
+    t.frame_index = 20
+    t._exit_velocity = (0.0, -40.0)  # up and out through the top
+    np.testing.assert_allclose(t._exit_band(), [[0.0, 0.0, 320.0, 3 * hy]])

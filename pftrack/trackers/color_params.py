@@ -144,6 +144,14 @@ class ColorModelParams(Params):
         "gain undone (von Kries): a target whose colours drifted with the light while it was hidden is "
         "re-acquired. 'replace' scores the relit frame only; 'max' the better of relit and raw (twice the "
         "search's cost). Tracking is unchanged (fusion-pf has its own relit_colour)."))
+    reenter_border: float = param(0.0, ge=0, le=100, doc=(
+        "A target that left the view comes back through the border: once the loss is declared with the "
+        "constant-velocity prediction from the last confident frame mostly (over half its box) outside the "
+        "frame, the search samples and accepts only candidates whose box lies within this many target widths "
+        "(heights, for the top and bottom edges) of that edge, plus the distance it could have walked in since at "
+        "the speed it left with, until the target is re-acquired. Without "
+        "it, a person of similar colours elsewhere in the view is acquired the moment the target has gone. "
+        "0: off. Not applied with entry regions (init_auto's regions say where targets enter)."))
     search_prior: float = param(0.0, ge=0, le=1, doc=(
         "Re-acquisition with a position prior: a candidate's ratio gets the log prior odds of its position, "
         "log((1 - e) A N(x; m, s^2) + e), m the constant-velocity prediction from the last confident frame and s "
@@ -184,6 +192,11 @@ class ColorPFParams(ColorModelParams):
         "See ColorModelParams.relit_search (off there). 'max' for color-pf, chosen on the tune split "
         "(docs/robustness.md): re-acquired 0.51 of the reappearances against 0.38 off, vanish AUC 0.494 against "
         "0.431, real sequences 0.503 against 0.501; 'replace' 0.51 with real 0.494. fusion-pf keeps it off."))
+    reenter_border: float = param(1.0, ge=0, le=100, doc=(
+        "See ColorModelParams.reenter_border (off there). 1 for color-pf and fusion-pf, chosen on the tune split "
+        "with the PETS pedestrians (docs/robustness.md): leave AUC 0.617 against 0.582 (color-pf) and 0.726 "
+        "against 0.666 (fusion-pf), lost recall 0.826 against 0.797 and 0.840 against 0.836; 0.5 and 2 within "
+        "0.04 of 1."))
     position_noise: float = param(0.2, ge=0, le=10, doc=(
         "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
         "(scale-invariant). The paper leaves it open."))

@@ -40,6 +40,7 @@ the particle-position variance falls below a threshold).
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -53,7 +54,7 @@ from ..filtering.loss import LossDetector
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..filtering.seir import seir
-from ..geometry import Box, box_to_ellipse, in_frame_fraction
+from ..geometry import Box, box_to_ellipse, displacement_rate, in_frame_fraction
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
@@ -112,6 +113,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self._confident_size = (0.0, 0.0)  # half-axes when the loss test was last confident
         self._confident_motion = None  # (frame index, position, velocity) when last confident
         self._lost_at = None  # the same, for the current loss (search prediction)
+        self._confident_track: deque = deque(maxlen=6)  # (frame index, x, y) of the last confident estimates
+        self._exit_velocity = (0.0, 0.0)  # their mean displacement per frame when the loss was declared
         self._seen_levels: np.ndarray | None = None  # channel levels while the target was seen (relit_search)
         self.regions: np.ndarray | None = None
         self._search_states: np.ndarray | None = None
@@ -214,6 +217,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self.loss.miss = 0
         self.loss.lost = False
         self._lost_at = None
+        self._confident_track.clear()  # a velocity is measured within one stretch of tracking
         self._search_states = None
         self._search_loglik = None
         self._last_search = None
@@ -384,6 +388,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
             self.cue.confirm(p.normalize_rate)
             self._confident_size = (float(est[HX]), float(est[HY]))
             self._confident_motion = (self.frame_index, est[[X, Y]].copy(), est[[VX, VY]].copy())
+            self._confident_track.append((self.frame_index, float(est[X]), float(est[Y])))
         if p.search and lost_now:
             # search at the size the target had when last seen clearly (a target that is leaving the
             # frame or being covered shrinks the estimate on its way out)
@@ -391,6 +396,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
             self.mode = "searching"
             self.loss.lost = True
             self._lost_at = self._confident_motion
+            self._exit_velocity = displacement_rate(self._confident_track)
             self._search_states = None
             self._search_since = self.frame_index
             self._last_search = None

@@ -21,7 +21,7 @@ from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, X, Y
 from ..filtering.loss import confidence
 from ..frames import as_bgr_uint8
-from ..geometry import Box, box_to_ellipse, ellipse_to_box, validate_box
+from ..geometry import Box, box_to_ellipse, ellipse_to_box, in_frame_fraction, validate_box
 from .base import TrackState
 
 _ELL_COLS = np.array([X, Y, HX, HY])
@@ -116,19 +116,19 @@ class SearchMixin:
             return p.search_particles
         fh, fw = self._shape
         hx, hy = self.size
-        area = fw * fh if self.regions is None else float(np.sum(self.regions[:, 2] * self.regions[:, 3]))
+        boxes = self._sample_boxes()
+        area = fw * fh if boxes is None else float(np.sum(boxes[:, 2] * boxes[:, 3]))
         # about four samples per target-sized cell: the likelihood peak is narrower than the target
         cells = int(math.ceil(area / max(hx * hy, 1.0)))
         return int(min(max(cells, p.n_particles), 10 * p.n_particles))
 
     def _uniform_positions(self, m: int) -> np.ndarray:
-        """``m`` stratified positions over the frame (or the entry regions)."""
+        """``m`` stratified positions over the frame (or the entry regions, or the border after an exit)."""
         rng = self.rng
-        if self.regions is None:
+        boxes = self._sample_boxes()
+        if boxes is None:
             fh, fw = self._shape
             boxes = np.array([[0.0, 0.0, fw, fh]])
-        else:
-            boxes = self.regions
         areas = boxes[:, 2] * boxes[:, 3]
         # split m among the regions in proportion to their area (largest remainder)
         share = m * areas / areas.sum()
@@ -160,7 +160,54 @@ class SearchMixin:
         last = self._last_search
         return replace(last, info={**last.info, "mode": "waiting"})
 
+    def _sample_boxes(self) -> np.ndarray | None:
+        """Where the search spreads its samples: the entry regions, the border band after an exit, or the whole
+        frame (``None``)."""
+        return self.regions if self.regions is not None else self._exit_band()
+
+    def _exit_band(self) -> np.ndarray | None:
+        """``reenter_border``: after the target left the view, the strip along the edge it left through where a
+        box within ``b`` target sizes of that edge has its centre, widened by the distance the target could have
+        walked in since the loss at the speed it left with, as ``[[x, y, w, h]]``; ``None`` when off, with
+        entry regions, or when the target was not seen leaving (its last confident position, moved on at the
+        mean displacement of its last confident frames to the frame the loss was declared, is over half
+        inside)."""
+        b = self.params.reenter_border
+        if b <= 0 or self.regions is not None or self._lost_at is None:
+            return None
+        hx, hy = self.size
+        fh, fw = self._shape
+        k = self._search_since - self._lost_at[0]
+        cx, cy = self._lost_at[1] + k * np.asarray(self._exit_velocity)
+        if in_frame_fraction((cx - hx, cy - hy, 2.0 * hx, 2.0 * hy), fw, fh) >= 0.5:
+            return None
+        # the edge it left through: the one its predicted centre is furthest beyond (in target sizes)
+        edge = int(np.argmin([cx / hx, (fw - cx) / hx, cy / hy, (fh - cy) / hy]))
+        # the centre of a box whose far side is b sizes in, plus the way the target could have walked in since
+        # the loss at the speed it left with
+        grow = math.hypot(*self._exit_velocity) * max(self.frame_index - self._search_since, 0)
+        bx = min(hx * (1.0 + 2.0 * b) + grow, float(fw))
+        by = min(hy * (1.0 + 2.0 * b) + grow, float(fh))
+        return np.array([[(0.0, 0.0, bx, fh), (fw - bx, 0.0, bx, fh), (0.0, 0.0, fw, by), (0.0, fh - by, fw, by)][edge]])
+
     def _position_log_prior(self, states: np.ndarray) -> np.ndarray | None:
+        """The log prior of each search sample's position: ``search_prior``'s term (below) and, after an exit
+        (``reenter_border``), ``-inf`` away from the edge the target left through; ``None`` when neither
+        applies."""
+        out = self._motion_log_prior(states)
+        band = self._exit_band()
+        if band is None:
+            return out
+        fh, fw = self._shape
+        x0, y0, w, h = band[0]
+        x, y = states[:, X], states[:, Y]
+        # the strip, open towards the outside of the frame (a sample's centre may lie beyond the edge)
+        near = (((x >= x0) | (x0 <= 0)) & ((x <= x0 + w) | (x0 + w >= fw))
+                & ((y >= y0) | (y0 <= 0)) & ((y <= y0 + h) | (y0 + h >= fh)))
+        gate = np.where(near, 0.0, -np.inf)
+        return gate if out is None else out + gate
+
+    def _motion_log_prior(self, states: np.ndarray) -> np.ndarray | None:
         """``search_prior``: log prior odds of each search sample's position, ``log((1 - e) A N(x; m, s^2 I) + e)``
         with ``m`` the constant-velocity prediction from the last confident frame, ``s`` the search's spread
         (growing with the time lost), ``A`` the frame's area and ``e = search_prior`` the chance that the target
