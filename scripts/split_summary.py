@@ -1,4 +1,4 @@
-"""Group a pftrack eval results.csv by kind of sequence: real, grey, grey+light, synthetic varied/vanish/leave/camouflage.
+"""Group a pftrack eval results.csv by kind of sequence: real, PETS pedestrians, grey, grey+light, synthetic scenes.
 
     python scripts/split_summary.py reports/split/report/results.csv
 
@@ -16,13 +16,15 @@ import sys
 from pathlib import Path
 from collections import defaultdict
 
-GROUPS = ["real", "gray", "graylight", "varied", "vanish", "leave", "camouflage", "teleport"]
+GROUPS = ["real", "pets", "gray", "graylight", "varied", "vanish", "leave", "camouflage", "teleport"]
 
 
 def group_of(sequence: str) -> str:
     for g in ("vanish", "leave", "varied", "camouflage", "teleport"):
         if sequence.startswith(g + "-"):
             return g
+    if sequence.startswith("pets"):
+        return "pets"  # single people of PETS 2009 S2.L1 (scripts/make_mot_sot.py)
     if sequence.endswith("-gray-light"):
         return "graylight"
     if sequence.endswith("-gray"):
