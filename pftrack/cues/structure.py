@@ -37,6 +37,7 @@ import numpy as np
 
 from .._numba import njit, numba_enabled
 from .reduced_region import Reduced, _box_roi, box_bounds, gray_region, reduce_region, reduction_factor
+from .structure_search import propose_centres
 
 __all__ = ["Reduced", "StructureCue", "box_bounds", "gray_region", "kernel_weights", "ncc_reduced", "ncc_scores",
            "patch_shape", "reduce_region", "reduction_factor", "sample_boxes", "sample_reduced", "standardize",
@@ -396,6 +397,14 @@ class StructureCue:
                         w, 1.0, dots)
         self._last = (key, (best, dots))
         return self._last[1]
+
+    def proposals(self, frame: np.ndarray, half_axes: tuple[float, float], k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Centres ``(m, 2)`` of the ``k`` best separated matches of the references (running mean and anchor)
+        over the whole frame for a box of ``half_axes``, and their NCC (:mod:`pftrack.cues.structure_search`)."""
+        if self._run is None:
+            return np.empty((0, 2)), np.empty(0)
+        refs = [self._run] + ([self._first] if self.anchor and self._first is not None else [])
+        return propose_centres(frame, np.stack([r.reshape(self.shape) for r in refs]), half_axes, k)
 
     def update(self, frame: np.ndarray, ellipse, rate: float, anchor_gate: float = -1.0) -> bool:
         """Blend the estimate's patch into the running reference: ``t <- (1 - rate) t + rate p``.

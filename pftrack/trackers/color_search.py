@@ -225,6 +225,10 @@ class SearchMixin:
         out = np.log((1.0 - eps) * dens + eps)
         return np.minimum(out, 0.0) if self.params.search_prior_cap else out
 
+    def _search_proposals(self, frame: np.ndarray) -> np.ndarray | None:
+        """Positions ``(m, 2)`` a cue proposes to the search (default: none; fusion-pf's structural cue)."""
+        return None
+
     def _search_rho(self, frame: np.ndarray, ell: np.ndarray):
         """The search samples' colour ``rho``, quantised features and masses (``_rho``).  With ``relit_search`` on
         colour input, once a channel's level is 5 % or more away from the last background refresh while the
@@ -278,6 +282,14 @@ class SearchMixin:
         scale = np.exp(self.rng.normal(0.0, 0.1, (n_new, 1)))
         states[n_keep:, HX] = hx * scale[:, 0]
         states[n_keep:, HY] = hy * scale[:, 0]
+        props = self._search_proposals(frame)
+        if props is not None and len(props):
+            # candidates proposed by a cue that sees the whole frame take the place of some uniform samples
+            m = min(len(props), n_new - n_pred)
+            i0 = n_keep + n_pred
+            states[i0:i0 + m, X:Y + 1] = props[:m]
+            states[i0:i0 + m, HX] = hx
+            states[i0:i0 + m, HY] = hy
         self._clip_states(states)
         ell = self._ellipses(states)
         rho, tot, feats = self._search_rho(frame, ell)

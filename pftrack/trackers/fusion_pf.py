@@ -126,6 +126,11 @@ class FusionPFParams(ColorPFParams):
         "prediction needs e^3 more evidence (see ColorModelParams.search_prior). Chosen on the tune split "
         "(docs/fusion-pf.md): re-acquired 48 / 72 against 44 / 72, real sequences unchanged; 0.01 and 0.001 gave "
         "the same, 0.2 less."))
+    search_proposals: int = param(0, ge=0, le=1000, doc=(
+        "While searching, the structural cue's references are matched over the whole frame (OpenCV "
+        "matchTemplate, zero-mean NCC, at the reference's resolution; book ch. 14) and its best this many "
+        "separated peaks join the search samples, scored with every cue like the others: a small or relit "
+        "target is found even when no uniform sample lands on it. 0: off."))
     search_prior_cap: bool = param(True, doc=(
         "Only penalise far candidates (color-pf: False). Uncapped, a candidate near the prediction needed less "
         "evidence and the real tune sequences lost 0.005 AUC."))
@@ -275,6 +280,12 @@ class FusionPF(ColorPF):
         # with fused cues the colour threshold alone would veto a target that only the structure sees: the
         # supporters are the samples whose fused likelihood is within a factor e^3 of the best one's
         return log_lik >= np.max(log_lik) - 3.0
+
+    def _search_proposals(self, frame):
+        k = self.params.search_proposals
+        if k <= 0 or not self._fused or not self.structure.ready:
+            return None
+        return self.structure.proposals(frame, self.size, k)[0]
 
     def _search_log_lik(self, frame, states, log_lik, feats):
         if not self._fused:
