@@ -145,9 +145,10 @@ class ColorModelParams(Params):
         "re-acquired. 'replace' scores the relit frame only; 'max' the better of relit and raw (twice the "
         "search's cost). Tracking is unchanged (fusion-pf has its own relit_colour)."))
     reenter_border: float = param(0.0, ge=0, le=100, doc=(
-        "A target that left the view comes back through the border: once the loss is declared with the "
-        "constant-velocity prediction from the last confident frame mostly (over half its box) outside the "
-        "frame, the search samples and accepts only candidates whose box lies within this many target widths "
+        "A target that left the view comes back through the border: once the loss is declared with the last "
+        "confident position, moved on at the mean displacement of the last confident frames, mostly (over half "
+        "its box) outside the frame, the search samples and accepts only candidates whose box lies within this "
+        "many target widths "
         "(heights, for the top and bottom edges) of that edge, plus the distance it could have walked in since at "
         "the speed it left with, until the target is re-acquired. Without "
         "it, a person of similar colours elsewhere in the view is acquired the moment the target has gone. "
