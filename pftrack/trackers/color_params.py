@@ -194,7 +194,9 @@ class ColorPFParams(ColorModelParams):
         "(docs/robustness.md): re-acquired 0.51 of the reappearances against 0.38 off, vanish AUC 0.494 against "
         "0.431, real sequences 0.503 against 0.501; 'replace' 0.51 with real 0.494. fusion-pf keeps it off."))
     reenter_border: float = param(1.0, ge=0, le=100, doc=(
-        "See ColorModelParams.reenter_border (off there). 1 for color-pf and fusion-pf, chosen on the tune split "
+        "After the target left the view, re-acquire it only within this many target sizes of the edge it left "
+        "through, a strip widening at the speed it left with; 0: off (ColorModelParams' default). 1 for color-pf "
+        "and fusion-pf, chosen on the tune split "
         "with the PETS pedestrians (docs/robustness.md): leave AUC 0.617 against 0.582 (color-pf) and 0.726 "
         "against 0.666 (fusion-pf), lost recall 0.826 against 0.797 and 0.840 against 0.836; 0.5 and 2 within "
         "0.04 of 1."))
