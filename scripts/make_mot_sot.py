@@ -8,21 +8,21 @@ half into small pedestrians among similar people, the case a colour tracker find
 absences: a person who walks out of the view has ``NaN`` ground truth from then on, as in TLD files.
 
 The selection is fixed in advance and never looks at a tracker's result: every identity with at least
-``--min-frames`` annotated frames in the range gives one sequence. It starts at the identity's first
-annotated frame in the range and runs to the range's end, so the frames after the person has left are
-absent frames. A gap inside a track (none in PETS S2.L1) is absent too. The frames are symbolic links to
-the source images; ``ATTRIBUTION.md`` keeps the source's credit.
+``--min-frames`` annotated frames in the range gives one sequence (pftrack.io.person_sequences). It starts
+at the identity's first annotated frame in the range and runs to the range's end, so the frames after the
+person has left are absent frames. The frames are symbolic links to the source images.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 
-import numpy as np
-
 from pftrack.io.datasets import read_sequence
+from pftrack.io.person_sequences import person_sequences, write_otb
+
+PETS_CREDIT = ("PETS 2009 benchmark data, University of Reading; ground truth: Anton Milan's annotations "
+               "(milanton.de), converted to MOTChallenge format.")
 
 
 def main() -> None:
@@ -37,34 +37,14 @@ def main() -> None:
         raise SystemExit(f"{args.mot}: no MOT ground truth")
     lo, hi = (int(v) for v in args.frames.split("-"))
     hi = min(hi, len(seq.frames))
-    gt = seq.mot_gt
-    out = Path(args.out)
     stem = Path(args.mot).name.split("_")[0]
+    credit = PETS_CREDIT if stem.startswith("pets") else ""
     made = []
-    for pid in np.unique(gt[:, 1]).astype(int):
-        rows = gt[(gt[:, 1] == pid) & (gt[:, 0] >= lo) & (gt[:, 0] <= hi)]
-        if len(rows) < args.min_frames:
-            continue
-        first = int(rows[:, 0].min())
-        name = f"{stem}_f{lo}-{hi}_id{pid}"
-        dest = out / name
-        (dest / "img").mkdir(parents=True, exist_ok=True)
-        boxes = {int(r[0]): r[2:6] for r in rows}
-        lines = []
-        for k, number in enumerate(range(first, hi + 1)):
-            link = dest / "img" / f"{k + 1:04d}{seq.frames[number - 1].suffix}"
-            if link.is_symlink() or link.exists():
-                link.unlink()
-            os.symlink(os.path.relpath(seq.frames[number - 1].resolve(), link.parent), link)
-            b = boxes.get(number)
-            lines.append("NaN,NaN,NaN,NaN" if b is None else ",".join(f"{v:.2f}" for v in b))
-        (dest / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
-        (dest / "ATTRIBUTION.md").write_text(
-            f"Person {pid} of {Path(args.mot).name}, frames {first}-{hi} (frame k of this folder is frame "
-            f"{first} + k - 1 of the source). PETS 2009 benchmark data, University of Reading; ground truth: "
-            "Anton Milan's annotations (milanton.de), converted to MOTChallenge format.\n", encoding="utf-8")
-        made.append(f"{name} ({len(lines)} frames, {len(lines) - len(rows)} absent)")
-    print(f"{len(made)} sequences -> {out}: " + ", ".join(made))
+    for person in person_sequences(seq.mot_gt, lo, hi, min_frames=args.min_frames):
+        name = f"{stem}_f{lo}-{hi}_id{person.identity}"
+        write_otb(seq, person, Path(args.out) / name, credit=credit)
+        made.append(f"{name} ({len(person.frames)} frames, {person.absent} absent)")
+    print(f"{len(made)} sequences -> {args.out}: " + ", ".join(made))
 
 
 if __name__ == "__main__":
