@@ -40,7 +40,7 @@ def map_peaks(score: np.ndarray, k: int, window: tuple[int, int]) -> tuple[np.nd
         i = int(np.argmax(s))
         r, c = divmod(i, s.shape[1])
         v = float(s[r, c])
-        if not np.isfinite(v) or v == -np.inf:
+        if not np.isfinite(v):  # every position suppressed
             break
         pos.append((r, c))
         val.append(v)

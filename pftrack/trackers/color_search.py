@@ -165,12 +165,12 @@ class SearchMixin:
         frame (``None``)."""
         return self.regions if self.regions is not None else self._exit_band()
 
-    def _exit_band(self) -> np.ndarray | None:
-        """``reenter_border``: after the target left the view, the strip along the edge it left through where a
-        box within ``b`` target sizes of that edge has its centre, widened by the distance the target could have
-        walked in since the loss at the speed it left with, as ``[[x, y, w, h]]``; ``None`` when off, with
-        entry regions, or when the target was not seen leaving (its last confident position, moved on at the
-        mean displacement of its last confident frames to the frame the loss was declared, is over half
+    def _exit_strip(self) -> tuple[int, float] | None:
+        """``reenter_border``: after the target left the view, the edge it left through (0 left, 1 right, 2 top,
+        3 bottom) and how far from it a candidate's centre may lie: a box within ``b`` target sizes of the edge,
+        plus the distance the target could have walked in since the loss at the speed it left with. ``None`` when
+        off, with entry regions, or when the target was not seen leaving (its last confident position, moved on
+        at the mean displacement of its last confident frames to the frame the loss was declared, is over half
         inside)."""
         b = self.params.reenter_border
         if b <= 0 or self.regions is not None or self._lost_at is None:
@@ -183,27 +183,32 @@ class SearchMixin:
             return None
         # the edge it left through: the one its predicted centre is furthest beyond (in target sizes)
         edge = int(np.argmin([cx / hx, (fw - cx) / hx, cy / hy, (fh - cy) / hy]))
-        # the centre of a box whose far side is b sizes in, plus the way the target could have walked in since
-        # the loss at the speed it left with
         grow = math.hypot(*self._exit_velocity) * max(self.frame_index - self._search_since, 0)
-        bx = min(hx * (1.0 + 2.0 * b) + grow, float(fw))
-        by = min(hy * (1.0 + 2.0 * b) + grow, float(fh))
-        return np.array([[(0.0, 0.0, bx, fh), (fw - bx, 0.0, bx, fh), (0.0, 0.0, fw, by), (0.0, fh - by, fw, by)][edge]])
+        half, extent = (hx, fw) if edge < 2 else (hy, fh)
+        return edge, min(half * (1.0 + 2.0 * b) + grow, float(extent))
+
+    def _exit_band(self) -> np.ndarray | None:
+        """The strip of :meth:`_exit_strip` as a rectangle ``[[x, y, w, h]]`` of sample centres (``None`` as
+        there)."""
+        strip = self._exit_strip()
+        if strip is None:
+            return None
+        edge, d = strip
+        fh, fw = self._shape
+        return np.array([[(0.0, 0.0, d, fh), (fw - d, 0.0, d, fh), (0.0, 0.0, fw, d), (0.0, fh - d, fw, d)][edge]])
 
     def _position_log_prior(self, states: np.ndarray) -> np.ndarray | None:
         """The log prior of each search sample's position: ``search_prior``'s term (below) and, after an exit
-        (``reenter_border``), ``-inf`` away from the edge the target left through; ``None`` when neither
-        applies."""
+        (``reenter_border``), ``-inf`` farther than the strip's depth from the edge the target left through (a
+        centre beyond the edge is in); ``None`` when neither applies."""
         out = self._motion_log_prior(states)
-        band = self._exit_band()
-        if band is None:
+        strip = self._exit_strip()
+        if strip is None:
             return out
+        edge, d = strip
         fh, fw = self._shape
-        x0, y0, w, h = band[0]
         x, y = states[:, X], states[:, Y]
-        # the strip, open towards the outside of the frame (a sample's centre may lie beyond the edge)
-        near = (((x >= x0) | (x0 <= 0)) & ((x <= x0 + w) | (x0 + w >= fw))
-                & ((y >= y0) | (y0 <= 0)) & ((y <= y0 + h) | (y0 + h >= fh)))
+        near = (x <= d, x >= fw - d, y <= d, y >= fh - d)[edge]
         gate = np.where(near, 0.0, -np.inf)
         return gate if out is None else out + gate
 
