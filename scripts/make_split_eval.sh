@@ -3,7 +3,7 @@
 #
 #   tune:   otb_crossing, otb_couple, vot_bag, otb_dragonbaby, davis16_dog, their grey and grey+light variants,
 #           the people of PETS 2009 S2.L1 frames 1-200 (one sequence each, scripts/make_mot_sot.py),
-#           synthetic vanish/leave/varied/camouflage/teleport scenes, seeds 0-7   (defaults were chosen here)
+#           synthetic vanish/leave/exit/varied/camouflage/teleport scenes, seeds 0-7   (defaults were chosen here)
 #   report: otb_motorrolling, tld_pedestrian2, davis16_blackswan, davis16_car-shadow, their grey and grey+light
 #           variants, the people of PETS frames 201-400, freshly seeded synthetic scenes, seeds 100-107
 #           (never tuned on)
@@ -26,13 +26,13 @@ for s in otb_motorrolling tld_pedestrian2 davis16_blackswan davis16_car-shadow; 
 [ -d "$WORK/report_variants" ] || "$PY" scripts/make_variants.py "$WORK"/report_real/* --out "$WORK/report_variants"
 [ -d "$WORK/tune_pets" ] || "$PY" scripts/make_mot_sot.py "$DATA/pets09_s2l1_dev" --frames 1-200 --out "$WORK/tune_pets"
 [ -d "$WORK/report_pets" ] || "$PY" scripts/make_mot_sot.py "$DATA/pets09_s2l1_dev" --frames 201-400 --out "$WORK/report_pets"
-for kind in vanish leave varied camouflage teleport; do
+for kind in vanish leave exit varied camouflage teleport; do
   [ -d "$WORK/tune_synth/$kind" ] || "$PFTRACK" synth "$kind" --seeds 0-7 --out "$WORK/tune_synth/$kind"
   [ -d "$WORK/report_synth/$kind" ] || "$PFTRACK" synth "$kind" --seeds 100-107 --out "$WORK/report_synth/$kind"
 done
 for split in tune report; do
   "$PFTRACK" eval "$WORK/${split}_real" "$WORK/${split}_variants" "$WORK/${split}_pets" \
-    "$WORK/${split}_synth"/{vanish,leave,varied,camouflage,teleport} \
+    "$WORK/${split}_synth"/{vanish,leave,exit,varied,camouflage,teleport} \
     --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet --report "$WORK/$split" \
     --title "pftrack: $split split" > "$WORK/$split.md"
   "$PY" scripts/split_summary.py "$WORK/$split/results.csv"

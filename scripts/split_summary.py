@@ -16,11 +16,11 @@ import sys
 from pathlib import Path
 from collections import defaultdict
 
-GROUPS = ["real", "pets", "gray", "graylight", "varied", "vanish", "leave", "camouflage", "teleport"]
+GROUPS = ["real", "pets", "gray", "graylight", "varied", "vanish", "leave", "exit", "camouflage", "teleport"]
 
 
 def group_of(sequence: str) -> str:
-    for g in ("vanish", "leave", "varied", "camouflage", "teleport"):
+    for g in ("vanish", "leave", "exit", "varied", "camouflage", "teleport"):
         if sequence.startswith(g + "-"):
             return g
     if sequence.startswith("pets"):

@@ -371,3 +371,52 @@ def test_exit_band_is_the_strip_along_the_edge_left_through():
     t.frame_index = 20
     t._exit_velocity = (0.0, -40.0)  # up and out through the top
     np.testing.assert_allclose(t._exit_band(), [[0.0, 0.0, 320.0, 3 * hy]])
+
+
+def _flow_scene(seed: int) -> SceneSpec:
+    """The target walks out through the right edge; its twin (same colours) follows at the same speed, 170 px
+    behind, and leaves too."""
+    target = Target(path=((0, 230.0, 120.0), (30, 360.0, 120.0)), size=(26.0, 52.0))
+    twin = Target(path=((0, 60.0 - 4.0 * seed, 150.0), (70, 363.0 - 4.0 * seed, 150.0)), size=(26.0, 52.0))
+    return SceneSpec(n_frames=70, seed=seed, targets=(target, twin), background="flat", kind="exit")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_look_alike_heading_out_through_the_exit_edge_is_not_acquired(seed):
+    """reenter_outward: the exit strip widens until it covers the twin walking the target's way (about 12 frames
+    after the exit); a candidate moving out through the edge the target left by is not the target coming back.
+    Without the rule the twin is acquired there."""
+    scene = Scene(_flow_scene(seed))
+    frames = scene.frames()
+    gt = scene.groundtruth()
+    twin_box = scene.groundtruth(target=1)
+    runs = {}
+    for k_out in (0.0, 0.5):
+        t = pftrack.create_tracker("color-pf", seed=seed, reenter_outward=k_out)
+        t.init(frames[0], tuple(gt[0]))
+        runs[k_out] = [t.update(f) for f in frames[1:]]
+    assert all(s.lost for k, s in enumerate(runs[0.5], start=1) if k >= 30)
+    assert any(s.info.get("vetoed") for s in runs[0.5])
+    taken = [iou(s.box, twin_box[k]) > 0.5 and not s.lost for k, s in enumerate(runs[0.0], start=1) if k >= 30]
+    assert any(taken)
+
+
+def test_patch_shift_recovers_a_shift_and_refuses_a_flat_patch():
+    import cv2
+
+    from pftrack.cues.template import patch_shift
+
+    rng = np.random.default_rng(4)
+    base = cv2.GaussianBlur((rng.random((60, 80)) * 255).astype(np.float32), (0, 0), 1.5)
+    prev = np.full((240, 320), 128.0, np.float32)
+    cur = prev.copy()
+    prev[100:160, 100:180] = base
+    cur[98:158, 105:185] = base  # moved by (+5, -2)
+    d = patch_shift(prev.astype(np.uint8), cur.astype(np.uint8), (115.0, 108.0, 50.0, 40.0), 8)
+    np.testing.assert_allclose(d, [5.0, -2.0], atol=0.3)
+    # the box half outside the frame: its in-frame part is matched
+    prev2, cur2 = np.roll(prev, 200, axis=1), np.roll(cur, 200, axis=1)
+    d = patch_shift(prev2.astype(np.uint8), cur2.astype(np.uint8), (300.0, 108.0, 50.0, 40.0), 8)
+    np.testing.assert_allclose(d, [5.0, -2.0], atol=0.3)
+    flat = np.full((240, 320), 90, np.uint8)
+    assert patch_shift(flat, flat, (115.0, 108.0, 50.0, 40.0), 8) is None

@@ -270,3 +270,28 @@ def batch_scores(patches: np.ndarray, template: np.ndarray, method: str = "ncc")
         den = r.sum() + p.sum(axis=1)
         return np.where(den > 0, 2 * v / np.where(den > 0, den, 1.0), 0.0)
     raise ValueError(f"batch scores are not available for {method!r}")
+
+
+def patch_shift(prev_gray: np.ndarray, gray: np.ndarray, box, radius: int, *, min_score: float = 0.5
+                ) -> np.ndarray | None:
+    """How far the content of ``box`` (x, y, w, h on ``gray``) moved since ``prev_gray``: ``(dx, dy)``, the
+    in-frame part of the box found again (normalised correlation, Eq. 5, sub-pixel peak) within ``radius`` px in
+    the previous frame.  ``None`` when the part is flat or smaller than 4 x 4 px, or the peak is below
+    ``min_score``."""
+    h, w = gray.shape[:2]
+    bx, by, bw, bh = (float(v) for v in box)
+    x0, y0 = max(int(round(bx)), 0), max(int(round(by)), 0)
+    x1, y1 = min(int(round(bx + bw)), w), min(int(round(by + bh)), h)
+    if x1 - x0 < 4 or y1 - y0 < 4:
+        return None
+    tmpl = gray[y0:y1, x0:x1].astype(np.float32)
+    if float(tmpl.std()) < 2.0:
+        return None
+    r = int(radius)
+    sx0, sy0 = max(x0 - r, 0), max(y0 - r, 0)
+    area = prev_gray[sy0:min(y1 + r, h), sx0:min(x1 + r, w)].astype(np.float32)
+    score = cv2.matchTemplate(area, tmpl, cv2.TM_CCOEFF_NORMED)
+    peak = best_offset(score)
+    if peak.value < min_score:
+        return None
+    return np.array([x0 - (sx0 + peak.l), y0 - (sy0 + peak.k)])

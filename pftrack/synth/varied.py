@@ -16,6 +16,8 @@ Scenes:
   15-35 frames and comes out on the other side (the lost flag and re-acquisition);
 * :func:`leave_scene` — the target walks out of the frame and comes back later
   (ground truth NaN while it is out);
+* :func:`exit_scene` — the target walks out in a flow of look-alikes heading the same way (the lost
+  flag after an exit, and what may be re-acquired);
 * :func:`camouflage_scene` — a flipped patch of the background moves over it: only its
   structure tells it apart (book ch. 2).
 
@@ -194,6 +196,56 @@ def camouflage_scene(seed: int = 0, n_frames: int = 150, **draw) -> SceneSpec:
                      illumination=(gain, gain, gain), kind="camouflage", nuisances=tuple(sorted(nz.items())))
 
 
+def exit_scene(seed: int = 0, n_frames: int = 140, **draw) -> SceneSpec:
+    """The target walks out through a side edge in a flow of look-alikes heading the same way.
+
+    1-3 walkers of similar hue follow it towards the same edge, 2-6 target widths behind, at 0.7-1.2 times its
+    speed and a drawn height; they leave too.  With probability 0.5 the target comes back through that edge
+    15-40 frames after it left and walks in; with probability 0.5 a look-alike walks in through that edge at a
+    drawn time instead (a walker entering is not the target coming back, and nothing in its looks says so).
+    Ground truth is NaN while the target is out (a pedestrian flow at an exit, as in PETS 2009 S2.L1)."""
+    rng = np.random.default_rng([seed, 77])
+    nz = draw_nuisances(rng, distractors=(3, 3), **draw)  # the look-alikes' colours: similar hue
+    w, h = nz["size"]
+    speed = float(np.clip(nz["speed"], 1.5, 4.0))
+    side = -1.0 if rng.random() < 0.5 else 1.0
+    edge_out = -w if side < 0 else W + w  # centre fully outside
+    x0 = float(np.clip(edge_out - side * speed * rng.uniform(25, 40), w, W - w))
+    y = float(rng.uniform(h * 0.6 + 5, H - h * 0.6 - 5))
+    t_exit = abs(edge_out - x0) / speed
+    comes_back = bool(rng.random() < 0.5)
+    if comes_back:
+        t_back = t_exit + int(rng.integers(15, 41))
+        x_in = edge_out - side * min(abs(edge_out - x0), 4.0 * w)
+        t_in = t_back + abs(edge_out - x_in) / speed
+        y_back = float(np.clip(y + rng.uniform(-20, 20), h * 0.6 + 5, H - h * 0.6 - 5))
+        path = ((0, x0, y), (t_exit, edge_out, y), (t_back, edge_out, y_back), (t_in, x_in, y_back),
+                (max(n_frames - 1, t_in + 1), x_in, y_back))
+    else:
+        path = ((0, x0, y), (t_exit, edge_out, y), (n_frames - 1, edge_out, y))
+    tgt = Target(path=path, size=(w, h), colors=nz["colors"], texture=nz["texture"])
+    hue_like = nz["distractor_colors"]
+    walkers = []
+    for k in range(int(rng.integers(1, 4))):
+        size = tuple(float(v) * rng.uniform(0.85, 1.15) for v in nz["size"])
+        v = speed * float(rng.uniform(0.7, 1.2))
+        xs = float(np.clip(x0 - side * w * rng.uniform(2.0, 6.0), -0.4 * w, W + 0.4 * w))
+        ys = float(rng.uniform(size[1] * 0.6 + 5, H - size[1] * 0.6 - 5))
+        walkers.append(Target(path=((0, xs, ys), (abs(edge_out - xs) / v, edge_out, ys),
+                                    (max(n_frames - 1, abs(edge_out - xs) / v + 1), edge_out, ys)),
+                              size=size, colors=hue_like[k], texture=nz["texture"]))
+    if not comes_back:  # a look-alike walks in through the exit edge
+        size = tuple(float(v) * rng.uniform(0.85, 1.15) for v in nz["size"])
+        t0 = float(t_exit + rng.integers(5, 40))
+        ys = float(rng.uniform(size[1] * 0.6 + 5, H - size[1] * 0.6 - 5))
+        x_in = edge_out - side * W * 0.5
+        walkers.append(Target(path=((0, edge_out, ys), (t0, edge_out, ys), (t0 + abs(edge_out - x_in) / speed, x_in, ys),
+                                    (max(n_frames - 1, t0 + abs(edge_out - x_in) / speed + 1), x_in, ys)),
+                              size=size, colors=hue_like[2], texture=nz["texture"]))
+    nz = {**nz, "speed": speed, "comes_back": comes_back, "distractor_colors": tuple(t.colors for t in walkers)}
+    return _spec(seed, n_frames, "exit", nz, [tgt, *walkers])
+
+
 def teleport_scene(seed: int = 0, n_frames: int = 110, **draw) -> SceneSpec:
     """Sudden motion and full occlusion (book ch. 6's switching claims; ch06.md §5.2).
 
@@ -238,6 +290,7 @@ VARIED_SCENES = {
     "varied": varied_scene,
     "vanish": vanish_scene,
     "leave": leave_scene,
+    "exit": exit_scene,
 }
 
 

@@ -17,6 +17,8 @@ import numpy as np
 
 from ..cues.color import reachable_roi
 from ..cues.intensity import channel_levels, gain_maps
+from ..cues.lk import gray_of
+from ..cues.template import patch_shift
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, X, Y
 from ..filtering.loss import confidence
@@ -212,6 +214,30 @@ class SearchMixin:
         gate = np.where(near, 0.0, -np.inf)
         return gate if out is None else out + gate
 
+    def _leaving(self, frame: np.ndarray, ell: np.ndarray) -> bool:
+        """``reenter_outward``: is a candidate of the exit strip (ellipse ``ell``) moving out through the edge the
+        target left by, faster than ``reenter_outward`` times the speed the target left with (at least 1 px per
+        frame)?  Its motion is its patch's shift since the previous frame (normalised correlation within three
+        exit speeds, at least 8 px).  When that is unknown (a flat patch, no match, a sliver at the edge), a
+        candidate where the object vetoed on the previous frame has moved to is that object; otherwise unknown
+        motion vetoes nothing."""
+        k = self.params.reenter_outward
+        prev = self._search_gray
+        strip = self._exit_strip() if k > 0 and prev is not None else None
+        if strip is None or self.frame_index - prev[0] != 1:
+            return False
+        speed = max(math.hypot(*self._exit_velocity), 1.0)
+        d = patch_shift(prev[1], gray_of(frame), ellipse_to_box(ell), max(8, math.ceil(3.0 * speed)))
+        last, self._vetoed = self._vetoed, None
+        if d is None:
+            return bool(last is not None and last[0] == self.frame_index - 1
+                        and np.all(np.abs(ell[:2] - last[1] - last[2]) <= np.asarray(self.size)))
+        outward = (-d[0], d[0], -d[1], d[1])[strip[0]]
+        if outward > k * speed:
+            self._vetoed = (self.frame_index, np.array(ell[:2], dtype=np.float64), d)
+            return True
+        return False
+
     def _motion_log_prior(self, states: np.ndarray) -> np.ndarray | None:
         """``search_prior``: log prior odds of each search sample's position, ``log((1 - e) A N(x; m, s^2 I) + e)``
         with ``m`` the constant-velocity prediction from the last confident frame, ``s`` the search's spread
@@ -332,6 +358,10 @@ class SearchMixin:
             mean = (ww[:, None] * pos).sum(axis=0)
             var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
             found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
+        vetoed = found and self._leaving(frame, ell[best])
+        if vetoed:
+            found = False
+            self.loss.lost = True  # acquire() ended the loss; the candidate is another object on its way out
         if not found and self.detector is not None and self.frame_index % p.detector_interval == 0:
             boxes, _ = self._detections(frame)
             if boxes.shape[0]:
@@ -348,7 +378,7 @@ class SearchMixin:
                     self.last_box = box
                     return self._state(box=box, score=float(d_rho[k]), lost=False,
                                        info={"mode": "acquired", "threshold": thr})
-        info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr}
+        info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr, "vetoed": vetoed}
         if found:
             self._start_tracking(states[cluster], loglik[cluster])
             est = self.estimate
