@@ -9,6 +9,7 @@ import numpy as np
 from pftrack.cues.intensity import is_gray
 from pftrack.io.datasets import read_sequence
 from pftrack.synth import Scene, export_otb, hidden_frames, leave_scene, vanish_scene, varied_scene
+from pftrack.synth.varied import exit_scene
 
 
 def test_nuisances_vary_with_the_seed():
@@ -35,6 +36,34 @@ def test_leave_scene_target_leaves_the_frame():
     scene = Scene(spec)
     present = [scene.render(t)[1].present[0] for t in range(spec.n_frames)]
     assert present[0] and present[-1] and not all(present)
+
+
+def test_exit_scene_look_alikes_head_for_the_edge_the_target_leaves_by():
+    backs = set()
+    for seed in range(8):
+        spec = exit_scene(seed)
+        assert spec == exit_scene(seed)
+        nz = dict(spec.nuisances)
+        backs.add(nz["comes_back"])
+        scene = Scene(spec)
+        truths = [scene.render(t)[1] for t in range(spec.n_frames)]
+        present = np.array([tr.present[0] for tr in truths])
+        gone = int(np.argmin(present))  # the first frame out
+        assert present[:gone].all() and gone > 5
+        assert present[-1] == nz["comes_back"]
+        tgt = spec.targets[0]
+        side = np.sign(tgt.center(gone)[0] - tgt.center(0)[0])
+        followers = spec.targets[1:1 + len(spec.targets) - 1 - (not nz["comes_back"])]
+        assert 1 <= len(followers) <= 3
+        for f in followers:  # behind the target at the start, walking its way, and out by the end
+            assert side * (f.center(0)[0] - tgt.center(0)[0]) < 0
+            assert side * (f.center(spec.n_frames - 1)[0] - f.center(0)[0]) > 0
+        if not nz["comes_back"]:  # a look-alike walks in through the exit edge after the target left
+            walker = spec.targets[-1]
+            t_in = next(t for t in range(spec.n_frames) if truths[t].present[len(spec.targets) - 1])
+            assert t_in > gone
+            assert side * (walker.center(spec.n_frames - 1)[0] - walker.center(t_in)[0]) < 0
+    assert backs == {True, False}
 
 
 def test_export_writes_hidden_frames_and_grey_frames(tmp_path):
