@@ -155,10 +155,10 @@ class ColorModelParams(Params):
         "0: off. Not applied with entry regions (init_auto's regions say where targets enter)."))
     reenter_outward: float = param(0.0, ge=0, le=100, doc=(
         "With reenter_border: a target coming back through the edge it left by moves into the view, not out. A "
-        "candidate of the exit strip whose own motion since the previous frame (the median pyramidal LK "
-        "displacement of a grid of its points, forward-backward checked) carries it towards that edge faster than "
-        "this many times the speed the target left with (at least 1 px/frame) is another object on its way out, "
-        "and is not acquired. 0: off."))
+        "candidate of the exit strip whose own motion since the previous frame (its patch found again in the "
+        "previous frame by normalised correlation) carries it towards that edge faster than this many times the "
+        "speed the target left with (at least 1 px/frame) is another object on its way out, and is not acquired. "
+        "0: off."))
     search_prior: float = param(0.0, ge=0, le=1, doc=(
         "Re-acquisition with a position prior: a candidate's ratio gets the log prior odds of its position, "
         "log((1 - e) A N(x; m, s^2) + e), m the constant-velocity prediction from the last confident frame and s "
