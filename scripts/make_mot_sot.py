@@ -10,13 +10,17 @@ absences: a person who walks out of the view has ``NaN`` ground truth from then 
 The selection is fixed in advance and never looks at a tracker's result: every identity with at least
 ``--min-frames`` annotated frames in the range gives one sequence (pftrack.io.person_sequences). It starts
 at the identity's first annotated frame in the range and runs to the range's end, so the frames after the
-person has left are absent frames. The frames are symbolic links to the source images.
+person has left are absent frames, except those on which the person is still (partly) in view: a PETS track
+ends as the walker reaches the border, and those frames are listed as ``unannotated`` in ``meta.json``
+(neither absent nor scored). The frames are symbolic links to the source images.
 """
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+
+import cv2
 
 from pftrack.io.datasets import read_sequence
 from pftrack.io.person_sequences import person_sequences, write_otb
@@ -40,10 +44,15 @@ def main() -> None:
     stem = Path(args.mot).name.split("_")[0]
     credit = PETS_CREDIT if stem.startswith("pets") else ""
     made = []
-    for person in person_sequences(seq.mot_gt, lo, hi, min_frames=args.min_frames):
+    first = cv2.imread(str(seq.frames[0]))
+    if first is None:
+        raise SystemExit(f"{seq.frames[0]}: unreadable frame")
+    size = (first.shape[1], first.shape[0])
+    for person in person_sequences(seq.mot_gt, lo, hi, min_frames=args.min_frames, frame_size=size):
         name = f"{stem}_f{lo}-{hi}_id{person.identity}"
         write_otb(seq, person, Path(args.out) / name, credit=credit)
-        made.append(f"{name} ({len(person.frames)} frames, {person.absent} absent)")
+        unannotated = int(person.in_view.sum()) if person.in_view is not None else 0
+        made.append(f"{name} ({len(person.frames)} frames, {person.absent} absent, {unannotated} in view unannotated)")
     print(f"{len(made)} sequences -> {args.out}: " + ", ".join(made))
 
 

@@ -237,6 +237,14 @@ def read_otb(path: str | Path) -> Sequence:
     for number in hidden:
         if 1 <= number <= len(files):
             absent[number - 1] = True
+    # frames without a box on which the target is still in view (a MOT track cut short at the border): neither
+    # absent nor scored
+    unannotated = meta.get("unannotated", [])
+    if not isinstance(unannotated, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in unannotated):
+        raise FormatError(f"{path / 'meta.json'}: 'unannotated' must be a list of frame numbers (from 1)")
+    for number in unannotated:
+        if 1 <= number <= len(files):
+            absent[number - 1] = False
     return Sequence(path.name, "otb", path, files, groundtruth=_pad_gt(boxes, len(files)), attributes=attributes,
                     absent=absent, meta=meta)
 

@@ -5,17 +5,30 @@ ends). Cut into one single-object sequence per identity, running from the person
 to the end of a frame range, it measures a single-object tracker on small people among similar ones, and
 its lost flag on real absences: the frames after the person has left have no box (``NaN``), as in TLD
 files. ``scripts/make_mot_sot.py`` writes them in the OTB layout for ``pftrack eval``.
+
+A MOT track may end before the person has left the image: PETS 2009 S2.L1's annotation stops as a
+walker reaches the border, with the whole box still inside. The frames in between show the person but have
+no box. Given the frame size, :func:`person_sequences` marks them ``in_view``: the frames without a box on
+which the last annotated box, moved on at the mean velocity of the last annotated frames (or the next run's
+first box, moved back), would still have at least ``HIDDEN_BELOW`` (10 %) of its area inside the image, as
+the synthetic scenes count a target as present. :func:`write_otb` lists them as ``unannotated`` in
+``meta.json``: they count neither as absent nor as present for the lost flag.
 """
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..geometry import in_frame_fraction
 from .datasets import Sequence
+
+IN_VIEW_FRACTION = 0.1  # the synthetic scenes' HIDDEN_BELOW: a target with less of its area in view is absent
+VELOCITY_FRAMES = 5  # the velocity of an extrapolated box: mean displacement over this many annotated frames
 
 __all__ = ["PersonSequence", "person_sequences", "write_otb"]
 
@@ -28,15 +41,51 @@ class PersonSequence:
     identity: int
     frames: np.ndarray
     boxes: np.ndarray
+    in_view: np.ndarray | None = None  # (len(frames),) bool: no box, but the person is still (partly) in the image
 
     @property
     def absent(self) -> int:
-        return int(np.count_nonzero(~np.isfinite(self.boxes).all(axis=1)))
+        """Frames without a box on which the person is out of view (all frames without a box when ``in_view`` is
+        unknown)."""
+        gone = ~np.isfinite(self.boxes).all(axis=1)
+        if self.in_view is not None:
+            gone &= ~self.in_view
+        return int(np.count_nonzero(gone))
 
 
-def person_sequences(mot_gt: np.ndarray, first: int, last: int, *, min_frames: int = 30) -> list[PersonSequence]:
+def in_view_frames(boxes: np.ndarray, width: float, height: float, *, fraction: float = IN_VIEW_FRACTION,
+                   velocity_frames: int = VELOCITY_FRAMES) -> np.ndarray:
+    """Bool per row of ``boxes`` (``NaN`` rows: no annotation): a row without a box on which the box of the
+    annotated run before it, moved on at that run's mean velocity over its last ``velocity_frames`` frames, or
+    the box of the run after it, moved back at that run's first velocity, keeps ``fraction`` of its area or more
+    inside the ``width`` x ``height`` image."""
+    boxes = np.asarray(boxes, dtype=np.float64)
+    ok = np.isfinite(boxes).all(axis=1)
+    out = np.zeros(len(boxes), dtype=bool)
+    idx = np.flatnonzero(ok)
+    if idx.size == 0:
+        return out
+    for t in np.flatnonzero(~ok):
+        for run_end, step in ((idx[idx < t], -1), (idx[idx > t], 1)):
+            if run_end.size == 0:
+                continue
+            k = int(run_end[-1] if step < 0 else run_end[0])
+            near = idx[(idx <= k) & (idx >= k - velocity_frames)] if step < 0 else \
+                idx[(idx >= k) & (idx <= k + velocity_frames)]
+            v = (boxes[near[-1], :2] - boxes[near[0], :2]) / max(near[-1] - near[0], 1) if near.size > 1 else 0.0
+            box = boxes[k].copy()
+            box[:2] += v * (t - k)
+            if in_frame_fraction(box, width, height) >= fraction:
+                out[t] = True
+                break
+    return out
+
+
+def person_sequences(mot_gt: np.ndarray, first: int, last: int, *, min_frames: int = 30,
+                     frame_size: tuple[int, int] | None = None) -> list[PersonSequence]:
     """Every identity with at least ``min_frames`` annotated frames in ``first..last`` (1-based, inclusive),
-    from its first annotated frame there to ``last``, in identity order."""
+    from its first annotated frame there to ``last``, in identity order.  With ``frame_size`` ``(width,
+    height)``, the frames without a box on which the person is still in view are marked (:func:`in_view_frames`)."""
     gt = np.asarray(mot_gt, dtype=np.float64)
     if last < first:
         raise ValueError(f"empty frame range {first}-{last}")
@@ -49,13 +98,16 @@ def person_sequences(mot_gt: np.ndarray, first: int, last: int, *, min_frames: i
         frames = np.arange(start, last + 1)
         boxes = np.full((frames.size, 4), np.nan)
         boxes[rows[:, 0].astype(int) - start] = rows[:, 2:6]
-        out.append(PersonSequence(int(pid), frames, boxes))
+        in_view = None if frame_size is None else in_view_frames(boxes, *frame_size)
+        out.append(PersonSequence(int(pid), frames, boxes, in_view))
     return out
 
 
 def write_otb(seq: Sequence, person: PersonSequence, dest: str | Path, *, credit: str = "") -> Path:
     """Write ``person`` of ``seq`` as an OTB folder: ``img/0001...`` as relative symbolic links to the source
-    frames, ``groundtruth_rect.txt`` (``NaN,NaN,NaN,NaN`` for absent frames), and ``ATTRIBUTION.md``."""
+    frames, ``groundtruth_rect.txt`` (``NaN,NaN,NaN,NaN`` for frames without a box), ``meta.json`` listing the
+    ``unannotated`` frames (numbers from 1: no box, but the person is in view) when there are any, and
+    ``ATTRIBUTION.md``."""
     dest = Path(dest)
     (dest / "img").mkdir(parents=True, exist_ok=True)
     for k, number in enumerate(person.frames):
@@ -66,6 +118,12 @@ def write_otb(seq: Sequence, person: PersonSequence, dest: str | Path, *, credit
         os.symlink(os.path.relpath(src, link.parent), link)
     lines = ["NaN,NaN,NaN,NaN" if not np.isfinite(b).all() else ",".join(f"{v:.2f}" for v in b) for b in person.boxes]
     (dest / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    meta = dest / "meta.json"
+    if person.in_view is not None and person.in_view.any():
+        unannotated = [int(k) + 1 for k in np.flatnonzero(person.in_view)]
+        meta.write_text(json.dumps({"kind": "mot-person", "unannotated": unannotated}) + "\n", encoding="utf-8")
+    elif meta.exists():
+        meta.unlink()
     (dest / "ATTRIBUTION.md").write_text(
         f"Identity {person.identity} of {seq.name}, source frames {int(person.frames[0])}-{int(person.frames[-1])} "
         f"(frame k of this folder is source frame {int(person.frames[0])} + k - 1). {credit}\n".rstrip() + "\n",
