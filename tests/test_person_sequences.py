@@ -17,6 +17,19 @@ GT = np.array([
 ], dtype=float)
 
 
+def _mot_folder(tmp_path, gt: np.ndarray, n: int):
+    """A MOTChallenge folder of ``n`` 48 x 40 frames with the annotation ``gt``."""
+    src = tmp_path / "mot"
+    (src / "img1").mkdir(parents=True)
+    (src / "gt").mkdir()
+    for k in range(1, n + 1):
+        cv2.imwrite(str(src / "img1" / f"{k:06d}.jpg"), np.full((40, 48, 3), 20 * k, np.uint8))
+    np.savetxt(src / "gt" / "gt.txt", gt, delimiter=",", fmt="%g")
+    (src / "seqinfo.ini").write_text(f"[Sequence]\nname=mot\nimDir=img1\nframeRate=7\nseqLength={n}\n"
+                                     "imWidth=48\nimHeight=40\nimExt=.jpg\n", encoding="utf-8")
+    return src
+
+
 def test_person_sequences_run_from_the_first_frame_to_the_range_end_with_absences():
     people = person_sequences(GT, 1, 6, min_frames=2)
     assert [p.identity for p in people] == [1, 2]  # person 3 has one frame
@@ -33,15 +46,7 @@ def test_person_sequences_run_from_the_first_frame_to_the_range_end_with_absence
 
 
 def test_write_otb_gives_a_sequence_pftrack_reads(tmp_path):
-    src = tmp_path / "mot"
-    (src / "img1").mkdir(parents=True)
-    (src / "gt").mkdir()
-    for k in range(1, 7):
-        cv2.imwrite(str(src / "img1" / f"{k:06d}.jpg"), np.full((40, 48, 3), 20 * k, np.uint8))
-    np.savetxt(src / "gt" / "gt.txt", GT, delimiter=",", fmt="%g")
-    (src / "seqinfo.ini").write_text("[Sequence]\nname=mot\nimDir=img1\nframeRate=7\nseqLength=6\n"
-                                     "imWidth=48\nimHeight=40\nimExt=.jpg\n", encoding="utf-8")
-    seq = read_sequence(src)
+    seq = read_sequence(_mot_folder(tmp_path, GT, 6))
     person = person_sequences(seq.mot_gt, 1, 6, min_frames=2)[1]
     out = write_otb(seq, person, tmp_path / "otb" / "id2", credit="test data")
     sot = read_sequence(out)
@@ -75,16 +80,10 @@ def test_frames_without_a_box_while_the_person_is_still_in_view():
 
 
 def test_in_view_frames_are_written_as_unannotated_and_not_scored_as_absent(tmp_path):
-    src = tmp_path / "mot"
-    (src / "img1").mkdir(parents=True)
-    (src / "gt").mkdir()
-    for k in range(1, 9):
-        cv2.imwrite(str(src / "img1" / f"{k:06d}.jpg"), np.full((40, 48, 3), 20 * k, np.uint8))
-    # one walker leaving through the right edge at 4 px per frame, annotated until its box touches x = 44
+    # one walker leaving through the right edge at 4 px per frame, annotated until its box's right side is at x = 40
     gt = np.array([[k, 5, 24 + 4 * (k - 1), 10, 8, 10, 1] for k in range(1, 4)] +
                   [[k, 6, 5, 20, 6, 8, 1] for k in range(1, 9)], dtype=float)
-    np.savetxt(src / "gt" / "gt.txt", gt, delimiter=",", fmt="%g")
-    seq = read_sequence(src)
+    seq = read_sequence(_mot_folder(tmp_path, gt, 8))
     person = person_sequences(seq.mot_gt, 1, 8, min_frames=2, frame_size=(48, 40))[0]
     assert person.identity == 5 and person.in_view.tolist() == [False] * 3 + [True] * 3 + [False] * 2
     assert person.absent == 2

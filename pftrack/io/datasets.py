@@ -231,22 +231,22 @@ def read_otb(path: str | Path) -> Sequence:
     m = min(len(files), boxes.shape[0])
     absent[:m] = ~np.all(np.isfinite(boxes[:m]), axis=1)  # NaN rows in the file: out of view (TLD convention)
     meta = read_meta(path)
-    hidden = meta.get("hidden", [])
-    if not isinstance(hidden, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in hidden):
-        raise FormatError(f"{path / 'meta.json'}: 'hidden' must be a list of frame numbers (from 1)")
-    for number in hidden:
-        if 1 <= number <= len(files):
-            absent[number - 1] = True
-    # frames without a box on which the target is still in view (a MOT track cut short at the border): neither
-    # absent nor scored
-    unannotated = meta.get("unannotated", [])
-    if not isinstance(unannotated, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in unannotated):
-        raise FormatError(f"{path / 'meta.json'}: 'unannotated' must be a list of frame numbers (from 1)")
-    for number in unannotated:
-        if 1 <= number <= len(files):
-            absent[number - 1] = False
+    # meta.json: "hidden" frames (fully occluded) are absent; "unannotated" frames have no box but show the target
+    # (a MOT track cut short at the border), so they are neither absent nor scored
+    for key, value in (("hidden", True), ("unannotated", False)):
+        for number in _frame_numbers(meta, key, path):
+            if 1 <= number <= len(files):
+                absent[number - 1] = value
     return Sequence(path.name, "otb", path, files, groundtruth=_pad_gt(boxes, len(files)), attributes=attributes,
                     absent=absent, meta=meta)
+
+
+def _frame_numbers(meta: dict, key: str, path: Path) -> list[int]:
+    """``meta[key]``, a list of frame numbers from 1 (empty when missing)."""
+    numbers = meta.get(key, [])
+    if not isinstance(numbers, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in numbers):
+        raise FormatError(f"{path / 'meta.json'}: '{key}' must be a list of frame numbers (from 1)")
+    return numbers
 
 
 def read_meta(path: Path) -> dict:
