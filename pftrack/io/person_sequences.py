@@ -66,10 +66,10 @@ def in_view_frames(boxes: np.ndarray, width: float, height: float, *, fraction: 
     if idx.size == 0:
         return out
     for t in np.flatnonzero(~ok):
-        for run_end, step in ((idx[idx < t], -1), (idx[idx > t], 1)):
-            if run_end.size == 0:
+        for annotated, step in ((idx[idx < t], -1), (idx[idx > t], 1)):  # the run before t, the run after it
+            if annotated.size == 0:
                 continue
-            k = int(run_end[-1] if step < 0 else run_end[0])
+            k = int(annotated[-1] if step < 0 else annotated[0])  # that run's box nearest to t
             near = idx[(idx <= k) & (idx >= k - velocity_frames)] if step < 0 else \
                 idx[(idx >= k) & (idx <= k + velocity_frames)]
             v = (boxes[near[-1], :2] - boxes[near[0], :2]) / max(near[-1] - near[0], 1) if near.size > 1 else 0.0
