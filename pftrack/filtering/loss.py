@@ -300,8 +300,10 @@ class FusedLoss:
     tracker's Eqs. 13-14 threshold.
     """
 
-    def __init__(self, n_cues: int, *, cue_clip: float = 10.0, cue_floor: float | None = None, **kwargs):
+    def __init__(self, n_cues: int, *, cue_clip: float = 10.0, cue_floor: float | None = None,
+                 acquire_z: float = 0.0, **kwargs):
         self.members = [LossDetector(**kwargs) for _ in range(int(n_cues))]
+        self.acquire_z = float(acquire_z)
         self.cue_clip = float(cue_clip)
         self.cue_floor = float(cue_clip if cue_floor is None else cue_floor)
         self.lost_frames = self.members[0].lost_frames
@@ -362,23 +364,30 @@ class FusedLoss:
         self.lost = self.miss >= self.lost_frames
         return self.lost, confidence(self.llr)
 
-    def confident(self, s) -> bool:
+    def confident(self, s, *, veto_z: float = 0.0) -> bool:
         """The fused ratio is clearly the target's, and no cue vetoes it: a cue vetoes when its score is far
-        below its own history (``learn_z`` spreads) *and* its own ratio says background."""
+        below its own history (``learn_z`` spreads) *and* its own ratio says background, or (``veto_z`` > 0)
+        when it is more than ``veto_z`` spreads below its history, whatever its ratio."""
         s = self._vector(s)
         if not any(math.isfinite(v) for v in s) or self.llr <= self.reacquire_margin:
             return False
-        return not any((v - m.mu_t) / m.sd_t <= -m.learn_z and m.evaluate(v) < 0.0
-                       for m, v in zip(self.members, s) if math.isfinite(v))
+        for m, v in zip(self.members, s):
+            if math.isfinite(v):
+                z = (v - m.mu_t) / m.sd_t
+                if (z <= -m.learn_z and m.evaluate(v) < 0.0) or (veto_z > 0.0 and z <= -veto_z):
+                    return False
+        return True
 
     def acquire(self, s, log_prior: float = 0.0) -> bool:
         """While lost: does a candidate with score vector ``s`` end the loss?  (``log_prior`` as in
-        :meth:`LossDetector.acquire`.)"""
+        :meth:`LossDetector.acquire`.)  With ``acquire_z`` > 0 every cue's score must also be within
+        ``acquire_z`` spreads of its own history: a candidate the fused ratio favours because one cue is far
+        above the background, while another sees it far below the target as last seen, is not taken."""
         s = self._vector(s)
         for m in self.members:
             m.unseen += 1
         self.llr = self.evaluate(s) + log_prior
-        if self.confident(s):
+        if self.confident(s, veto_z=self.acquire_z):
             self.lost = False
             self.miss = 0
             return True

@@ -126,6 +126,12 @@ class ColorModelParams(Params):
     search_keep: float = param(0.1, ge=0, lt=1, doc=(
         "Fraction of search samples drawn from the previous search posterior; the rest are spread "
         "uniformly (stratified) over the frame or the entry regions."))
+    search_refine: float = param(0.0, ge=0, le=4, doc=(
+        "A second layer of search samples on the same frame, this fraction of the first layer's count: drawn "
+        "from the first layer's posterior (likelihood times the position prior) and moved by a quarter of the "
+        "target's half-axes, then scored like the others (one layer of annealing). The likelihood peak is "
+        "narrower than the target, so a uniform layer seldom lands on it; the refined layer finds its top and "
+        "the supporters the acquisition test counts. 0: off."))
     search_predict: float = param(0.5, ge=0, le=1, doc=(
         "Fraction of the new search samples drawn around the position predicted from the target's last "
         "confident velocity (constant-velocity extrapolation, spread growing with the time lost); the rest "

@@ -281,6 +281,33 @@ class SearchMixin:
                 return rho, tot, relit
         return self._rho(frame, ell)
 
+    def _refine_layer(self, frame, states, ell, rho, tot, loglik, prior, roi):
+        """``search_refine``: a second layer of samples drawn from the first layer's posterior, moved by a quarter
+        of the half-axes and scored the same way (sizes kept: drawn afresh around the searched size instead, the
+        tune split lost 0.012 real AUC and re-acquired 0.71 against 0.76); both layers are returned together
+        (the region of the colour features then spans both)."""
+        p = self.params
+        rank = loglik if prior is None else loglik + prior
+        rank = np.where(tot > 0, rank, -np.inf)
+        if not np.isfinite(rank).any():
+            return states, ell, rho, tot, loglik, prior, roi
+        m = int(round(p.search_refine * len(states)))
+        w = np.exp(rank - rank.max())
+        idx = self.rng.choice(len(w), size=m, p=w / w.sum())
+        extra = states[idx].copy()
+        extra[:, X:Y + 1] += self.rng.normal(0.0, 0.25, (m, 2)) * extra[:, HX:HY + 1]
+        self._clip_states(extra)
+        e_ell = self._ellipses(extra)
+        e_rho, e_tot, e_feats = self._search_rho(frame, e_ell)
+        e_ll = self._search_log_lik(frame, extra, self._log_lik(e_rho, e_tot), e_feats)
+        e_ll = np.where(np.isfinite(e_ll), e_ll, -np.inf)
+        e_prior = self._position_log_prior(extra)
+        both = None if prior is None else np.concatenate([prior, e_prior])
+        r0, r1 = roi, e_feats.roi
+        box = (min(r0[0], r1[0]), min(r0[1], r1[1]), max(r0[2], r1[2]), max(r0[3], r1[3]))
+        return (np.concatenate([states, extra]), np.concatenate([ell, e_ell]), np.concatenate([rho, e_rho]),
+                np.concatenate([tot, e_tot]), np.concatenate([loglik, e_ll]), both, box)
+
     def _search(self, frame: np.ndarray) -> TrackState:
         """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
         p = self.params
@@ -327,10 +354,14 @@ class SearchMixin:
         loglik = self._search_log_lik(frame, states, self._log_lik(rho, tot), feats)
         if not np.isfinite(loglik).any():
             loglik = np.zeros_like(loglik)
+        prior = self._position_log_prior(states)
+        roi = feats.roi
+        if p.search_refine > 0:
+            states, ell, rho, tot, loglik, prior, roi = self._refine_layer(frame, states, ell, rho, tot, loglik,
+                                                                             prior, roi)
         self._search_states = states
         self._search_loglik = loglik
         thr = self._threshold()
-        prior = self._position_log_prior(states)
         rank = loglik if prior is None else loglik + prior
         best = int(np.argmax(np.where(tot > 0, rank, -np.inf))) if np.any(tot > 0) else 0
         lp = 0.0 if prior is None else float(prior[best])
@@ -338,7 +369,7 @@ class SearchMixin:
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
         found = False
         conf = None
-        s_best = self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1], feats.roi)[0]
+        s_best = self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1], roi)[0]
         if p.search_method == "appearance":
             cluster = near & self._appearance_pass(rho, thr, loglik) & (tot > 0)
             if p.loss_test == "likelihood":

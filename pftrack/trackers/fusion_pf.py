@@ -108,6 +108,17 @@ class FusionPFParams(ColorPFParams):
     loss_cue_floor: float = param(2.0, gt=0, le=30, doc=(
         "Lower clip of each cue's log-likelihood ratio in the fused loss test: the most odds one cue alone can "
         "give against the target (a single cue also drops for reasons other than absence)."))
+    acquire_z: float = param(4.0, ge=0, le=50, doc=(
+        "Re-acquisition with the fused loss test: a cue also vetoes a candidate whose score is more than "
+        "acquire_z spreads below that cue's target history, even when its own ratio favours the target (a "
+        "look-alike whose shape matches and whose colours are far off, but still far above this scene's "
+        "background). 0 (off): a cue vetoes only when it is history_z spreads below its history and its ratio "
+        "says background. Chosen on the tune split (docs/fusion-pf.md): vanish AUC 0.561 against 0.529, every "
+        "other group within 0.001; 2 and 3 cost the exit scenes or lost recall."))
+    search_refine: float = param(0.5, ge=0, le=4, doc=(
+        "color-pf's refined search layer (ColorModelParams.search_refine; color-pf: 0, off). Chosen on the tune "
+        "split (docs/fusion-pf.md): with acquire_z = 4, real AUC 0.595 against 0.582, PETS 0.374 against 0.364, "
+        "teleport 0.645 against 0.601, false-lost 0.038 against 0.047; 0.25 and 1 gave less."))
     relit_colour: bool = param(True, doc=(
         "While searching, when the colour cue would veto the best candidate that the structural cue alone could "
         "acquire, its colour score is retaken after undoing a global per-channel gain (von Kries: the frame's "
@@ -150,7 +161,9 @@ class FusionPF(ColorPF):
         self.motion_cue = LocalMotionCue(levels=p.lk_levels, max_features=p.max_features)
         self.structure = StructureCue(p.structure_pixels, weighting=p.structure_weighting)
         if self._fused:
-            self.loss = FusedLoss(2, cue_clip=p.loss_cue_clip, cue_floor=p.loss_cue_floor, lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
+            self.loss = FusedLoss(2, cue_clip=p.loss_cue_clip, cue_floor=p.loss_cue_floor,
+                                  acquire_z=p.acquire_z, lost_frames=p.lost_frames,
+                                  reacquire_margin=p.reacquire_margin,
                                   history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                   sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
         self._obj = None
