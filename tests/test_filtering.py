@@ -152,3 +152,19 @@ def test_normalize_kernel_matches_reference():
         assert a[0] == b[0] and a[1] == pytest.approx(b[1], rel=1e-12)
         assert np.allclose(a[3], b[3], atol=1e-15) and np.allclose(a[4], b[4], atol=1e-12)
         assert np.isclose(a[3].sum(), 1.0) and np.all(np.isfinite(a[3]))
+
+
+def test_reappearance_log_prior_is_the_mixture_relative_to_uniform():
+    from pftrack.filtering.dynamics import reappearance_log_prior
+
+    pos = np.array([[50.0, 40.0], [53.0, 44.0], [300.0, 200.0]])
+    area, sd, eps = 320.0 * 240.0, 5.0, 0.05
+    raw = reappearance_log_prior(pos, (50.0, 40.0), sd, area, eps, cap=False)
+    d2 = np.array([0.0, 25.0, 250.0 ** 2 + 160.0 ** 2]) / sd ** 2
+    ref = np.log((1 - eps) * area * np.exp(-0.5 * d2) / (2 * np.pi * sd ** 2) + eps)
+    np.testing.assert_allclose(raw, ref)
+    assert raw[0] > 0 > raw[2] and raw[2] == pytest.approx(np.log(eps))  # far away: only the uniform part
+    capped = reappearance_log_prior(pos, (50.0, 40.0), sd, area, eps)
+    np.testing.assert_allclose(capped, np.minimum(raw, 0.0))
+    # eps = 1: no preference anywhere
+    np.testing.assert_allclose(reappearance_log_prior(pos, (50.0, 40.0), sd, area, 1.0, cap=False), 0.0, atol=1e-12)

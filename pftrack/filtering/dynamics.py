@@ -136,3 +136,20 @@ class NCVRandomWalk:
         return propagate_ncv_rw(states, self._noise, sigma_xy=self.sigma_xy, max_size_change=self.max_size_change,
                                 min_half_axis=self.min_half_axis, max_half_axis=self.max_half_axis,
                                 keep_aspect=self.keep_aspect, width=w, height=h)
+
+
+def reappearance_log_prior(positions: np.ndarray, centre, sd: float, area: float, eps: float, *,
+                           cap: bool = True) -> np.ndarray:
+    """Log prior odds of where a lost target reappears: ``log((1 - eps) A N(x; m, sd^2 I) + eps)``.
+
+    ``m`` is the predicted centre (constant velocity from the last confident frame), ``sd`` the spread
+    (growing with the time lost), ``A`` the frame's area and ``eps`` the chance that the target reappears
+    anywhere (uniform over the frame), so the odds are relative to the uniform prior.  With ``cap`` the
+    odds are at most 1: far candidates need more evidence, near ones no less than usual.  ``positions``:
+    ``(M, 2)`` centres; returns ``(M,)``.
+    """
+    p = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
+    d2 = ((p[:, 0] - centre[0]) ** 2 + (p[:, 1] - centre[1]) ** 2) / (sd * sd)
+    dens = area * np.exp(-0.5 * d2) / (2.0 * np.pi * sd * sd)
+    out = np.log((1.0 - eps) * dens + eps)
+    return np.minimum(out, 0.0) if cap else out

@@ -20,7 +20,7 @@ from ..cues.intensity import channel_levels, gain_maps
 from ..cues.lk import gray_of
 from ..cues.template import patch_shift
 from ..errors import ParameterError
-from ..filtering.dynamics import HX, HY, X, Y
+from ..filtering.dynamics import HX, HY, X, Y, reappearance_log_prior
 from ..filtering.loss import confidence
 from ..frames import as_bgr_uint8
 from ..geometry import Box, box_to_ellipse, ellipse_to_box, in_frame_fraction, validate_box
@@ -251,10 +251,7 @@ class SearchMixin:
         centre = self._lost_at[1] + k * self._lost_at[2]
         sd = 0.5 * (hx + hy) * (0.5 + 0.1 * k)
         fh, fw = self._shape
-        d2 = ((states[:, X] - centre[0]) ** 2 + (states[:, Y] - centre[1]) ** 2) / (sd * sd)
-        dens = fw * fh * np.exp(-0.5 * d2) / (2.0 * math.pi * sd * sd)
-        out = np.log((1.0 - eps) * dens + eps)
-        return np.minimum(out, 0.0) if self.params.search_prior_cap else out
+        return reappearance_log_prior(states[:, X:Y + 1], centre, sd, fw * fh, eps, cap=self.params.search_prior_cap)
 
     def _search_proposals(self, frame: np.ndarray) -> np.ndarray | None:
         """Positions ``(m, 2)`` a cue proposes to the search (default: none; fusion-pf's structural cue)."""

@@ -35,6 +35,7 @@ from ..cues import covariance as cv
 from ..cues import covariance_search as cs
 from ..cues import feature_selection as fs
 from ..cues.intensity import is_gray
+from ..filtering.dynamics import reappearance_log_prior
 from ..filtering.loss import RunningThreshold, confidence
 from ..geometry import Box
 from ..params import param
@@ -69,6 +70,13 @@ class SwitchingParams(FSMeanShiftParams):
         "the check every 10 frames did not raise AUC (0.493 vs 0.497 without) and cost 20-40 % of the speed."))
     distraction_margin: float = param(1.0, ge=0, doc=(
         "A distant global window takes over when its covariance distance is lower by this many sigma_LE."))
+    search_prior: float = param(0.0, ge=0, le=1, doc=(
+        "Where a lost or occluded target reappears (proposed; fusion-pf's search_prior): among the global "
+        "candidates that pass the covariance and local tests, the one of highest posterior odds is taken, the "
+        "local test's log-likelihood ratio plus log((1 - e) A N(x; m, s^2 I) + e) capped at 0, with m the "
+        "constant-velocity prediction from the last confident local frame, s half the box's mean side times "
+        "(0.5 + 0.1 k) after k frames, A the frame's area and e this value (the chance of reappearing anywhere). "
+        "0 (the chapter's rule): the first candidate by covariance distance that passes."))
     le_sigma: float = param(3.0, gt=0, doc="A global result is accepted within mu_LE + this x sigma_LE.")
     le_floor: float = param(0.05, ge=0, doc="Floor on sigma_LE.")
 
@@ -95,6 +103,8 @@ class Switching(FSMeanShift):
         self.mode = "local"
         self.n_global = 0
         self.last_box = tuple(float(v) for v in box)
+        self._frame_shape = frame.shape[:2]
+        self._seen = None  # (frame index, centre, velocity) of the last confident local frame (search_prior)
         return st
 
     # -- covariance helpers ------------------------------------------------------------------------
@@ -163,18 +173,35 @@ class Switching(FSMeanShift):
 
     def _verify(self, frame: np.ndarray, res: cs.SearchResult):
         """The first global candidate (by covariance distance) that passes the covariance test and, after a
-        local mean shift from it, the local test: ``(centre, size, rho, H_c, d, d_le)`` or None.
+        local mean shift from it, the local test: ``(centre, size, rho, H_c, d, d_le)`` or None.  With
+        ``search_prior`` every candidate is verified and the one of highest posterior odds is taken.
 
         The global search proposes and the local tracker verifies, so a window whose covariance merely
         resembles the model (a weak test on small or plain targets) does not capture the tracker."""
+        prior = self.params.search_prior > 0 and self._seen is not None
+        best, best_odds = None, -np.inf
         for x, y, w, h, dist in res.candidates:
             if not self._accept(dist):
                 break  # sorted by distance
             size = np.array([w, h])
             c, rho, H_c, _, _ = self._local(frame, np.array([x + w / 2, y + h / 2]), size)
             if self._passes(rho):
-                return c, size, rho, H_c, float(np.sqrt(max(1.0 - rho, 0.0))), float(dist)
-        return None
+                found = c, size, rho, H_c, float(np.sqrt(max(1.0 - rho, 0.0))), float(dist)
+                if not prior:
+                    return found
+                odds = self.loss.evaluate(rho) + float(self._log_prior(c))
+                if odds > best_odds:
+                    best, best_odds = found, odds
+        return best
+
+    def _log_prior(self, centre: np.ndarray) -> float:
+        """``search_prior``'s log prior odds of a candidate centre (see the parameter)."""
+        k0, c0, v0 = self._seen
+        k = self.frame_index - k0
+        fh, fw = self._frame_shape
+        sd = 0.25 * float(self.size[0] + self.size[1]) * (0.5 + 0.1 * k)
+        return float(reappearance_log_prior(np.asarray(centre)[None], c0 + k * v0, sd, fw * fh,
+                                            self.params.search_prior)[0])
 
     def _update_at(self, frame: np.ndarray) -> TrackState:
         p = self.params
@@ -227,6 +254,7 @@ class Switching(FSMeanShift):
             score = confidence(self.loss.evaluate(rho))
         elif confident and reason is None:
             self.vel = self.c - prev
+            self._seen = (self.frame_index, self.c.copy(), self.vel.copy())
             self._learn(frame, d_le, C_loc, H_c, mass)
         return self._state(score=score, info={"pair": self.pair, "d": d, "d_le": d_le, "mode": self.mode,
                                               "switch": reason, "llr": self.loss.llr,
