@@ -170,6 +170,7 @@ class FusionPF(ColorPF):
         self._sur = None
         self._lut = None
         self._ii: np.ndarray | None = None  # the integral image's buffer, reused between frames
+        self._ii_of = None  # (frame index, features) the integral image was computed from
         self._prev_gray = None
         self._gray = None
         self._flow = None
@@ -232,7 +233,11 @@ class FusionPF(ColorPF):
         if w_col != 1.0:
             log_lik = log_lik * w_col
         if p.contrast and self._lut is not None:
-            ii = self._ii = probability_integral(feats.bins, self._lut, out=self._ii)
+            if self._ii_of is not None and self._ii_of[0] == self.frame_index and self._ii_of[1] is feats:
+                ii = self._ii  # the same quantised region again on this frame (the search's refined layer)
+            else:
+                ii = self._ii = probability_integral(feats.bins, self._lut, out=self._ii)
+                self._ii_of = (self.frame_index, feats)
             c = contrast_scores_ellipses(ii, feats.x0, feats.y0, ell, ring=p.ring, pitch=feats.pitch)
             log_lik = log_lik + p.contrast_gain * c
         if p.structure and p.structure_gain > 0 and self.structure.ready:
@@ -325,6 +330,7 @@ class FusionPF(ColorPF):
         blended = blend_counts(self._obj, obj, self._sur, sur, p.contrast_alpha)
         if blended is not None:
             self._obj, self._sur, self._lut = blended
+            self._ii_of = None  # an integral image of this frame was taken with the former table
 
     def _on_frame(self, frame):
         self.structure.new_frame()
