@@ -1,6 +1,7 @@
 """Book ch. 6 §3 and §5: feature selection, back-projection mean shift, fs-meanshift and switching
 (ch06.md §5.1 tests 1-4 and 8, §5.2)."""
 
+import cv2
 import numpy as np
 import pytest
 
@@ -225,3 +226,29 @@ def test_compiled_kernel_histogram_and_mean_shift_equal_the_numpy_reference():
     finally:
         set_numba_enabled(previous)
     assert ms[0][0] < 45.0 and ms[0][1] > 22.0  # moved towards the heavy block
+
+
+def test_search_prior_prefers_the_passing_candidate_near_the_prediction():
+    """search_prior: of two global candidates that both pass the local test (two copies of the target), the
+    chapter's rule takes the first by covariance distance; with the prior, the one near the prediction."""
+    from pftrack.cues import covariance_search as cs
+
+    rng = np.random.default_rng(0)
+    img = cv2.GaussianBlur(rng.uniform(0, 255, (240, 320, 3)).astype(np.float32), (0, 0), 3).astype(np.uint8)
+    patch = np.zeros((40, 24, 3), np.uint8)
+    patch[:20] = (30, 60, 200)
+    patch[20:] = (200, 160, 40)
+    img[40:80, 40:64] = patch
+    img[150:190, 220:244] = patch
+    boxes = [(40.0, 40.0, 24.0, 40.0), (220.0, 150.0, 24.0, 40.0)]
+    res = cs.SearchResult(boxes[0], 0.1, 2, np.array([(*boxes[0], 0.1), (*boxes[1], 0.2)]))
+    picks = []
+    for eps in (0.0, 0.05):
+        t = pftrack.create_tracker("switching", search_prior=eps)
+        t.init(img, boxes[0])
+        t.update(img)
+        t._seen = (t.frame_index, np.array([232.0, 170.0]), np.zeros(2))  # the target was last seen near B
+        found = t._verify(img, res)
+        assert found is not None
+        picks.append(found[0])
+    assert np.hypot(*(picks[0] - [52.0, 60.0])) < 6 and np.hypot(*(picks[1] - [232.0, 170.0])) < 6, picks

@@ -117,8 +117,9 @@ class FusionPFParams(ColorPFParams):
         "other group within 0.001; 2 and 3 cost the exit scenes or lost recall."))
     search_refine: float = param(0.5, ge=0, le=4, doc=(
         "color-pf's refined search layer (ColorModelParams.search_refine; color-pf: 0, off). Chosen on the tune "
-        "split (docs/fusion-pf.md): with acquire_z = 4, real AUC 0.595 against 0.582, PETS 0.374 against 0.364, "
-        "teleport 0.645 against 0.601, false-lost 0.038 against 0.047; 0.25 and 1 gave less."))
+        "split (docs/fusion-pf.md): with acquire_z = 4, real AUC 0.593 against 0.582, PETS 0.369 against 0.364, "
+        "teleport 0.645 against 0.601, leave 0.746 against 0.726; 1 gave less. It costs speed on lost frames "
+        "only, and the report split's lost recall after an exit (a look-alike met at its exact peak)."))
     relit_colour: bool = param(True, doc=(
         "While searching, when the colour cue would veto the best candidate that the structural cue alone could "
         "acquire, its colour score is retaken after undoing a global per-channel gain (von Kries: the frame's "
