@@ -129,11 +129,6 @@ class CoTrainPFParams(Params):
         "A frame counts as a miss when the contrast is below this fraction of the running median."))
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive misses before lost is raised.")
     lost_spread: float = param(2.0, ge=1, le=10, doc="Random-walk std multiplier while lost (re-acquisition).")
-    global_search: int = param(0, ge=0, le=1000, doc=(
-        "While lost, every this many frames the fused map is computed over the whole frame (at the working "
-        "scale) and boxes of the current size on a lattice of a quarter box are scored by their contrast; when "
-        "the best reaches update_gate of the running median (the retraining test), the particles and the gate "
-        "restart there (the chapter re-acquires through the widened random walk only). 0: off."))
 
 
 class CoTrainPF(Tracker):
@@ -262,7 +257,6 @@ class CoTrainPF(Tracker):
         self.f = min(1.0, float(np.sqrt(p.work_area / max(w * h, 1.0))))
         self.mu = np.array([x + w / 2, y + h / 2])
         self.lost, self.miss = False, 0
-        self._lost_for = 0
         self.anchor = None
         m = self._maps(frame, self._region(frame.shape, None))
         for _ in range(p.init_passes):
@@ -294,32 +288,8 @@ class CoTrainPF(Tracker):
         self._sig = sig
         return X
 
-    def _global_candidate(self, frame: np.ndarray, ref: float):
-        """``global_search``: the whole frame's best box of the current size by contrast, if it passes the
-        retraining test (``update_gate`` of the running median ``ref``), else None."""
-        p = self.params
-        fh, fw = frame.shape[:2]
-        m = self._maps(frame, (0, 0, fw, fh))
-        w, h = self.box[2], self.box[3]
-        xs = np.arange(0.0, max(fw - w, 0.0) + 1e-9, max(w / 4.0, 1.0))
-        ys = np.arange(0.0, max(fh - h, 0.0) + 1e-9, max(h / 4.0, 1.0))
-        gx, gy = np.meshgrid(xs, ys)
-        boxes = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, w), np.full(gx.size, h)])
-        c = self._contrast(m, boxes)
-        k = int(np.argmax(c))
-        if not np.isfinite(c[k]) or c[k] < p.update_gate * ref:
-            return None
-        return boxes[k]
-
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
-        if self.lost and p.global_search:
-            self._lost_for += 1
-            if self._lost_for % p.global_search == 0:
-                found = self._global_candidate(frame, max(float(np.median(self.accepted)), 0.05))
-                if found is not None:
-                    self.mu = found[:2] + found[2:] / 2
-                    self.particles[:, :2] = self.mu
         X = self._predict(frame.shape)
         m = self._maps(frame, self._region(frame.shape, self._boxes(X)))
         ll = self._log_lik(m, X)
@@ -345,7 +315,6 @@ class CoTrainPF(Tracker):
             self.lost = not good
         else:
             self.lost = self.miss >= p.lost_frames
-            self._lost_for = 0
         self.mu = est[:2].copy()
         if not self.lost:
             self.box = est_box
