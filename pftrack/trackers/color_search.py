@@ -281,8 +281,8 @@ class SearchMixin:
     def _refine_layer(self, frame, states, ell, rho, tot, loglik, prior, feats):
         """``search_refine``: a second layer of samples drawn from the first layer's posterior, moved by a quarter
         of the half-axes and scored the same way (sizes kept: drawn afresh around the searched size instead, the
-        tune split lost 0.012 real AUC and re-acquired 0.71 against 0.76); both layers are returned together
-        (the region of the colour features then spans both)."""
+        tune split lost 0.012 real AUC and re-acquired 0.71 against 0.76, docs/fusion-pf.md); both layers are
+        returned together (the region of the colour features then spans both)."""
         p = self.params
         roi = feats.roi
         rank = loglik if prior is None else loglik + prior
