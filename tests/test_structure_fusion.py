@@ -242,6 +242,30 @@ def test_fused_acquisition_vetoes_a_cue_far_below_its_history():
         [m.mu_t - 3.0 * m.sd_t, 0.95])
 
 
+def test_fused_acquisition_margin_is_separate_from_the_tracking_gate():
+    """acquire_margin: ending a loss asks for a larger ratio than the tracking (model update) gate."""
+    def detector(margin):
+        det = FusedLoss(2, lost_frames=1, reacquire_margin=1.0, acquire_margin=margin)
+        bg = np.linspace(0.2, 0.5, 50)
+        det.set_background(np.column_stack([bg, bg]))
+        for _ in range(20):
+            det.step([0.95, 0.95])
+        return det
+
+    for margin, taken in ((None, True), (2.0, False)):
+        det = detector(margin)
+        det.step([0.1, 0.1])
+        assert det.lost
+        # a score whose fused ratio lies between the two margins (as acquire() sees it: one more frame unseen)
+        for m in det.members:
+            m.unseen += 1
+        s = next([v, v] for v in np.linspace(0.5, 0.99, 2000) if 1.2 < det.evaluate([v, v]) < 1.8)
+        for m in det.members:
+            m.unseen -= 1
+        assert det.acquire(s) is taken
+        assert 1.0 < det.llr < 2.0
+
+
 def test_refined_search_layer_samples_the_best_mode_and_is_reproducible():
     """search_refine: the second layer is drawn from the first layer's posterior and moved by a quarter of the
     half-axes, so its samples gather around the best first-layer sample; the search stays seeded."""

@@ -301,9 +301,10 @@ class FusedLoss:
     """
 
     def __init__(self, n_cues: int, *, cue_clip: float = 10.0, cue_floor: float | None = None,
-                 acquire_z: float = 0.0, **kwargs):
+                 acquire_z: float = 0.0, acquire_margin: float | None = None, **kwargs):
         self.members = [LossDetector(**kwargs) for _ in range(int(n_cues))]
         self.acquire_z = float(acquire_z)
+        self.acquire_margin = acquire_margin
         self.cue_clip = float(cue_clip)
         self.cue_floor = float(cue_clip if cue_floor is None else cue_floor)
         self.lost_frames = self.members[0].lost_frames
@@ -364,12 +365,12 @@ class FusedLoss:
         self.lost = self.miss >= self.lost_frames
         return self.lost, confidence(self.llr)
 
-    def confident(self, s, *, veto_z: float = 0.0) -> bool:
+    def confident(self, s, *, veto_z: float = 0.0, margin: float | None = None) -> bool:
         """The fused ratio is clearly the target's, and no cue vetoes it: a cue vetoes when its score is far
         below its own history (``learn_z`` spreads) *and* its own ratio says background, or (``veto_z`` > 0)
         when it is more than ``veto_z`` spreads below its history, whatever its ratio."""
         s = self._vector(s)
-        if not any(math.isfinite(v) for v in s) or self.llr <= self.reacquire_margin:
+        if not any(math.isfinite(v) for v in s) or self.llr <= (self.reacquire_margin if margin is None else margin):
             return False
         for m, v in zip(self.members, s):
             if math.isfinite(v):
@@ -387,7 +388,7 @@ class FusedLoss:
         for m in self.members:
             m.unseen += 1
         self.llr = self.evaluate(s) + log_prior
-        if self.confident(s, veto_z=self.acquire_z):
+        if self.confident(s, veto_z=self.acquire_z, margin=self.acquire_margin):
             self.lost = False
             self.miss = 0
             return True
