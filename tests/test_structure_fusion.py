@@ -427,7 +427,7 @@ def test_relit_colour_reacquires_a_target_whose_colours_drifted_while_hidden(see
     """Two seeded vanish scenes with a global lighting drift (colour frames): with the relit colour score the
     target is re-acquired within 15 frames of coming out; without it the colour cue vetoes it (measured on
     seeds 300-419 when the rule came in: 19 of 27 such reappearances re-acquired against 18, lost-flag rates
-    unchanged; with the current defaults, 32 such scenes: 24 of 33 against 18)."""
+    unchanged; with the refined search, before acquire_margin, 32 such scenes: 24 of 33 against 18)."""
     from .test_loss_flag import _run
 
     spec = vanish_scene(seed)
