@@ -48,7 +48,6 @@ import numpy as np
 from ..cues.color import blend_model, reachable_roi, warmup
 from ..cues.histogram_cue import ColorCue
 from ..cues.intensity import channel_levels
-from ..cues.lk import gray_of
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
 from ..filtering.loss import LossDetector
@@ -123,6 +122,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self._search_since = 0  # frame index at which the current search began
         self._last_search: TrackState | None = None  # its latest result (re-reported between searches)
         self._search_gray: tuple[int, np.ndarray] | None = None  # (frame index, grey frame) while searching
+        self._gray_now: tuple[int, np.ndarray] | None = None  # this frame's grey image, once converted
         self._vetoed = None  # (frame index, centre, shift) of the last candidate reenter_outward refused
         self._ell = np.empty((0, 4))
 
@@ -257,7 +257,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         else:
             state = self._waiting_state()
         # the previous frame while the search is confined to an exit strip (reenter_outward: a candidate's motion)
-        self._search_gray = ((self.frame_index, gray_of(frame)) if self.mode == "searching"
+        self._search_gray = ((self.frame_index, self._frame_gray(frame)) if self.mode == "searching"
                              and self.params.reenter_outward > 0 and self._exit_strip() is not None else None)
         self._on_frame(frame)
         return state

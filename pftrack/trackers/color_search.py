@@ -227,7 +227,7 @@ class SearchMixin:
         if strip is None or self.frame_index - prev[0] != 1:
             return False
         speed = max(math.hypot(*self._exit_velocity), 1.0)
-        d = patch_shift(prev[1], gray_of(frame), ellipse_to_box(ell), max(8, math.ceil(3.0 * speed)))
+        d = patch_shift(prev[1], self._frame_gray(frame), ellipse_to_box(ell), max(8, math.ceil(3.0 * speed)))
         last, self._vetoed = self._vetoed, None
         if d is None:
             return bool(last is not None and last[0] == self.frame_index - 1
@@ -237,6 +237,14 @@ class SearchMixin:
             self._vetoed = (self.frame_index, np.array(ell[:2], dtype=np.float64), d)
             return True
         return False
+
+    def _frame_gray(self, frame: np.ndarray) -> np.ndarray:
+        """This frame's grey image, converted once (``_leaving`` needs it, and the search keeps it for the next
+        frame)."""
+        cached = self._gray_now
+        if cached is None or cached[0] != self.frame_index:
+            cached = self._gray_now = (self.frame_index, gray_of(frame))
+        return cached[1]
 
     def _motion_log_prior(self, states: np.ndarray) -> np.ndarray | None:
         """``search_prior``: log prior odds of each search sample's position, ``log((1 - e) A N(x; m, s^2 I) + e)``

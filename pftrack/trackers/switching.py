@@ -103,7 +103,7 @@ class Switching(FSMeanShift):
         self.mode = "local"
         self.n_global = 0
         self.last_box = tuple(float(v) for v in box)
-        self._frame_shape = frame.shape[:2]
+        self._frame_shape = frame.shape[:2]  # the working resolution's (the base class keeps the input's)
         self._seen = None  # (frame index, centre, velocity) of the last confident local frame (search_prior)
         return st
 
