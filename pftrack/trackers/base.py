@@ -79,7 +79,7 @@ class Tracker(abc.ABC):
         box = validate_box(box, w, h)
         self._shape = (h, w)
         self.frame_index = 0
-        return self._init(frame, box)
+        return self._init(self._transform_input(frame, first=True), box)
 
     def update(self, frame: np.ndarray) -> TrackState:
         """Track into the next frame."""
@@ -87,7 +87,7 @@ class Tracker(abc.ABC):
             raise RuntimeError(f"{self.name}: call init(frame, box) before update(frame)")
         frame = self._check_frame(frame)
         self.frame_index += 1
-        return self._update(frame)
+        return self._update(self._transform_input(frame, first=False))
 
     # -- helpers ------------------------------------------------------------------
     def _check_frame(self, frame: np.ndarray) -> np.ndarray:
@@ -96,6 +96,10 @@ class Tracker(abc.ABC):
             raise FrameError(
                 f"frame {self.frame_index + 2}: size {frame.shape[1]}x{frame.shape[0]} differs from the "
                 f"first frame's {self._shape[1]}x{self._shape[0]}", index=self.frame_index + 1)
+        return frame
+
+    def _transform_input(self, frame: np.ndarray, *, first: bool) -> np.ndarray:
+        """Per-frame input transform applied before ``_init`` (``first``) and ``_update`` (default: none)."""
         return frame
 
     @property

@@ -38,6 +38,17 @@ class ColorModelParams(Params):
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
         "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
         "on."))
+    illumination: Literal["none", "quotient"] = param("none", doc=(
+        "Grey input under changing light: 'quotient' divides every grey frame by its own smoothed copy (the "
+        "self-quotient image, pftrack.cues.illumination; Wang et al. 2004, a single-scale Retinex), so that a "
+        "lamp or shade that changes the target's grey levels differently from the rest of the frame cancels; "
+        "'none' uses the grey levels as they are (global equalisation only). Colour input is never changed."))
+    illumination_sigma: float = param(0.1, gt=0, le=2, doc=(
+        "'quotient': std of the Gaussian illumination estimate, as a fraction of the frame's larger side (the "
+        "light must be smooth at this scale for Q = I / (G * I) to cancel it)."))
+    illumination_strength: float = param(1.0, ge=0, le=1, doc=(
+        "'quotient': the fraction gamma of the local light variation that is divided out, I (L_mean / L)^gamma "
+        "(1: the self-quotient image; smaller keeps more of the absolute grey levels)."))
     gradient_threshold: float = param(40.0, ge=0, le=2000, doc=(
         "Grey features: Sobel magnitude (equalised levels) below which a pixel counts as flat."))
     kernel: Literal["nummiaro", "epanechnikov"] = param("nummiaro", doc=(

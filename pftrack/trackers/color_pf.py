@@ -47,7 +47,8 @@ import numpy as np
 
 from ..cues.color import blend_model, reachable_roi, warmup
 from ..cues.histogram_cue import ColorCue
-from ..cues.intensity import channel_levels
+from ..cues.illumination import illumination_quotient
+from ..cues.intensity import channel_levels, is_gray
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
 from ..filtering.loss import LossDetector
@@ -92,6 +93,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         if detector is not None and not callable(detector):
             raise ParameterError("detector must be a callable frame -> boxes")
         self.detector = detector
+        self._quotient = False  # grey input lit anew (illumination="quotient"), decided by init
         warmup()
         self._reset()
 
@@ -201,6 +203,16 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self._since_bg = 0
         if self.params.relit_search != "off" and frame.ndim == 3 and self.cue.color_space == "rgb":
             self._seen_levels = channel_levels(frame, stride=16)  # the light while the target is seen
+
+    # ------------------------------------------------------------------ input
+    def _transform_input(self, frame: np.ndarray, *, first: bool) -> np.ndarray:
+        """Grey input with ``illumination="quotient"``: the self-quotient image (decided on the first frame)."""
+        p = self.params
+        if first:
+            self._quotient = p.illumination == "quotient" and (
+                p.color_space == "gray" or (p.color_space == "auto" and is_gray(frame)))
+        return (illumination_quotient(frame, p.illumination_sigma, strength=p.illumination_strength) if self._quotient
+                else frame)
 
     # ------------------------------------------------------------------ init
     def _start_tracking(self, states: np.ndarray, log_lik: np.ndarray | None = None) -> None:
