@@ -107,3 +107,30 @@ def test_quotient_tracks_a_grey_target_under_a_drifting_lamp(name):
     assert scores["quotient"] > 0.75
     if name == "color-pf":  # the intensity histogram alone is lost without it
         assert scores["none"] < scores["quotient"] - 0.2
+
+
+def test_raw_frame_check_refuses_background_and_accepts_the_target():
+    from pftrack.filtering.loss import LossDetector
+    from pftrack.trackers.raw_check import RawGreyCheck
+
+    rng = np.random.default_rng(3)
+    h, w = 160, 200
+    frame = _texture(rng, (h, w), 4, 90, 25)
+    target = (60.0, 80.0, 12.0, 18.0)  # cx, cy, hx, hy
+    yy, xx = np.mgrid[0:h, 0:w]
+    inside = ((xx - target[0]) / target[2]) ** 2 + ((yy - target[1]) / target[3]) ** 2 <= 1
+    frame[inside] = _texture(rng, (h, w), 1, 190, 20)[inside]
+    bgr = cv2.cvtColor(np.clip(frame, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    check = RawGreyCheck(gray_bins=(16, 8), kernel="nummiaro", max_pixels=1000, gradient_threshold=40.0,
+                         alpha=0.05, detector=LossDetector())
+    check.init(bgr, np.array(target))
+    gx, gy = np.meshgrid(np.arange(20, w, 25.0), np.arange(20, h, 25.0))
+    grid = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, 12.0), np.full(gx.size, 18.0)])
+    far = (np.abs(grid[:, 0] - target[0]) > 30) | (np.abs(grid[:, 1] - target[1]) > 40)
+    check.set_background(bgr, grid[far])
+    for _ in range(5):
+        check.new_frame(bgr)
+        check.learn(bgr, np.array(target))
+    assert not check.vetoes(bgr, np.array(target))
+    assert check.vetoes(bgr, np.array([150.0, 40.0, 12.0, 18.0]))
+    assert np.isnan(check.rho(bgr, np.array([[-500.0, -500.0, 5.0, 5.0]]))[0])

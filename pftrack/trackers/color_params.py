@@ -49,6 +49,11 @@ class ColorModelParams(Params):
     illumination_strength: float = param(1.0, ge=0, le=1, doc=(
         "'quotient': the fraction gamma of the local light variation that is divided out, I (L_mean / L)^gamma "
         "(1: the self-quotient image; smaller keeps more of the absolute grey levels)."))
+    illumination_check: bool = param(True, doc=(
+        "'quotient': re-acquisition also asks a grey histogram model of the untransformed frames, learned on the "
+        "confident frames with its own background statistics and history (pftrack.trackers.raw_check): a "
+        "candidate it calls background is refused. The quotient also divides out the scene's own shading, so "
+        "background patches can resemble the target more than they did."))
     gradient_threshold: float = param(40.0, ge=0, le=2000, doc=(
         "Grey features: Sobel magnitude (equalised levels) below which a pixel counts as flat."))
     kernel: Literal["nummiaro", "epanechnikov"] = param("nummiaro", doc=(

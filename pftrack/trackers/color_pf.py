@@ -59,6 +59,7 @@ from ..geometry import Box, box_to_ellipse, displacement_rate, in_frame_fraction
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
+from .raw_check import RawGreyCheck
 
 __all__ = ["ColorModelParams", "ColorPF", "ColorPFParams", "ColorParticleFilter"]
 
@@ -94,6 +95,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
             raise ParameterError("detector must be a callable frame -> boxes")
         self.detector = detector
         self._quotient = False  # grey input lit anew (illumination="quotient"), decided by init
+        self._raw_check: RawGreyCheck | None = None  # its check of re-acquisitions on the untransformed frames
+        self._raw: np.ndarray | None = None  # the untransformed frame
         warmup()
         self._reset()
 
@@ -195,6 +198,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         # The background histograms are computed exactly like the samples' (a subsampled frame would
         # shift mu and sigma and with them the appearance threshold).
         rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h))
+        if self._raw_check is not None:
+            self._raw_check.set_background(self._raw, ell)
         if np.count_nonzero(tot > 0) >= 2:
             # Eqs. 13-14, with a floor on the spread so a non-discriminative scene cannot collapse it
             self.loss.set_background(self._loss_scores(frame, ell[tot > 0], rho[tot > 0], (0, 0, w, h)))
@@ -211,8 +216,17 @@ class ColorParticleFilter(SearchMixin, Tracker):
         if first:
             self._quotient = p.illumination == "quotient" and (
                 p.color_space == "gray" or (p.color_space == "auto" and is_gray(frame)))
-        return (illumination_quotient(frame, p.illumination_sigma, strength=p.illumination_strength) if self._quotient
-                else frame)
+            self._raw_check = RawGreyCheck(
+                gray_bins=p.gray_bins, kernel=p.kernel, max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold,
+                alpha=p.alpha, detector=LossDetector(history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
+                                                     sd_floor_background=p.score_sd_floor)
+            ) if self._quotient and p.illumination_check else None
+        if not self._quotient:
+            return frame
+        self._raw = frame
+        if self._raw_check is not None and not first:
+            self._raw_check.new_frame(frame)
+        return illumination_quotient(frame, p.illumination_sigma, strength=p.illumination_strength)
 
     # ------------------------------------------------------------------ init
     def _start_tracking(self, states: np.ndarray, log_lik: np.ndarray | None = None) -> None:
@@ -243,6 +257,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self.cue.new_frame(frame)
         self.loss.reset(1.0)
         ell = box_to_ellipse(box)
+        if self._raw_check is not None:
+            self._raw_check.init(self._raw, ell)
         self._set_model(self.cue.histogram(frame, ell))
         self.size = (float(ell[2]), float(ell[3]))
         self._confident_size = self.size
@@ -404,6 +420,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         confident = confident and not out  # no learning from a sliver
         if confident:
             self.cue.confirm(p.normalize_rate)
+            if self._raw_check is not None:
+                self._raw_check.learn(self._raw, e_ell)
             self._confident_size = (float(est[HX]), float(est[HY]))
             self._confident_motion = (self.frame_index, est[[X, Y]].copy(), est[[VX, VY]].copy())
             self._confident_track.append((self.frame_index, float(est[X]), float(est[Y])))

@@ -404,7 +404,8 @@ class SearchMixin:
             mean = (ww[:, None] * pos).sum(axis=0)
             var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
             found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
-        vetoed = found and self._leaving(frame, ell[best])
+        vetoed = found and (self._leaving(frame, ell[best]) or (
+            self._raw_check is not None and self._raw_check.vetoes(self._raw, ell[best])))
         if vetoed:
             found = False
             self.loss.lost = True  # acquire() ended the loss; the candidate is another object on its way out

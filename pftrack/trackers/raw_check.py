@@ -1,0 +1,75 @@
+"""A second opinion on re-acquisition from the untransformed grey frames.
+
+With ``illumination="quotient"`` the colour trackers see the self-quotient image of each grey
+frame (:mod:`pftrack.cues.illumination`), which cancels uneven, changing light but also the
+scene's own large-scale shading.  Background patches then resemble the target more than they
+did, and a search can acquire one while the target is still hidden (docs/robustness.md).
+
+:class:`RawGreyCheck` keeps the grey histogram model of the untransformed frames beside the
+tracker's: learned on the frames the tracker is confident on, with its own background
+statistics and score history (:class:`~pftrack.filtering.loss.LossDetector`, the two-class
+test of the colour PFs).  It is consulted at re-acquisition only: a candidate whose raw
+histogram the test calls background (``LLR < 0``) is refused.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..cues.color import blend_model, reachable_roi
+from ..cues.histogram_cue import ColorCue
+from ..filtering.loss import LossDetector
+
+
+class RawGreyCheck:
+    """The grey histogram model and loss test of the untransformed frames (see the module docstring)."""
+
+    def __init__(self, *, gray_bins, kernel: str, max_pixels: int, gradient_threshold: float, alpha: float,
+                 detector: LossDetector):
+        self.cue = ColorCue("gray", None, kernel, max_pixels, gray_bins=tuple(gray_bins),
+                            gradient_threshold=gradient_threshold)
+        self.alpha = float(alpha)
+        self.detector = detector
+        self.sqrt_q: np.ndarray | None = None
+        self.q: np.ndarray | None = None
+
+    def init(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
+        self.cue.new_frame(frame)
+        q = self.cue.histogram(frame, ellipse)
+        s = q.sum()
+        self.q = q / s if s > 0 else np.full_like(q, 1.0 / q.size)
+        self.sqrt_q = np.sqrt(self.q)
+        self.detector.reset(1.0)
+
+    def new_frame(self, frame: np.ndarray) -> None:
+        """The equalisation table of this frame (call once per frame before the other methods)."""
+        self.cue.new_frame(frame)
+
+    def rho(self, frame: np.ndarray, ellipses: np.ndarray) -> np.ndarray:
+        """Bhattacharyya coefficients of a batch of ellipses with the raw model (NaN: no pixel in the frame)."""
+        e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
+        h, w = frame.shape[:2]
+        feats = self.cue.prepare(frame, reachable_roi(e, w, h), self.cue.step_for(e))
+        r, tot = self.cue.rho(feats, e, self.sqrt_q, reuse=False)
+        return np.where(tot > 0, r, np.nan)
+
+    def learn(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
+        """A confident frame: the estimate's raw score joins the history and its histogram the model."""
+        e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
+        hist = self.cue.histogram(frame, e)
+        if hist.sum() <= 0:
+            return
+        s = float(np.sum(np.sqrt(hist / hist.sum()) * self.sqrt_q))
+        self.detector.learn(min(max(s, 0.0), 1.0), True)
+        if self.alpha > 0:
+            self.q, self.sqrt_q = blend_model(self.q, hist / hist.sum(), self.alpha)
+
+    def set_background(self, frame: np.ndarray, ellipses: np.ndarray) -> None:
+        r = self.rho(frame, ellipses)
+        if np.count_nonzero(np.isfinite(r)) >= 2:
+            self.detector.set_background(r[np.isfinite(r)])
+
+    def vetoes(self, frame: np.ndarray, ellipse: np.ndarray) -> bool:
+        """Does the raw evidence call this candidate background?"""
+        r = float(self.rho(frame, ellipse)[0])
+        return bool(np.isfinite(r) and self.detector.evaluate(r) < 0.0)
