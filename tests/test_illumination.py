@@ -128,9 +128,20 @@ def test_raw_frame_check_refuses_background_and_accepts_the_target():
     grid = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, 12.0), np.full(gx.size, 18.0)])
     far = (np.abs(grid[:, 0] - target[0]) > 30) | (np.abs(grid[:, 1] - target[1]) > 40)
     check.set_background(bgr, grid[far])
-    for _ in range(5):
-        check.new_frame(bgr)
+    for _ in range(10):
+        check.new_frame()
         check.learn(bgr, np.array(target))
     assert not check.vetoes(bgr, np.array(target))
     assert check.vetoes(bgr, np.array([150.0, 40.0, 12.0, 18.0]))
     assert np.isnan(check.rho(bgr, np.array([[-500.0, -500.0, 5.0, 5.0]]))[0])
+
+
+def test_automatic_initialisation_leaves_the_frames_as_they_are():
+    frames, boxes = spot_scene(0, n=3)
+    t = pftrack.create_tracker("color-pf", seed=0, illumination="quotient")
+    t.init(frames[0], boxes[0])
+    assert t._quotient
+    hist = t.cue.histogram(frames[0], np.array([45.0, 100.0, 15.0, 20.0]))
+    t.init_auto(frames[0], hist, (30, 40))
+    assert not t._quotient and t._raw_check is None
+    assert t._transform_input(frames[1], first=False) is frames[1]

@@ -26,8 +26,8 @@ more than it did (docs/robustness.md measures both sides).
 
 Speed: the smoothing is taken on a block-averaged copy (``block`` x ``block`` pixels per
 cell, then a Gaussian of ``sigma / block`` cells), and the reciprocal is brought back to
-full resolution by one bilinear resize and one saturating multiply, about 0.25 ms for a
-640 x 480 frame on one core.
+full resolution by one bilinear resize and one saturating multiply into kept buffers
+(:class:`QuotientImage`): about 0.2 ms for a 480 x 360 frame on one core.
 """
 
 from __future__ import annotations
@@ -37,29 +37,57 @@ import numpy as np
 
 from .intensity import to_gray
 
-__all__ = ["illumination_quotient"]
+__all__ = ["QuotientImage", "illumination_quotient"]
+
+
+class QuotientImage:
+    """:func:`illumination_quotient` with its full-size intermediate images kept between calls (a tracker calls
+    it on every frame of one size)."""
+
+    def __init__(self, sigma: float = 0.1, *, strength: float = 1.0, block: int = 16):
+        self.sigma = float(sigma)
+        self.strength = float(strength)
+        self.block = max(1, int(block))
+        self._gain: np.ndarray | None = None
+        self._q: np.ndarray | None = None
+
+    def __call__(self, frame: np.ndarray) -> np.ndarray:
+        gray = to_gray(frame)
+        h, w = gray.shape
+        k = self.block
+        sw, sh = max(1, w // k), max(1, h // k)
+        # exact k x k block means of the largest whole-block part (OpenCV's fast integer-factor path); the
+        # strip of fewer than k pixels left over at the right and bottom is covered by the bilinear resize
+        small = cv2.resize(gray[:sh * k, :sw * k], (sw, sh), interpolation=cv2.INTER_AREA).astype(np.float32)
+        s = self.sigma * max(h, w) / k
+        if s > 0:
+            small = cv2.GaussianBlur(small, (0, 0), s, borderType=cv2.BORDER_REFLECT)
+        small = np.maximum(small, np.float32(1.0))
+        inv = np.float32(small.mean()) / small  # S_mean / S: the frame's mean level is kept
+        if self.strength != 1.0:
+            inv = np.power(inv, np.float32(self.strength))
+        if self._gain is None or self._gain.shape != (h, w):
+            self._gain = np.empty((h, w), np.float32)
+            self._q = np.empty((h, w), np.uint8)
+        # bilinear from the cells' centres (OpenCV's resize mapping) over the whole-block part, and the last
+        # column and row repeated over the strip of fewer than k pixels left at the right and bottom
+        W, H = sw * k, sh * k
+        cv2.resize(inv, (W, H), dst=self._gain[:H, :W], interpolation=cv2.INTER_LINEAR)
+        if W < w:
+            self._gain[:H, W:] = self._gain[:H, W - 1:W]
+        if H < h:
+            self._gain[H:] = self._gain[H - 1:H]
+        cv2.multiply(gray, self._gain, dst=self._q, dtype=cv2.CV_8U)
+        return cv2.cvtColor(self._q, cv2.COLOR_GRAY2BGR)
 
 
 def illumination_quotient(frame: np.ndarray, sigma: float = 0.1, *, strength: float = 1.0, block: int = 16) -> np.ndarray:
     """The self-quotient image of a grey (or BGR, converted to grey) frame, as a BGR ``uint8`` frame.
 
     ``sigma`` is the std of the Gaussian illumination estimate as a fraction of the frame's
-    larger side; ``strength`` is gamma (see the module docstring).  Levels saturate at 255.
-    Each output channel holds the same grey levels, so the result stays a grey frame for
+    larger side; ``strength`` is gamma (see the module docstring); ``block`` the side of the
+    cells the estimate is taken on.  Levels saturate at 255.  Each output channel holds the
+    same grey levels, so the result stays a grey frame for
     :func:`~pftrack.cues.intensity.is_gray`.
     """
-    gray = to_gray(frame)
-    h, w = gray.shape
-    k = max(1, int(block))
-    sw, sh = max(1, w // k), max(1, h // k)
-    small = cv2.resize(gray, (sw, sh), interpolation=cv2.INTER_AREA).astype(np.float32)
-    s = float(sigma) * max(h, w) / k
-    if s > 0:
-        small = cv2.GaussianBlur(small, (0, 0), s, borderType=cv2.BORDER_REFLECT)
-    small = np.maximum(small, np.float32(1.0))
-    inv = np.float32(small.mean()) / small  # L_mean / L: the frame's mean level is kept
-    if strength != 1.0:
-        inv = np.power(inv, np.float32(strength))
-    gain = cv2.resize(inv, (w, h), interpolation=cv2.INTER_LINEAR)
-    q = cv2.multiply(gray, gain, dtype=cv2.CV_8U)
-    return cv2.cvtColor(q, cv2.COLOR_GRAY2BGR)
+    return QuotientImage(sigma, strength=strength, block=block)(frame)

@@ -42,7 +42,9 @@ class ColorModelParams(Params):
         "Grey input under changing light: 'quotient' divides every grey frame by its own smoothed copy (the "
         "self-quotient image, pftrack.cues.illumination; Wang et al. 2004, a single-scale Retinex), so that a "
         "lamp or shade that changes the target's grey levels differently from the rest of the frame cancels; "
-        "'none' uses the grey levels as they are (global equalisation only). Colour input is never changed."))
+        "'none' uses the grey levels as they are (global equalisation only). Colour input is never changed, nor are "
+        "the frames of a tracker started by init_auto or init_detect (a given histogram or detector sees the frames "
+        "as they are)."))
     illumination_sigma: float = param(0.1, gt=0, le=2, doc=(
         "'quotient': std of the Gaussian illumination estimate, as a fraction of the frame's larger side (the "
         "light must be smooth at this scale for Q = I / (G * I) to cancel it)."))

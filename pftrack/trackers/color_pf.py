@@ -47,7 +47,7 @@ import numpy as np
 
 from ..cues.color import blend_model, reachable_roi, warmup
 from ..cues.histogram_cue import ColorCue
-from ..cues.illumination import illumination_quotient
+from ..cues.illumination import QuotientImage
 from ..cues.intensity import channel_levels, is_gray
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
@@ -221,12 +221,14 @@ class ColorParticleFilter(SearchMixin, Tracker):
                 alpha=p.alpha, detector=LossDetector(history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                                      sd_floor_background=p.score_sd_floor)
             ) if self._quotient and p.illumination_check else None
+            self._quotient_image = (QuotientImage(p.illumination_sigma, strength=p.illumination_strength)
+                                    if self._quotient else None)
         if not self._quotient:
             return frame
         self._raw = frame
-        if self._raw_check is not None and not first:
-            self._raw_check.new_frame(frame)
-        return illumination_quotient(frame, p.illumination_sigma, strength=p.illumination_strength)
+        if self._raw_check is not None:
+            self._raw_check.new_frame()
+        return self._quotient_image(frame)
 
     # ------------------------------------------------------------------ init
     def _start_tracking(self, states: np.ndarray, log_lik: np.ndarray | None = None) -> None:

@@ -9,7 +9,10 @@ did, and a search can acquire one while the target is still hidden (docs/robustn
 tracker's: learned on the frames the tracker is confident on, with its own background
 statistics and score history (:class:`~pftrack.filtering.loss.LossDetector`, the two-class
 test of the colour PFs).  It is consulted at re-acquisition only: a candidate whose raw
-histogram the test calls background (``LLR < 0``) is refused.
+histogram the test calls background (``LLR < 0``) is refused.  It equalises a frame only
+when it looks at one.  ``learn_every`` > 1 learns on every k-th confident frame only; 5 saved
+0.1 ms per frame but re-acquired 0.72 of the tune split's reappearances against 0.80, so the
+tracker learns on every one.
 """
 
 from __future__ import annotations
@@ -25,28 +28,39 @@ class RawGreyCheck:
     """The grey histogram model and loss test of the untransformed frames (see the module docstring)."""
 
     def __init__(self, *, gray_bins, kernel: str, max_pixels: int, gradient_threshold: float, alpha: float,
-                 detector: LossDetector):
+                 detector: LossDetector, learn_every: int = 1):
         self.cue = ColorCue("gray", None, kernel, max_pixels, gray_bins=tuple(gray_bins),
                             gradient_threshold=gradient_threshold)
         self.alpha = float(alpha)
         self.detector = detector
         self.sqrt_q: np.ndarray | None = None
         self.q: np.ndarray | None = None
+        self.learn_every = max(1, int(learn_every))
+        self._confident = 0
+        self._stale = True  # the cue's equalisation table is not this frame's
 
     def init(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
-        self.cue.new_frame(frame)
+        self._stale = True
+        self._confident = 0
+        self._equalised(frame)
         q = self.cue.histogram(frame, ellipse)
         s = q.sum()
         self.q = q / s if s > 0 else np.full_like(q, 1.0 / q.size)
         self.sqrt_q = np.sqrt(self.q)
         self.detector.reset(1.0)
 
-    def new_frame(self, frame: np.ndarray) -> None:
-        """The equalisation table of this frame (call once per frame before the other methods)."""
-        self.cue.new_frame(frame)
+    def new_frame(self) -> None:
+        """A new frame begins (its equalisation table is computed when first needed)."""
+        self._stale = True
+
+    def _equalised(self, frame: np.ndarray) -> None:
+        if self._stale:
+            self.cue.new_frame(frame)
+            self._stale = False
 
     def rho(self, frame: np.ndarray, ellipses: np.ndarray) -> np.ndarray:
         """Bhattacharyya coefficients of a batch of ellipses with the raw model (NaN: no pixel in the frame)."""
+        self._equalised(frame)
         e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
         h, w = frame.shape[:2]
         feats = self.cue.prepare(frame, reachable_roi(e, w, h), self.cue.step_for(e))
@@ -54,7 +68,12 @@ class RawGreyCheck:
         return np.where(tot > 0, r, np.nan)
 
     def learn(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
-        """A confident frame: the estimate's raw score joins the history and its histogram the model."""
+        """A confident frame: on every ``learn_every``-th, the estimate's raw score joins the history and its
+        histogram the model."""
+        self._confident += 1
+        if (self._confident - 1) % self.learn_every:
+            return
+        self._equalised(frame)
         e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
         hist = self.cue.histogram(frame, e)
         if hist.sum() <= 0:
