@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.cues.illumination import illumination_quotient
+from pftrack.cues.illumination import QuotientImage, illumination_quotient
 from pftrack.cues.intensity import is_gray
 from pftrack.geometry import iou
 
@@ -59,6 +59,15 @@ def test_a_uniform_gain_passes_through_and_the_output_stays_grey():
     assert np.abs(q1.astype(np.float64) * 0.5 - q2).mean() < 1.0
     # a BGR grey frame and its single channel give the same image
     assert np.array_equal(illumination_quotient(cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)), q1)
+
+
+@pytest.mark.parametrize("shape", [(120, 160), (10, 12), (8, 40), (40, 8), (17, 33), (1, 1)])
+def test_a_flat_frame_stays_flat_at_any_size(shape):
+    q = QuotientImage()
+    for level in (100, 30):  # the kept buffers are refilled on every frame
+        out = q(np.full(shape, level, np.uint8))
+        assert out.shape == (*shape, 3)
+        assert np.all(out == level)
 
 
 def test_a_smooth_light_field_is_divided_out():

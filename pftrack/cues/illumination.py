@@ -54,8 +54,8 @@ class QuotientImage:
     def __call__(self, frame: np.ndarray) -> np.ndarray:
         gray = to_gray(frame)
         h, w = gray.shape
-        k = self.block
-        sw, sh = max(1, w // k), max(1, h // k)
+        k = max(1, min(self.block, w, h))  # a frame smaller than a block is one cell per pixel row or column
+        sw, sh = w // k, h // k
         # exact k x k block means of the largest whole-block part (OpenCV's fast integer-factor path); the
         # strip of fewer than k pixels left over at the right and bottom is covered by the bilinear resize
         small = cv2.resize(gray[:sh * k, :sw * k], (sw, sh), interpolation=cv2.INTER_AREA).astype(np.float32)
