@@ -96,7 +96,7 @@ def test_colour_input_is_never_changed():
     for name in ("color-pf", "fusion-pf"):
         t = pftrack.create_tracker(name, seed=0, illumination="quotient")
         t.init(frame, (20, 15, 20, 20))
-        assert t._quotient is False
+        assert t._quotient is None
         assert t._transform_input(frame, first=False) is frame
 
 
@@ -149,8 +149,8 @@ def test_automatic_initialisation_leaves_the_frames_as_they_are():
     frames, boxes = spot_scene(0, n=3)
     t = pftrack.create_tracker("color-pf", seed=0, illumination="quotient")
     t.init(frames[0], boxes[0])
-    assert t._quotient
+    assert t._quotient is not None
     hist = t.cue.histogram(frames[0], np.array([45.0, 100.0, 15.0, 20.0]))
     t.init_auto(frames[0], hist, (30, 40))
-    assert not t._quotient and t._raw_check is None
+    assert t._quotient is None and t._raw_check is None
     assert t._transform_input(frames[1], first=False) is frames[1]

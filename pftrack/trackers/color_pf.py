@@ -48,7 +48,7 @@ import numpy as np
 from ..cues.color import blend_model, reachable_roi, warmup
 from ..cues.histogram_cue import ColorCue
 from ..cues.illumination import QuotientImage
-from ..cues.intensity import channel_levels, is_gray
+from ..cues.intensity import channel_levels
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
 from ..filtering.loss import LossDetector
@@ -59,7 +59,7 @@ from ..geometry import Box, box_to_ellipse, displacement_rate, in_frame_fraction
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
-from .raw_check import RawGreyCheck
+from .raw_check import RawGreyCheck, illumination_stages
 
 __all__ = ["ColorModelParams", "ColorPF", "ColorPFParams", "ColorParticleFilter"]
 
@@ -94,8 +94,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         if detector is not None and not callable(detector):
             raise ParameterError("detector must be a callable frame -> boxes")
         self.detector = detector
-        self._quotient = False  # grey input lit anew (illumination="quotient"), decided by init
-        self._raw_check: RawGreyCheck | None = None  # its check of re-acquisitions on the untransformed frames
+        self._quotient: QuotientImage | None = None  # illumination="quotient" on grey input (decided by init)
+        self._raw_check: RawGreyCheck | None = None  # its re-acquisition check on the untransformed frames
         self._raw: np.ndarray | None = None  # the untransformed frame
         warmup()
         self._reset()
@@ -212,23 +212,14 @@ class ColorParticleFilter(SearchMixin, Tracker):
     # ------------------------------------------------------------------ input
     def _transform_input(self, frame: np.ndarray, *, first: bool) -> np.ndarray:
         """Grey input with ``illumination="quotient"``: the self-quotient image (decided on the first frame)."""
-        p = self.params
         if first:
-            self._quotient = p.illumination == "quotient" and (
-                p.color_space == "gray" or (p.color_space == "auto" and is_gray(frame)))
-            self._raw_check = RawGreyCheck(
-                gray_bins=p.gray_bins, kernel=p.kernel, max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold,
-                alpha=p.alpha, detector=LossDetector(history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
-                                                     sd_floor_background=p.score_sd_floor)
-            ) if self._quotient and p.illumination_check else None
-            self._quotient_image = (QuotientImage(p.illumination_sigma, strength=p.illumination_strength)
-                                    if self._quotient else None)
-        if not self._quotient:
+            self._quotient, self._raw_check = illumination_stages(self.params, frame)
+        if self._quotient is None:
             return frame
         self._raw = frame
         if self._raw_check is not None:
             self._raw_check.new_frame()
-        return self._quotient_image(frame)
+        return self._quotient(frame)
 
     # ------------------------------------------------------------------ init
     def _start_tracking(self, states: np.ndarray, log_lik: np.ndarray | None = None) -> None:

@@ -57,7 +57,7 @@ class SearchMixin:
         self._shape = frame.shape[:2]
         self.frame_index = 0
         self._reset()
-        self._quotient, self._raw_check = False, None  # a given histogram is of the frames as they are
+        self._quotient, self._raw_check = None, None  # a given histogram is of the frames as they are
         self._set_model(hist)
         self.size = (w / 2.0, h / 2.0)
         if regions is not None:
@@ -83,7 +83,7 @@ class SearchMixin:
         self._shape = frame.shape[:2]
         self.frame_index = 0
         self._reset()
-        self._quotient, self._raw_check = False, None  # the detector sees the frames as they are
+        self._quotient, self._raw_check = None, None  # the detector sees the frames as they are
         box = self._best_detection(frame)
         if box is not None:
             return self._init(frame, box)

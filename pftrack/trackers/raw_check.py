@@ -21,7 +21,22 @@ import numpy as np
 
 from ..cues.color import blend_model, reachable_roi
 from ..cues.histogram_cue import ColorCue
+from ..cues.illumination import QuotientImage
+from ..cues.intensity import is_gray
 from ..filtering.loss import LossDetector
+
+
+def illumination_stages(p, frame: np.ndarray) -> tuple[QuotientImage | None, "RawGreyCheck | None"]:
+    """For a colour tracker's parameters ``p`` (:class:`~pftrack.trackers.color_params.ColorModelParams`) and
+    its first frame: the self-quotient transform of its input (``illumination="quotient"`` on grey input) and
+    the re-acquisition check on the untransformed frames (``illumination_check``), each None when off."""
+    if not (p.illumination == "quotient" and (p.color_space == "gray" or (p.color_space == "auto" and is_gray(frame)))):
+        return None, None
+    check = RawGreyCheck(
+        gray_bins=p.gray_bins, kernel=p.kernel, max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold,
+        alpha=p.alpha, detector=LossDetector(history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
+                                             sd_floor_background=p.score_sd_floor)) if p.illumination_check else None
+    return QuotientImage(p.illumination_sigma, strength=p.illumination_strength), check
 
 
 class RawGreyCheck:
