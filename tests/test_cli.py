@@ -71,6 +71,13 @@ def test_bad_input_exits_2(args, needle, clip, tmp_path, capsys):
     assert needle in one_line_error(capsys)
 
 
+def test_missing_camera_is_one_line_on_the_terminal(tmp_path, capfd):
+    # OpenCV's backends write their own warnings straight to the process's stderr when a device fails to open
+    assert main(["track", "97", "--box", "1,1,5,5", "--out", str(tmp_path / "o.csv"), "--quiet"]) == 2
+    err = [line for line in capfd.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and "camera 97" in err[0]
+
+
 def test_corrupt_frame_keeps_earlier_rows(tmp_path, capsys):
     d = tmp_path / "frames"
     d.mkdir()

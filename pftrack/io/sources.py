@@ -13,6 +13,7 @@ then skipped and counted in :attr:`FrameSource.skipped`).  Frame numbers start a
 from __future__ import annotations
 
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
@@ -147,6 +148,21 @@ class ImageFolderSource(FrameSource):
             yield i, read_image(path), path.name
 
 
+@contextmanager
+def _quiet_opencv():
+    """OpenCV's log level lowered to errors for the block (its backends warn on every device they fail to open)."""
+    log = getattr(getattr(cv2, "utils", None), "logging", None)
+    if log is None:
+        yield
+        return
+    level = log.getLogLevel()
+    log.setLogLevel(min(level, log.LOG_LEVEL_ERROR))
+    try:
+        yield
+    finally:
+        log.setLogLevel(level)
+
+
 class VideoSource(FrameSource):
     """Frames decoded from a video file or a camera by OpenCV."""
 
@@ -155,7 +171,8 @@ class VideoSource(FrameSource):
     def __init__(self, target: str | int, name: str, *, skip_bad_frames: bool = False):
         super().__init__(name, skip_bad_frames=skip_bad_frames)
         self.target = target
-        self.cap = cv2.VideoCapture(target)
+        with _quiet_opencv():  # OpenCV's own warnings on a failed open would precede our one-line error
+            self.cap = cv2.VideoCapture(target)
         if not self.cap.isOpened():
             self.cap.release()
             what = "camera" if isinstance(target, int) else "video"
