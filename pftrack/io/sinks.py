@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 
 from ..errors import FormatError, OutputError
+from .quiet import quiet_opencv
 
 CSV_HEADER = "frame,x,y,w,h,score,lost"
 
@@ -163,7 +164,8 @@ class VideoSink:
     def write(self, frame: np.ndarray) -> None:
         h, w = frame.shape[:2]
         if self._writer is None:
-            self._writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*self.fourcc), self.fps, (w, h))
+            with quiet_opencv():
+                self._writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*self.fourcc), self.fps, (w, h))
             if not self._writer.isOpened():
                 self._writer = None
                 raise OutputError(f"{self.path}: cannot open a {self.fourcc} video writer")

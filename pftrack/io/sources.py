@@ -13,7 +13,6 @@ then skipped and counted in :attr:`FrameSource.skipped`).  Frame numbers start a
 from __future__ import annotations
 
 import warnings
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
@@ -24,6 +23,7 @@ from ..errors import FrameError, SourceError
 from ..frames import as_bgr_uint8
 from .datasets import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, read_sequence
 from .prefetch import prefetch
+from .quiet import quiet_opencv
 
 
 def read_image(path: Path) -> np.ndarray | None:
@@ -148,21 +148,6 @@ class ImageFolderSource(FrameSource):
             yield i, read_image(path), path.name
 
 
-@contextmanager
-def _quiet_opencv():
-    """OpenCV's log level lowered to errors for the block (its backends warn on every device they fail to open)."""
-    log = getattr(getattr(cv2, "utils", None), "logging", None)
-    if log is None:
-        yield
-        return
-    level = log.getLogLevel()
-    log.setLogLevel(min(level, log.LOG_LEVEL_ERROR))
-    try:
-        yield
-    finally:
-        log.setLogLevel(level)
-
-
 class VideoSource(FrameSource):
     """Frames decoded from a video file or a camera by OpenCV."""
 
@@ -171,7 +156,7 @@ class VideoSource(FrameSource):
     def __init__(self, target: str | int, name: str, *, skip_bad_frames: bool = False):
         super().__init__(name, skip_bad_frames=skip_bad_frames)
         self.target = target
-        with _quiet_opencv():  # OpenCV's own warnings on a failed open would precede our one-line error
+        with quiet_opencv():  # OpenCV's own warnings on a failed open would precede our one-line error
             self.cap = cv2.VideoCapture(target)
         if not self.cap.isOpened():
             self.cap.release()
