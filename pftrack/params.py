@@ -194,7 +194,8 @@ class Params:
         for key in merged:
             if key not in known:
                 close = difflib.get_close_matches(key, sorted(known), n=3)
-                hint = f"; did you mean {', '.join(close)}?" if close else f"; valid: {', '.join(sorted(known))}"
+                hint = (f"; did you mean {', '.join(close)}?" if close else
+                        f"; valid: {', '.join(sorted(known))}" if known else " (it takes no parameters)")
                 raise ParameterError(f"unknown parameter '{key}' for {cls.__name__}{hint}")
         return cls(**merged)
 

@@ -49,6 +49,7 @@ def test_track_writes_one_row_per_frame(clip, tmp_path, capsys):
     (["track", "{clip}"], "initial box"),
     (["track", "{clip}", "--box", "1,1,5,5", "--tracker", "nope"], "unknown tracker"),
     (["track", "{clip}", "--box", "1,1,5,5", "--param", "bogus=1"], "unknown parameter"),
+    (["track", "{clip}", "--box", "1,1,5,5", "--tracker", "opencv-csrt", "--param", "sigma=1"], "takes no parameters"),
     (["track", "{clip}", "--box", "1,1,5,5", "--param", "n_particles=0"], "n_particles"),
     (["track", "{clip}", "--box", "1,1,5,5", "--param", "sigma=abc"], "sigma"),
     (["track", "{clip}", "--box", "1,1,5,5", "--param", "novalue"], "KEY=VALUE"),
