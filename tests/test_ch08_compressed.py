@@ -196,6 +196,8 @@ def test_cli_mot_mv_cd_and_activity(tmp_path, capsys):
     assert not (tmp_path / "none.csv").exists()  # bad input is refused before any output is written
     assert main(["mot", str(tmp_path / "missing.mp4"), "--detector", "mv"]) == 2
     assert "error" in capsys.readouterr().err
+    assert main(["activity", str(tmp_path)]) == 2
+    assert "is a folder" in capsys.readouterr().err
 
 
 def test_block_energy_at_matches_the_full_pseudo_residual():

@@ -107,7 +107,8 @@ class MVSource:
         av = require_av()
         self.name = str(path)
         if not Path(self.name).is_file():
-            raise SourceError(f"{path}: no such file (the mv detector needs a compressed video file)")
+            what = "is a folder" if Path(self.name).is_dir() else "no such file"
+            raise SourceError(f"{path}: {what} (motion vectors need a compressed video file)")
         try:
             with av.open(self.name) as c:
                 if not c.streams.video:
