@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import cv2
 import numpy as np
 
 from pftrack.cues.intensity import is_gray
@@ -96,3 +97,23 @@ def test_eval_reports_both_lost_flag_rates(tmp_path, capsys):
     assert rows and rows[0]["lost_recall"] != "" and rows[0]["false_lost"] != ""
     assert float(rows[0]["absent_frames"]) > 0
     assert "lost recall" in (rep / "index.html").read_text(encoding="utf-8")
+
+
+def test_synth_gray_option_greys_each_seed_and_keeps_its_other_nuisances(tmp_path, capsys):
+    from pftrack.cli import main
+
+    assert main(["synth", "vanish", "--seeds", "0-5", "--gray", "1", "--out", str(tmp_path / "g")]) == 0
+    assert main(["synth", "vanish", "--seeds", "0-5", "--out", str(tmp_path / "d")]) == 0
+    changed = 0
+    for s in range(6):
+        g = json.loads((tmp_path / "g" / f"vanish-{s:03d}" / "meta.json").read_text())
+        d = json.loads((tmp_path / "d" / f"vanish-{s:03d}" / "meta.json").read_text())
+        assert g["gray"] is True
+        ng, nd = dict(g["nuisances"]), dict(d["nuisances"])
+        assert {k for k in ng if ng[k] != nd[k]} <= {"gray"}
+        changed += not d["gray"]
+        seq = read_sequence(tmp_path / "g" / f"vanish-{s:03d}")
+        assert is_gray(cv2.imread(str(seq.frames[0])))
+    assert changed >= 1  # at least one seed was in colour by default
+    assert main(["synth", "camouflage", "--gray", "1", "--out", str(tmp_path / "c")]) == 2
+    assert main(["synth", "vanish", "--gray", "1.5", "--out", str(tmp_path / "c")]) == 2

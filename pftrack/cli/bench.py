@@ -101,6 +101,10 @@ def cmd_bench(args) -> int:
     return 0
 
 
+#: synthetic scene kinds whose nuisances (grey frames among them) are drawn from the seed (pftrack.synth.varied)
+GRAY_KINDS = ("exit", "leave", "teleport", "vanish", "varied")
+
+
 def add_synth(sub) -> None:
     from ..synth import SCENES
 
@@ -121,6 +125,10 @@ def add_synth(sub) -> None:
                                     "sequence folder")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
+    p.add_argument("--gray", type=float, default=None, metavar="P",
+                   help="probability that a scene is grey (the scenes with drawn nuisances: "
+                        f"{', '.join(sorted(GRAY_KINDS))}; default their own, 0.3). The other nuisances of a seed "
+                        "stay the same, so --gray 1 gives each seed's scene in grey")
     p.set_defaults(func=cmd_synth)
 
 
@@ -143,6 +151,13 @@ def cmd_synth(args) -> int:
         raise ParameterError("no seeds given")
     out = Path(args.out)
     image = None
+    draw = {}
+    if args.gray is not None:
+        if args.kind not in GRAY_KINDS:
+            raise ParameterError(f"--gray applies to the scenes {', '.join(GRAY_KINDS)}, not {args.kind!r}")
+        if not 0.0 <= args.gray <= 1.0:
+            raise ParameterError(f"--gray is a probability in [0, 1], got {args.gray}")
+        draw["gray"] = args.gray
     if args.kind == "twocam":
         from ..errors import SourceError
         from ..io.datasets import detect_layout
@@ -184,7 +199,7 @@ def cmd_synth(args) -> int:
 
             export_stereo_scene(stereo_rail_scene(sd), out / f"stereo-rail-{sd:03d}")
         else:
-            export_otb(SCENES[args.kind](sd), out / f"{args.kind}-{sd:03d}")
+            export_otb(SCENES[args.kind](sd, **draw), out / f"{args.kind}-{sd:03d}")
     (out / "README.txt").write_text(f"Synthetic '{args.kind}' scenes, seeds {args.seeds}, written by pftrack synth.\n",
                                     encoding="utf-8")
     print(f"wrote {len(seeds)} '{args.kind}' sequences to {out}", file=sys.stderr)
