@@ -154,3 +154,21 @@ def test_automatic_initialisation_leaves_the_frames_as_they_are():
     t.init_auto(frames[0], hist, (30, 40))
     assert t._quotient is None and t._raw_check is None
     assert t._transform_input(frames[1], first=False) is frames[1]
+
+
+def test_track_command_runs_the_quotient_option_on_grey_video(tmp_path, capsys):
+    from pftrack.cli import main
+    from pftrack.io import read_track_csv
+
+    frames, boxes = spot_scene(2, n=25)
+    folder = tmp_path / "img"
+    folder.mkdir()
+    for i, f in enumerate(frames, 1):
+        cv2.imwrite(str(folder / f"{i:04d}.png"), f[..., 0])  # single-channel files: a monochrome camera
+    out = tmp_path / "t.csv"
+    box = ",".join(str(v) for v in boxes[0])
+    assert main(["track", str(folder), "--box", box, "--out", str(out), "--quiet",
+                 "--param", "illumination=quotient"]) == 0
+    rows = read_track_csv(out)
+    assert rows.shape == (25, 7)
+    assert np.mean([iou(tuple(r[1:5]), b) for r, b in zip(rows[1:], boxes[1:])]) > 0.6
