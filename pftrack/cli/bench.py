@@ -101,12 +101,9 @@ def cmd_bench(args) -> int:
     return 0
 
 
-#: synthetic scene kinds whose nuisances (grey frames among them) are drawn from the seed (pftrack.synth.varied)
-GRAY_KINDS = ("exit", "leave", "teleport", "vanish", "varied")
-
-
 def add_synth(sub) -> None:
     from ..synth import SCENES
+    from ..synth.varied import DRAWN_NUISANCE_SCENES
 
     p = sub.add_parser("synth", help="write seeded synthetic scenes with exact ground truth as OTB folders",
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
@@ -127,7 +124,7 @@ def add_synth(sub) -> None:
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.add_argument("--gray", type=float, default=None, metavar="P",
                    help="probability that a scene is grey (the scenes with drawn nuisances: "
-                        f"{', '.join(sorted(GRAY_KINDS))}; default their own, 0.3). The other nuisances of a seed "
+                        f"{', '.join(DRAWN_NUISANCE_SCENES)}; default their own, 0.3). The other nuisances of a seed "
                         "stay the same, so --gray 1 gives each seed's scene in grey")
     p.set_defaults(func=cmd_synth)
 
@@ -136,6 +133,7 @@ def cmd_synth(args) -> int:
     from ..errors import ParameterError
     from ..io.sinks import prepare_output
     from ..synth import SCENES, export_otb
+    from ..synth.varied import DRAWN_NUISANCE_SCENES
 
     seeds: list[int] = []
     try:
@@ -153,8 +151,8 @@ def cmd_synth(args) -> int:
     image = None
     draw = {}
     if args.gray is not None:
-        if args.kind not in GRAY_KINDS:
-            raise ParameterError(f"--gray applies to the scenes {', '.join(GRAY_KINDS)}, not {args.kind!r}")
+        if args.kind not in DRAWN_NUISANCE_SCENES:
+            raise ParameterError(f"--gray applies to the scenes {', '.join(DRAWN_NUISANCE_SCENES)}, not {args.kind!r}")
         if not 0.0 <= args.gray <= 1.0:
             raise ParameterError(f"--gray is a probability in [0, 1], got {args.gray}")
         draw["gray"] = args.gray

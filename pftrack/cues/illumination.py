@@ -15,10 +15,10 @@ Under the Lambertian model ``I = R L`` with an illumination ``L`` that is smooth
 scale ``sigma``, ``G_sigma * I ≈ L (G_sigma * R)``, so ``Q ≈ R / (G_sigma * R)``: the
 light cancels and what is left is the reflectance relative to its surroundings.
 
-:func:`illumination_quotient` returns ``I (S_mean / S)^gamma`` with ``S = G_sigma * I``: the
-quotient scaled back to the frame's mean level ``S_mean`` (a uniform gain is left for the
-grey features' global equalisation), and with ``gamma < 1`` only part of the local light
-divided out.
+:func:`illumination_quotient` returns ``I S_mean / S`` with ``S = G_sigma * I``: the quotient
+scaled back to the frame's mean level ``S_mean`` (a uniform gain is left for the grey
+features' global equalisation).  Dividing out only half of the light, ``I (S_mean / S)^0.5``,
+kept too little of the gain under a drifting lamp (docs/robustness.md).
 
 The price: whatever varies at scales above ``sigma`` is divided out too, the scene's own
 bright and dark areas included, so a patch of background can come to resemble the target
@@ -44,9 +44,8 @@ class QuotientImage:
     """:func:`illumination_quotient` with its full-size intermediate images kept between calls (a tracker calls
     it on every frame of one size)."""
 
-    def __init__(self, sigma: float = 0.1, *, strength: float = 1.0, block: int = 16):
+    def __init__(self, sigma: float = 0.1, *, block: int = 16):
         self.sigma = float(sigma)
-        self.strength = float(strength)
         self.block = max(1, int(block))
         self._gain: np.ndarray | None = None
         self._q: np.ndarray | None = None
@@ -64,8 +63,6 @@ class QuotientImage:
             small = cv2.GaussianBlur(small, (0, 0), s, borderType=cv2.BORDER_REFLECT)
         small = np.maximum(small, np.float32(1.0))
         inv = np.float32(small.mean()) / small  # S_mean / S: the frame's mean level is kept
-        if self.strength != 1.0:
-            inv = np.power(inv, np.float32(self.strength))
         if self._gain is None or self._gain.shape != (h, w):
             self._gain = np.empty((h, w), np.float32)
             self._q = np.empty((h, w), np.uint8)
@@ -81,13 +78,12 @@ class QuotientImage:
         return cv2.cvtColor(self._q, cv2.COLOR_GRAY2BGR)
 
 
-def illumination_quotient(frame: np.ndarray, sigma: float = 0.1, *, strength: float = 1.0, block: int = 16) -> np.ndarray:
+def illumination_quotient(frame: np.ndarray, sigma: float = 0.1, *, block: int = 16) -> np.ndarray:
     """The self-quotient image of a grey (or BGR, converted to grey) frame, as a BGR ``uint8`` frame.
 
     ``sigma`` is the std of the Gaussian illumination estimate as a fraction of the frame's
-    larger side; ``strength`` is gamma (see the module docstring); ``block`` the side of the
-    cells the estimate is taken on.  Levels saturate at 255.  Each output channel holds the
+    larger side; ``block`` the side of the cells the estimate is taken on.  Levels saturate at 255.  Each output channel holds the
     same grey levels, so the result stays a grey frame for
     :func:`~pftrack.cues.intensity.is_gray`.
     """
-    return QuotientImage(sigma, strength=strength, block=block)(frame)
+    return QuotientImage(sigma, block=block)(frame)

@@ -284,6 +284,9 @@ def teleport_scene(seed: int = 0, n_frames: int = 110, **draw) -> SceneSpec:
     return _spec(seed, n_frames, "teleport", nz, [tgt, *_distractors(rng, nz, n_frames, avoid=(x0, y0))], [occ])
 
 
+#: the scenes whose nuisances (grey frames among them) come from draw_nuisances, so they accept its arguments
+DRAWN_NUISANCE_SCENES = ("exit", "leave", "teleport", "vanish", "varied")
+
 VARIED_SCENES = {
     "camouflage": camouflage_scene,
     "teleport": teleport_scene,

@@ -49,9 +49,6 @@ class ColorModelParams(Params):
     illumination_sigma: float = param(0.1, gt=0, le=2, doc=(
         "'quotient': std of the Gaussian illumination estimate, as a fraction of the frame's larger side (the "
         "light must be smooth at this scale for Q = I / (G * I) to cancel it)."))
-    illumination_strength: float = param(1.0, ge=0, le=1, doc=(
-        "'quotient': the fraction gamma of the local light variation that is divided out, I (L_mean / L)^gamma "
-        "(1: the self-quotient image; smaller keeps more of the absolute grey levels)."))
     illumination_check: bool = param(True, doc=(
         "'quotient': re-acquisition also asks a grey histogram model of the untransformed frames, learned on the "
         "confident frames with its own background statistics and history (pftrack.trackers.raw_check): a "

@@ -309,8 +309,7 @@ class SearchMixin:
         e_ell = self._ellipses(extra)
         fh, fw = self._shape
         x0, y0, x1, y1 = reachable_roi(e_ell, fw, fh)
-        r = feats.roi
-        if p.relit_search == "off" and r[0] <= x0 and r[1] <= y0 and x1 <= r[2] and y1 <= r[3]:
+        if p.relit_search == "off" and roi[0] <= x0 and roi[1] <= y0 and x1 <= roi[2] and y1 <= roi[3]:
             # inside the first layer's quantised region (the usual case): scored on the same features
             e_rho, e_tot = self.cue.rho(feats, e_ell, self._sqrt_q)
             e_feats = feats
@@ -320,8 +319,8 @@ class SearchMixin:
         e_ll = np.where(np.isfinite(e_ll), e_ll, -np.inf)
         e_prior = self._position_log_prior(extra)
         both = None if prior is None else np.concatenate([prior, e_prior])
-        r0, r1 = roi, e_feats.roi
-        box = (min(r0[0], r1[0]), min(r0[1], r1[1]), max(r0[2], r1[2]), max(r0[3], r1[3]))
+        r1 = e_feats.roi
+        box = (min(roi[0], r1[0]), min(roi[1], r1[1]), max(roi[2], r1[2]), max(roi[3], r1[3]))
         return (np.concatenate([states, extra]), np.concatenate([ell, e_ell]), np.concatenate([rho, e_rho]),
                 np.concatenate([tot, e_tot]), np.concatenate([loglik, e_ll]), both, box)
 
