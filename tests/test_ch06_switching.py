@@ -215,8 +215,15 @@ def test_compiled_kernel_histogram_and_mean_shift_equal_the_numpy_reference():
     compiled = [fs.kernel_histogram(joint, 144, *c) for c in cases]
     ms = fs.weighted_meanshift(weights, (45.0, 22.0), (8.0, 6.0), origin=(0, 0))
     ms_off = fs.weighted_meanshift(weights, (145.0, 222.0), (8.0, 6.0), origin=(100, 200), max_iter=3)
+    model = fs.kernel_histogram(joint, 144, (10, 10, 40, 40), 15.0, 15.0, 15.0, 15.0)
+    # centres inside, across the border, outside (NaN) and on the half-pixel grid
+    centres = np.array([[30.0, 25.0], [2.5, 58.5], [-40.0, 10.0], [79.5, 0.5], [41.25, 33.75]])
+    rhos = fs.kernel_rhos_at(joint, model, centres, 17.0, 23.0)
     previous = set_numba_enabled(False)
     try:
+        ref = fs.kernel_rhos_at(joint, model, centres, 17.0, 23.0)
+        assert np.array_equal(np.isnan(rhos), np.isnan(ref)) and np.isnan(rhos[2])
+        assert np.allclose(rhos[~np.isnan(rhos)], ref[~np.isnan(ref)], rtol=0, atol=1e-12)
         for c, h in zip(cases, compiled):
             assert np.array_equal(h, fs.kernel_histogram(joint, 144, *c))
         for got, kw in ((ms, {}), (ms_off, {"origin": (100, 200), "max_iter": 3})):

@@ -229,12 +229,16 @@ def kernel_histogram(joint: np.ndarray, n_joint: int, window: tuple[int, int, in
 
 @njit
 def _kernel_hist(joint, i0, j0, i1, j1, cx, cy, hx, hy, h):
+    dx2 = np.empty(i1 - i0)
+    for c in range(i1 - i0):
+        dx2[c] = ((c + 0.5 - cx) / hx) ** 2
     for r in range(j1 - j0):
-        dy = (r + 0.5 - cy) / hy
+        dy2 = ((r + 0.5 - cy) / hy) ** 2
+        row = joint[j0 + r]
         for c in range(i1 - i0):
-            dx = (c + 0.5 - cx) / hx
-            r2 = dx ** 2 + dy ** 2
-            h[joint[j0 + r, i0 + c]] += 1.0 - r2 if r2 <= 1.0 else 0.0
+            r2 = dx2[c] + dy2
+            if r2 <= 1.0:
+                h[row[i0 + c]] += 1.0 - r2
 
 
 def kernel_window(shape: tuple[int, int], cx: float, cy: float, sx: float, sy: float):
@@ -250,6 +254,11 @@ def kernel_window(shape: tuple[int, int], cx: float, cy: float, sx: float, sy: f
 def kernel_rhos_at(joint: np.ndarray, model: np.ndarray, centres: np.ndarray, sx: float, sy: float) -> np.ndarray:
     """:func:`kernel_rhos` of the ellipses of size ``(sx, sy)`` at ``centres`` ``(M, 2)`` (region coordinates); NaN
     where the window is empty or holds no kernel weight."""
+    if numba_enabled():
+        out = np.empty(len(centres))
+        _kernel_rhos_at(joint, np.ascontiguousarray(model, dtype=np.float64),
+                        np.ascontiguousarray(centres, dtype=np.float64).reshape(-1, 2), float(sx), float(sy), out)
+        return out
     out = np.full(len(centres), np.nan)
     wins = [kernel_window(joint.shape, float(cx), float(cy), sx, sy) for cx, cy in centres]
     ok = np.array([i1 > i0 and j1 > j0 for i0, j0, i1, j1, _, _ in wins], dtype=bool)
@@ -258,6 +267,30 @@ def kernel_rhos_at(joint: np.ndarray, model: np.ndarray, centres: np.ndarray, sx
         out[ok] = kernel_rhos(joint, model, np.array([wn[:4] for wn in sel]), np.array([wn[4:] for wn in sel]),
                               sx / 2, sy / 2)
     return out
+
+
+@njit
+def _kernel_rhos_at(joint, model, centres, sx, sy, out):
+    """:func:`kernel_rhos_at` compiled: :func:`kernel_window` and :func:`_kernel_rhos` per centre."""
+    h, w = joint.shape
+    hist = np.empty(model.shape[0])
+    for m in range(centres.shape[0]):
+        cx, cy = centres[m, 0], centres[m, 1]
+        i0, i1 = max(int(cx - sx / 2), 0), min(int(math.ceil(cx + sx / 2)) + 1, w)
+        j0, j1 = max(int(cy - sy / 2), 0), min(int(math.ceil(cy + sy / 2)) + 1, h)
+        out[m] = np.nan
+        if i1 <= i0 or j1 <= j0:
+            continue
+        hist[:] = 0.0
+        _kernel_hist(joint, i0, j0, i1, j1, cx - i0, cy - j0, sx / 2, sy / 2, hist)
+        s = 0.0
+        for b in range(hist.shape[0]):
+            s += hist[b]
+        if s > 0:
+            r = 0.0
+            for b in range(hist.shape[0]):
+                r += math.sqrt(hist[b] / s * model[b])
+            out[m] = r
 
 
 def refine_centre(joint: np.ndarray, model: np.ndarray, origin: tuple[int, int], c, size, *, radius: int = 2,

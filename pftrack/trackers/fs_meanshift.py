@@ -35,7 +35,7 @@ import cv2
 import numpy as np
 
 from ..cues import feature_selection as fs
-from ..cues.intensity import equalization_lut
+from ..cues.intensity import equalization_lut, to_gray
 from ..filtering.loss import LossDetector, RunningThreshold, confidence
 from ..geometry import Box
 from ..params import Params, param
@@ -146,9 +146,8 @@ class FSMeanShift(WorkingResolution, Tracker):
         obj, ring = fs.ring_masks((y1 - y0, x1 - x0), box, inner=p.ring_inner, outer=p.ring_outer, origin=(x0, y0))
         self.pair = self._choose(self._init_bins, obj, ring, None)
         self._set_pair(self.pair, current=None)
-        g = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
         self._tshape = _template_shape(w, h)
-        self._init_patch = self._patch(g, self.c, self.size)
+        self._init_patch = self._patch(frame, self.c, self.size)
         self.thresh = RunningThreshold(window=p.threshold_window, k=p.threshold_sigma, sd_floor=p.threshold_floor)
         self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
                                  sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor)
@@ -161,10 +160,13 @@ class FSMeanShift(WorkingResolution, Tracker):
         return TrackState(box=tuple(float(v) for v in box), score=1.0, lost=False, info={"pair": self.pair})
 
     def _new_frame(self, frame: np.ndarray) -> None:
-        self._eq_lut = equalization_lut(frame) if "Ieq" in self.candidates else None
+        # the equalisation table of "Ieq" is computed on the first use in this frame (most frames bin other features)
+        self._frame, self._eq_lut = frame, None
 
     def _bins(self, region: np.ndarray, names) -> np.ndarray:
         p = self.params
+        if self._eq_lut is None and "Ieq" in names:
+            self._eq_lut = equalization_lut(self._frame)
         return fs.bin_images(region, names, bins=p.bins, grad_threshold=p.grad_threshold, eq_lut=self._eq_lut)
 
     @staticmethod
@@ -201,13 +203,15 @@ class FSMeanShift(WorkingResolution, Tracker):
         self.H_i = fs.joint_histogram(joint0, self._n_joint, self._init_kernel)
         self.H_m = self.H_i.copy() if current is None else current
 
-    def _patch(self, gray: np.ndarray, c, size) -> np.ndarray:
+    def _patch(self, frame: np.ndarray, c, size) -> np.ndarray:
+        """The grey NCC patch of the box of ``size`` at ``c`` (only the box's pixels are converted to grey)."""
         w, h = size
         x0, y0 = int(round(c[0] - w / 2)), int(round(c[1] - h / 2))
-        fh, fw = gray.shape
+        fh, fw = frame.shape[:2]
         x1, y1 = min(max(x0 + int(round(w)), 1), fw), min(max(y0 + int(round(h)), 1), fh)
         x0, y0 = min(max(x0, 0), x1 - 1), min(max(y0, 0), y1 - 1)
-        return cv2.resize(gray[y0:y1, x0:x1], self._tshape[::-1], interpolation=cv2.INTER_AREA).astype(np.float32)
+        crop = to_gray(frame[y0:y1, x0:x1])
+        return cv2.resize(crop, self._tshape[::-1], interpolation=cv2.INTER_AREA).astype(np.float32)
 
     # -- one local step ----------------------------------------------------------------------------
     def _local(self, frame: np.ndarray, start: np.ndarray, size: np.ndarray):
@@ -287,8 +291,7 @@ class FSMeanShift(WorkingResolution, Tracker):
         elif p.model_update == "pooled":
             self.H_m = 0.5 * (self.H_i + H_c)
         else:
-            g = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
-            cur = self._patch(g, self.c, self.size)
+            cur = self._patch(frame, self.c, self.size)
             s = float(cv2.matchTemplate(cur, self._init_patch, cv2.TM_CCOEFF_NORMED)[0, 0])
             s = min(max(s if np.isfinite(s) else 0.0, 0.0), 1.0)
             self.H_m = (1.0 - s) * self.H_i + s * H_c
