@@ -27,6 +27,8 @@ import math
 
 import numpy as np
 
+from .._numba import njit, np_sum, numba_enabled
+
 
 def rotation(theta: float) -> np.ndarray:
     """``R(theta) = [[cos, sin], [-sin, cos]]`` (Eq. 9)."""
@@ -76,9 +78,10 @@ def rotated_to_axis_box(cx: float, cy: float, h: float, w: float, theta: float) 
     return float(lo[0]), float(lo[1]), float(hi[0] - lo[0]), float(hi[1] - lo[1])
 
 
-def _support(bins_shape, origin, y, sigma):
-    """Pixel grid of the ellipse's bounding rectangle: (xs, ys, offsets (n,2), d (n,), flat idx)."""
-    hgt, wid = bins_shape
+def _support(bins, origin, y, sigma):
+    """The pixels of ``bins`` (pixel ``(0, 0)`` at ``origin``) under the ellipse ``d <= 1`` of ``sigma`` at ``y``,
+    in row order: ``(offsets x, offsets y, d, their bins)``; None for a degenerate or empty kernel."""
+    hgt, wid = bins.shape
     if not (np.all(np.isfinite(sigma)) and np.linalg.det(sigma) > 1e-9):
         return None  # a degenerate kernel covers no pixel
     ex = math.sqrt(max(sigma[0, 0], 1e-12))
@@ -88,24 +91,48 @@ def _support(bins_shape, origin, y, sigma):
     j0, j1 = max(int(math.floor(ly - ey)), 0), min(int(math.ceil(ly + ey)) + 1, hgt)
     if i1 <= i0 or j1 <= j0:
         return None
+    inv = np.linalg.inv(sigma)
+    if numba_enabled():
+        n = (j1 - j0) * (i1 - i0)
+        X, Y, d, B = np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=bins.dtype)
+        k = _gather_ellipse(bins, i0, i1, j0, j1, float(lx), float(ly), inv[0, 0], inv[0, 1], inv[1, 1], X, Y, d, B)
+        return X[:k], Y[:k], d[:k], B[:k]
     xs = np.arange(i0, i1) + 0.5 - lx
     ys = np.arange(j0, j1) + 0.5 - ly
     X, Y = np.meshgrid(xs, ys)
-    inv = np.linalg.inv(sigma)
     d = inv[0, 0] * X * X + 2 * inv[0, 1] * X * Y + inv[1, 1] * Y * Y
     inside = d <= 1.0
-    return (j0, j1, i0, i1), X[inside], Y[inside], d[inside], inside
+    return X[inside], Y[inside], d[inside], bins[j0:j1, i0:i1][inside]
+
+
+@njit
+def _gather_ellipse(bins, i0, i1, j0, j1, lx, ly, a, b, c, X, Y, d, B):
+    """:func:`_support`'s pixels, compiled: the NumPy path's arithmetic and its boolean-mask (row) order, so the
+    offsets, ``d`` and bins are the same to the last bit; returns their count."""
+    k = 0
+    b2 = 2 * b
+    for j in range(j0, j1):
+        yv = j + 0.5 - ly
+        for i in range(i0, i1):
+            xv = i + 0.5 - lx
+            dv = a * xv * xv + b2 * xv * yv + c * yv * yv
+            if dv <= 1.0:
+                X[k] = xv
+                Y[k] = yv
+                d[k] = dv
+                B[k] = bins[j, i]
+                k += 1
+    return k
 
 
 def ellipse_histogram(bins: np.ndarray, origin: tuple[int, int], y, sigma: np.ndarray, n_bins: int
                       ) -> np.ndarray:
     """Eq. 5: the Epanechnikov-weighted histogram of the ellipse ``d(y_j) <= 1`` (normalised to sum 1;
     zeros when the ellipse covers no pixel of ``bins``, whose pixel ``(0, 0)`` is at ``origin``)."""
-    sup = _support(bins.shape, origin, y, np.asarray(sigma, dtype=np.float64))
+    sup = _support(bins, origin, y, np.asarray(sigma, dtype=np.float64))
     if sup is None:
         return np.zeros(n_bins)
-    (j0, j1, i0, i1), _, _, d, inside = sup
-    b = bins[j0:j1, i0:i1][inside]
+    _, _, d, b = sup
     h = np.bincount(b, weights=1.0 - d, minlength=n_bins).astype(np.float64)
     s = h.sum()
     return h / s if s > 0 else h
@@ -120,6 +147,60 @@ def objective(bins: np.ndarray, origin, q: np.ndarray, y, sigma: np.ndarray, gam
     """The quantity Eq. 8 climbs, ``|Sigma|^(gamma/2) rho(p(y, Sigma), q)``."""
     p = ellipse_histogram(bins, origin, y, sigma, q.shape[0])
     return float(np.linalg.det(sigma)) ** (gamma / 2.0) * bhattacharyya(p, q)
+
+
+@njit
+def _aniso_sums(X, Y, d, B, q, p, a, b, c, adapt):
+    """One iteration's sums over the support, compiled: ``(s, sw, shift x, shift y, den, Mxx, Mxy, Myy)`` with
+    ``s`` the histogram's mass (Eq. 5), ``sw`` the weights' sum (Eq. 6), the Eq. 7 shift and Eq. 8's
+    denominator and second moments about the shifted centre.  The NumPy path's numbers up to the order of
+    the sums (sequential here)."""
+    p[:] = 0.0
+    for k in range(B.shape[0]):
+        p[B[k]] += 1.0 - d[k]
+    s = np_sum(p)
+    out = np.zeros(8)
+    out[0] = s
+    if s <= 0:
+        return out
+    sw = 0.0
+    sx = 0.0
+    sy = 0.0
+    for k in range(B.shape[0]):
+        pb = p[B[k]] / s
+        w = math.sqrt(q[B[k]] / pb) if pb > 0 else 0.0
+        sw += w
+        sx += w * X[k]
+        sy += w * Y[k]
+    out[1] = sw
+    if sw <= 0:
+        return out
+    shx = sx / sw
+    shy = sy / sw
+    out[2] = shx
+    out[3] = shy
+    if adapt:
+        b2 = 2 * b
+        den = 0.0
+        mxx = 0.0
+        mxy = 0.0
+        myy = 0.0
+        for k in range(B.shape[0]):
+            xn = X[k] - shx
+            yn = Y[k] - shy
+            dn = a * xn * xn + b2 * xn * yn + c * yn * yn
+            if dn <= 1.0:
+                pb = p[B[k]] / s
+                w = math.sqrt(q[B[k]] / pb) if pb > 0 else 0.0
+                den += w * (1.0 - dn)
+                mxx += w * (xn * xn)
+                mxy += w * (xn * yn)
+                myy += w * (yn * yn)
+        out[4] = den
+        out[5] = mxx
+        out[6] = mxy
+        out[7] = myy
+    return out
 
 
 def clamp_scale(sigma: np.ndarray, det0: float, step: float) -> np.ndarray:
@@ -154,41 +235,53 @@ def aniso_mean_shift(bins: np.ndarray, origin: tuple[int, int], q: np.ndarray, y
     y = np.asarray(y0, dtype=np.float64).copy()
     sigma = np.asarray(sigma0, dtype=np.float64).copy()
     det0 = float(np.linalg.det(sigma)) if max_scale_step > 0 else 0.0
+    hist = None
     it = 0
     for it in range(1, max_iter + 1):
-        sup = _support(bins.shape, origin, y, sigma)
+        sup = _support(bins, origin, y, sigma)
         if sup is None:
             break
-        (j0, j1, i0, i1), X, Y, d, inside = sup
-        b = bins[j0:j1, i0:i1][inside]
-        p = np.bincount(b, weights=1.0 - d, minlength=n_bins)
-        s = p.sum()
-        if s <= 0:
-            break
-        p /= s
-        ratio = np.zeros(n_bins)
-        nz = p > 0
-        ratio[nz] = np.sqrt(q[nz] / p[nz])
-        w = ratio[b]
-        sw = w.sum()
-        if sw <= 0:
-            break
-        # Eq. 7: location (g constant on the support)
-        shift = np.array([np.dot(w, X), np.dot(w, Y)]) / sw
-        y_new = y + shift
-        sigma_new = sigma
-        if adapt_sigma:
-            # Eq. 8 about the new location, with the current kernel's support and weights
-            Xn, Yn = X - shift[0], Y - shift[1]
-            inv = np.linalg.inv(sigma)
-            dn = inv[0, 0] * Xn * Xn + 2 * inv[0, 1] * Xn * Yn + inv[1, 1] * Yn * Yn
-            keep = dn <= 1.0
-            wk = w[keep]
-            den = float(np.dot(wk, 1.0 - dn[keep]))
-            if den > 0:
+        X, Y, d, b = sup
+        inv = np.linalg.inv(sigma)
+        if numba_enabled():
+            if hist is None:
+                hist = np.empty(n_bins)
+            r = _aniso_sums(X, Y, d, b, q, hist, inv[0, 0], inv[0, 1], inv[1, 1], adapt_sigma)
+            if r[0] <= 0 or r[1] <= 0:
+                break
+            shift = np.array([r[2], r[3]])
+            den, M = r[4], np.array([[r[5], r[6]], [r[6], r[7]]])
+        else:
+            p = np.bincount(b, weights=1.0 - d, minlength=n_bins)
+            s = p.sum()
+            if s <= 0:
+                break
+            p /= s
+            ratio = np.zeros(n_bins)
+            nz = p > 0
+            ratio[nz] = np.sqrt(q[nz] / p[nz])
+            w = ratio[b]
+            sw = w.sum()
+            if sw <= 0:
+                break
+            # Eq. 7: location (g constant on the support)
+            shift = np.array([np.dot(w, X), np.dot(w, Y)]) / sw
+            den, M = 0.0, None
+            if adapt_sigma:
+                # Eq. 8's sums about the new location, with the current kernel's support and weights
+                Xn, Yn = X - shift[0], Y - shift[1]
+                dn = inv[0, 0] * Xn * Xn + 2 * inv[0, 1] * Xn * Yn + inv[1, 1] * Yn * Yn
+                keep = dn <= 1.0
+                wk = w[keep]
+                den = float(np.dot(wk, 1.0 - dn[keep]))
                 xk, yk = Xn[keep], Yn[keep]
                 M = np.array([[np.dot(wk, xk * xk), np.dot(wk, xk * yk)],
                               [np.dot(wk, xk * yk), np.dot(wk, yk * yk)]])
+        y_new = y + shift
+        sigma_new = sigma
+        if adapt_sigma:
+            # Eq. 8
+            if den > 0:
                 sigma_new = (2.0 / (1.0 - gamma)) * M / den
                 lam, V = np.linalg.eigh(sigma_new)
                 lam = np.maximum(lam, min_axis ** 2)
