@@ -278,19 +278,26 @@ def _kernel_rhos_at(joint, model, centres, sx, sy, out):
         cx, cy = centres[m, 0], centres[m, 1]
         i0, i1 = max(int(cx - sx / 2), 0), min(int(math.ceil(cx + sx / 2)) + 1, w)
         j0, j1 = max(int(cy - sy / 2), 0), min(int(math.ceil(cy + sy / 2)) + 1, h)
-        out[m] = np.nan
         if i1 <= i0 or j1 <= j0:
+            out[m] = np.nan
             continue
         hist[:] = 0.0
         _kernel_hist(joint, i0, j0, i1, j1, cx - i0, cy - j0, sx / 2, sy / 2, hist)
-        s = 0.0
-        for b in range(hist.shape[0]):
-            s += hist[b]
-        if s > 0:
-            r = 0.0
-            for b in range(hist.shape[0]):
-                r += math.sqrt(hist[b] / s * model[b])
-            out[m] = r
+        out[m] = _rho_of(hist, model)
+
+
+@njit
+def _rho_of(hist, model):
+    """Bhattacharyya coefficient of the normalised ``hist`` with ``model``; NaN for an empty ``hist``."""
+    s = 0.0
+    for b in range(hist.shape[0]):
+        s += hist[b]
+    if s <= 0:
+        return np.nan
+    r = 0.0
+    for b in range(hist.shape[0]):
+        r += math.sqrt(hist[b] / s * model[b])
+    return r
 
 
 def refine_centre(joint: np.ndarray, model: np.ndarray, origin: tuple[int, int], c, size, *, radius: int = 2,
@@ -338,16 +345,7 @@ def _kernel_rhos(joint, model, windows, centres, hx, hy, out):
         h[:] = 0.0
         _kernel_hist(joint, windows[m, 0], windows[m, 1], windows[m, 2], windows[m, 3], centres[m, 0], centres[m, 1],
                      hx, hy, h)
-        s = 0.0
-        for b in range(h.shape[0]):
-            s += h[b]
-        if s > 0:
-            r = 0.0
-            for b in range(h.shape[0]):
-                r += math.sqrt(h[b] / s * model[b])
-            out[m] = r
-        else:
-            out[m] = np.nan
+        out[m] = _rho_of(h, model)
 
 
 def epanechnikov(h: int, w: int, cx: float, cy: float, hx: float, hy: float) -> np.ndarray:
