@@ -299,3 +299,89 @@ def test_compiled_kernel_paths_equal_the_numpy_reference():
     for (y, s, it), (yr, sr, itr) in zip(ms, ms_ref):
         assert it == itr
         assert np.allclose(y, yr, rtol=0, atol=1e-9) and np.allclose(s, sr, rtol=1e-9, atol=1e-9)
+
+
+# --- the corrected background-weighted model of Tracker B (Ning et al. 2012) -------------------------------
+
+def _two_tone_scene():
+    """An ellipse whose one half has a colour of its own (bin 0) and whose other half has the background's
+    dominant colour (bin 1); the background is 80 % bin 1 and 20 % bins 2-3."""
+    H, W = 240, 260
+    A = an.sigma_from_box(60, 30, math.radians(30))
+    yy, xx = np.mgrid[0:H, 0:W] + 0.5
+    X, Y = xx - 130, yy - 120
+    inv = np.linalg.inv(A)
+    d = inv[0, 0] * X * X + 2 * inv[0, 1] * X * Y + inv[1, 1] * Y * Y
+    rng = np.random.default_rng(0)
+    bg = np.where(rng.random((H, W)) < 0.8, 1, rng.integers(2, 4, (H, W)))
+    u = (math.cos(math.radians(30)), math.sin(math.radians(30)))
+    obj = np.where(X * u[0] + Y * u[1] < 0, 0, 1)
+    return np.where(d <= 1, obj, bg).astype(np.int64), A, d
+
+
+def test_ring_histogram_counts_the_ring_only():
+    bins, A, d = _two_tone_scene()
+    ring = an.ring_histogram(bins, (0, 0), (130, 120), A, 4)  # out to sqrt(3) x the axes: d <= 3
+    in_ring = (d > 1) & (d <= 3)
+    assert abs(ring.sum() - in_ring.sum()) <= 2  # pixels on the boundary, up to rounding
+    assert ring[0] == 0  # the object's own colour lies inside the ellipse only
+    np.testing.assert_allclose(ring[1:], np.bincount(bins[in_ring], minlength=4)[1:], atol=2)
+
+
+def test_cbwh_weights_and_model():
+    ring = np.array([0.0, 2000.0, 250.0, 500.0])
+    np.testing.assert_allclose(an.background_weights(ring), [1.0, 0.125, 1.0, 0.5])  # min(o*/o_u, 1)
+    q = np.array([0.5, 0.5, 0.0, 0.0])
+    np.testing.assert_allclose(an.background_weighted(q, ring), [0.5, 0.0625, 0, 0] / np.float64(0.5625))
+    # weights taken on pooled bins: fine bins 0-1 and 2-3 pool to 0 and 1
+    index = an.pool_index((4,), 2)
+    np.testing.assert_array_equal(index, [0, 0, 1, 1])
+    qb = an.background_weighted(np.full(4, 0.25), ring, index)  # pooled ring [2000, 750]: weights 0.375, 1
+    np.testing.assert_allclose(qb, np.array([0.375, 0.375, 1, 1]) / 2.75)
+    np.testing.assert_array_equal(an.background_weighted(q, np.zeros(4)), q)  # no background: q itself
+
+
+def test_pool_index_matches_pool_histogram():
+    rng = np.random.default_rng(1)
+    for bins, s in (((32, 32, 32), 8), ((64,), 8), ((16, 9, 1), 8), ((32, 32, 32), 32)):
+        h = rng.random(int(np.prod(bins)))
+        idx = an.pool_index(bins, s)
+        np.testing.assert_allclose(np.bincount(idx, weights=h), an.pool_histogram(h, bins, s))
+
+
+def test_cbwh_stops_eq8_inflating_over_a_shared_background_colour():
+    """With the plain reference, Eq. 8 grows the kernel over the background that shares half the target's
+    colours; with the background-weighted model it stays near the object's size."""
+    bins, A, _ = _two_tone_scene()
+    q = an.ellipse_histogram(bins, (0, 0), (130, 120), A, 4)
+    qb = an.background_weighted(q, an.ring_histogram(bins, (0, 0), (130, 120), A, 4))
+    size = lambda M: np.linalg.det(M) ** 0.25  # noqa: E731
+    _, S_plain, _ = an.aniso_mean_shift(bins, (0, 0), q, (130, 120), A, gamma=0.33, max_iter=10)
+    y, S_cbwh, _ = an.aniso_mean_shift(bins, (0, 0), qb, (130, 120), A, gamma=0.33, max_iter=10)
+    assert size(S_plain) / size(A) > 2.0
+    assert 0.8 < size(S_cbwh) / size(A) < 1.2
+    assert np.hypot(y[0] - 130, y[1] - 120) < 0.5 * 30  # on the object, leaning to its own colour
+
+
+def test_follow_restarts_both_trackers_from_the_best_rejected_region():
+    """on_fail='follow': when both trackers fail their tests, their rejected regions compete with the held
+    output by the coefficient of Eqs. 22-23, and both restart from the winner; a held output that scores
+    higher stays."""
+    from pftrack.trackers.sift_ransac import colour_roi
+
+    frames = _textured_scene(3)
+    t = pftrack.create_tracker("keypoint-ams", max_pixels=0)
+    box0 = tuple(frames[0][1])
+    t.init(frames[0][0], box0)
+    f1, b1 = frames[1]
+    v_true = an.axis_box_to_rotated(tuple(b1))
+    x, y, w, h = b1
+    v_off = an.axis_box_to_rotated((x + 0.6 * w, y + 0.6 * h, w, h))  # mostly background
+    t.color.prepare(f1, colour_roi(v_true))
+    qp = t._pool(t.q)
+    rho_off = t._select_rho(v_off, qp)
+    chosen, v, rho = t._follow({"failed": False, "v": v_true}, v_off, qp, v_off, rho_off)
+    assert chosen == "A*" and v == v_true and rho > rho_off
+    assert t.v1 == t.v2 == v_true and t.A.v == v_true
+    chosen, v, _ = t._follow({"failed": True}, v_off, qp, v_true, t._select_rho(v_true, qp))
+    assert chosen == "held" and v == v_true  # B's region scores lower than the held output
