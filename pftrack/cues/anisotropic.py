@@ -151,11 +151,16 @@ def ring_histogram(bins: np.ndarray, origin: tuple[int, int], y, sigma: np.ndarr
     return np.bincount(b[ring], minlength=n_bins).astype(np.float64)
 
 
+def _pool_factors(bins, s: int) -> tuple[tuple[int, ...], list[int]]:
+    """The histogram shape and, per axis, how many of its bins pool into one (1: the axis is kept)."""
+    bins = tuple(int(b) for b in bins)
+    return bins, [b // s if (b > s and b % s == 0) else 1 for b in bins]
+
+
 def pool_histogram(h: np.ndarray, bins, s: int) -> np.ndarray:
     """A flattened histogram of shape ``bins`` with each axis of more than ``s`` bins pooled to ``s`` bins (when
     ``s`` divides it; other axes are kept): 32^3 RGB to s^3, or the intensity axis of a grey histogram."""
-    bins = tuple(int(b) for b in bins)
-    f = [b // s if (b > s and b % s == 0) else 1 for b in bins]
+    bins, f = _pool_factors(bins, s)
     if max(f) == 1 or h.size != int(np.prod(bins)):
         return h
     shape = [d for b, k in zip(bins, f) for d in (b // k, k)]
@@ -164,8 +169,7 @@ def pool_histogram(h: np.ndarray, bins, s: int) -> np.ndarray:
 
 def pool_index(bins, s: int) -> np.ndarray:
     """For each bin of a flattened histogram of shape ``bins``, its bin after :func:`pool_histogram`."""
-    bins = tuple(int(b) for b in bins)
-    f = [b // s if (b > s and b % s == 0) else 1 for b in bins]
+    bins, f = _pool_factors(bins, s)
     if max(f) == 1:
         return np.arange(int(np.prod(bins)))
     idx = np.indices(bins).reshape(len(bins), -1)
