@@ -259,3 +259,21 @@ def test_search_prior_prefers_the_passing_candidate_near_the_prediction():
         assert found is not None
         picks.append(found[0])
     assert np.hypot(*(picks[0] - [52.0, 60.0])) < 6 and np.hypot(*(picks[1] - [232.0, 170.0])) < 6, picks
+
+
+def test_the_switch_rule_of_each_alarm():
+    """ch06.md §1.10: on an occlusion alarm a near candidate always takes over; a far one, with
+    occlusion_take='closer', only when its covariance distance beats the local window's ('any': always).
+    A sudden-motion alarm needs a higher rho; a distraction check a far candidate better on both."""
+    from pftrack.trackers.switching import takes_over
+
+    common = dict(global_rho=0.9, local_rho=0.7)
+    assert takes_over("occlusion", far=False, global_le=2.0, local_le=1.0, **common)
+    assert not takes_over("occlusion", far=True, global_le=2.0, local_le=1.0, **common)  # a look-alike elsewhere
+    assert takes_over("occlusion", far=True, global_le=0.5, local_le=1.0, **common)
+    assert takes_over("occlusion", far=True, global_le=2.0, local_le=1.0, occlusion_take="any", **common)
+    assert takes_over("motion", far=True, global_le=2.0, local_le=1.0, global_rho=0.8, local_rho=0.7)
+    assert not takes_over("motion", far=True, global_le=0.1, local_le=1.0, global_rho=0.6, local_rho=0.7)
+    assert takes_over(None, far=True, global_le=0.5, local_le=1.0, distraction_bar=0.3, **common)
+    assert not takes_over(None, far=True, global_le=0.8, local_le=1.0, distraction_bar=0.3, **common)
+    assert not takes_over(None, far=False, global_le=0.1, local_le=1.0, **common)

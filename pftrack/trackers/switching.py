@@ -10,7 +10,9 @@ only: the back-projection of the selected features above ``fg_threshold``, ch06.
 (ch06.md §1.10; the chapter sketches the detectors, ours are marked proposed):
 
 1. **occlusion**: the local distance ``d = sqrt(1 - rho)`` exceeds ``mu + 3 sigma`` of the
-   confident frames' distances (the chapter's "3 sigma from the mean", online, without labels);
+   confident frames' distances (the chapter's "3 sigma from the mean", online, without labels); by
+   default (``occlusion_take``) a candidate more than half a box away then takes over only if its
+   covariance matches the model better than the local window's;
 2. **sudden motion** (proposed): mean shift hits its iteration cap, or the back-projection mass
    in the converged window falls below ``sudden_mass`` of its running mean;
 3. **distraction** (proposed; off by default): every ``distraction_every`` frames the global search runs as a
@@ -77,8 +79,31 @@ class SwitchingParams(FSMeanShiftParams):
         "constant-velocity prediction from the last confident local frame, s half the box's mean side times "
         "(0.5 + 0.1 k) after k frames, A the frame's area and e this value (the chance of reappearing anywhere). "
         "0 (the chapter's rule): the first candidate by covariance distance that passes."))
+    occlusion_take: Literal["any", "closer"] = param("closer", doc=(
+        "On an occlusion alarm, which verified global candidate replaces the local window. 'any': the first "
+        "(the chapter's switch). 'closer' (pftrack's default): one more than half a box away only when its "
+        "covariance distance (Eq. 30) to the model is lower than the local window's, since the local window may "
+        "still hold the partly covered target and a look-alike elsewhere can pass the colour test. Chosen on the "
+        "tune split (5 real, 8 PETS people, 10 grey copies, 5 initial boxes each): mean AUC 0.435 against 0.432, "
+        "tracking 48.5 % against 48.3 %, no group lower; the synthetic scenes unchanged."))
     le_sigma: float = param(3.0, gt=0, doc="A global result is accepted within mu_LE + this x sigma_LE.")
     le_floor: float = param(0.05, ge=0, doc="Floor on sigma_LE.")
+
+
+def takes_over(reason: str | None, *, far: bool, global_le: float, local_le: float, global_rho: float,
+               local_rho: float, occlusion_take: str = "closer", distraction_bar: float = 0.0) -> bool:
+    """Does a verified global candidate replace the local window (ch06.md §1.10)?
+
+    ``reason`` is what started the search: ``"occlusion"`` (the chapter's switch; with ``occlusion_take=
+    "closer"`` a ``far`` candidate must also be nearer the covariance model than the local window),
+    ``"motion"`` (a sudden-motion alarm: the local result was not rejected, so the candidate must score a
+    higher rho) or None (a distraction check: a far candidate better by ``distraction_bar`` in covariance
+    distance and by rho)."""
+    if reason == "occlusion":
+        return occlusion_take == "any" or not far or global_le < local_le
+    if reason == "motion":
+        return global_rho > local_rho
+    return far and global_le < local_le - distraction_bar and global_rho > local_rho
 
 
 class Switching(FSMeanShift):
@@ -226,14 +251,10 @@ class Switching(FSMeanShift):
             found = self._verify(frame, res)
             if found is not None:
                 gc, gsize, grho, gH, gd, gdist = found
-                far = np.hypot(*(gc - c)) > 0.5 * min(size)
-                if reason == "occlusion":
-                    take = True
-                elif reason == "motion":  # the local result was not rejected: the global one must beat it
-                    take = grho > rho
-                else:
-                    take = far and gdist < d_le - p.distraction_margin * self.le_thresh.sd and grho > rho
-                if take:
+                far = bool(np.hypot(*(gc - c)) > 0.5 * min(size))
+                if takes_over(reason, far=far, global_le=gdist, local_le=d_le, global_rho=grho, local_rho=rho,
+                              occlusion_take=p.occlusion_take,
+                              distraction_bar=p.distraction_margin * self.le_thresh.sd):
                     if reason is None:
                         reason = "distraction"
                     c, size, rho, H_c, d, d_le = gc, gsize, grho, gH, gd, gdist
