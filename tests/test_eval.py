@@ -292,6 +292,43 @@ def test_eval_cli_end_to_end(dataset, tmp_path, capsys):
     assert main(["eval", str(dataset), "--trackers", "meanshift[zzz=1]", "--quiet"]) == 2
 
 
+def test_sre_perturbations_follow_otb():
+    """OTB's SRE: 8 shifts of 10 % of the size (4 centre, 4 corner) and scales 0.8, 0.9, 1.1, 1.2 about the
+    centre; clipped to the frame; a box shifted out of it falls back to the ground truth's."""
+    from pftrack.eval.runner import SRE_PERTURBATIONS, perturbed_box
+
+    assert len(SRE_PERTURBATIONS) == 12
+    box = (100.0, 50.0, 40.0, 20.0)
+    got = [perturbed_box(box, k) for k in range(12)]
+    centres = {(round(x + w / 2 - 120, 6), round(y + h / 2 - 60, 6)) for x, y, w, h in got[:8]}
+    assert centres == {(dx, dy) for dx in (-4.0, 0.0, 4.0) for dy in (-2.0, 0.0, 2.0)} - {(0.0, 0.0)}
+    assert all((w, h) == (40.0, 20.0) for _, _, w, h in got[:8])
+    for (x, y, w, h), s in zip(got[8:], (0.8, 0.9, 1.1, 1.2)):
+        assert (w, h) == pytest.approx((40 * s, 20 * s)) and (x + w / 2, y + h / 2) == pytest.approx((120, 60))
+    assert perturbed_box((0.0, 0.0, 40.0, 20.0), 0, (200, 100)) == pytest.approx((0.0, 0.0, 36.0, 20.0))
+    assert perturbed_box((0.0, 0.0, 1.0, 1.0), 4, (200, 100)) == (0.0, 0.0, 1.0, 1.0)
+
+
+def test_sre_protocol_runs_every_tracker_from_each_perturbed_box(dataset, tmp_path, capsys):
+    from pftrack.cli import main
+    from pftrack.io import discover_sequences
+
+    jobs = build_jobs(discover_sequences(dataset), parse_tracker_list("meanshift,color-pf[n_particles=30]"),
+                      seeds=1, protocol="sre")
+    assert len(jobs) == 2 * 2 * 12  # deterministic or not, once per perturbation; --seeds is ignored
+    job = next(j for j in jobs if j.tracker.name == "meanshift" and j.seed == 9)
+    rec = run_job(job)
+    gt = read_sequence(job.sequence).groundtruth
+    x, y, w, h = gt[0]
+    assert rec["init_box"] == pytest.approx([x + 0.05 * w, y + 0.05 * h, 0.9 * w, 0.9 * h])
+    assert rec["auc"] > 0.3 and rec["protocol"] == "sre"
+    rc = main(["eval", str(dataset / "seqA"), "--trackers", "meanshift", "--protocol", "sre", "--workers", "1",
+               "--quiet", "--report", str(tmp_path / "r")])
+    out = capsys.readouterr().out
+    assert rc == 0 and "SRE (OTB's spatial robustness evaluation)" in out and "| `meanshift` |" in out
+    assert (tmp_path / "r" / "success.png").is_file()
+
+
 @pytest.mark.shared_data
 def test_csrt_auc_agrees_with_independent_scorer_on_dev_sequence():
     seq_path = shared_sequence("otb_crossing")

@@ -18,8 +18,9 @@ def add_eval(sub) -> None:
     p.add_argument("--trackers", required=True,
                    help="comma-separated tracker specs: NAME or NAME[key=value;...]; 'all', 'ours', 'baselines', "
                         "'opencv' expand to registered families; with --protocol mot: multi-pf[...]")
-    p.add_argument("--protocol", choices=["ope", "vot", "mot"], default="ope",
-                   help="OTB one-pass (default), VOT reset, or MOTChallenge multi-object (trackers: multi-pf[...])")
+    p.add_argument("--protocol", choices=["ope", "sre", "vot", "mot"], default="ope",
+                   help="OTB one-pass (default); OTB spatial robustness (sre: every tracker from 12 perturbed first "
+                        "boxes, --seeds ignored); VOT reset; or MOTChallenge multi-object (trackers: multi-pf[...])")
     p.add_argument("--seeds", type=int, default=1, help="seeds per stochastic tracker (default 1)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local worker processes")

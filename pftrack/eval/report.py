@@ -26,6 +26,7 @@ from typing import Iterable
 import numpy as np
 
 from ..io.sinks import prepare_output
+from .runner import ONE_PASS
 
 CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "mean_iou", "failures", "accuracy",
                "fps", "frames", "lost_frames", "lost_recall", "false_lost", "absent_frames", "reappearances",
@@ -162,6 +163,11 @@ def _ratio(a: float, b: float) -> float:
     return a / b if math.isfinite(b) and b > 0 else float("nan")
 
 
+def _one_pass(protocols) -> bool:
+    """Are any of these protocols scored by the OTB curves (one pass from a first box: OPE, SRE)?"""
+    return any(p in ONE_PASS for p in protocols)
+
+
 def summary_markdown(records: list[dict], *, command: str | None = None, title: str = "Evaluation") -> str:
     agg = aggregate(records)
     protocols = sorted({r["protocol"] for r in records})
@@ -173,15 +179,20 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         seqs = ", ".join(agg["sequences"])
         lines += [f"Protocol: mot. Sequences: {seqs}. Seeds: {', '.join(map(str, seeds))}.", ""]
         return _mot_markdown(records, agg, lines)
-    lines += [f"Protocol: {', '.join(protocols)}. Seeds: {', '.join(map(str, seeds))} "
-              "(deterministic trackers run once). fps = update calls per second on one core, decode excluded; "
-              "per sequence the median over seeds, overall the median over sequences.", ""]
-    if "ope" in protocols:
+    runs = ("Runs: one per perturbed first box (the seed is its index)" if protocols == ["sre"] else
+            f"Seeds: {', '.join(map(str, seeds))} (deterministic trackers run once)")
+    lines += [f"Protocol: {', '.join(protocols)}. {runs}. fps = update calls per second on one core, decode "
+              "excluded; per sequence the median over seeds, overall the median over sequences.", ""]
+    if "sre" in protocols:
+        lines += ["SRE (OTB's spatial robustness evaluation): every tracker runs once from each of 12 perturbed first "
+                  "boxes (shifted by 10 % of the size in 8 directions, scaled by 0.8, 0.9, 1.1, 1.2); the seed is the "
+                  "perturbation, and the figures are means over the 12 runs, scored against the ground truth.", ""]
+    if _one_pass(protocols):
         lines += ["The lost flag as a detector: *lost recall* = fraction of the frames with the target absent or "
                   "fully hidden on which `lost` is raised; *false-lost rate* = fraction of the frames with IoU >= 0.5 "
                   "on which it is raised (means over the sequences where each is defined); *re-acquired* = "
                   "reappearances after which the target is covered with `lost` down within 15 frames.", ""]
-    ope = "ope" in protocols
+    ope = _one_pass(protocols)
     vot = "vot" in protocols
     head = ["tracker"]
     if ope:
@@ -249,7 +260,7 @@ def _plots(records: list[dict], out: Path) -> list[str]:
     made = []
     agg = aggregate(records)
     trackers, seqs = agg["trackers"], agg["sequences"]
-    ope = [r for r in records if r["protocol"] == "ope" and r.get("success")]
+    ope = [r for r in records if _one_pass([r["protocol"]]) and r.get("success")]
     if ope:
         for kind, xs, key, xl in (("success", THRESHOLDS, "success", "overlap threshold"),
                                   ("precision", PRECISION_THRESHOLDS, "precision_curve", "location error threshold (px)")):
@@ -360,7 +371,7 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
     agg = aggregate(records)
     e = html.escape
     protocols = sorted({r["protocol"] for r in records})
-    ope = "ope" in protocols
+    ope = _one_pass(protocols)
     rows = []
     for t in agg["trackers"]:
         o = agg["overall"][t]

@@ -37,6 +37,32 @@ from .metrics import lost_detection, ope_scores, valid_gt
 
 RESULT_VERSION = 3  # 2: lost-flag detection metrics; 3: identification rate (MOT)
 
+#: OTB's spatial robustness evaluation (Wu, Lim & Yang, CVPR 2013, §4.2): the first box shifted by 10 % of its
+#: size in 8 directions (4 centre shifts, 4 corner shifts) and scaled by 0.8, 0.9, 1.1 and 1.2 about its centre;
+#: each entry is ``(dx, dy, scale)``, shifts as fractions of the width and height.  Run ``k`` of a tracker on a
+#: sequence starts from perturbation ``k`` (its seed).
+SRE_PERTURBATIONS = ((-0.1, 0.0, 1.0), (0.1, 0.0, 1.0), (0.0, -0.1, 1.0), (0.0, 0.1, 1.0),
+                     (-0.1, -0.1, 1.0), (0.1, -0.1, 1.0), (-0.1, 0.1, 1.0), (0.1, 0.1, 1.0),
+                     (0.0, 0.0, 0.8), (0.0, 0.0, 0.9), (0.0, 0.0, 1.1), (0.0, 0.0, 1.2))
+#: protocols that run one pass from a first box and are scored by the OTB curves
+ONE_PASS = ("ope", "sre")
+
+
+def perturbed_box(box, k: int, frame_size: tuple[int, int] | None = None) -> tuple[float, float, float, float]:
+    """The first box under SRE perturbation ``k`` (:data:`SRE_PERTURBATIONS`), clipped to the frame
+    ``(width, height)`` when given (the part of the box inside it)."""
+    x, y, w, h = (float(v) for v in box)
+    dx, dy, s = SRE_PERTURBATIONS[int(k) % len(SRE_PERTURBATIONS)]
+    nw, nh = w * s, h * s
+    x0, y0 = x + dx * w + (w - nw) / 2, y + dy * h + (h - nh) / 2
+    x1, y1 = x0 + nw, y0 + nh
+    if frame_size is not None:
+        x0, y0 = max(x0, 0.0), max(y0, 0.0)
+        x1, y1 = min(x1, float(frame_size[0])), min(y1, float(frame_size[1]))
+        if x1 - x0 < 1 or y1 - y0 < 1:  # shifted out of the frame: the unperturbed box
+            return x, y, w, h
+    return x0, y0, x1 - x0, y1 - y0
+
 
 # ---------------------------------------------------------------------------------------------- specs
 
@@ -138,7 +164,7 @@ class Job:
     sequence: str  # path
     sequence_name: str
     seed: int
-    protocol: str  # "ope" | "vot"
+    protocol: str  # "ope" | "sre" | "vot" | "mot"
     threads: int = 1
     extra: tuple[tuple[str, Any], ...] = ()
 
@@ -175,8 +201,12 @@ def build_jobs(sequences: Iterable, trackers: list[TrackerConfig], *, seeds: int
     jobs = []
     for seq in sequences:
         for cfg in trackers:
-            stochastic = True if protocol == "mot" else get_spec(cfg.name).cls.stochastic
-            for seed in range(seeds if stochastic else 1):
+            if protocol == "sre":  # every tracker once from each perturbed first box
+                runs = len(SRE_PERTURBATIONS)
+            else:
+                stochastic = True if protocol == "mot" else get_spec(cfg.name).cls.stochastic
+                runs = seeds if stochastic else 1
+            for seed in range(runs):
                 jobs.append(Job(cfg, str(seq.path), seq.name, seed, protocol, threads))
     return jobs
 
@@ -231,8 +261,9 @@ def run_job(job: Job) -> dict:
     rec: dict[str, Any] = {"version": RESULT_VERSION, "tracker": job.tracker.label, "name": job.tracker.name,
                            "params": dict(job.tracker.params), "sequence": job.sequence_name, "seed": job.seed,
                            "protocol": job.protocol, "frames": len(seq.frames)}
-    if job.protocol == "ope":
+    if job.protocol in ONE_PASS:
         start = seq.init_index
+        first = seq.init_box
         boxes = np.full((len(seq.frames), 4), np.nan)
         lost_flags = np.zeros(len(seq.frames), dtype=bool)
         upd_s = 0.0
@@ -241,7 +272,10 @@ def run_job(job: Job) -> dict:
             if t < start:
                 continue
             if t == start:
-                st = tracker.init(frame, seq.init_box)
+                if job.protocol == "sre":
+                    first = perturbed_box(seq.init_box, job.seed, (frame.shape[1], frame.shape[0]))
+                    rec["init_box"] = list(first)
+                st = tracker.init(frame, first)
             else:
                 t0 = time.perf_counter()
                 st = tracker.update(frame)
