@@ -60,7 +60,7 @@ def main(path: str) -> None:
     runs = Path(path).parent / "runs"
     if runs.is_dir():
         tp: dict[tuple[str, str], list[float]] = defaultdict(list)
-        for f in sorted(runs.glob("ope__*.json")):
+        for f in sorted((p for pat in ("ope__*.json", "sre__*.json") for p in runs.glob(pat))):
             rec = json.loads(f.read_text())
             curve = rec.get("success") or []
             if len(curve) == 21:  # thresholds 0, 0.05, ..., 1: index 10 is IoU > 0.5
