@@ -196,7 +196,8 @@ def background_weighted(q: np.ndarray, ring: np.ndarray, index: np.ndarray | Non
     if index is None:
         w = background_weights(ring)
     else:
-        w = background_weights(np.bincount(index, weights=ring, minlength=int(index.max()) + 1))[index]
+        # the last fine bin falls in the last pooled bin (row-major pooling)
+        w = background_weights(np.bincount(index, weights=ring, minlength=int(index[-1]) + 1))[index]
     qb = q * w
     s = qb.sum()
     return qb / s if s > 0 else q

@@ -49,10 +49,16 @@ ONE_PASS = ("ope", "sre")
 
 
 def perturbed_box(box, k: int, frame_size: tuple[int, int] | None = None) -> tuple[float, float, float, float]:
-    """The first box under SRE perturbation ``k`` (:data:`SRE_PERTURBATIONS`), clipped to the frame
-    ``(width, height)`` when given (the part of the box inside it)."""
+    """The first box under SRE perturbation ``k`` (:data:`SRE_PERTURBATIONS`); see :func:`perturb`."""
+    return perturb(box, SRE_PERTURBATIONS[int(k) % len(SRE_PERTURBATIONS)], frame_size)
+
+
+def perturb(box, shift_scale: tuple[float, float, float], frame_size: tuple[int, int] | None = None
+            ) -> tuple[float, float, float, float]:
+    """``box`` shifted by ``(dx, dy)`` times its width and height and scaled by ``s`` about its centre, clipped
+    to the frame ``(width, height)`` when given (the part of the box inside it)."""
     x, y, w, h = (float(v) for v in box)
-    dx, dy, s = SRE_PERTURBATIONS[int(k) % len(SRE_PERTURBATIONS)]
+    dx, dy, s = shift_scale
     nw, nh = w * s, h * s
     x0, y0 = x + dx * w + (w - nw) / 2, y + dy * h + (h - nh) / 2
     x1, y1 = x0 + nw, y0 + nh
