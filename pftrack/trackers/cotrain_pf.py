@@ -35,6 +35,8 @@ import numpy as np
 
 from ..cues import cotrain as ct
 from ..cues.intensity import is_gray
+from ..cues.scale_search import search_scale
+from ..cues.structure import StructureCue
 from ..filtering.particles import effective_sample_size, weights_from_log
 from ..filtering.resampling import multinomial, systematic
 from ..filtering.seir import seir
@@ -129,6 +131,27 @@ class CoTrainPFParams(Params):
         "A frame counts as a miss when the contrast is below this fraction of the running median."))
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive misses before lost is raised.")
     lost_spread: float = param(2.0, ge=1, le=10, doc="Random-walk std multiplier while lost (re-acquisition).")
+    scale_search: Literal["ncc", "none"] = param("ncc", doc=(
+        "How the box's size follows the target. 'ncc': after the filter's estimate, the sizes 1/(1+scale_step), 1 "
+        "and 1+scale_step around it are compared with grey reference patches by zero-mean NCC (DSST-style, "
+        "cues.scale_search), and the best moves the estimate and the particles. 'none': the particles' scale "
+        "alone. The contrast of the object map is flat over a range of sizes (the map covers the learned core), "
+        "so on its own the size drifts (docs/cotrain.md)."))
+    scale_step: float = param(0.05, gt=0, le=0.5, doc="Relative size step of the NCC scale search per frame.")
+    scale_margin: float = param(0.04, ge=0, le=1, doc=(
+        "A size other than the current one is taken only when its NCC beats the current size's by more than this "
+        "(tune split: 0.01, 0.02, 0.03 and 0.04 tried; docs/cotrain.md)."))
+    scale_interpolate: bool = param(False, doc=(
+        "The size between the three compared ones: the vertex of the parabola through their NCC in log-scale "
+        "(cues.scale_search.vertex_ratio), so that noise moves the size by a fraction of a step. Tried on the tune "
+        "split and not kept: the fractional steps drifted (docs/cotrain.md)."))
+    scale_contrast_tol: float = param(0.02, ge=-1, le=2, doc=(
+        "A new size is taken only when the object map's contrast at it is at least the current size's minus this "
+        "(-1: not checked). The contrast is flat over the sizes that fit the map and falls for a box far too large "
+        "or too small, so the NCC chooses within the sizes the map allows."))
+    scale_rate: float = param(0.05, ge=0, le=1, doc=(
+        "Blending rate of the scale search's running grey reference, on frames that pass update_gate (the first "
+        "frame's patch is kept as a second reference)."))
 
 
 class CoTrainPF(Tracker):
@@ -178,6 +201,11 @@ class CoTrainPF(Tracker):
         fx, fy = m["scale"]
         b = np.asarray(boxes, dtype=np.float64)
         return np.column_stack([(b[:, 0] - x0) * fx, (b[:, 1] - y0) * fy, b[:, 2] * fx, b[:, 3] * fy])
+
+    @staticmethod
+    def _ellipse(box) -> tuple[float, float, float, float]:
+        x, y, w, h = box
+        return (x + w / 2, y + h / 2, w / 2, h / 2)
 
     def _boxes(self, states: np.ndarray) -> np.ndarray:
         w = states[:, 2] * self.size0[0]
@@ -266,6 +294,10 @@ class CoTrainPF(Tracker):
         m = self._maps(frame, m["region"])
         c0 = float(self._contrast(m, np.array([self.box]))[0])
         self.accepted: deque[float] = deque([max(c0, 0.05)], maxlen=10)
+        self.struct = None
+        if p.scale_search == "ncc":
+            self.struct = StructureCue(template_pixels=256, anchor=True)
+            self.struct.init(frame, self._ellipse(self.box))
         self.particles = np.column_stack([np.full(p.n_particles, self.mu[0]), np.full(p.n_particles, self.mu[1]),
                                           np.ones(p.n_particles)])
         self.last_maps = m
@@ -305,6 +337,19 @@ class CoTrainPF(Tracker):
         est = w @ X
         idx = systematic(w, self.rng) if p.resampler != "multinomial" else multinomial(w, self.rng)
         self.particles = X[idx]
+        if self.struct is not None and not self.lost:
+            self.struct.new_frame()
+            r, _, _ = search_scale(self.struct, frame, (est[0], est[1], est[2] * self.size0[0] / 2,
+                                                        est[2] * self.size0[1] / 2), step=p.scale_step,
+                                   margin=p.scale_margin, interpolate=p.scale_interpolate)
+            if r != 1.0 and p.scale_contrast_tol >= 0:
+                c1, cr = self._contrast(m, self._boxes(np.array([est, [est[0], est[1], est[2] * r]])))
+                if cr < c1 - p.scale_contrast_tol:
+                    r = 1.0
+            if r != 1.0:
+                est[2] *= r
+                self.particles[:, 2] *= r
+            info["scale_ratio"] = r
         bw, bh = est[2] * self.size0[0], est[2] * self.size0[1]
         est_box = (float(est[0] - bw / 2), float(est[1] - bh / 2), float(bw), float(bh))
         c = float(self._contrast(m, np.array([est_box]))[0])
@@ -321,6 +366,8 @@ class CoTrainPF(Tracker):
             if good:
                 self.accepted.append(c)
                 self._learn(m, est_box)
+                if self.struct is not None:
+                    self.struct.update(frame, self._ellipse(est_box), p.scale_rate)
         self.last_maps = m
         info.update(contrast=c, reference=ref, region=m["region"])
         return TrackState(box=self.box, score=float(np.clip(c / ref, 0.0, 1.0)), lost=self.lost,

@@ -1,0 +1,79 @@
+"""The target's scale from a grey reference patch: NCC over a few scales around an estimate (DSST-style).
+
+A tracker whose likelihood cannot tell sizes apart still needs the box's size. Danelljan et
+al.'s DSST ("Accurate scale estimation for robust visual tracking", BMVC 2014) estimates the
+position first and then compares the target's appearance at a handful of scales around it.
+Here the appearance is the zero-mean NCC of grey patches (:class:`~pftrack.cues.structure.StructureCue`:
+a running reference and the first frame's, gain- and offset-invariant), so the estimate holds on
+grey video and under a change of light. Each scale's score is the best over a few small shifts
+of the centre, so that a position error of a pixel or two does not decide the scale.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .structure import StructureCue
+
+
+def scale_candidates(ellipse, ratios: np.ndarray, shifts: np.ndarray) -> np.ndarray:
+    """``(R*S, 4)`` ellipses ``(cx, cy, hx, hy)``: each ratio of the half-axes at each shift of the centre.
+
+    ``shifts`` is ``(S, 2)`` in units of the scaled half-axes (row ``r * S + s`` is ratio ``r``, shift ``s``)."""
+    cx, cy, hx, hy = (float(v) for v in ellipse)
+    r = np.asarray(ratios, dtype=np.float64)[:, None]
+    d = np.asarray(shifts, dtype=np.float64).reshape(-1, 2)[None, :, :]
+    ex = (cx + d[..., 0] * r * hx).ravel()
+    ey = (cy + d[..., 1] * r * hy).ravel()
+    ax = np.broadcast_to(r * hx, (r.shape[0], d.shape[1])).ravel()
+    ay = np.broadcast_to(r * hy, (r.shape[0], d.shape[1])).ravel()
+    return np.column_stack([ex, ey, ax, ay])
+
+
+def best_ratio(scores: np.ndarray, ratios: np.ndarray, n_shifts: int, margin: float = 0.0) -> tuple[float, float, float]:
+    """From the ``(R*S,)`` NCC of :func:`scale_candidates`: ``(ratio, its score, the score at ratio 1)``.
+
+    Each ratio scores the best of its shifts. A ratio other than 1 is taken only when it beats ratio 1
+    by more than ``margin`` (no change on a flat response)."""
+    per = np.asarray(scores, dtype=np.float64).reshape(len(ratios), n_shifts).max(axis=1)
+    ratios = np.asarray(ratios, dtype=np.float64)
+    i1 = int(np.argmin(np.abs(ratios - 1.0)))
+    k = int(np.argmax(per))
+    if per[k] <= per[i1] + margin:
+        k = i1
+    return float(ratios[k]), float(per[k]), float(per[i1])
+
+
+def vertex_ratio(scores: np.ndarray, step: float, n_shifts: int, margin: float = 0.0) -> tuple[float, float, float]:
+    """Like :func:`best_ratio` for the three ratios ``1/(1+step), 1, 1+step``, with the optimum between them:
+    the vertex of the parabola through the three scores in log-scale (clipped to the outer ratios).
+
+    Noise in the scores then moves the size by a fraction of a step, around zero, instead of a whole step.
+    A response that is not concave (no maximum between the outer ratios) takes the better outer ratio
+    when it beats ratio 1 by more than ``margin``, else keeps the size. Returns ``(ratio, best score, score at ratio 1)``."""
+    lo, mid, hi = np.asarray(scores, dtype=np.float64).reshape(3, n_shifts).max(axis=1)
+    best = max(lo, mid, hi)
+    curv = lo - 2.0 * mid + hi
+    if curv < 0.0:  # concave: the vertex
+        x = float(np.clip(0.5 * (lo - hi) / curv, -1.0, 1.0))
+    elif max(lo, hi) - mid > margin:
+        x = -1.0 if lo > hi else 1.0
+    else:
+        x = 0.0
+    return float(np.exp(x * np.log1p(step))), float(best), float(mid)
+
+
+def search_scale(cue: StructureCue, frame: np.ndarray, ellipse, *, step: float = 0.05, shift: float = 0.1,
+                 margin: float = 0.0, interpolate: bool = False) -> tuple[float, float, float]:
+    """The ratio in ``{1/(1+step), 1, 1+step}`` whose box around ``ellipse`` best matches the cue's reference.
+
+    The centre is also tried at ``shift`` of the half-axes to each side (9 positions). Returns
+    ``(ratio, its NCC, NCC at ratio 1)``."""
+    ratios = np.array([1.0 / (1.0 + step), 1.0, 1.0 + step])
+    g = np.array([-shift, 0.0, shift])
+    shifts = np.array([(a, b) for b in g for a in g])
+    ell = scale_candidates(ellipse, ratios, shifts)
+    scores = cue.scores(frame, None, ell)
+    if interpolate:
+        return vertex_ratio(scores, step, len(shifts), margin)
+    return best_ratio(scores, ratios, len(shifts), margin)

@@ -1,0 +1,104 @@
+"""The NCC scale search (``pftrack.cues.scale_search``) and ``cotrain-pf``'s size estimate built on it."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.cues.scale_search import best_ratio, scale_candidates, search_scale, vertex_ratio
+from pftrack.cues.structure import StructureCue
+
+
+def test_candidates_scale_the_half_axes_and_shift_in_scaled_units():
+    ell = scale_candidates((50.0, 40.0, 10.0, 20.0), [0.5, 1.0, 2.0], np.array([[0.0, 0.0], [0.1, -0.1]]))
+    assert ell.shape == (6, 4)
+    np.testing.assert_allclose(ell[0], [50, 40, 5, 10])
+    np.testing.assert_allclose(ell[1], [50.5, 39.0, 5, 10])  # shift 0.1 of the scaled half-axes
+    np.testing.assert_allclose(ell[5], [52.0, 36.0, 20, 40])
+
+
+def test_best_ratio_takes_the_best_shift_and_needs_the_margin():
+    ratios = np.array([0.9, 1.0, 1.1])
+    s = np.array([0.1, 0.5, 0.60, 0.2, 0.3, 0.58])  # 3 ratios x 2 shifts; per ratio: 0.5, 0.6, 0.58
+    assert best_ratio(s, ratios, 2) == (1.0, 0.6, 0.6)
+    s2 = np.array([0.2, 0.3, 0.5, 0.55, 0.7, 0.1])  # per ratio: 0.3, 0.55, 0.7
+    assert best_ratio(s2, ratios, 2) == (1.1, 0.7, 0.55)
+    assert best_ratio(s2, ratios, 2, margin=0.2)[0] == 1.0  # 0.7 does not beat 0.55 by more than 0.2
+
+
+def test_vertex_ratio_interpolates_in_log_scale():
+    # one shift per ratio; scores at 1/1.05, 1, 1.05
+    r, best, at1 = vertex_ratio(np.array([0.5, 0.7, 0.6]), 0.05, 1)
+    assert r == pytest.approx(1.05 ** (1 / 6)) and (best, at1) == (0.7, 0.7)  # vertex at x = 1/6 of a step
+    assert vertex_ratio(np.array([0.6, 0.7, 0.6]), 0.05, 1)[0] == 1.0  # symmetric: no change
+    assert vertex_ratio(np.array([0.2, 0.5, 0.9]), 0.05, 1)[0] == pytest.approx(1.05)  # vertex beyond: clipped
+    assert vertex_ratio(np.array([0.5, 0.4, 0.7]), 0.05, 1)[0] == pytest.approx(1.05)  # convex: the better end
+    assert vertex_ratio(np.array([0.5, 0.4, 0.7]), 0.05, 1, margin=0.5)[0] == 1.0  # ... only beyond the margin
+    # the best shift of each ratio counts (2 shifts per ratio)
+    assert vertex_ratio(np.array([0.1, 0.5, 0.7, 0.0, 0.2, 0.6]), 0.05, 2)[0] == pytest.approx(1.05 ** (1 / 6))
+
+
+def _textured_frame(rng, scale: float, size=(240, 320), centre=(160.0, 120.0), half=(24.0, 36.0)):
+    """A smooth random texture target of half-axes ``half * scale`` on a textured background."""
+    h, w = size
+    bg = cv2.GaussianBlur(rng.uniform(0, 255, (h, w)).astype(np.float32), (0, 0), 3)
+    tex = cv2.GaussianBlur(np.random.default_rng(99).uniform(0, 255, (96, 64)).astype(np.float32), (0, 0), 2)
+    tw, th = int(round(2 * half[0] * scale)), int(round(2 * half[1] * scale))
+    sprite = cv2.resize(tex, (tw, th), interpolation=cv2.INTER_LINEAR)
+    x0, y0 = int(round(centre[0] - tw / 2)), int(round(centre[1] - th / 2))
+    img = bg.copy()
+    img[y0:y0 + th, x0:x0 + tw] = sprite
+    return cv2.cvtColor(np.clip(img, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_search_scale_recovers_a_five_percent_size_change(seed):
+    rng = np.random.default_rng(seed)
+    ell = (160.0, 120.0, 24.0, 36.0)
+    cue = StructureCue(template_pixels=256, anchor=True)
+    cue.init(_textured_frame(rng, 1.0), ell)
+    for true, expect in ((1.05, 1.05), (1 / 1.05, 1 / 1.05), (1.0, 1.0)):
+        cue.new_frame()
+        r, best, at1 = search_scale(cue, _textured_frame(rng, true), ell, step=0.05)
+        assert r == pytest.approx(expect), (true, r, best, at1)
+        assert best >= at1
+
+
+def _growing_scene(seed: int, n: int = 50):
+    """A textured, distinctly coloured target drifting right while it grows from 30 x 40 to 45 x 60 px."""
+    rng = np.random.default_rng(seed)
+    h, w = 200, 260
+    bg = cv2.GaussianBlur(rng.uniform(60, 200, (h, w, 3)).astype(np.float32), (0, 0), 4)
+    tex = rng.uniform(0, 255, (60, 45)).astype(np.float32)
+    tex = cv2.GaussianBlur(tex, (0, 0), 1.5)
+    frames, boxes = [], []
+    for t in range(n):
+        s = 1.0 + 0.5 * t / (n - 1)
+        tw, th = int(round(30 * s)), int(round(40 * s))
+        cx, cy = 90 + 60 * t / (n - 1), 100.0
+        sprite = cv2.resize(tex, (tw, th))
+        col = np.stack([0.3 * sprite, 0.5 * sprite, 0.4 * sprite + 120], axis=-1)  # reddish, textured
+        x0, y0 = int(round(cx - tw / 2)), int(round(cy - th / 2))
+        img = bg.copy()
+        img[y0:y0 + th, x0:x0 + tw] = col
+        img += rng.normal(0, 2.0, img.shape)
+        frames.append(np.clip(img, 0, 255).astype(np.uint8))
+        boxes.append((x0, y0, tw, th))
+    return frames, np.array(boxes, float)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_cotrain_pf_size_follows_a_growing_target(seed):
+    """With the particles' own scale frozen, the size follows only through the NCC search."""
+    frames, gt = _growing_scene(seed)
+    sizes = {}
+    for mode in ("ncc", "none"):
+        t = pftrack.create_tracker("cotrain-pf", seed=seed, scale_search=mode, scale_noise=0.0)
+        t.init(frames[0], gt[0])
+        states = [t.update(f) for f in frames[1:]]
+        sizes[mode] = np.sqrt(states[-1].box[2] * states[-1].box[3])
+    true = np.sqrt(gt[-1, 2] * gt[-1, 3])  # 1.5 x the first size
+    assert abs(sizes["ncc"] / true - 1.0) < 0.15, (sizes, true)
+    assert sizes["none"] == pytest.approx(np.sqrt(gt[0, 2] * gt[0, 3]))
