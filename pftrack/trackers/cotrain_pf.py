@@ -15,7 +15,8 @@ Per frame (ch03.md §1.8):
    ``"contrast"`` (default) is the map's mean over the box's centre minus its mean over the ring
    around the box, times ``contrast_gain`` in the log domain, times the same gate;
 5. SEIR (Algorithm 3, :func:`pftrack.filtering.seir.seir`) or plain resampling;
-6. the weighted-mean estimate; its contrast relative to the running median is the score;
+6. the weighted-mean estimate (with ``scale_search="ncc"``, its size then chosen among three by NCC of grey
+   patches, :mod:`pftrack.cues.scale_search`); its contrast relative to the running median is the score;
 7. retraining of both classifiers when the score passes ``update_gate`` (positives from the box's
    core, chosen per ``label_mode``; negatives from outside the enlarged box, class-balanced), and
    the lost flag when it stays below ``lost_gate`` for ``lost_frames`` frames.
