@@ -65,10 +65,11 @@ def vertex_ratio(scores: np.ndarray, step: float, n_shifts: int, margin: float =
 
 def search_scale(cue: StructureCue, frame: np.ndarray, ellipse, *, step: float = 0.05, shift: float = 0.1,
                  margin: float = 0.0, interpolate: bool = False) -> tuple[float, float, float]:
-    """The ratio in ``{1/(1+step), 1, 1+step}`` whose box around ``ellipse`` best matches the cue's reference.
+    """The ratio in ``{1/(1+step), 1, 1+step}`` whose box around ``ellipse`` best matches the cue's reference
+    (:func:`best_ratio`), or with ``interpolate`` the parabola's vertex between them (:func:`vertex_ratio`).
 
     The centre is also tried at ``shift`` of the half-axes to each side (9 positions). Returns
-    ``(ratio, its NCC, NCC at ratio 1)``."""
+    ``(ratio, best NCC, NCC at ratio 1)``."""
     ratios = np.array([1.0 / (1.0 + step), 1.0, 1.0 + step])
     g = np.array([-shift, 0.0, shift])
     shifts = np.array([(a, b) for b in g for a in g])
