@@ -41,7 +41,7 @@ from ..cues.structure import StructureCue
 from ..filtering.particles import effective_sample_size, weights_from_log
 from ..filtering.resampling import multinomial, systematic
 from ..filtering.seir import seir
-from ..geometry import Box
+from ..geometry import Box, box_to_ellipse
 from ..params import Params, param
 from .base import Tracker, TrackState
 
@@ -204,11 +204,6 @@ class CoTrainPF(Tracker):
         b = np.asarray(boxes, dtype=np.float64)
         return np.column_stack([(b[:, 0] - x0) * fx, (b[:, 1] - y0) * fy, b[:, 2] * fx, b[:, 3] * fy])
 
-    @staticmethod
-    def _ellipse(box) -> tuple[float, float, float, float]:
-        x, y, w, h = box
-        return (x + w / 2, y + h / 2, w / 2, h / 2)
-
     def _boxes(self, states: np.ndarray) -> np.ndarray:
         w = states[:, 2] * self.size0[0]
         h = states[:, 2] * self.size0[1]
@@ -299,7 +294,7 @@ class CoTrainPF(Tracker):
         self.struct = None
         if p.scale_search == "ncc":
             self.struct = StructureCue(template_pixels=256, anchor=True)
-            self.struct.init(frame, self._ellipse(self.box))
+            self.struct.init(frame, box_to_ellipse(self.box))
         self.particles = np.column_stack([np.full(p.n_particles, self.mu[0]), np.full(p.n_particles, self.mu[1]),
                                           np.ones(p.n_particles)])
         self.last_maps = m
@@ -322,6 +317,24 @@ class CoTrainPF(Tracker):
         self._sig = sig
         return X
 
+    def _search_size(self, frame: np.ndarray, m: dict, est: np.ndarray, info: dict) -> float | None:
+        """``scale_search='ncc'``: move the estimate's and the particles' scale (in place) to the size the NCC
+        search chooses within the sizes the map's contrast allows.  Returns the contrast at the kept size when
+        the check computed it (else None)."""
+        p = self.params
+        self.struct.new_frame()
+        r, _, _ = search_scale(self.struct, frame, box_to_ellipse(self._boxes(est[None]))[0], step=p.scale_step,
+                               margin=p.scale_margin, interpolate=p.scale_interpolate)
+        c = None
+        if r != 1.0 and p.scale_contrast_tol >= 0:
+            c1, cr = self._contrast(m, self._boxes(np.array([est, [est[0], est[1], est[2] * r]])))
+            r, c = (1.0, c1) if cr < c1 - p.scale_contrast_tol else (r, cr)
+        if r != 1.0:
+            est[2] *= r
+            self.particles[:, 2] *= r
+        info["scale_ratio"] = r
+        return None if c is None else float(c)
+
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
         X = self._predict(frame.shape)
@@ -339,22 +352,13 @@ class CoTrainPF(Tracker):
         est = w @ X
         idx = systematic(w, self.rng) if p.resampler != "multinomial" else multinomial(w, self.rng)
         self.particles = X[idx]
+        c = None
         if self.struct is not None and not self.lost:
-            self.struct.new_frame()
-            r, _, _ = search_scale(self.struct, frame, (est[0], est[1], est[2] * self.size0[0] / 2,
-                                                        est[2] * self.size0[1] / 2), step=p.scale_step,
-                                   margin=p.scale_margin, interpolate=p.scale_interpolate)
-            if r != 1.0 and p.scale_contrast_tol >= 0:
-                c1, cr = self._contrast(m, self._boxes(np.array([est, [est[0], est[1], est[2] * r]])))
-                if cr < c1 - p.scale_contrast_tol:
-                    r = 1.0
-            if r != 1.0:
-                est[2] *= r
-                self.particles[:, 2] *= r
-            info["scale_ratio"] = r
+            c = self._search_size(frame, m, est, info)
         bw, bh = est[2] * self.size0[0], est[2] * self.size0[1]
         est_box = (float(est[0] - bw / 2), float(est[1] - bh / 2), float(bw), float(bh))
-        c = float(self._contrast(m, np.array([est_box]))[0])
+        if c is None:
+            c = float(self._contrast(m, np.array([est_box]))[0])
         ref = max(float(np.median(self.accepted)), 0.05)
         good = c >= p.update_gate * ref
         self.miss = 0 if c >= p.lost_gate * ref else self.miss + 1
@@ -369,7 +373,7 @@ class CoTrainPF(Tracker):
                 self.accepted.append(c)
                 self._learn(m, est_box)
                 if self.struct is not None:
-                    self.struct.update(frame, self._ellipse(est_box), p.scale_rate)
+                    self.struct.update(frame, box_to_ellipse(est_box), p.scale_rate)
         self.last_maps = m
         info.update(contrast=c, reference=ref, region=m["region"])
         return TrackState(box=self.box, score=float(np.clip(c / ref, 0.0, 1.0)), lost=self.lost,
