@@ -13,6 +13,7 @@ import argparse
 
 import numpy as np
 
+from pftrack.eval.metrics import success_curve
 from pftrack.frames import as_bgr_uint8
 from pftrack.geometry import iou
 from pftrack.io.datasets import read_sequence
@@ -36,8 +37,7 @@ def run(frames, gt, box0, seed: int, oracle: bool) -> float:
             x, y, w, h = t.box
             w2, h2 = t.size0[0] * sc, t.size0[1] * sc
             t.box = (x + w / 2 - w2 / 2, y + h / 2 - h2 / 2, w2, h2)
-    u = np.array(ious)
-    return float(np.mean([(u > th).mean() for th in np.linspace(0, 1, 21)])) if len(u) else float("nan")
+    return float(np.mean(success_curve(np.array(ious))))
 
 
 def main() -> None:
