@@ -1,6 +1,10 @@
 """Book ch. 3 experiments (docs/cotrain.md): co-trained maps and SEIR.
 
     python scripts/ch03_experiments.py [--data ../shared/data] [--part maps,seir,resamplers,seir-synth] [--json F]
+                                       [--colour-weight W]
+
+``--colour-weight`` is cotrain-pf's colour term in the tracker runs (default: the tracker's default; 0 gives the
+chapter's likelihood, the object map alone).
 
 * maps (C3.1): pixel AUC of the confidence maps against the DAVIS masks, frames 2-100, in an oracle region
   (the ground-truth box + 50 % per side), both learners retrained every frame from their own maps inside the
@@ -38,6 +42,7 @@ from pftrack.synth import Scene, varied_scene
 
 TUNE = ["otb_crossing", "otb_couple", "vot_bag", "otb_dragonbaby", "davis16_dog"]
 REPORT = ["otb_motorrolling", "tld_pedestrian2", "davis16_blackswan", "davis16_car-shadow"]
+TRACKER_PARAMS: dict = {}  # cotrain-pf parameters of every tracker run (--colour-weight)
 DAVIS = {"davis16_dog": "tune", "davis16_blackswan": "report", "davis16_car-shadow": "report"}
 
 
@@ -141,7 +146,7 @@ def seir_experiment(data: Path, seq: str = "otb_crossing") -> dict:
     out = {}
     s = read_sequence(data / seq)
     frames = [cv2.imread(str(p)) for p in s.frames]
-    t = pftrack.create_tracker("cotrain-pf", seed=0)
+    t = pftrack.create_tracker("cotrain-pf", seed=0, **TRACKER_PARAMS)
     t.init(frames[0], s.init_box)
     ess, loops = [], []
     for f in frames[1:]:
@@ -177,7 +182,7 @@ def seir_experiment(data: Path, seq: str = "otb_crossing") -> dict:
 
 
 def _run(frames, gt, resampler, seed):
-    t = pftrack.create_tracker("cotrain-pf", seed=seed, resampler=resampler)
+    t = pftrack.create_tracker("cotrain-pf", seed=seed, resampler=resampler, **TRACKER_PARAMS)
     i0 = int(np.argmax(np.all(np.isfinite(gt), axis=1)))
     t.init(frames[i0], tuple(gt[i0]))
     boxes, ess, spread = [tuple(gt[i0])], [], []
@@ -251,7 +256,11 @@ def main() -> None:
     ap.add_argument("--data", default="../shared/data")
     ap.add_argument("--part", default="maps,seir,resamplers,seir-synth")
     ap.add_argument("--json")
+    ap.add_argument("--colour-weight", type=float, default=None,
+                    help="cotrain-pf's colour_weight in the tracker runs (default: its default; 0: the chapter's)")
     a = ap.parse_args()
+    if a.colour_weight is not None:
+        TRACKER_PARAMS["colour_weight"] = a.colour_weight
     data = Path(a.data)
     parts = set(a.part.split(","))
     out = {}

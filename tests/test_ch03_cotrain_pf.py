@@ -196,3 +196,41 @@ def test_track_show_map_puts_the_learned_map_beside_the_frame(tmp_path, capsys):
     assert main(["track", str(d), "--box", box, "--tracker", "color-pf", "--out", str(tmp_path / "u.csv"),
                  "--video-out", str(tmp_path / "u.avi"), "--show-map", "--quiet"]) == 2
     assert "no confidence map" in capsys.readouterr().err
+
+
+def test_colour_term_improves_tracking_over_varied_scenes():
+    """The kernel colour histogram term (``colour_weight``, not in the chapter) against the object map alone,
+    over seeded varied scenes (random distractors, light, grey frames).  Measured on seeds 300-303: mean IoU
+    0.852 against 0.814."""
+    from pftrack.eval.metrics import frame_ious
+    from pftrack.synth import Scene, varied_scene
+
+    means = {0.0: [], 1.5: []}
+    for seed in range(300, 304):
+        spec = varied_scene(seed, n_frames=80)
+        scene = Scene(spec)
+        gt = scene.groundtruth(0)
+        frames = [scene.render(k)[0] for k in range(spec.n_frames)]
+        for w in means:
+            states = _run("cotrain-pf", frames, gt, seed=seed, colour_weight=w)
+            means[w].append(float(np.nanmean(frame_ious(np.array([s.box for s in states]), gt[1:]))))
+    assert np.mean(means[1.5]) >= np.mean(means[0.0]) + 0.015, means
+
+
+def test_colour_term_scores_the_particles_by_the_histogram_model():
+    """With the colour term, a particle on the target outscores one shifted off it by the term alone, and the
+    term is exactly -(1 - rho) / (2 sigma^2) times the weight."""
+    frames, gt = _textured_target_scene(7, n=3)
+    on = pftrack.create_tracker("cotrain-pf", seed=0, colour_weight=1.5)
+    off = pftrack.create_tracker("cotrain-pf", seed=0, colour_weight=0.0)
+    for t in (on, off):
+        t.init(frames[0], gt[0])
+    assert off.ccue is None
+    on._colour_frame(frames[1])
+    m = on._maps(frames[1], on._region(frames[1].shape, None))
+    cx, cy = gt[1, 0] + gt[1, 2] / 2, gt[1, 1] + gt[1, 3] / 2
+    states = np.array([[cx, cy, 1.0], [cx + 20, cy, 1.0]])
+    rho = on._colour_rho(states)
+    assert rho[0] > rho[1]
+    diff = on._log_lik(m, states) - off._log_lik(m, states)
+    assert np.allclose(diff, -1.5 * (1.0 - rho) / (2 * 0.1 ** 2))
