@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from pftrack.cues.boosting import OnlineRealBoost, ltp_codes, pixel_features, riu2_table
+from pftrack.cues.boosting import (GREY_LTP, LTP_PAIRS, OnlineRealBoost, grey_texture, ltp_codes, ltp_features,
+                                   pixel_features, riu2_table)
 
 # neighbour u = 0..7 clockwise from the right: (0,1) (1,1) (1,0) (1,-1) (0,-1) (-1,-1) (-1,0) (-1,1)
 _POS = [(1, 2), (2, 2), (2, 1), (2, 0), (1, 0), (0, 0), (0, 1), (0, 2)]
@@ -123,3 +124,20 @@ def test_cotrainer_cross_labels_teach_each_view_separately():
     n = co.learn(feats, pos_c, neg, pos_texture=pos_t, max_each=50)
     assert n == 4 * 50  # each classifier saw its own 50 positives and 50 negatives
     assert co.colour.alpha.any() and co.texture.alpha.any()
+
+
+def test_compiled_ltp_features_equal_the_pairwise_codes():
+    """The one-pass kernel gives ltp_codes' numbers for the nine channel pairs and the grey radii/thresholds,
+    borders included."""
+    rng = np.random.default_rng(3)
+    img = rng.integers(0, 256, (23, 31, 3)).astype(np.uint8)
+    riu2 = riu2_table()
+
+    def blocks(up, lo):
+        return 10 * riu2[up] + riu2[lo]
+
+    ref = np.stack([blocks(*ltp_codes(img[..., c], img[..., n], 5.0)) for c, n in LTP_PAIRS], axis=-1)
+    assert np.array_equal(ltp_features(img, LTP_PAIRS, t=5.0), ref)
+    g = img[..., 1]
+    ref = np.stack([blocks(*ltp_codes(g, g, m * 5.0, radius=r)) for r, m in GREY_LTP], axis=-1)
+    assert np.array_equal(grey_texture(g, t=5.0), ref)

@@ -25,7 +25,8 @@ import numpy as np
 
 from .._numba import njit
 
-__all__ = ["LTP_PAIRS", "OnlineRealBoost", "colour_features", "ltp_codes", "pixel_features", "riu2_table"]
+__all__ = ["LTP_PAIRS", "OnlineRealBoost", "colour_features", "ltp_codes", "ltp_features", "pixel_features",
+           "riu2_table"]
 
 #: (centre channel, neighbour channel) of the nine LTP features, RGB indices (L2119–2121)
 LTP_PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1))
@@ -63,6 +64,48 @@ def ltp_codes(centre: np.ndarray, neighbour: np.ndarray, t: float, radius: int =
     return up.astype(np.uint8), lo.astype(np.uint8)
 
 
+@njit
+def _ltp_features(img, ci, ni, radius, thr, riu2, out):
+    """``out[y, x, k] = 10 riu2(up_k) + riu2(lo_k)``: the LTP codes of :func:`ltp_codes` with centre channel
+    ``ci[k]``, neighbour channel ``ni[k]``, ring ``radius[k]`` and threshold ``thr[k]`` of ``img`` (H, W, C),
+    replicated borders, for every feature ``k`` in one pass."""
+    h, w = img.shape[0], img.shape[1]
+    for y in range(h):
+        for x in range(w):
+            for k in range(ci.shape[0]):
+                r = radius[k]
+                c = np.int32(img[y, x, ci[k]])
+                up = 0
+                lo = 0
+                for u in range(8):
+                    yy = min(max(y + r * _NY[u], 0), h - 1)
+                    xx = min(max(x + r * _NX[u], 0), w - 1)
+                    d = np.int32(img[yy, xx, ni[k]]) - c
+                    if d >= thr[k]:
+                        up |= 1 << u
+                    if d <= -thr[k]:
+                        lo |= 1 << u
+                out[y, x, k] = 10 * riu2[up] + riu2[lo]
+    return out
+
+
+_NY = np.array([dy for dy, _ in _NEIGHBOURS], dtype=np.int64)
+_NX = np.array([dx for _, dx in _NEIGHBOURS], dtype=np.int64)
+
+
+def ltp_features(img: np.ndarray, pairs, *, t: float | np.ndarray, radius: int | np.ndarray = 1) -> np.ndarray:
+    """``(H, W, K)`` texture blocks ``10 riu2(up) + riu2(lo)`` of the LTP codes of K (centre, neighbour)
+    channel pairs of ``img`` (H, W) or (H, W, C) — the same numbers as :func:`ltp_codes` pair by pair.
+    ``t`` and ``radius`` are scalars or one per pair."""
+    a = np.ascontiguousarray(img if img.ndim == 3 else img[..., None])
+    pr = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    k = len(pr)
+    thr = np.broadcast_to(np.asarray(t, dtype=np.float64), (k,)).copy()
+    rad = np.broadcast_to(np.asarray(radius, dtype=np.int64), (k,)).copy()
+    out = np.empty(a.shape[:2] + (k,), dtype=np.int64)
+    return _ltp_features(a, np.ascontiguousarray(pr[:, 0]), np.ascontiguousarray(pr[:, 1]), rad, thr, _RIU2, out)
+
+
 def colour_features(bgr: np.ndarray, blocks: int = 32) -> np.ndarray:
     """``(H, W, 4)`` block indices of R, G, B and grey Y."""
     rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
@@ -77,11 +120,8 @@ GREY_LTP = ((1, 0.5), (1, 1.0), (1, 2.0), (2, 0.5), (2, 1.0), (2, 2.0), (3, 0.5)
 
 def grey_texture(gray: np.ndarray, *, t: float = 5.0) -> np.ndarray:
     """``(H, W, 9)`` LTP blocks of one channel at radii 1, 2, 3 and thresholds t/2, t, 2t."""
-    tex = np.empty(gray.shape[:2] + (9,), dtype=np.int64)
-    for k, (r, tm) in enumerate(GREY_LTP):
-        up, lo = ltp_codes(gray, gray, tm * t, radius=r)
-        tex[..., k] = 10 * _RIU2[up] + _RIU2[lo]
-    return tex
+    return ltp_features(gray, [(0, 0)] * len(GREY_LTP), t=np.array([tm * t for _, tm in GREY_LTP]),
+                        radius=np.array([r for r, _ in GREY_LTP]))
 
 
 def grey_features(gray: np.ndarray, *, t: float = 5.0, blocks: int = 32) -> tuple[np.ndarray, np.ndarray]:
@@ -115,11 +155,7 @@ def pixel_features(bgr: np.ndarray, *, t: float = 5.0, colour_blocks: int = 32,
     if texture == "radii":
         return colour_features(bgr, colour_blocks), grey_texture(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY), t=t)
     rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-    tex = np.empty(bgr.shape[:2] + (9,), dtype=np.int64)
-    for k, (ci, ni) in enumerate(LTP_PAIRS):
-        up, lo = ltp_codes(rgb[..., ci], rgb[..., ni], t)
-        tex[..., k] = 10 * _RIU2[up] + _RIU2[lo]
-    return colour_features(bgr, colour_blocks), tex
+    return colour_features(bgr, colour_blocks), ltp_features(rgb, LTP_PAIRS, t=t)
 
 
 @njit
@@ -162,6 +198,13 @@ def _update(w, corr, wrong, sel, alpha, x, y, eps, count_errors, replace):
             wrong[n, worst] = 1.0
 
 
+@njit
+def _update_all(w, corr, wrong, sel, alpha, x, y, eps, count_errors, replace):
+    """:func:`_update` for each row of ``x`` (S, M) in order, with its label in ``y`` (S,)."""
+    for k in range(x.shape[0]):
+        _update(w, corr, wrong, sel, alpha, x[k], y[k], eps, count_errors, replace)
+
+
 class OnlineRealBoost:
     """Online real AdaBoost over ``n_features`` block-valued features (one feature group)."""
 
@@ -194,9 +237,8 @@ class OnlineRealBoost:
         self._tables = None
         if self.forgetting < 1.0 and len(x):  # beta of ch03.md P4: old block counts fade once per update call
             self.w *= self.forgetting
-        for k in range(len(x)):
-            _update(self.w, self.corr, self.wrong, self.sel, self.alpha, x[k], float(y[k]), self.eps,
-                    self.count_errors, per_sample)
+        _update_all(self.w, self.corr, self.wrong, self.sel, self.alpha, np.ascontiguousarray(x),
+                    np.ascontiguousarray(y), self.eps, self.count_errors, per_sample)
         if not per_sample and len(x):
             self._replace_worst()
 
