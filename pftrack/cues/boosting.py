@@ -64,6 +64,10 @@ def ltp_codes(centre: np.ndarray, neighbour: np.ndarray, t: float, radius: int =
     return up.astype(np.uint8), lo.astype(np.uint8)
 
 
+_NY = np.array([dy for dy, _ in _NEIGHBOURS], dtype=np.int64)
+_NX = np.array([dx for _, dx in _NEIGHBOURS], dtype=np.int64)
+
+
 @njit
 def _ltp_features(img, ci, ni, radius, thr, riu2, out):
     """``out[y, x, k] = 10 riu2(up_k) + riu2(lo_k)``: the LTP codes of :func:`ltp_codes` with centre channel
@@ -87,10 +91,6 @@ def _ltp_features(img, ci, ni, radius, thr, riu2, out):
                         lo |= 1 << u
                 out[y, x, k] = 10 * riu2[up] + riu2[lo]
     return out
-
-
-_NY = np.array([dy for dy, _ in _NEIGHBOURS], dtype=np.int64)
-_NX = np.array([dx for _, dx in _NEIGHBOURS], dtype=np.int64)
 
 
 def ltp_features(img: np.ndarray, pairs, *, t: float | np.ndarray, radius: int | np.ndarray = 1) -> np.ndarray:

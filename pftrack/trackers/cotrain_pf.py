@@ -47,10 +47,11 @@ from ..filtering.resampling import multinomial, systematic
 from ..filtering.seir import seir
 from ..geometry import Box, box_to_ellipse
 from ..params import Params, param
+from .base import Tracker, TrackState
 from .color_params import ColorModelParams
 
-ColorModelDefaults = ColorModelParams()
-from .base import Tracker, TrackState
+#: color-pf's colour-model defaults (colour space, grey bins, kernel, ...) for the colour term
+_COLOUR_DEFAULTS = ColorModelParams()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -265,14 +266,16 @@ class CoTrainPF(Tracker):
         ell = self._ellipses(states)
         h, w = self._frame.shape[:2]
         x0, y0, x1, y1 = reachable_roi(ell, w, h)
-        f = self._cfeats
-        if f is None or not (f[1] <= x0 and f[2] <= y0 and x1 <= f[3] and y1 <= f[4]):
-            if f is not None:
-                x0, y0, x1, y1 = min(x0, f[1]), min(y0, f[2]), max(x1, f[3]), max(y1, f[4])
-            pitch = self.ccue.step_for(ell) if f is None else f[0].pitch
-            self._cfeats = f = (self.ccue.prepare(self._frame, (x0, y0, x1, y1), pitch), x0, y0, x1, y1)
-        rho, _ = self.ccue.rho(f[0], ell, self._sqrt_q, reuse=False)
-        return rho
+        if self._cfeats is None:
+            pitch = self.ccue.step_for(ell)
+        else:
+            a0, b0, a1, b1 = self._croi
+            if a0 <= x0 and b0 <= y0 and x1 <= a1 and y1 <= b1:
+                return self.ccue.rho(self._cfeats, ell, self._sqrt_q, reuse=False)[0]
+            x0, y0, x1, y1 = min(x0, a0), min(y0, b0), max(x1, a1), max(y1, b1)
+            pitch = self._cfeats.pitch
+        self._cfeats, self._croi = self.ccue.prepare(self._frame, (x0, y0, x1, y1), pitch), (x0, y0, x1, y1)
+        return self.ccue.rho(self._cfeats, ell, self._sqrt_q, reuse=False)[0]
 
     def _colour_update(self, box) -> None:
         q = self.ccue.histogram(self._frame, box_to_ellipse(box))
@@ -340,7 +343,7 @@ class CoTrainPF(Tracker):
         self.anchor = None
         self.ccue = None
         if p.colour_weight > 0:
-            c = ColorModelDefaults
+            c = _COLOUR_DEFAULTS
             self.ccue = ColorCue(c.color_space, None, c.kernel, p.colour_pixels, gray_bins=tuple(c.gray_bins),
                                  gradient_threshold=c.gradient_threshold, normalize=c.color_normalize)
             self.ccue.adapt_to(frame)
