@@ -2,6 +2,8 @@
 
     python scripts/grey_face_proxy.py [--seeds 0-7] [--trackers fusion-pf,color-pf,opencv-csrt] [--frames 150]
 
+(scikit-image, from the `dev` extra, provides the portrait.)
+
 No grey face sequence is among the development data, and issue #14 asks for such sequences. This script
 makes a stand-in from scikit-image's ``astronaut`` portrait (NASA, public domain): the grey image is viewed
 through a camera that pans and zooms along a seeded smooth path (320 x 240 frames), so the face moves and
