@@ -5,7 +5,8 @@
 (scikit-image, from the `dev` extra, provides the portrait.)
 
 No grey face sequence is among the development data, and issue #14 asks for such sequences. This script
-makes a stand-in from scikit-image's ``astronaut`` portrait (NASA, public domain): the grey image is viewed
+runs trackers on :func:`pftrack.synth.face.face_scene` (also ``pftrack synth face``), a stand-in made from
+scikit-image's ``astronaut`` portrait (NASA, public domain): the grey image is viewed
 through a camera that pans and zooms along a seeded smooth path (320 x 240 frames), so the face moves and
 changes size in the frame, and the frames are lit by
 
@@ -24,54 +25,12 @@ from __future__ import annotations
 import argparse
 import time
 
-import cv2
 import numpy as np
 
 import pftrack
 from pftrack.eval.metrics import frame_ious, ope_scores
 from pftrack.eval.runner import _split_top, parse_tracker_list
-
-FACE = (170.0, 40.0, 112.0, 140.0)  # x, y, w, h of the face and hair in the 512 x 512 portrait
-OUT_W, OUT_H = 320, 240
-
-
-def portrait() -> np.ndarray:
-    from skimage import data
-
-    return cv2.cvtColor(data.astronaut()[:, :, ::-1].copy(), cv2.COLOR_BGR2GRAY)
-
-
-def scene(seed: int, n: int = 150) -> tuple[list[np.ndarray], np.ndarray]:
-    """Frames (grey uint8) and exact face boxes of one seeded proxy sequence."""
-    rng = np.random.default_rng(seed)
-    base = portrait().astype(np.float32)
-    fx, fy, fw, fh = FACE
-    f1, f2, f3 = rng.uniform(0.5, 1.5, 3)
-    p1, p2, p3, p4 = rng.uniform(0, 2 * np.pi, 4)
-    lamp0, lamp1 = rng.uniform((0, 0), (OUT_W, OUT_H)), rng.uniform((0, 0), (OUT_W, OUT_H))
-    theta = rng.uniform(0, 2 * np.pi)
-    dark_at = rng.uniform(0.3, 0.7)
-    yy, xx = np.mgrid[0:OUT_H, 0:OUT_W].astype(np.float32)
-    along = xx * np.cos(theta) + yy * np.sin(theta)
-    lo, hi = float(along.min()), float(along.max())
-    frames, boxes = [], []
-    for k in range(n):
-        t = k / max(n - 1, 1)
-        zoom = 1.0 + 0.2 * np.sin(2 * np.pi * f3 * t + p3)          # 0.8-1.2
-        s = zoom * 0.9                                              # source pixels -> frame pixels
-        cx = fx + fw / 2 + 40 * np.sin(2 * np.pi * f1 * t + p1)     # the view's centre in the portrait
-        cy = fy + fh / 2 + 20 * np.sin(2 * np.pi * f2 * t + p2) + 15
-        m = np.array([[s, 0, OUT_W / 2 - s * cx], [0, s, OUT_H / 2 - s * cy]], dtype=np.float64)
-        img = cv2.warpAffine(base, m, (OUT_W, OUT_H), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
-        gain = 1.0 - 0.65 * np.exp(-((t - dark_at) / 0.2) ** 2)   # 1 -> 0.35 -> 1
-        lc = lamp0 + (lamp1 - lamp0) * t
-        lamp = 0.55 + 0.9 * np.exp(-((xx - lc[0]) ** 2 + (yy - lc[1]) ** 2) / (0.35 * OUT_W) ** 2)
-        edge = lo + (hi - lo) * (0.5 + 0.5 * np.sin(2 * np.pi * t + p4))
-        shadow = 1.0 - 0.6 / (1.0 + np.exp(-(along - edge) / 10.0))
-        img = img * gain * lamp * shadow + rng.normal(0, 2.0, img.shape)
-        frames.append(np.clip(img, 0, 255).astype(np.uint8))
-        boxes.append((s * fx + m[0, 2], s * fy + m[1, 2], s * fw, s * fh))
-    return frames, np.array(boxes)
+from pftrack.synth.face import export_face, face_scene
 
 
 def run(spec: str, frames, gt, seed: int) -> dict:
@@ -105,15 +64,9 @@ def main() -> None:
     names = _split_top(a.trackers)
     res = {n: [] for n in names}
     for sd in seeds:
-        frames, gt = scene(sd, a.frames)
+        frames, gt = face_scene(sd, a.frames)
         if a.save and sd == seeds[0]:
-            from pathlib import Path
-
-            out = Path(a.save)
-            (out / "img").mkdir(parents=True, exist_ok=True)
-            for i, f in enumerate(frames):
-                cv2.imwrite(str(out / "img" / f"{i + 1:04d}.png"), f)
-            np.savetxt(out / "groundtruth_rect.txt", gt, fmt="%.2f", delimiter=",")
+            export_face(frames, gt, a.save)
         for n in names:
             r = run(n, frames, gt, sd)
             res[n].append(r)

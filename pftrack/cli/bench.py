@@ -109,7 +109,7 @@ def add_synth(sub) -> None:
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
     p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse",
-                                                             "twocam", "xray", "deform"],
+                                                             "twocam", "xray", "deform", "face"],
                    help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
                         "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
                         "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7; 'traffic-sparse' and "
@@ -117,7 +117,8 @@ def add_synth(sub) -> None:
                         "cuts the MOTChallenge sequence given with --source into two cameras with disjoint views "
                         "and a seeded colour response (cam_a/, cam_b/, identity.csv; book ch. 11); 'deform' is a deforming "
                         "textured sheet under changing shading (img/, mesh_gt.csv of a 7x7 mesh, shading_gt.csv, "
-                        "box.txt; book ch. 13)")
+                        "box.txt; book ch. 13); 'face' is a grey face under a dimming light, a drifting lamp and a "
+                        "sweeping shadow, seen by a panning and zooming camera (built from scikit-image's portrait)")
     p.add_argument("--source", help="xray: the grey image to warp (an angiography frame); twocam: a MOTChallenge "
                                     "sequence folder")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
@@ -170,6 +171,13 @@ def cmd_synth(args) -> int:
         if not args.source:
             raise ParameterError("xray scenes need --source IMAGE (the grey frame to warp)")
         image = image_file(args.source)
+    if args.kind == "face":
+        from ..synth.face import astronaut_grey
+
+        try:
+            astronaut_grey()
+        except ImportError as e:
+            raise ParameterError(str(e)) from None
     prepare_output(out / "README.txt")
     for sd in seeds:
         if image is not None:
@@ -192,6 +200,10 @@ def cmd_synth(args) -> int:
             from ..synth.deform import deform_scene, export_deform
 
             export_deform(deform_scene(sd), out / f"deform-{sd:03d}")
+        elif args.kind == "face":
+            from ..synth.face import export_face, face_scene
+
+            export_face(*face_scene(sd), out / f"face-{sd:03d}")
         elif args.kind == "stereo-rail":
             from ..synth.occluder import export_stereo_scene, stereo_rail_scene
 

@@ -1,0 +1,68 @@
+"""The grey face scene under changing light (``pftrack synth face``) and the trackers' light handling on it."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.eval.metrics import frame_ious
+
+pytest.importorskip("skimage")
+
+from pftrack.synth.face import ASTRONAUT_FACE, face_scene  # noqa: E402
+
+
+def _normalised_crop(img: np.ndarray, box, size=(48, 60)) -> np.ndarray:
+    """The box resampled to ``size``, divided by its smoothed copy (the light cancels), zero-mean, unit norm."""
+    x, y, w, h = box
+    m = np.float32([[size[0] / w, 0, -x * size[0] / w], [0, size[1] / h, -y * size[1] / h]])
+    c = cv2.warpAffine(img.astype(np.float32), m, size, flags=cv2.INTER_AREA)
+    c = c / (cv2.GaussianBlur(c, (0, 0), 6) + 1.0)
+    c -= c.mean()
+    return c / (np.linalg.norm(c) + 1e-9)
+
+
+def test_face_scene_is_seeded_and_its_boxes_follow_the_face():
+    frames, boxes = face_scene(3, 60)
+    again, boxes2 = face_scene(3, 60)
+    assert all(np.array_equal(a, b) for a, b in zip(frames, again)) and np.array_equal(boxes, boxes2)
+    assert frames[0].shape == (240, 320) and frames[0].dtype == np.uint8
+    # a camera zoom keeps the face's aspect; the face stays in view
+    assert np.allclose(boxes[:, 2] / boxes[:, 3], ASTRONAUT_FACE[2] / ASTRONAUT_FACE[3])
+    assert (boxes[:, 0] >= 0).all() and (boxes[:, 0] + boxes[:, 2] <= 320).all()
+    # the exact box holds the same face in every frame (the light divided out); a box a quarter-width aside does not
+    ref = _normalised_crop(frames[0], boxes[0])
+    on = [float((_normalised_crop(frames[k], boxes[k]) * ref).sum()) for k in range(10, 60, 10)]
+    off = [float((_normalised_crop(frames[k], boxes[k] + [0.25 * boxes[k][2], 0, 0, 0]) * ref).sum())
+           for k in range(10, 60, 10)]
+    assert min(on) > 0.9 and max(off) < 0.3, (on, off)  # measured: 0.96-0.98 and below 0
+    # the light changes strongly: the darkest frame is under half the brightest
+    means = [f.mean() for f in frames]
+    assert min(means) < 0.5 * max(means)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_quotient_illumination_follows_a_grey_face_without_false_alarms(seed):
+    """fusion-pf with illumination='quotient' (docs/robustness.md): the face is always visible, so no frame may be
+    called lost.  Measured on 100 frames: mean IoU 0.82 and 0.80, no lost frame (the default raises lost on 60 and
+    29 frames of these two seeds)."""
+    frames, gt = face_scene(seed, 100)
+    t = pftrack.create_tracker("fusion-pf", seed=seed, illumination="quotient")
+    t.init(frames[0], tuple(gt[0]))
+    states = [t.update(f) for f in frames[1:]]
+    iou = frame_ious(np.array([s.box for s in states]), gt[1:])
+    assert iou.mean() >= 0.65, iou.mean()
+    assert not any(s.lost for s in states)
+
+
+def test_synth_face_writes_otb_folders(tmp_path):
+    from pftrack.cli import main
+    from pftrack.io.datasets import read_sequence
+
+    assert main(["synth", "face", "--seeds", "4", "--out", str(tmp_path / "f")]) == 0
+    seq = read_sequence(tmp_path / "f" / "face-004")
+    frames, boxes = face_scene(4)
+    assert len(seq.frames) == len(frames) and np.allclose(seq.groundtruth, boxes, atol=0.01)
+    assert np.array_equal(cv2.imread(str(seq.frames[7]), cv2.IMREAD_GRAYSCALE), frames[7])
