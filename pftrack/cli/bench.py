@@ -175,7 +175,7 @@ def cmd_synth(args) -> int:
         from ..synth.face import astronaut_grey
 
         try:
-            astronaut_grey()
+            portrait = astronaut_grey()  # loaded once for every seed
         except ImportError as e:
             raise ParameterError(str(e)) from None
     prepare_output(out / "README.txt")
@@ -203,7 +203,7 @@ def cmd_synth(args) -> int:
         elif args.kind == "face":
             from ..synth.face import export_face, face_scene
 
-            export_face(*face_scene(sd), out / f"face-{sd:03d}")
+            export_face(*face_scene(sd, image=portrait), out / f"face-{sd:03d}")
         elif args.kind == "stereo-rail":
             from ..synth.occluder import export_stereo_scene, stereo_rail_scene
 

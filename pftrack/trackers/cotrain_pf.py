@@ -37,7 +37,7 @@ import cv2
 import numpy as np
 
 from ..cues import cotrain as ct
-from ..cues.color import reachable_roi
+from ..cues.color import blend_model, reachable_roi
 from ..cues.histogram_cue import ColorCue
 from ..cues.intensity import is_gray
 from ..cues.scale_search import search_scale
@@ -278,12 +278,10 @@ class CoTrainPF(Tracker):
         return self.ccue.rho(self._cfeats, ell, self._sqrt_q, reuse=False)[0]
 
     def _colour_update(self, box) -> None:
-        q = self.ccue.histogram(self._frame, box_to_ellipse(box))
-        if q.sum() <= 0:
-            return
-        q = q / q.sum()
-        qq = (1.0 - self.params.colour_rate) * self._sqrt_q ** 2 + self.params.colour_rate * q
-        self._sqrt_q = np.sqrt(qq / qq.sum())
+        """Blend the colour model with the histogram of ``box`` at ``colour_rate`` (Nummiaro et al. Eq. 12)."""
+        h = self.ccue.histogram(self._frame, box_to_ellipse(box))
+        if h.sum() > 0:
+            self._q, self._sqrt_q = blend_model(self._q, h / h.sum(), self.params.colour_rate)
 
     # ------------------------------------------------------------------ training
     def _masks(self, m: dict, box) -> tuple[np.ndarray, np.ndarray]:
@@ -349,7 +347,8 @@ class CoTrainPF(Tracker):
             self.ccue.adapt_to(frame)
             self._colour_frame(frame)
             q = self.ccue.histogram(frame, box_to_ellipse(self.box))
-            self._sqrt_q = np.sqrt(q / max(q.sum(), 1e-12))
+            self._q = q / max(q.sum(), 1e-12)
+            self._sqrt_q = np.sqrt(self._q)
         m = self._maps(frame, self._region(frame.shape, None))
         for _ in range(p.init_passes):
             self._learn(m, self.box, first=True)
