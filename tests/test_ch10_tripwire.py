@@ -147,7 +147,8 @@ def test_trackerless_tripwire_direction_and_count_once():
     dirs = sorted(e.direction for e in ev)
     assert dirs == [-1, 1], [(e.frame, e.direction, e.x) for e in ev]
     pos_ev = next(e for e in ev if e.direction > 0)
-    assert pos_ev.x < 120 and 30 <= pos_ev.frame <= 50  # the disc going down crosses y = 80 near frame 35
+    # the disc going down (radius 14, centre at y = 10 + 2 (n - 1)) has its foot point on y = 80 at frame 29
+    assert pos_ev.x < 120 and 28 <= pos_ev.frame <= 30, pos_ev
 
 
 def test_trackerless_tripwire_ignores_a_mover_hovering_on_the_line():
@@ -168,7 +169,7 @@ def test_synthetic_sparse_traffic_is_counted():
         sc = traffic_scene(seed, kind="sparse", n_vehicles=10)
         truth = [(c.frame, c.direction) for c in track_crossings(sc.tracks, sc.wire, hysteresis=3, point="centre")]
         assert len(truth) == 10
-        tw = TrackerlessTripwire(sc.wire, sc.frames[0].shape[:2], sc.fps, TripwireParams())
+        tw = TrackerlessTripwire(sc.wire, sc.frames[0].shape[:2], sc.fps, TripwireParams(timing="match"))
         ev = []
         for n, f in enumerate(sc.frames, 1):
             ev += tw.process(f, n)
@@ -230,8 +231,83 @@ def test_one_event_for_an_object_whose_parts_fire_apart():
             ev += tw.process(f, n)
         return ev
 
-    apart = run(group_blob=0.0)
+    apart = run(group_blob=0.0, timing="match")
     assert len(apart) == 2 and len({e.direction for e in apart}) == 1, [(e.frame, e.y) for e in apart]
     assert abs(apart[0].y - apart[1].y) > 30
-    merged = run()
+    merged = run(timing="match")
     assert len(merged) == 1 and merged[0].direction == apart[0].direction
+    # foot timing: the two events are held on one blob, so one is kept even without group_blob
+    by_foot = run(group_blob=0.0)
+    assert len(by_foot) == 1 and by_foot[0].direction == apart[0].direction
+
+
+def _tall(ys, shape=(240, 200), x=100):
+    """Frames of a tall upright object (26 x 90 px; head, torso and legs of different colours, textured like
+    clothing) whose bottom edge is at the given y values (NaN: not there), over textured ground."""
+    rng = np.random.default_rng(5)
+    bg = np.clip(rng.normal(100, 8, (*shape, 3)), 0, 255).astype(np.float64)
+    body = np.empty((90, 26, 3))
+    body[:30], body[30:60], body[60:] = (40, 40, 220), (220, 60, 40), (40, 200, 60)
+    body = np.clip(body + rng.normal(0, 25, body.shape), 0, 255)
+    frames = []
+    for yb in ys:
+        f = bg.copy()
+        if np.isfinite(yb):
+            yb = int(round(yb))
+            top, bottom = max(0, yb - 90), min(shape[0], yb)
+            f[top:bottom, x - 13:x + 13] = body[top - (yb - 90):bottom - (yb - 90)]
+        frames.append(f.astype(np.uint8))
+    return frames
+
+
+def _run(frames, wire, **kw):
+    tw = TrackerlessTripwire(wire, frames[0].shape[:2], 10.0, TripwireParams(radius=8, **kw))
+    ev = []
+    for n, f in enumerate(frames, 1):
+        ev += tw.process(f, n)
+    return ev + tw.finish()
+
+
+def test_foot_timing_dates_an_upright_crossing_by_its_foot_point():
+    """An upright object walks up across a horizontal ground wire: its head arrives on the far side about 30
+    frames before its feet do. 'match' dates the event by the head, 'foot' by the feet (the ground truth)."""
+    wire = np.array([[20.0, 120.0], [180.0, 120.0]])
+    ys = np.r_[np.full(10, np.nan), 230 - 3.0 * np.arange(75)]  # the bottom edge crosses y = 120 at frame 47.7
+    frames = _tall(ys)
+    foot_frame = 11 + (230 - 120) / 3.0
+    match = _run(frames, wire, timing="match")
+    foot = _run(frames, wire)
+    assert {e.direction for e in match} == {-1} and [e.direction for e in foot] == [-1]
+    assert match[0].frame < foot_frame - 15, match[0].frame  # (and the torso fires again later)
+    assert abs(foot[0].frame - foot_frame) <= 2, foot[0].frame
+    assert abs(foot[0].y - 120) <= 6  # the event's point is the foot point
+
+
+def test_confirm_drops_an_object_whose_feet_never_cross():
+    """The head and torso lean over the wire and go back: the appearance crosses, the object does not."""
+    wire = np.array([[20.0, 120.0], [180.0, 120.0]])
+    ys = np.r_[np.full(10, np.nan), 230 - 3.0 * np.arange(25), 158 + 3.0 * np.arange(30)]  # bottom stays >= 155
+    frames = _tall(ys)
+    match = _run(frames, wire, timing="match")
+    assert -1 in {e.direction for e in match}                 # the text's rule counts it
+    assert _run(frames, wire) == []
+    kept = [e for e in _run(frames, wire, confirm=False) if e.direction == -1]
+    assert [e.frame for e in kept] == [match[0].frame]        # unconfirmed: kept at its matching frame
+
+
+def test_blob_helpers():
+    from pftrack.events.timing import blob_labels, blob_point, follow
+
+    fg = np.zeros((20, 30), np.uint8)
+    fg[2:6, 0:5] = 1
+    fg[8:18, 10:14] = 1                      # a tall blob, and its head one row above it
+    fg[5:7, 11:13] = 1
+    labels = blob_labels(fg, 1)
+    assert labels.max() == 3
+    lab, pix = follow(labels, np.ravel_multi_index((np.array([9, 10, 5]), np.array([11, 12, 11])), fg.shape))
+    assert lab == labels[9, 11] and len(pix) == 10 * 4      # the blob covering most of the pixels
+    assert blob_point(pix, 30, "foot") == (11.5, 17.5)
+    assert blob_point(pix, 30, "centre") == (11.5, 12.5)
+    assert follow(labels, np.array([0, 1]))[1] is None
+    closed = blob_labels(fg, 3)              # the closing joins the head to the body, not the far blob
+    assert closed[5, 11] == closed[12, 12] != closed[3, 2]

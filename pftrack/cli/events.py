@@ -26,8 +26,10 @@ def add_tripwire(sub) -> None:
     p.add_argument("--line", required=True, help='polyline "X1,Y1;X2,Y2[;...]" (at least two points)')
     p.add_argument("--out", default="events.csv", help="CSV output (default events.csv)")
     p.add_argument("--from-tracks", help="MOTChallenge tracks file (frame,id,x,y,w,h,...): the tracker-based tripwire")
-    p.add_argument("--point", choices=["foot", "centre"], default="foot",
-                   help="with --from-tracks: the box point that crosses (foot = bottom centre, default)")
+    p.add_argument("--point", choices=["foot", "centre", "match"], default="foot",
+                   help="the object's point whose passage is the crossing: foot = bottom centre of its box (default; "
+                        "upright objects seen obliquely), centre (views from above); 'match' (trackerless only): "
+                        "the frame where the appearance is matched across the line, the book's rule")
     p.add_argument("--hysteresis", type=float, default=5.0,
                    help="with --from-tracks: pixels a point must pass beyond the line (default 5)")
     p.add_argument("--min-frames", type=int, default=3,
@@ -71,6 +73,11 @@ def _tracks_mode(args, line: np.ndarray) -> int:
     return 0
 
 
+def _event_row(e) -> str:
+    return (f"{e.frame},{'positive' if e.direction > 0 else 'negative'},{e.time_s:.3f},{e.to_patch},{e.from_patch},"
+            f"{e.tau_frame},{e.score:.4f},{e.s_color:.4f},{e.s_motion:.4f},{e.x:.1f},{e.y:.1f},{e.vx:.2f},{e.vy:.2f}")
+
+
 def cmd_tripwire(args) -> int:
     import cv2
 
@@ -85,10 +92,12 @@ def cmd_tripwire(args) -> int:
     if args.stride < 1:
         raise ParameterError("--stride must be >= 1")
     if args.from_tracks:
+        if args.point == "match":
+            raise ParameterError("--point match is for the trackerless tripwire; with --from-tracks use foot or centre")
         return _tracks_mode(args, line)
     if not args.source:
         raise ParameterError("a SOURCE is needed (or --from-tracks)")
-    extra = parse_param_assignments(args.param)
+    extra = {"timing": args.point, **parse_param_assignments(args.param)}
     if args.radius != "auto":
         try:
             extra["radius"] = float(args.radius)
@@ -141,9 +150,7 @@ def cmd_tripwire(args) -> int:
         def handle(num: int, img) -> None:
             for e in tw.process(img, num):
                 count[e.direction] += 1
-                out._write(f"{e.frame},{'positive' if e.direction > 0 else 'negative'},{e.time_s:.3f},{e.to_patch},"
-                           f"{e.from_patch},{e.tau_frame},{e.score:.4f},{e.s_color:.4f},{e.s_motion:.4f},{e.x:.1f},"
-                           f"{e.y:.1f},{e.vx:.2f},{e.vy:.2f}")
+                out._write(_event_row(e))
                 flash.append([e, 6])
             if video:
                 canvas = img.copy()
@@ -169,6 +176,9 @@ def cmd_tripwire(args) -> int:
                     continue
                 handle(number, frame)
                 stop.check()
+            for e in tw.finish():
+                count[e.direction] += 1
+                out._write(_event_row(e))
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; events so far are in {args.out}") from None
     finally:
