@@ -53,6 +53,7 @@ def ntt(frames, numbers, line, fps, stride, **kw):
     t0 = time.perf_counter()
     for n, f in zip(numbers, frames):
         ev += tw.process(f, n)
+    ev += tw.finish()
     return ev, len(frames) / (time.perf_counter() - t0)
 
 

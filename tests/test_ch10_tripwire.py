@@ -194,6 +194,8 @@ def test_tripwire_cli(tmp_path):
     assert len(gt.read_text().splitlines()) == 1 + 4
     assert main(["tripwire", str(tmp_path / "road"), "--line", "10,10", "--out", str(out), "--quiet"]) == 2
     assert main(["tripwire", "--from-tracks", str(tmp_path / "none.txt"), "--line", wire, "--out", str(out)]) == 2
+    assert main(["tripwire", "--from-tracks", str(tmp_path / "road" / "gt" / "gt.txt"), "--line", wire,
+                 "--point", "match", "--out", str(gt)]) == 2
     bad = tmp_path / "bad.txt"
     bad.write_text("not,a,track\n")
     assert main(["tripwire", "--from-tracks", str(bad), "--line", wire, "--out", str(out)]) == 2
