@@ -75,9 +75,9 @@ class CrossingTimer:
     """Holds events until their object's ``point`` (``foot`` or ``centre``) has passed the wire.
 
     With ``confirm``, an event is released only when the point is seen to cross: on the origin side in
-    one of the last ``lookback`` frames (the blob followed backwards) or while held, then on the far
-    side. Events whose point is never seen to cross are dropped; without ``confirm`` they keep their
-    matching frame."""
+    one of the last ``lookback`` processed frames (the blob followed backwards; the event is then dated
+    by the first frame on the far side) or while held, then on the far side. Events whose point is
+    never seen to cross are dropped; without ``confirm`` they keep their matching frame."""
 
     def __init__(self, polyline: np.ndarray, origin: tuple[int, int], width: int, *, point: str, hold_time: float,
                  close: int, confirm: bool = False, lookback: int = 0):
