@@ -277,3 +277,22 @@ def test_the_switch_rule_of_each_alarm():
     assert takes_over(None, far=True, global_le=0.5, local_le=1.0, distraction_bar=0.3, **common)
     assert not takes_over(None, far=True, global_le=0.8, local_le=1.0, distraction_bar=0.3, **common)
     assert not takes_over(None, far=False, global_le=0.1, local_le=1.0, **common)
+
+
+def test_ratio_test_on_look_alikes():
+    """``ambiguity``: a far candidate is refused when another window one box side or more away is nearly as
+    close to the covariance model (or closer); windows overlapping the candidate do not count."""
+    from pftrack.trackers.switching import ambiguous
+
+    size = (20.0, 40.0)
+    chosen = (100.0, 100.0)                      # centre of the candidate; its distance is 1.0
+    cand = np.array([[90.0, 80.0, 20.0, 40.0, 1.0],     # the candidate itself
+                     [93.0, 80.0, 20.0, 40.0, 1.02],    # 3 px away: the same place
+                     [150.0, 80.0, 20.0, 40.0, 1.5]])   # a window 60 px away, clearly worse
+    assert not ambiguous(cand, chosen, size, 1.0, 0.1)
+    twin = np.vstack([cand, [[200.0, 80.0, 20.0, 40.0, 1.08]]])  # a look-alike 110 px away, within 10 %
+    assert ambiguous(twin, chosen, size, 1.0, 0.1)
+    assert not ambiguous(twin, chosen, size, 1.0, 0.05)
+    assert not ambiguous(twin, chosen, size, 1.0, 0.0)          # off
+    better = np.vstack([cand, [[200.0, 80.0, 20.0, 40.0, 0.7]]])  # a closer window that failed verification
+    assert ambiguous(better, chosen, size, 1.0, 0.1)
