@@ -228,3 +228,21 @@ def test_btf_subspace_loglik_matches_the_gaussian_and_ranks_in_family_btfs_highe
     assert btf_subspace_loglik(model, gamma_lut(0.75)) > btf_subspace_loglik(model, 255 - gamma_lut(0.75))
     h = np.tile(np.bincount(rng.integers(0, 256, 5000), minlength=256), (3, 1)).astype(float)
     assert btf_from_hists(h, h).shape == (3, 256)
+
+
+def test_colour_responses_are_monotone_and_the_strong_family_is_wider():
+    from pftrack.synth.twocam import colour_response
+
+    mild = [colour_response(np.random.default_rng(s)) for s in range(40)]
+    strong = [colour_response(np.random.default_rng(s), "strong") for s in range(40)]
+    for t in mild + strong:
+        assert t.shape == (3, 256) and np.all(np.diff(t, axis=1) >= 0) and t.min() >= 0 and t.max() <= 255
+    # the same seed gives the same mild tables as before the strong family existed (rng drawn g, gamma, o)
+    rng = np.random.default_rng(7)
+    v = np.arange(256) / 255.0
+    ref = [255.0 * np.clip(rng.uniform(0.7, 1.25) * v ** rng.uniform(0.55, 1.8) + rng.uniform(-0.1, 0.1), 0, 1)
+           for _ in range(3)]
+    np.testing.assert_allclose(colour_response(np.random.default_rng(7)), np.maximum.accumulate(np.stack(ref), 1))
+    # how far a mid-grey moves: the strong family spreads it more
+    spread = lambda ts: np.std([t[:, 128] for t in ts])  # noqa: E731
+    assert spread(strong) > 1.3 * spread(mild)

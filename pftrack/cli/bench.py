@@ -121,6 +121,8 @@ def add_synth(sub) -> None:
                         "sweeping shadow, seen by a panning and zooming camera (built from scikit-image's portrait)")
     p.add_argument("--source", help="xray: the grey image to warp (an angiography frame); twocam: a MOTChallenge "
                                     "sequence folder")
+    p.add_argument("--response", choices=["mild", "strong"], default="mild",
+                   help="twocam: camera B's colour response ('strong': wider gamma, gain and offset; a stress test)")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.add_argument("--gray", type=float, default=None, metavar="P",
@@ -191,7 +193,7 @@ def cmd_synth(args) -> int:
         elif args.kind == "twocam":
             from ..synth.twocam import export_twocam, twocam_scene
 
-            export_twocam(twocam_scene(args.source, sd), out / f"twocam-{sd:03d}")
+            export_twocam(twocam_scene(args.source, sd, response=args.response), out / f"twocam-{sd:03d}")
         elif args.kind.startswith("traffic-"):
             from ..synth.traffic import export_traffic, traffic_scene
 

@@ -4,7 +4,8 @@ Camera A sees the left part of each frame, camera B the right part; the strip be
 them is seen by neither (people vanish there).  Camera B's pixels go through a seeded,
 nonlinear, per-channel colour response ``v' = 255·clip(g·(v/255)^γ + o)`` that the
 hand-over method does not know (γ ∈ [0.55, 1.8], gain g ∈ [0.7, 1.25], offset o ∈
-[−0.1, 0.1] per channel).  Each camera's tracks are the annotated boxes lying fully inside
+[−0.1, 0.1] per channel; ``response="strong"``: γ log-uniform in [0.4, 2.5], g ∈ [0.55, 1.45],
+o ∈ [−0.15, 0.15], a stress test).  Each camera's tracks are the annotated boxes lying fully inside
 its view, split where a person leaves it; ``identity`` maps ``(camera, track)`` to the
 person.
 """
@@ -62,11 +63,19 @@ def _span(rows: np.ndarray, tid: int) -> tuple[int, int]:
     return int(f.min()), int(f.max())
 
 
-def colour_response(rng: np.random.Generator) -> np.ndarray:
+#: ranges of the per-channel response: gain, gamma (log-uniform for "strong"), offset
+RESPONSES = {"mild": ((0.7, 1.25), (0.55, 1.8), (-0.1, 0.1)), "strong": ((0.55, 1.45), (0.4, 2.5), (-0.15, 0.15))}
+
+
+def colour_response(rng: np.random.Generator, strength: str = "mild") -> np.ndarray:
+    """Camera B's (3, 256) tables: ``255·clip(g·(v/255)^γ + o)`` per channel, made non-decreasing."""
+    (g0, g1), (c0, c1), (o0, o1) = RESPONSES[strength]
     v = np.arange(256) / 255.0
     out = []
     for _ in range(3):
-        g, gamma, o = rng.uniform(0.7, 1.25), rng.uniform(0.55, 1.8), rng.uniform(-0.1, 0.1)
+        g = rng.uniform(g0, g1)
+        gamma = rng.uniform(c0, c1) if strength == "mild" else float(np.exp(rng.uniform(np.log(c0), np.log(c1))))
+        o = rng.uniform(o0, o1)
         out.append(255.0 * np.clip(g * v ** gamma + o, 0.0, 1.0))
     return np.maximum.accumulate(np.stack(out), axis=1)
 
@@ -93,7 +102,7 @@ def _tracks(gt: np.ndarray, inside, shift: float, cam: str, min_len: int, identi
 
 
 def twocam_scene(sequence_dir, seed: int = 0, *, numbers: tuple[int, int] = (1, 400),
-                 split: tuple[int, int] = (340, 430), min_len: int = 5) -> TwoCamScene:
+                 split: tuple[int, int] = (340, 430), min_len: int = 5, response: str = "mild") -> TwoCamScene:
     """Cut a MOTChallenge sequence (frames and ground truth) into two disjoint cameras."""
     from ..io.datasets import read_sequence
 
@@ -107,8 +116,9 @@ def twocam_scene(sequence_dir, seed: int = 0, *, numbers: tuple[int, int] = (1, 
     ta = _tracks(gt, lambda b: b[0] >= 2 and b[0] + b[2] <= split[0] - 2, 0.0, "a", min_len, identity)
     tb = _tracks(gt, lambda b: b[0] >= split[1] + 2 and b[0] + b[2] <= w - 2, float(split[1]), "b", min_len,
                  identity)
-    resp = colour_response(rng)
-    meta = {"seed": seed, "frames": list(numbers), "split": list(split), "source": str(sequence_dir)}
+    resp = colour_response(rng, response)
+    meta = {"seed": seed, "frames": list(numbers), "split": list(split), "source": str(sequence_dir),
+            "response": response}
     return TwoCamScene(list(seq.frames), split, resp, ta, tb, identity, numbers, meta)
 
 
