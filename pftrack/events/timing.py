@@ -9,11 +9,12 @@ tripwire and its ground truth take the box's foot point (bottom centre) or centr
 :class:`CrossingTimer` holds an event until the chosen point of its object has passed the wire. The
 object is the 8-connected blob of the (closed) foreground that covers the event's patch; from frame
 to frame the blob is followed by overlap (the blob of the new frame that covers most of the old
-blob's pixels). An event is released
-
-* at once if the point is already on the far side when it fires;
-* on the first frame its point is on the far side;
-* at its firing frame if the blob is lost or the point has not crossed within ``hold_time``.
+blob's pixels). An event whose point is still on the origin side when it fires is released on the
+first frame its point is on the far side. One whose point is already on the far side is released
+at once; with ``confirm`` only if, followed backwards over the last frames, the point was on the
+origin side, and it is then dated by the first frame on the far side. An event whose blob is lost,
+or whose point has not crossed within ``hold_time``, keeps its matching frame, or is dropped with
+``confirm``.
 
 Two held events of one direction whose blobs become one are one object: the later is dropped (a
 walker's head and then its torso are matched across the wire a few frames apart).
@@ -160,5 +161,6 @@ class CrossingTimer:
                     out.append(replace(ev, frame=when[0], time_s=when[1], x=x, y=y))
         self.held = keep
         if self.lookback:
-            self.past.append((number, t, labels))
+            # the look-back keeps a few seconds of label images: 2 bytes a pixel where that suffices
+            self.past.append((number, t, labels.astype(np.uint16) if labels.max() < 65535 else labels))
         return out
