@@ -109,11 +109,12 @@ def add_synth(sub) -> None:
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
     p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse",
-                                                             "twocam", "xray", "deform", "face"],
+                                                             "twocam", "walkers", "xray", "deform", "face"],
                    help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
                         "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
                         "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7; 'traffic-sparse' and "
-                        "'traffic-dense' (MOTChallenge folders with wire.txt) are the tripwire scenes of book ch. 10; 'twocam' "
+                        "'traffic-dense' (MOTChallenge folders with wire.txt) are the tripwire scenes of book ch. 10, and "
+                        "'walkers' (the same layout) has upright walkers crossing a ground line seen obliquely; 'twocam' "
                         "cuts the MOTChallenge sequence given with --source into two cameras with disjoint views "
                         "and a seeded colour response (cam_a/, cam_b/, identity.csv; book ch. 11); 'deform' is a deforming "
                         "textured sheet under changing shading (img/, mesh_gt.csv of a 7x7 mesh, shading_gt.csv, "
@@ -194,6 +195,10 @@ def cmd_synth(args) -> int:
             from ..synth.twocam import export_twocam, twocam_scene
 
             export_twocam(twocam_scene(args.source, sd, response=args.response), out / f"twocam-{sd:03d}")
+        elif args.kind == "walkers":
+            from ..synth.walkers import export_walkers, walkers_scene
+
+            export_walkers(walkers_scene(sd), out / f"walkers-{sd:03d}")
         elif args.kind.startswith("traffic-"):
             from ..synth.traffic import export_traffic, traffic_scene
 

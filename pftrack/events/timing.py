@@ -81,12 +81,13 @@ class CrossingTimer:
     never seen to cross are dropped; without ``confirm`` they keep their matching frame."""
 
     def __init__(self, polyline: np.ndarray, origin: tuple[int, int], width: int, *, point: str, hold_time: float,
-                 close: int, confirm: bool = False, lookback: int = 0):
+                 close: int, confirm: bool = False, lookback: int = 0, merge: bool = True):
         self.polyline = np.asarray(polyline, dtype=np.float64)
         self.x0, self.y0 = origin
         self.width = int(width)
         self.point, self.hold_time, self.close = point, float(hold_time), int(close)
         self.confirm, self.lookback = bool(confirm), int(lookback)
+        self.merge = bool(merge)
         self.held: list[_Held] = []
         self.past: deque[tuple[int, float, np.ndarray]] = deque(maxlen=max(1, self.lookback))
 
@@ -134,7 +135,7 @@ class CrossingTimer:
             if pix is None or t > h.until:
                 self._release(h.event, True, out)
                 continue
-            if (lab, h.event.direction) in taken:
+            if self.merge and (lab, h.event.direction) in taken:
                 continue
             taken.add((lab, h.event.direction))
             s, x, y = self._side(pix)
@@ -147,7 +148,7 @@ class CrossingTimer:
             if pix is None:
                 self._release(ev, True, out)
                 continue
-            if (lab, ev.direction) in taken:
+            if self.merge and (lab, ev.direction) in taken:
                 continue
             taken.add((lab, ev.direction))
             s, x, y = self._side(pix)

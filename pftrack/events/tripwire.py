@@ -111,6 +111,7 @@ class TripwireParams(Params):
         "with timing foot/centre: drop an event unless its point is seen to cross (on the origin side within the "
         "last `lookback` seconds or while held, then on the far side). Events of one direction whose blobs are "
         "one are one event"))
+    merge_blob: bool = param(True, doc="with timing foot/centre: events of one direction on one blob are one event")
     lookback: float = param(2.5, ge=0, doc=(
         "with confirm: seconds the blob is followed backwards from the frame an event fires (the event is then "
         "dated by the frame its point reached the far side); MOG2 misses feet, which touch their shadows, so a "
@@ -202,7 +203,7 @@ class TrackerlessTripwire:
         self._timer = None if p.timing == "match" or p.faithful else CrossingTimer(
             self.polyline, (self.x0, self.y0), rw, point=p.timing, hold_time=p.hold_time,
             close=int(round(p.blob_close * r)), confirm=p.confirm,
-            lookback=int(np.ceil(p.lookback * self.fps / self.stride)))
+            lookback=int(np.ceil(p.lookback * self.fps / self.stride)), merge=p.merge_blob)
         self.frames = 0
 
     # -- per frame ------------------------------------------------------------------------------
