@@ -81,13 +81,15 @@ class CrossingTimer:
     never seen to cross are dropped; without ``confirm`` they keep their matching frame."""
 
     def __init__(self, polyline: np.ndarray, origin: tuple[int, int], width: int, *, point: str, hold_time: float,
-                 close: int, confirm: bool = False, lookback: int = 0, merge: bool = True):
+                 close: int, confirm: bool = False, lookback: int = 0, merge: bool = True,
+                 max_width: float = 0.0):
         self.polyline = np.asarray(polyline, dtype=np.float64)
         self.x0, self.y0 = origin
         self.width = int(width)
         self.point, self.hold_time, self.close = point, float(hold_time), int(close)
         self.confirm, self.lookback = bool(confirm), int(lookback)
         self.merge = bool(merge)
+        self.max_width = float(max_width)
         self.held: list[_Held] = []
         self.past: deque[tuple[int, float, np.ndarray]] = deque(maxlen=max(1, self.lookback))
 
@@ -108,6 +110,13 @@ class CrossingTimer:
                 return first
             first = (n, tt)
         return None
+
+    def _crowd(self, pixels: np.ndarray) -> bool:
+        """Is the blob wider than one object (``max_width`` px; 0: never)? Its box point is then nobody's."""
+        if self.max_width <= 0:
+            return False
+        xs = pixels % self.width
+        return bool(xs.max() - xs.min() + 1 > self.max_width)
 
     def _release(self, ev, unconfirmed: bool, out: list) -> None:
         if not (unconfirmed and self.confirm):
@@ -132,6 +141,9 @@ class CrossingTimer:
         taken: set[tuple[int, int]] = set()   # (label, direction) of the objects already held or released
         for h in self.held:
             lab, pix = follow(labels, h.pixels)
+            if pix is not None and self._crowd(pix):
+                out.append(h.event)  # merged with others: the matching frame
+                continue
             if pix is None or t > h.until:
                 self._release(h.event, True, out)
                 continue
@@ -145,6 +157,9 @@ class CrossingTimer:
                 keep.append(_Held(h.event, pix, h.until))
         for ev in fired:
             lab, pix = follow(labels, disc_of(ev.to_patch))
+            if pix is not None and self._crowd(pix):
+                out.append(ev)  # merged with others: the matching frame
+                continue
             if pix is None:
                 self._release(ev, True, out)
                 continue

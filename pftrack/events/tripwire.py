@@ -111,6 +111,12 @@ class TripwireParams(Params):
         "with timing foot/centre: drop an event unless its point is seen to cross (on the origin side within the "
         "last `lookback` seconds or while held, then on the far side). Events of one direction whose blobs are "
         "one are one event"))
+    crowd_width: float = param(0.0, ge=0, doc=(
+        "with timing foot/centre: a blob wider than this many 2r (r is about half an object's width with --radius "
+        "auto) is taken for several objects side by side, whose box point is nobody's: its events keep their "
+        "matching frame, unconfirmed (0: off, the default). 2 helps in crowds (synthetic walkers, tune seeds: "
+        "accuracy / precision 0.48 / 0.77 -> 0.64 / 0.70) but not on the PETS tune half (unchanged at stride 1, "
+        "0.50 / 0.89 against 0.53 / 0.94 at stride 2, 0.22 / 0.41 against 0.28 / 1.00 at stride 3)"))
     merge_blob: bool = param(True, doc="with timing foot/centre: events of one direction on one blob are one event")
     lookback: float = param(2.5, ge=0, doc=(
         "with confirm: seconds the blob is followed backwards from the frame an event fires (the event is then "
@@ -203,7 +209,8 @@ class TrackerlessTripwire:
         self._timer = None if p.timing == "match" or p.faithful else CrossingTimer(
             self.polyline, (self.x0, self.y0), rw, point=p.timing, hold_time=p.hold_time,
             close=int(round(p.blob_close * r)), confirm=p.confirm,
-            lookback=int(np.ceil(p.lookback * self.fps / self.stride)), merge=p.merge_blob)
+            lookback=int(np.ceil(p.lookback * self.fps / self.stride)), merge=p.merge_blob,
+            max_width=p.crowd_width * 2.0 * r)
         self.frames = 0
 
     # -- per frame ------------------------------------------------------------------------------
