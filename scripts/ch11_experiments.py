@@ -89,7 +89,7 @@ def scene_scores(sc, repeats: int, seed: int) -> dict:
                 acc_s = out.setdefault("BTF subspace (PPCA) rank-1 only", [0, 0, 0, 0])
                 acc_s[1] += r1s
                 acc_s[2] += len(test)
-            for method in ("none", "mbtf", "cbtf"):
+            for method in ("none", "mbtf", "cbtf", "cbtf-pixels"):
                 lut = fit_btf(app_a, app_b, pairs, method)
                 tau = cooccur_threshold(app_a, app_b, lut, NEW_QUANTILE)
                 if tau is None:

@@ -246,3 +246,28 @@ def test_colour_responses_are_monotone_and_the_strong_family_is_wider():
     # how far a mid-grey moves: the strong family spreads it more
     spread = lambda ts: np.std([t[:, 128] for t in ts])  # noqa: E731
     assert spread(strong) > 1.3 * spread(mild)
+
+
+def test_cbtf_weights_people_alike_or_by_pixels():
+    """cbtf(weight="people") scales each training histogram to unit mass before pooling; "pixels" pools raw counts.
+    Two training people show the same levels, rendered differently by camera 2 (0.5 v and 0.9 v): the big one
+    decides the pixel-weighted BTF, while the people-weighted one gives both their share."""
+    v = np.arange(256)
+    h = np.zeros((3, 256))
+    h[:, 100:160] = 1.0
+    g1, g2 = np.zeros((3, 256)), np.zeros((3, 256))
+    for c in range(3):
+        np.add.at(g1[c], np.round(0.5 * v[100:160]).astype(int), 1.0)
+        np.add.at(g2[c], np.round(0.9 * v[100:160]).astype(int), 1.0)
+    big = 50.0                                        # person 2 seen 50 times larger
+    src, dst = [h, big * h], [g1, big * g2]
+    by_people = cbtf(src, dst, weight="people")
+    by_pixels = cbtf(src, dst, weight="pixels")
+    assert np.array_equal(by_people, cbtf([h, h], [g1, g2], weight="pixels"))  # unit mass: size no longer counts
+    f1, f2 = 0.5 * v[100:160], 0.9 * v[100:160]
+    assert np.abs(by_pixels[0, 100:160] - f2).mean() < 4          # the big person's response
+    err_people = np.abs(by_people[0, 100:160] - f1).mean()
+    err_pixels = np.abs(by_pixels[0, 100:160] - f1).mean()
+    assert err_people < 0.8 * err_pixels, (err_people, err_pixels)
+    with pytest.raises(ValueError):
+        cbtf(src, dst, weight="area")

@@ -20,7 +20,9 @@ def add_handover(sub) -> None:
     p.add_argument("--tracks-a", required=True, help="camera A tracks, MOTChallenge text (frame,id,x,y,w,h,...)")
     p.add_argument("--tracks-b", required=True, help="camera B tracks, MOTChallenge text")
     p.add_argument("--train-pairs", help="CSV track_a,track_b of known correspondences (fit the BTF; not linked)")
-    p.add_argument("--btf", choices=["cbtf", "mbtf", "none"], default="cbtf", help="transfer function (default cbtf)")
+    p.add_argument("--btf", choices=["cbtf", "cbtf-pixels", "mbtf", "none"], default="cbtf",
+                   help="transfer function (default cbtf: the training tracks' histograms pooled at equal weight; "
+                        "cbtf-pixels pools raw pixel counts)")
     p.add_argument("--features", choices=["whole", "ellipse1", "ellipse2", "positional"], default="positional",
                    help="appearance: whole box, one or two ellipses, or 2 rings x 4 sectors (default positional)")
     p.add_argument("--foreground", choices=["mog2", "none"], default="mog2",

@@ -56,10 +56,21 @@ def mbtf(src_hists, dst_hists, pairs) -> np.ndarray:
     return np.mean(luts, axis=0)
 
 
-def cbtf(src_hists, dst_hists) -> np.ndarray:
-    """BTF of the accumulated (raw-count) histograms of each camera's training images (Eq. 22)."""
-    return btf_from_hists(np.sum(np.asarray(src_hists, dtype=np.float64), axis=0),
-                          np.sum(np.asarray(dst_hists, dtype=np.float64), axis=0))
+def cbtf(src_hists, dst_hists, *, weight: str = "pixels") -> np.ndarray:
+    """BTF of the accumulated histograms of each camera's training images (Eq. 22).
+
+    ``weight="pixels"`` accumulates raw counts (ch11.md's restoration, as Prosser et al.): large and long-seen
+    training objects weigh more. ``"people"`` scales each training histogram to unit mass per channel first,
+    so every training object weighs the same (pftrack's variant; the default of the hand-over, docs/handover.md).
+    """
+    src = np.asarray(src_hists, dtype=np.float64)
+    dst = np.asarray(dst_hists, dtype=np.float64)
+    if weight == "people":
+        src = src / np.maximum(src.sum(axis=-1, keepdims=True), 1e-12)
+        dst = dst / np.maximum(dst.sum(axis=-1, keepdims=True), 1e-12)
+    elif weight != "pixels":
+        raise ValueError("CBTF weight must be 'pixels' or 'people'")
+    return btf_from_hists(src.sum(axis=0), dst.sum(axis=0))
 
 
 def apply_btf_hist(h: np.ndarray, lut: np.ndarray) -> np.ndarray:

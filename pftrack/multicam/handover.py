@@ -77,7 +77,9 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
 
 
 def fit_btf(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppearance], pairs, method: str) -> np.ndarray:
-    """``(3, 256)`` BTF from camera A to camera B fitted on the ``pairs`` (track_a, track_b)."""
+    """``(3, 256)`` BTF from camera A to camera B fitted on the ``pairs`` (track_a, track_b). ``method``:
+    ``none``, ``mbtf``, ``cbtf`` (each training track's histogram at unit mass before pooling) or ``cbtf-pixels``
+    (raw pixel counts pooled, Eq. 22 as restored in ch11.md)."""
     if method == "none" or not pairs:
         return identity_btf()
     src = [app_a[a].raw for a, _ in pairs]
@@ -85,8 +87,10 @@ def fit_btf(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppearance]
     if method == "mbtf":
         return mbtf(src, dst, [(k, k) for k in range(len(pairs))])
     if method == "cbtf":
-        return cbtf(src, dst)
-    raise ValueError("btf must be none, mbtf or cbtf")
+        return cbtf(src, dst, weight="people")
+    if method == "cbtf-pixels":
+        return cbtf(src, dst, weight="pixels")
+    raise ValueError("btf must be none, mbtf, cbtf or cbtf-pixels")
 
 
 def _similarities(app_a, app_b, lut) -> tuple[list[int], list[int], np.ndarray]:
