@@ -109,8 +109,7 @@ class TripwireParams(Params):
                                              "a walker in one blob)")
     confirm: bool = param(True, doc=(
         "with timing foot/centre: drop an event unless its point is seen to cross (on the origin side within the "
-        "last `lookback` seconds or while held, then on the far side). Events of one direction whose blobs are "
-        "one are one event"))
+        "last `lookback` seconds or while held, then on the far side)"))
     crowd_width: float = param(0.0, ge=0, doc=(
         "with timing foot/centre: a blob wider than this many 2r (r is about half an object's width with --radius "
         "auto) is taken for several objects side by side, whose box point is nobody's: its events keep their "
