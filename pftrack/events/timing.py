@@ -118,15 +118,16 @@ class CrossingTimer:
         xs = pixels % self.width
         return bool(xs.max() - xs.min() + 1 > self.max_width)
 
-    def _release(self, ev, unconfirmed: bool, out: list) -> None:
-        if not (unconfirmed and self.confirm):
+    def _unconfirmed(self, ev, out: list) -> None:
+        """An event whose point was not seen to cross: kept at its matching frame, or dropped with ``confirm``."""
+        if not self.confirm:
             out.append(ev)
 
     def finish(self) -> list:
         """The held events at the end of the stream: released at their matching frame, or none with confirm."""
         out: list = []
         for h in self.held:
-            self._release(h.event, True, out)
+            self._unconfirmed(h.event, out)
         self.held = []
         return out
 
@@ -145,7 +146,7 @@ class CrossingTimer:
                 out.append(h.event)  # merged with others: the matching frame
                 continue
             if pix is None or t > h.until:
-                self._release(h.event, True, out)
+                self._unconfirmed(h.event, out)
                 continue
             if self.merge and (lab, h.event.direction) in taken:
                 continue
@@ -161,7 +162,7 @@ class CrossingTimer:
                 out.append(ev)  # merged with others: the matching frame
                 continue
             if pix is None:
-                self._release(ev, True, out)
+                self._unconfirmed(ev, out)
                 continue
             if self.merge and (lab, ev.direction) in taken:
                 continue

@@ -63,18 +63,19 @@ def _span(rows: np.ndarray, tid: int) -> tuple[int, int]:
     return int(f.min()), int(f.max())
 
 
-#: ranges of the per-channel response: gain, gamma (log-uniform for "strong"), offset
-RESPONSES = {"mild": ((0.7, 1.25), (0.55, 1.8), (-0.1, 0.1)), "strong": ((0.55, 1.45), (0.4, 2.5), (-0.15, 0.15))}
+#: per-channel response ranges: gain, gamma, offset, and whether gamma is drawn log-uniformly
+RESPONSES = {"mild": ((0.7, 1.25), (0.55, 1.8), (-0.1, 0.1), False),
+             "strong": ((0.55, 1.45), (0.4, 2.5), (-0.15, 0.15), True)}
 
 
 def colour_response(rng: np.random.Generator, strength: str = "mild") -> np.ndarray:
     """Camera B's (3, 256) tables: ``255·clip(g·(v/255)^γ + o)`` per channel, made non-decreasing."""
-    (g0, g1), (c0, c1), (o0, o1) = RESPONSES[strength]
+    (g0, g1), (c0, c1), (o0, o1), log_gamma = RESPONSES[strength]
     v = np.arange(256) / 255.0
     out = []
     for _ in range(3):
         g = rng.uniform(g0, g1)
-        gamma = rng.uniform(c0, c1) if strength == "mild" else float(np.exp(rng.uniform(np.log(c0), np.log(c1))))
+        gamma = float(np.exp(rng.uniform(np.log(c0), np.log(c1)))) if log_gamma else rng.uniform(c0, c1)
         o = rng.uniform(o0, o1)
         out.append(255.0 * np.clip(g * v ** gamma + o, 0.0, 1.0))
     return np.maximum.accumulate(np.stack(out), axis=1)

@@ -273,11 +273,11 @@ class Switching(FSMeanShift):
             if found is not None:
                 gc, gsize, grho, gH, gd, gdist = found
                 far = bool(np.hypot(*(gc - c)) > 0.5 * min(size))
-                if far and reason == "occlusion" and ambiguous(res.candidates, gc, gsize, gdist, p.ambiguity):
-                    pass
-                elif takes_over(reason, far=far, global_le=gdist, local_le=d_le, global_rho=grho, local_rho=rho,
-                              occlusion_take=p.occlusion_take,
-                              distraction_bar=p.distraction_margin * self.le_thresh.sd):
+                # ``ambiguity``: among look-alikes a far candidate does not take over on an occlusion alarm
+                doubtful = far and reason == "occlusion" and ambiguous(res.candidates, gc, gsize, gdist, p.ambiguity)
+                if not doubtful and takes_over(reason, far=far, global_le=gdist, local_le=d_le, global_rho=grho,
+                                               local_rho=rho, occlusion_take=p.occlusion_take,
+                                               distraction_bar=p.distraction_margin * self.le_thresh.sd):
                     if reason is None:
                         reason = "distraction"
                     c, size, rho, H_c, d, d_le = gc, gsize, grho, gH, gd, gdist
