@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import cv2
 import numpy as np
 
@@ -49,15 +51,29 @@ def patch_similarity(h_o: np.ndarray, v_o: np.ndarray, H: np.ndarray, V: np.ndar
     return alpha_c * s_c + alpha_m * s_m, s_c, s_m
 
 
+@lru_cache(maxsize=8)
+def _squared_offsets(search: int) -> np.ndarray:
+    """``dx² + dy²`` over ``[-search, search]²`` (float32), centre at ``[search, search]``."""
+    d = np.arange(-search, search + 1, dtype=np.float32) ** 2
+    out = d[:, None] + d[None, :]
+    out.flags.writeable = False
+    return out
+
+
 def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int,
-               mask: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+               mask: np.ndarray | None = None, penalty: float = 0.0) -> tuple[np.ndarray, float]:
     """Motion of the ``(2·half+1)²`` square around ``centre`` from ``prev`` to ``cur`` by SSD block
     matching over ±``search`` px (``TM_SQDIFF``, parabolic sub-pixel refinement; ch10.md §1.3).
+
+    ``penalty`` λ adds ``λ |d|²`` per matched pixel to the cost of a displacement ``d`` (grey levels²
+    per px²): a prior for small motions, as video coders bias their block search towards the zero
+    vector. A larger displacement then wins only where it matches clearly better; a patch of a
+    uniformly dark coat otherwise finds its best match on some other dark patch far away.
 
     With ``mask`` (the foreground of ``cur``, full image size) the square of ``cur`` is matched
     back into ``prev`` on its foreground pixels only: an object that has just entered a patch
     is mostly background there, and unmasked SSD would report the background's zero motion.
-    Returns ``(v, ssd_per_pixel)``; ``v`` is ``(0, 0)`` with infinite cost when the square does not fit.
+    Returns ``(v, ssd_per_pixel)`` (the SSD without the prior); ``v`` is ``(0, 0)`` with infinite cost when the square does not fit.
     """
     h, w = prev.shape[:2]
     cx, cy = (int(round(float(c))) for c in centre)
@@ -79,9 +95,14 @@ def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int
         tmpl, area, sign = cur[y0:y1, x0:x1].astype(np.float32), prev[sy0:sy1, sx0:sx1].astype(np.float32), -1.0
         cost = cv2.matchTemplate(area, tmpl, cv2.TM_SQDIFF, mask=m)
         n_pix = float(m.sum())
+    ssd = cost
+    if penalty > 0:  # the prior for small motions: lambda |d|^2 per matched pixel
+        oy, ox = y0 - sy0, x0 - sx0  # where the zero motion lies in the cost map
+        sq = _squared_offsets(search)[search - oy:search - oy + cost.shape[0], search - ox:search - ox + cost.shape[1]]
+        cost = cost + np.float32(penalty * n_pix) * sq
     _, _, (bx, by), _ = cv2.minMaxLoc(cost)
-    exact = cost[by, bx] <= 1e-6 * n_pix
+    exact = ssd[by, bx] <= 1e-6 * n_pix
     dx = parabola_peak(-cost[by, bx - 1], -cost[by, bx], -cost[by, bx + 1]) if 0 < bx < cost.shape[1] - 1 and not exact else 0.0
     dy = parabola_peak(-cost[by - 1, bx], -cost[by, bx], -cost[by + 1, bx]) if 0 < by < cost.shape[0] - 1 and not exact else 0.0
     v = sign * np.array([sx0 + bx + dx - x0, sy0 + by + dy - y0])
-    return v, float(cost[by, bx]) / n_pix
+    return v, float(ssd[by, bx]) / n_pix

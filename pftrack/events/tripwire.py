@@ -67,6 +67,13 @@ class TripwireParams(Params):
     t_max: float = param(3.0, gt=0, doc="T_max in seconds: history entries last seen longer ago are ignored")
     max_entries: int = param(32, ge=1, doc="history entries kept per patch")
     v_max: float = param(600.0, gt=0, doc="largest speed in px/s, for the SSD search range")
+    motion_prior: float = param(1.0, ge=0, doc=(
+        "lambda of the SSD block matching's prior for small motions: a displacement of d px per frame of the "
+        "source costs lambda |d|^2 more per matched pixel (grey levels^2 per px^2; with --stride K, the K-frame "
+        "displacement D costs lambda |D / K|^2; pftrack's addition, 0 = the text's plain SSD). A patch of a "
+        "uniformly dark coat otherwise finds its best match on another dark patch 40-85 px away, and C_d rejects "
+        "the crossing. 1 chosen on the PETS tune frames at strides 1-3, the synthetic walkers and the top-down "
+        "traffic at strides 1-5 (tune seeds; docs/tripwire.md)"))
     colour: Literal["db", "bc"] = param("db", doc="S_c = 1 - D_B (restored) or the coefficient itself (ch10.md P1)")
     away_angle: float = param(60.0, gt=0, le=90, doc="C_d (Eq. 4) made strict: the motion must point within this "
                                                      "angle of straight away from the wire (90 is the text's "
@@ -197,6 +204,8 @@ class TrackerlessTripwire:
         below = np.clip(c[:, 1:2] + dy[None] + int(round(1.5 * r)), 0, rh - 1)
         self._below = below * rw + xs                  # the same discs 1.5 r lower
         self.half = half
+        # the prior is on the object's speed: a displacement over K frames is K times one frame's
+        self._prior = 0.0 if p.faithful else p.motion_prior / self.stride ** 2
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
         if p.bgs == "mog2":
             self._bgs = cv2.createBackgroundSubtractorMOG2(history=p.bgs_history, varThreshold=p.bgs_threshold,
@@ -284,7 +293,8 @@ class TrackerlessTripwire:
             last.last = t  # the same object is still there (P13)
             return False
         c = self.layout.centres[i] - [self.x0, self.y0]
-        v, _ = ssd_motion(self._prev_gray, gray, c, self.half, self.search, mask=self._fg)
+        v, _ = ssd_motion(self._prev_gray, gray, c, self.half, self.search, mask=self._fg,
+                          penalty=self._prior)
         patch.entries.append(_Entry(hist, v, t, t, number))
         if len(patch.entries) > p.max_entries:
             patch.entries.pop(0)
