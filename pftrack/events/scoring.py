@@ -73,7 +73,8 @@ def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int
     With ``mask`` (the foreground of ``cur``, full image size) the square of ``cur`` is matched
     back into ``prev`` on its foreground pixels only: an object that has just entered a patch
     is mostly background there, and unmasked SSD would report the background's zero motion.
-    Returns ``(v, ssd_per_pixel)`` (the SSD without the prior); ``v`` is ``(0, 0)`` with infinite cost when the square does not fit.
+    Returns ``(v, ssd_per_pixel)`` (the SSD without the prior); ``v`` is ``(0, 0)`` with infinite cost when
+    the square does not fit.
     """
     h, w = prev.shape[:2]
     cx, cy = (int(round(float(c))) for c in centre)
