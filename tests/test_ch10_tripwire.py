@@ -138,6 +138,31 @@ def test_ssd_motion_small_motion_prior():
     np.testing.assert_allclose(v, [3.0, -2.0], atol=1e-9)
 
 
+def test_motion_prior_is_per_source_frame(monkeypatch):
+    """With --stride K a displacement spans K source frames: the prior passed to the block matching is lambda / K^2,
+    and the text's plain SSD (faithful) has none."""
+    import pftrack.events.tripwire as tw_mod
+
+    seen = []
+
+    def spy(*args, penalty=0.0, **kw):
+        seen.append(penalty)
+        return np.zeros(2), 0.0
+
+    monkeypatch.setattr(tw_mod, "ssd_motion", spy)
+    rng = np.random.default_rng(0)
+    # independent noise frames: the frame difference marks every patch foreground, so every patch matches motion
+    frames = [np.clip(rng.normal(120, 60, (60, 80, 3)), 0, 255).astype(np.uint8) for _ in range(4)]
+    for stride, faithful, expect in ((1, False, 2.0), (3, False, 2.0 / 9), (3, True, 0.0)):
+        seen.clear()
+        tw = TrackerlessTripwire(np.array([[40.0, 5.0], [40.0, 55.0]]), (60, 80), 10.0,
+                                 TripwireParams(radius=4.0, motion_prior=2.0, faithful=faithful, bgs="diff"),
+                                 stride=stride)
+        for k, f in enumerate(frames):
+            tw.process(f, 1 + k * stride)
+        assert seen and all(v == pytest.approx(expect) for v in seen)
+
+
 def test_event_matching():
     s = match_events([(10, 1), (50, 1), (90, -1)], [(12, 1), (49, -1), (95, -1), (200, 1)], tol=10)
     assert (s.gt, s.detected, s.tp) == (4, 3, 2)
