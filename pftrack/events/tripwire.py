@@ -105,7 +105,8 @@ class TripwireParams(Params):
         "'centre' the frame where that point of the object's box (its foreground blob, followed by overlap) "
         "passes the wire, as the tracker-based tripwire counts. A walker's head reaches the far side of a "
         "horizontal ground line long before its feet do. 'foot' (default) chosen on the PETS tune frames with "
-        "`confirm`: accuracy 0.63 and precision 0.83 against 0.56 and 0.60 with 'match'; on top-down synthetic "
+        "`confirm`: accuracy 0.63 and precision 0.83 against 0.56 and 0.60 with 'match' (before motion_prior; "
+        "0.66 / 0.84 against 0.59 / 0.63 with it); on top-down synthetic "
         "traffic (tune seeds 0-2) 'match' is better, because queued vehicles merge into one blob"))
     hold_time: float = param(6.0, gt=0, doc=(
         "with timing foot/centre: seconds an event may wait for its point to cross (a walker 100 px tall at 3 px "
@@ -122,7 +123,8 @@ class TripwireParams(Params):
         "auto) is taken for several objects side by side, whose box point is nobody's: its events keep their "
         "matching frame, unconfirmed (0: off, the default). 2 helps in crowds (synthetic walkers, tune seeds: "
         "accuracy / precision 0.48 / 0.77 -> 0.64 / 0.70) but not on the PETS tune half (unchanged at stride 1, "
-        "0.50 / 0.89 against 0.53 / 0.94 at stride 2, 0.22 / 0.41 against 0.28 / 1.00 at stride 3)"))
+        "0.50 / 0.89 against 0.53 / 0.94 at stride 2, 0.22 / 0.41 against 0.28 / 1.00 at stride 3); the same "
+        "trade with motion_prior (docs/tripwire.md)"))
     merge_blob: bool = param(True, doc="with timing foot/centre: events of one direction on one blob are one event")
     lookback: float = param(2.5, ge=0, doc=(
         "with confirm: seconds the blob is followed backwards from the frame an event fires (the event is then "
