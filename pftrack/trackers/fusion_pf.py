@@ -224,6 +224,8 @@ class FusionPF(ColorPF):
             self._lut = foreground_lut(self._obj, self._sur).astype(np.float64)  # exact: the integral's type
         self.v_ref = None
         self._prev_gray = to_gray(frame) if p.motion else None
+        # the background statistics reduced this frame for the structural cue: the next frame must not reuse it
+        self.structure.new_frame()
         return st
 
     # ------------------------------------------------------------------ observation
