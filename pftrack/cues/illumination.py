@@ -44,9 +44,10 @@ class QuotientImage:
     """:func:`illumination_quotient` with its full-size intermediate images kept between calls (a tracker calls
     it on every frame of one size)."""
 
-    def __init__(self, sigma: float = 0.1, *, block: int = 16):
+    def __init__(self, sigma: float = 0.1, *, block: int = 16, bgr: bool = True):
         self.sigma = float(sigma)
         self.block = max(1, int(block))
+        self.bgr = bool(bgr)  # False: the quotient as a 2-D grey image (no copy into three channels)
         self._gain: np.ndarray | None = None
         self._q: np.ndarray | None = None
 
@@ -75,7 +76,7 @@ class QuotientImage:
         if H < h:
             self._gain[H:] = self._gain[H - 1:H]
         cv2.multiply(gray, self._gain, dst=self._q, dtype=cv2.CV_8U)
-        return cv2.cvtColor(self._q, cv2.COLOR_GRAY2BGR)
+        return cv2.cvtColor(self._q, cv2.COLOR_GRAY2BGR) if self.bgr else self._q
 
 
 def illumination_quotient(frame: np.ndarray, sigma: float = 0.1, *, block: int = 16) -> np.ndarray:

@@ -43,7 +43,7 @@ class LitStructure:
             raise ValueError(f"mode must be 'both' or 'quotient', got {mode!r}")
         self.quotient = StructureCue(template_pixels, weighting=weighting)
         self.levels = StructureCue(template_pixels, weighting=weighting) if mode == "both" else None
-        self._q = QuotientImage(sigma)
+        self._q = QuotientImage(sigma, bgr=False)  # the grey cue reads one channel: the same numbers, a third of the bytes
         self._frame: np.ndarray | None = None  # the frame whose quotient image is cached
         self._qframe: np.ndarray | None = None
 
