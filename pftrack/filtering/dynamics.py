@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .kernels import propagate_cv_scale, propagate_ncv_rw
+
 X, Y, VX, VY, HX, HY, AD = range(7)
 STATE_NAMES_7 = ("x", "y", "vx", "vy", "hx", "hy", "adot")
 STATE_NAMES_6 = STATE_NAMES_7[:6]
@@ -73,8 +75,6 @@ class ConstantVelocityScale:
         half-axis of the frame.  Returns the region ``(x0, y0, x1, y1)`` that the
         propagated ellipses cover.
         """
-        from .kernels import propagate_cv_scale
-
         if self._noise is None or self._noise.shape != states.shape:
             self._noise = np.empty_like(states)
         rng.standard_normal(out=self._noise)
@@ -126,8 +126,6 @@ class NCVRandomWalk:
 
         Returns the region ``(x0, y0, x1, y1)`` covered by the new ellipses.
         """
-        from .kernels import propagate_ncv_rw
-
         n = states.shape[0]
         if self._noise is None or self._noise.shape != (n, 4):
             self._noise = np.empty((n, 4))
