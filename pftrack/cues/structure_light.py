@@ -43,7 +43,8 @@ class LitStructure:
             raise ValueError(f"mode must be 'both' or 'quotient', got {mode!r}")
         self.quotient = StructureCue(template_pixels, weighting=weighting)
         self.levels = StructureCue(template_pixels, weighting=weighting) if mode == "both" else None
-        self._q = QuotientImage(sigma, bgr=False)  # the grey cue reads one channel: the same numbers, a third of the bytes
+        # one grey channel: the structural cue reads the same numbers as from three equal ones, a third of the bytes
+        self._q = QuotientImage(sigma, bgr=False)
         self._frame: np.ndarray | None = None  # the frame whose quotient image is cached
         self._qframe: np.ndarray | None = None
 

@@ -158,8 +158,8 @@ class FusionPFParams(ColorPFParams):
         "self-quotient image (illumination_sigma), where a lamp or shadow across the target cancels; 'both': two "
         "cues, each with its references, and a box scores the better NCC (pftrack.cues.structure_light). The "
         "histogram cue and the search see the grey levels either way. Chosen on the tune split "
-        "(docs/robustness.md): on its grey scenes mean AUC 0.593 against 0.576 ('levels'), lowest face proxy "
-        "0.740 against 0.498; 'quotient' lost the grey + light copies (0.364 against 0.464)."))
+        "(docs/robustness.md): on its grey scenes mean AUC 0.593 against 0.588 ('levels'), face proxy 0.779 against "
+        "0.720 (lowest run 0.695 against 0.471); 'quotient' lost the grey + light copies (0.359 against 0.469)."))
     lk_levels: int = param(2, ge=1, le=6, doc="Pyramid levels of the flow when motion is on.")
     max_features: int = param(150, ge=1, le=1_000_000, doc="Flow features per frame when motion is on.")
 
