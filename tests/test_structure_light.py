@@ -89,13 +89,11 @@ def test_fusion_pf_picks_the_grey_structure_from_the_input(gray, mode, kind):
     assert type(t.structure) is StructureCue
 
 
-skimage = pytest.importorskip("skimage")
-
-
 @pytest.mark.parametrize("seed", [0, 5])
 def test_default_fusion_pf_holds_a_grey_face_under_a_lamp_and_a_shadow(seed):
     """The grey face proxy's two hardest tune seeds for the grey levels alone (docs/robustness.md). Measured on 150
     frames: mean IoU 0.735 and 0.828; with grey_structure='levels' 0.535 and 0.690."""
+    pytest.importorskip("skimage")  # the portrait the scene is made from
     from pftrack.synth.face import face_scene
 
     frames, gt = face_scene(seed, 150)
