@@ -13,7 +13,7 @@ from pftrack.eval.metrics import frame_ious
 
 
 def _scene(seed: int = 0, size=(240, 320)):
-    """A textured grey frame (smooth texture, 40-200 grey levels) as BGR."""
+    """A textured grey image (float levels 40-200, smooth texture); _bgr makes a frame of it."""
     rng = np.random.default_rng(seed)
     g = cv2.GaussianBlur(rng.uniform(0, 255, size).astype(np.float32), (0, 0), 3)
     g = 40 + 160 * (g - g.min()) / (g.max() - g.min())
