@@ -174,7 +174,7 @@ class FusionPF(ColorPF):
         super().__init__(params, rng=rng, seed=seed, detector=detector)
         p = self.params
         self.motion_cue = LocalMotionCue(levels=p.lk_levels, max_features=p.max_features)
-        self.structure = StructureCue(p.structure_pixels, weighting=p.structure_weighting)
+        self.structure = self._structure_cue(None)
         if self._fused:
             self.loss = FusedLoss(2, cue_clip=p.loss_cue_clip, cue_floor=p.loss_cue_floor,
                                   acquire_z=p.acquire_z, acquire_margin=p.acquire_margin,
@@ -200,20 +200,25 @@ class FusionPF(ColorPF):
         return p.structure and p.fused_loss and p.loss_test == "likelihood"
 
     # ------------------------------------------------------------------ init
+    def _structure_cue(self, frame):
+        """A fresh structural cue for the input ``frame`` (None: unknown): on grey input with ``grey_structure`` other
+        than 'levels', the quotient and grey-level pair of pftrack.cues.structure_light."""
+        p = self.params
+        if frame is not None and p.grey_structure != "levels" and p.illumination == "none" and is_gray(frame):
+            return LitStructure(p.structure_pixels, weighting=p.structure_weighting, sigma=p.illumination_sigma,
+                                mode=p.grey_structure)
+        return StructureCue(p.structure_pixels, weighting=p.structure_weighting)
+
     def init_auto(self, frame, histogram, size, *, regions=None):
         """As :meth:`ColorPF.init_auto`; a known histogram gives no reference patch, so the structural cue
         stays off (no evidence) for this target."""
-        self.structure = StructureCue(self.params.structure_pixels, weighting=self.params.structure_weighting)
+        self.structure = self._structure_cue(None)
         return super().init_auto(frame, histogram, size, regions=regions)
 
     def _init(self, frame, box):
         p = self.params
         if p.structure:  # before the colour init: its background statistics need the structural reference
-            if p.grey_structure != "levels" and p.illumination == "none" and is_gray(frame):
-                self.structure = LitStructure(p.structure_pixels, weighting=p.structure_weighting,
-                                              sigma=p.illumination_sigma, mode=p.grey_structure)
-            else:
-                self.structure = StructureCue(p.structure_pixels, weighting=p.structure_weighting)
+            self.structure = self._structure_cue(frame)
             self.structure.init(frame, box_to_ellipse(box))
         st = super()._init(frame, box)
         if p.contrast:
