@@ -116,6 +116,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self.lam: float | None = None
         self.size = (0.0, 0.0)  # half-axes used while searching
         self._confident_size = (0.0, 0.0)  # half-axes when the loss test was last confident
+        self._confident_sizes: deque = deque()  # (frame index, hx, hy) of the recent confident estimates
         self._confident_motion = None  # (frame index, position, velocity) when last confident
         self._lost_at = None  # the same, for the current loss (search prediction)
         self._confident_track: deque = deque(maxlen=6)  # (frame index, x, y) of the last confident estimates
@@ -240,6 +241,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self.loss.lost = False
         self._lost_at = None
         self._confident_track.clear()  # a velocity is measured within one stretch of tracking
+        self._confident_sizes.clear()
         self._search_states = None
         self._search_loglik = None
         self._last_search = None
@@ -416,12 +418,20 @@ class ColorParticleFilter(SearchMixin, Tracker):
             if self._raw_check is not None:
                 self._raw_check.learn(self._raw, e_ell)
             self._confident_size = (float(est[HX]), float(est[HY]))
+            if p.search_size_frames:
+                sizes = self._confident_sizes
+                sizes.append((self.frame_index, *self._confident_size))
+                while sizes[0][0] <= self.frame_index - p.search_size_frames:
+                    sizes.popleft()
             self._confident_motion = (self.frame_index, est[[X, Y]].copy(), est[[VX, VY]].copy())
             self._confident_track.append((self.frame_index, float(est[X]), float(est[Y])))
         if p.search and lost_now:
             # search at the size the target had when last seen clearly (a target that is leaving the
             # frame or being covered shrinks the estimate on its way out)
             self.size = self._confident_size if p.loss_test == "likelihood" else (float(est[HX]), float(est[HY]))
+            if p.search_size_frames and p.loss_test == "likelihood" and self._confident_sizes:
+                _, hx, hy = max(self._confident_sizes, key=lambda s: s[1] * s[2])
+                self.size = (hx, hy)
             self.mode = "searching"
             self.loss.lost = True
             self._lost_at = self._confident_motion
