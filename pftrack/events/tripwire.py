@@ -58,6 +58,8 @@ class TripwireParams(Params):
         "object's lower edge is (the disc moved down by 1.5 r is mostly background), so that an upright object "
         "crosses when its foot point does (a walker's head crosses the image of a horizontal wire long before "
         "the walker does); on the PETS tune frames it traded recall for precision"))
+    bits: int = param(3, ge=1, le=8, doc="bits per RGB channel of the patch histograms (3: 8x8x8 = 512 bins; the "
+                                          "text gives no bin count, L9196)")
     hist_pixels: Literal["fg", "all"] = param("fg", doc="histogram of the disc's foreground pixels, or of all of them")
     novelty: float = param(0.3, gt=0, le=1, doc="D_B to the last entry above which a new entry is appended")
     alpha_c: float = param(0.7, ge=0, doc="weight of the colour similarity (alpha_c > alpha_m, L9309)")
@@ -257,11 +259,12 @@ class TrackerlessTripwire:
         new_app = np.zeros(len(self.patches), dtype=bool)
         rows = np.flatnonzero(is_fg)
         if len(rows) and self._prev_gray is not None:
-            bins = colour_bins(roi).ravel()
+            bins = colour_bins(roi, p.bits).ravel()
+            nb = 1 << (3 * p.bits)
             pix = self._disc[rows]                                    # (k, D)
             wts = fg[pix].astype(np.float64) if p.hist_pixels == "fg" else np.ones(pix.shape)
-            ids = (np.arange(len(rows))[:, None] * 512 + bins[pix]).ravel()
-            hists = np.bincount(ids, weights=wts.ravel(), minlength=len(rows) * 512).reshape(len(rows), 512)
+            ids = (np.arange(len(rows))[:, None] * nb + bins[pix]).ravel()
+            hists = np.bincount(ids, weights=wts.ravel(), minlength=len(rows) * nb).reshape(len(rows), nb)
             hists /= np.maximum(hists.sum(1, keepdims=True), 1e-12)
             for k, i in enumerate(rows):
                 if self._update_history(i, hists[k], t, number, gray):
