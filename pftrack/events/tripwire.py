@@ -58,15 +58,21 @@ class TripwireParams(Params):
         "object's lower edge is (the disc moved down by 1.5 r is mostly background), so that an upright object "
         "crosses when its foot point does (a walker's head crosses the image of a horizontal wire long before "
         "the walker does); on the PETS tune frames it traded recall for precision"))
-    bits: int = param(3, ge=1, le=8, doc="bits per RGB channel of the patch histograms (3: 8x8x8 = 512 bins; the "
-                                          "text gives no bin count, L9196)")
+    bits: int = param(2, ge=1, le=8, doc=(
+        "bits per RGB channel of the patch histograms (2: 4x4x4 = 64 bins; the text gives no bin count, L9196). A "
+        "disc of r = 10 px holds a few hundred foreground pixels, too few to fill 512 bins: the same walker's "
+        "colours seen on the two sides scored S_c 0.6-0.74. 2 chosen with threshold 0.8 and t_max 4 on the tune "
+        "data (PETS frames 1-200 at strides 1-3: 57 of 96 crossings found against 50 with 3 bits, 0.75 and 3 s; "
+        "docs/tripwire.md)"))
     hist_pixels: Literal["fg", "all"] = param("fg", doc="histogram of the disc's foreground pixels, or of all of them")
     novelty: float = param(0.3, gt=0, le=1, doc="D_B to the last entry above which a new entry is appended")
     alpha_c: float = param(0.7, ge=0, doc="weight of the colour similarity (alpha_c > alpha_m, L9309)")
     alpha_m: float = param(0.3, ge=0, doc="weight of the motion consistency")
-    threshold: float = param(0.75, doc="theta_S: a crossing when max S exceeds it (Eq. 7)")
+    threshold: float = param(0.8, doc="theta_S: a crossing when max S exceeds it (Eq. 7); 0.8 with 2 bits (0.75 "
+                                      "was chosen with 3 bits)")
     t_th: float = param(0.1, ge=0, doc="T_th in seconds: an inner appearance must be at least this old")
-    t_max: float = param(3.0, gt=0, doc="T_max in seconds: history entries last seen longer ago are ignored")
+    t_max: float = param(4.0, gt=0, doc="T_max in seconds: history entries last seen longer ago are ignored (4 "
+                                       "chosen with bits; 3 before)")
     max_entries: int = param(32, ge=1, doc="history entries kept per patch")
     v_max: float = param(600.0, gt=0, doc="largest speed in px/s, for the SSD search range")
     motion_prior: float = param(1.0, ge=0, doc=(
