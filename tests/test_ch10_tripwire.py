@@ -186,13 +186,17 @@ def _movers(positions, shape=(160, 240), colours=((40, 40, 220), (220, 60, 40)))
     return frames
 
 
-def test_trackerless_tripwire_direction_and_count_once():
+def _two_movers():
+    """A horizontal wire, one disc crossing it downwards (+) and one upwards (-), 90 frames."""
     wire = np.array([[20.0, 80.0], [220.0, 80.0]])
     T = 90
     down = np.stack([np.full(T, 70.0), np.clip(10 + 2.0 * np.arange(T), None, 150)], 1)       # one crossing, +
     up = np.stack([np.full(T, 170.0), np.clip(160 - 2.0 * np.arange(T), 10, None)], 1)        # one crossing, -
-    pos = np.stack([down, up], 1)
-    frames = _movers(pos)
+    return wire, _movers(np.stack([down, up], 1))
+
+
+def test_trackerless_tripwire_direction_and_count_once():
+    wire, frames = _two_movers()
     tw = TrackerlessTripwire(wire, frames[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50))
     ev = []
     for n, f in enumerate(frames, 1):
@@ -202,6 +206,21 @@ def test_trackerless_tripwire_direction_and_count_once():
     pos_ev = next(e for e in ev if e.direction > 0)
     # the disc going down (radius 14, centre at y = 10 + 2 (n - 1)) has its foot point on y = 80 at frame 29
     assert pos_ev.x < 120 and 28 <= pos_ev.frame <= 30, pos_ev
+
+
+@pytest.mark.parametrize("bits", [2, 3])
+def test_patch_histograms_have_the_chosen_bins(bits):
+    """``bits`` per channel: every history entry is a normalised histogram of 2^(3 bits) bins, and the crossings
+    are found with either."""
+    wire, frames = _two_movers()
+    tw = TrackerlessTripwire(wire, frames[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50, bits=bits))
+    ev = []
+    for n, f in enumerate(frames, 1):
+        ev += tw.process(f, n)
+    entries = [e for p in tw.patches for e in p.entries]
+    assert entries and all(e.hist.shape == (8 ** bits,) for e in entries)
+    assert np.allclose([e.hist.sum() for e in entries], 1.0)
+    assert sorted(e.direction for e in ev) == [-1, 1]
 
 
 def test_trackerless_tripwire_ignores_a_mover_hovering_on_the_line():
