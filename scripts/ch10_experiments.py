@@ -179,12 +179,10 @@ def crossing_angles(data: Path) -> dict:
             foot = np.c_[near[:, 2] + near[:, 4] / 2, near[:, 3] + near[:, 5]]
             v = (foot[-1] - foot[0]) / max(near[-1, 0] - near[0, 0], 1.0)
             angle = float(np.degrees(np.arccos(min(abs(v @ normal) / max(np.hypot(*v), 1e-9), 1.0))))
-            found = any(e.direction == c.direction and abs(e.frame - c.frame) <= TOL for e in ev)
-            found_cft = any(e.direction == c.direction and abs(e.frame - c.frame) <= TOL for e in cft)
             key = f"{'vertical' if li < 2 else 'horizontal'} lines, angle {'< 60' if angle < 60 else '>= 60'}"
             cell = out.setdefault(key, [0, 0, 0])
-            cell[0] += int(found)
-            cell[1] += int(found_cft)
+            for k, events in enumerate((ev, cft)):  # an event of the crossing's direction within TOL frames
+                cell[k] += any(e.direction == c.direction and abs(e.frame - c.frame) <= TOL for e in events)
             cell[2] += 1
     return {k: {"ntt": f, "cft": fc, "gt": g} for k, (f, fc, g) in sorted(out.items())}
 
