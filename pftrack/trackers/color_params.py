@@ -54,6 +54,13 @@ class ColorModelParams(Params):
         "confident frames with its own background statistics and history (pftrack.trackers.raw_check): a "
         "candidate it calls background is refused. The quotient also divides out the scene's own shading, so "
         "background patches can resemble the target more than they did."))
+    grey_histogram: Literal["levels", "both"] = param("levels", doc=(
+        "Grey input with illumination='none': 'both' keeps a second grey histogram model of the self-quotient "
+        "image (pftrack.cues.lit_histogram, its scale illumination_sigma) beside the model of the grey levels, "
+        "each learned on the same confident frames; while tracking, every particle, the estimate and the "
+        "background statistics score the better of the two coefficients (as fusion-pf's grey_structure does for "
+        "its structural cue), and the search scores the grey levels alone (with the quotient it acquired "
+        "clutter). 'levels': the grey levels alone. Colour input is unchanged."))
     gradient_threshold: float = param(40.0, ge=0, le=2000, doc=(
         "Grey features: Sobel magnitude (equalised levels) below which a pixel counts as flat."))
     kernel: Literal["nummiaro", "epanechnikov"] = param("nummiaro", doc=(
@@ -240,6 +247,11 @@ class ColorPFParams(ColorModelParams):
         "split's exit scenes (a target leaving in a flow of look-alikes, docs/robustness.md): color-pf AUC 0.783 "
         "against 0.757 off, lost recall 0.978 against 0.957 (0.25: the same; 1 and 2: no gain); fusion-pf and "
         "every other tune group unchanged."))
+    grey_histogram: Literal["levels", "both"] = param("both", doc=(
+        "See ColorModelParams.grey_histogram (grey levels alone there). 'both' for color-pf, chosen on the grey "
+        "tune set (docs/robustness.md): mean AUC 0.499 against 0.458, face proxies 0.647 against 0.424 (no run of "
+        "24 below 0.5, against 18), re-acquired 35 against 33 of 123, but vanish 0.419 against 0.457. fusion-pf "
+        "keeps 'levels' (its structural cue has the quotient)."))
     position_noise: float = param(0.2, ge=0, le=10, doc=(
         "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
         "(scale-invariant). The paper leaves it open."))

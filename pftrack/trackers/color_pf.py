@@ -48,6 +48,7 @@ import numpy as np
 from ..cues.color import blend_model, reachable_roi, warmup
 from ..cues.histogram_cue import ColorCue
 from ..cues.illumination import QuotientImage
+from ..cues.lit_histogram import LitHistogram
 from ..cues.intensity import channel_levels
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
@@ -131,6 +132,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self._gray_now: tuple[int, np.ndarray] | None = None  # this frame's grey image, once converted
         self._vetoed = None  # (frame index, centre, shift) of the last candidate reenter_outward refused
         self._ell = np.empty((0, 4))
+        self._lit: LitHistogram | None = None  # grey_histogram="both" on grey input (decided by _init)
 
     def _set_model(self, q: np.ndarray) -> None:
         q = np.asarray(q, dtype=np.float64)
@@ -154,8 +156,16 @@ class ColorParticleFilter(SearchMixin, Tracker):
         if roi is None:
             roi = reachable_roi(ellipses, w, h)
         feats = self.cue.prepare(frame, roi, self.cue.step_for(ellipses))
-        rho, tot = self.cue.rho(feats, ellipses, self._sqrt_q)
+        rho, tot = self._cue_rho(feats, ellipses)
         return rho, tot, feats
+
+    def _cue_rho(self, feats, ellipses: np.ndarray):
+        """Bhattacharyya coefficients and kernel masses of a batch on prepared features; with the quotient
+        model (``grey_histogram="both"``) the better of the two coefficients."""
+        rho, tot = self.cue.rho(feats, ellipses, self._sqrt_q)
+        if self._lit is not None and self.mode == "tracking":  # the search scores the grey levels alone
+            rho = np.maximum(rho, self._lit.rho(feats.roi, feats.pitch, ellipses))
+        return rho, tot
 
     def _sigma2(self, rho: np.ndarray, tot: np.ndarray) -> float:
         """sigma^2 of Eq. 10: the parameter, or with ``adaptive_sigma`` d_min^2 / 2 over the batch (book ch. 4)."""
@@ -252,6 +262,11 @@ class ColorParticleFilter(SearchMixin, Tracker):
         self.cue.new_frame(frame)
         self.loss.reset(1.0)
         ell = box_to_ellipse(box)
+        p = self.params
+        if p.grey_histogram == "both" and self.cue.color_space == "gray" and self._quotient is None:
+            self._lit = LitHistogram(sigma=p.illumination_sigma, gray_bins=p.gray_bins, kernel=p.kernel,
+                                     max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold)
+            self._lit.init(frame, ell)
         if self._raw_check is not None:
             self._raw_check.init(self._raw, ell)
         self._set_model(self.cue.histogram(frame, ell))
@@ -267,6 +282,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
     # ------------------------------------------------------------------ update
     def _update(self, frame: np.ndarray) -> TrackState:
         self.cue.new_frame(frame)
+        if self._lit is not None:
+            self._lit.new_frame(frame)
         if self.mode == "tracking":
             state = self._track(frame)
         elif self.mode == "detecting":
@@ -326,7 +343,7 @@ class ColorParticleFilter(SearchMixin, Tracker):
 
         def score(states: np.ndarray) -> np.ndarray:
             self._clip_states(states)
-            r, t = self.cue.rho(feats, self._ellipses(states), self._sqrt_q)
+            r, t = self._cue_rho(feats, self._ellipses(states))
             return self._extra_log_lik(frame, states, self._log_lik(r, t, s2), roi, feats)
 
         states, ll, info = seir(ps.states, log_lik, score, self.rng, mutation_std=std)
@@ -386,6 +403,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         p_e = hist_e[0].copy()
         # element-wise sums, not BLAS: results must not depend on the BLAS thread count of the process
         rho_e = min(max(float((np.sqrt(p_e) * self._sqrt_q).sum()), 0.0), 1.0) if tot_e[0] > 0 else 0.0
+        if self._lit is not None and tot_e[0] > 0:
+            rho_e = max(rho_e, self._lit.estimate_rho(feats.roi, feats.pitch, e_ell))
         cx, cy, hx, hy = (float(v) for v in e_ell[0])
         box = (cx - hx, cy - hy, 2.0 * hx, 2.0 * hy)  # ellipse_to_box
         # appearance condition (Eq. 15) -> lost detection (§6)
@@ -450,6 +469,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
                 gate = "threshold"
             if (gate == "confident" and confident) or (gate == "threshold" and rho_e > p.update_rho):
                 self.q, self._sqrt_q = blend_model(self.q, p_e, p.alpha)
+                if self._lit is not None:
+                    self._lit.learn(p.alpha)
                 self._update_models(frame, est, feats, rho_e)
             elif gate == "lambda":
                 pi_e = self._pi(rho_e)
@@ -458,6 +479,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
                 else:
                     if pi_e > self.lam and self.miss == 0:
                         self.q, self._sqrt_q = blend_model(self.q, p_e, p.alpha)
+                        if self._lit is not None:
+                            self._lit.learn(p.alpha)
                     self.lam = (1.0 - p.lambda_rate) * self.lam + p.lambda_rate * pi_e
         if p.background_interval and confident:
             self._since_bg += 1

@@ -311,7 +311,7 @@ class SearchMixin:
         x0, y0, x1, y1 = reachable_roi(e_ell, fw, fh)
         if p.relit_search == "off" and roi[0] <= x0 and roi[1] <= y0 and x1 <= roi[2] and y1 <= roi[3]:
             # inside the first layer's quantised region (the usual case): scored on the same features
-            e_rho, e_tot = self.cue.rho(feats, e_ell, self._sqrt_q)
+            e_rho, e_tot = self._cue_rho(feats, e_ell)
             e_feats = feats
         else:
             e_rho, e_tot, e_feats = self._search_rho(frame, e_ell)

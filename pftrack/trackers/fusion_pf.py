@@ -50,6 +50,9 @@ from .color_pf import _ELL_COLS, ColorPF, ColorPFParams
 class FusionPFParams(ColorPFParams):
     """Parameters of ``fusion-pf`` (colour-pf's plus the fusion ingredients)."""
 
+    grey_histogram: Literal["levels", "both"] = param("levels", doc=(
+        "See ColorModelParams.grey_histogram. 'levels' for fusion-pf: on grey input its structural cue already "
+        "scores the self-quotient image (grey_structure); 'both' was not tried with it."))
     contrast: bool = param(True, doc=(
         "Multiply in the background-aware contrast likelihood exp(contrast_gain * c), c = mean foreground "
         "probability inside the box minus in the surrounding ring."))

@@ -1,0 +1,136 @@
+"""color-pf's second grey histogram model, on the self-quotient image (pftrack.cues.lit_histogram)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.cues.histogram_cue import ColorCue
+from pftrack.cues.lit_histogram import LitHistogram
+from pftrack.eval.metrics import frame_ious
+
+TARGET = np.array([160.0, 120.0, 40.0, 40.0])  # ellipse (cx, cy, hx, hy): an 80 x 80 box
+
+
+def _scene(seed: int = 0, size=(240, 320)) -> np.ndarray:
+    """A textured grey background (float levels 40-200) with a target of vertical stripes in the 80 x 80 box
+    about (160, 120)."""
+    rng = np.random.default_rng(seed)
+    g = cv2.GaussianBlur(rng.uniform(0, 255, size).astype(np.float32), (0, 0), 3)
+    g = 40 + 160 * (g - g.min()) / (g.max() - g.min())
+    xx = np.arange(120, 200)
+    g[80:160, 120:200] = (120 + 60 * np.sign(np.sin(xx / 4.0)))[None, :]
+    return g
+
+
+def _bgr(g: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(np.clip(g, 0, 255).astype(np.uint8), cv2.COLOR_GRAY2BGR)
+
+
+def _lamp(g: np.ndarray, strength: float, width: float = 40.0) -> np.ndarray:
+    """A bright spot on the target's left half (a gain up to 1 + strength, smooth over ``width`` px): the target's
+    own grey levels change, and the rest of the frame hardly does, so global equalisation cannot undo it."""
+    yy, xx = np.mgrid[0:g.shape[0], 0:g.shape[1]]
+    spot = np.exp(-((xx - 140.0) ** 2 + (yy - 120.0) ** 2) / (2 * width ** 2))
+    return g * (1.0 + strength * spot)
+
+
+def _levels_rho(first, frame, ell) -> float:
+    cue = ColorCue("gray", None, "nummiaro", 1500)
+    cue.new_frame(first)
+    q = cue.histogram(first, TARGET)
+    sq = np.sqrt(q / q.sum())
+    cue.new_frame(frame)
+    feats = cue.prepare(frame, (0, 0, frame.shape[1], frame.shape[0]))
+    return float(cue.rho(feats, np.asarray(ell).reshape(-1, 4), sq)[0][0])
+
+
+def test_a_lamp_on_the_target_keeps_the_quotient_model_where_the_grey_levels_fall():
+    g = _scene()
+    first, lit_frame = _bgr(g), _bgr(_lamp(g, 1.2))
+    lit = LitHistogram(sigma=0.1, gray_bins=(16, 8), kernel="nummiaro", max_pixels=1500, gradient_threshold=40.0)
+    lit.init(first, TARGET)
+    lit.new_frame(lit_frame)
+    roi = (0, 0, 320, 240)
+    r_q = float(lit.rho(roi, 1, TARGET.reshape(1, 4))[0])
+    r_levels = _levels_rho(first, lit_frame, TARGET)
+    assert r_q > r_levels + 0.2, (r_q, r_levels)  # measured: quotient 0.89, grey levels 0.57
+    # a box of background beside the target stays far below it on the quotient too (measured: 0.16)
+    aside = (TARGET + [90.0, 0, 0, 0]).reshape(1, 4)
+    assert float(lit.rho(roi, 1, aside)[0]) < r_q - 0.5
+    # the estimate's coefficient is the batch's, and learning moves the model towards the estimate's histogram
+    assert lit.estimate_rho(roi, 1, TARGET) == pytest.approx(r_q, abs=1e-9)
+    q0 = lit.q.copy()
+    lit.learn(0.5)
+    assert not np.allclose(q0, lit.q) and lit.q.sum() == pytest.approx(1.0)
+    assert lit.estimate_rho(roi, 1, TARGET) > r_q
+
+
+def test_the_quotient_image_is_computed_once_per_frame():
+    g = _bgr(_scene(1))
+    lit = LitHistogram(sigma=0.1, gray_bins=(16, 8), kernel="nummiaro", max_pixels=1500, gradient_threshold=40.0)
+    lit.init(g, TARGET)
+    calls = []
+    inner = lit.quotient
+    lit.quotient = lambda f: calls.append(1) or inner(f)
+    lit.new_frame(g.copy())
+    lit.rho((0, 0, 320, 240), 1, TARGET.reshape(1, 4))
+    lit.rho((100, 60, 220, 180), 1, TARGET.reshape(1, 4))
+    lit.estimate_rho((100, 60, 220, 180), 1, TARGET)
+    assert len(calls) == 1
+    lit.new_frame(g.copy())
+    assert len(calls) == 1  # nothing asked for yet
+    lit.rho((0, 0, 320, 240), 1, TARGET.reshape(1, 4))
+    assert len(calls) == 2
+
+
+@pytest.mark.parametrize(("gray", "params", "has_lit"), [
+    (True, {}, True), (True, {"grey_histogram": "levels"}, False), (False, {}, False),
+    (True, {"illumination": "quotient"}, False)])
+def test_color_pf_picks_the_quotient_model_from_the_input(gray, params, has_lit):
+    g = _scene(2)
+    frame = _bgr(g) if gray else cv2.merge([g.astype(np.uint8), (255 - g).astype(np.uint8), g.astype(np.uint8)])
+    box = (120.0, 80.0, 80.0, 80.0)
+    t = pftrack.create_tracker("color-pf", seed=0, **params)
+    t.init(frame, box)
+    assert (t._lit is not None) is has_lit
+    st = t.update(frame)
+    assert frame_ious(np.array([st.box]), np.array([box]))[0] > 0.7 and not st.lost
+    assert pftrack.create_tracker("fusion-pf").params.grey_histogram == "levels"
+
+
+def test_tracking_scores_the_better_model_and_the_search_the_grey_levels_alone():
+    g = _scene(4)
+    first, lit_frame = _bgr(g), _bgr(_lamp(g, 1.2))
+    t = pftrack.create_tracker("color-pf", seed=0)
+    t.init(first, (120.0, 80.0, 80.0, 80.0))
+    t.cue.new_frame(lit_frame)
+    t._lit.new_frame(lit_frame)
+    ell = np.array([TARGET, TARGET + [90.0, 0, 0, 0]])
+    both, _, _ = t._rho(lit_frame, ell.copy(), (0, 0, 320, 240))
+    both = both.copy()
+    levels = t.cue.rho(t.cue.prepare(lit_frame, (0, 0, 320, 240), t.cue.step_for(ell)), ell, t._sqrt_q)[0].copy()
+    quot = t._lit.rho((0, 0, 320, 240), t.cue.step_for(ell), ell)
+    np.testing.assert_allclose(both, np.maximum(levels, quot))
+    assert both[0] > levels[0] + 0.05  # the lamp: the quotient model is the better one on the target
+    t.mode = "searching"
+    searched, _, _ = t._rho(lit_frame, ell.copy(), (0, 0, 320, 240))
+    np.testing.assert_allclose(searched, levels)
+
+
+@pytest.mark.parametrize("seed", [3, 6])
+def test_default_color_pf_holds_a_grey_face_under_a_lamp_and_a_shadow(seed):
+    """The grey face proxy's two hardest tune seeds for the grey levels alone (docs/robustness.md). Measured on 150
+    frames: mean IoU 0.679 and 0.748; with grey_histogram='levels' 0.261 and 0.303."""
+    pytest.importorskip("skimage")  # the portrait the scene is made from
+    from pftrack.synth.face import face_scene
+
+    frames, gt = face_scene(seed, 150)
+    t = pftrack.create_tracker("color-pf", seed=seed)
+    t.init(frames[0], tuple(gt[0]))
+    states = [t.update(f) for f in frames[1:]]
+    iou = frame_ious(np.array([s.box for s in states]), gt[1:])
+    assert iou.mean() >= 0.6, iou.mean()
+    assert not any(s.lost for s in states)  # the face is in view in every frame
