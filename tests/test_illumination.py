@@ -105,17 +105,23 @@ def test_quotient_tracks_a_grey_target_under_a_drifting_lamp(name):
     # the lamp brightens and darkens the target differently from the ground around it: global equalisation
     # cannot undo that, the quotient does
     scores = {}
-    for mode in ("none", "quotient"):
+    modes = {"none": {}, "quotient": {"illumination": "quotient"}}
+    if name == "color-pf":
+        modes["levels"] = {"grey_histogram": "levels"}
+    for mode, params in modes.items():
         ious = []
         for seed in range(3):
             frames, boxes = spot_scene(seed)
-            t = pftrack.create_tracker(name, seed=0, illumination=mode)
+            t = pftrack.create_tracker(name, seed=0, **params)
             t.init(frames[0], boxes[0])
             ious.append(np.mean([iou(t.update(f).box, b) for f, b in zip(frames[1:], boxes[1:])]))
         scores[mode] = float(np.mean(ious))
     assert scores["quotient"] > 0.75
-    if name == "color-pf":  # the intensity histogram alone is lost without it
-        assert scores["none"] < scores["quotient"] - 0.2
+    if name == "color-pf":
+        # the histogram of the grey levels alone is lost without the quotient (measured 0.54 against 0.83); the
+        # default keeps a second model of the quotient beside it (grey_histogram="both", measured 0.80)
+        assert scores["levels"] < scores["quotient"] - 0.2
+        assert scores["none"] > 0.75
 
 
 def test_raw_frame_check_refuses_background_and_accepts_the_target():
