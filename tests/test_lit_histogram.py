@@ -98,6 +98,11 @@ def test_color_pf_picks_the_quotient_model_from_the_input(gray, params, has_lit)
     assert (t._lit is not None) is has_lit
     st = t.update(frame)
     assert frame_ious(np.array([st.box]), np.array([box]))[0] > 0.7 and not st.lost
+    t = pftrack.create_tracker("fusion-pf", seed=0, **{"grey_histogram": "both", **params})
+    t.init(frame, box)
+    assert (t._lit is not None) is has_lit
+    if has_lit:  # one quotient image per frame for both grey cues
+        assert t._lit.quotient == t.structure._qf
     assert pftrack.create_tracker("fusion-pf").params.grey_histogram == "levels"
 
 

@@ -19,6 +19,8 @@ region (the tracker's region of the particles, or the search's).
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from .color import blend_model
@@ -31,10 +33,13 @@ __all__ = ["LitHistogram"]
 class LitHistogram:
     """The grey histogram model of the self-quotient image (see the module docstring)."""
 
-    def __init__(self, *, sigma: float, gray_bins, kernel: str, max_pixels: int, gradient_threshold: float):
+    def __init__(self, *, sigma: float, gray_bins, kernel: str, max_pixels: int, gradient_threshold: float,
+                 quotient: Callable[[np.ndarray], np.ndarray] | None = None):
         self.cue = ColorCue("gray", None, kernel, max_pixels, gray_bins=tuple(gray_bins),
                             gradient_threshold=gradient_threshold)
-        self.quotient = QuotientImage(sigma, bgr=False)
+        # ``quotient``: another cue's cached self-quotient image of the same frames and scale (fusion-pf's
+        # LitStructure), so that it is computed once per frame for both
+        self.quotient = quotient if quotient is not None else QuotientImage(sigma, bgr=False)
         self.q: np.ndarray | None = None
         self.sqrt_q: np.ndarray | None = None
         self._frame: np.ndarray | None = None

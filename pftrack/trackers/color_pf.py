@@ -265,7 +265,8 @@ class ColorParticleFilter(SearchMixin, Tracker):
         p = self.params
         if p.grey_histogram == "both" and self.cue.color_space == "gray" and self._quotient is None:
             self._lit = LitHistogram(sigma=p.illumination_sigma, gray_bins=p.gray_bins, kernel=p.kernel,
-                                     max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold)
+                                     max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold,
+                                     quotient=self._shared_quotient())
             self._lit.init(frame, ell)
         if self._raw_check is not None:
             self._raw_check.init(self._raw, ell)
@@ -321,6 +322,11 @@ class ColorParticleFilter(SearchMixin, Tracker):
     def _clip_states(self, states: np.ndarray) -> None:
         """Bound the sizes of samples placed by the search (in place)."""
         np.clip(states[:, HX:HY + 1], self.params.min_half_axis, None, out=states[:, HX:HY + 1])
+
+    def _shared_quotient(self):
+        """A cached self-quotient image ``frame -> image`` of another cue, for the second grey histogram to share
+        (default: none, it computes its own)."""
+        return None
 
     def _extra_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray,
                        roi: tuple[int, int, int, int], feats) -> np.ndarray:
