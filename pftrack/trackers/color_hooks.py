@@ -1,0 +1,94 @@
+"""The extension points of the colour particle filters (:class:`~pftrack.trackers.color_pf.ColorParticleFilter`),
+with their defaults: the dynamics a subclass supplies, and the further cues, models and tests it may add."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..filtering.dynamics import HX, HY, X, Y
+from ..filtering.particles import ParticleSet
+from ..filtering.seir import seir
+
+__all__ = ["ColorHooks"]
+
+
+class ColorHooks:
+    """Default hooks of :class:`~pftrack.trackers.color_pf.ColorParticleFilter` (a mixin; see there)."""
+
+    def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:
+        """Move the samples with the dynamic model (in place); return the region their ellipses cover."""
+        raise NotImplementedError
+
+    def _step_std(self, est: np.ndarray) -> np.ndarray:
+        """``(D,)`` one-step std of the dynamic model's noise on the centre and half-axes (``X, Y, HX, HY``;
+        other entries 0) around the state ``est``: the scale of SEIR's mutation."""
+        raise NotImplementedError
+
+    def _initial_state(self, ellipse) -> np.ndarray:
+        """A state at rest on an ellipse ``(cx, cy, hx, hy)``."""
+        state = np.zeros(self.dim)
+        state[[X, Y, HX, HY]] = ellipse
+        return state
+
+    def _clip_states(self, states: np.ndarray) -> None:
+        """Bound the sizes of samples placed by the search (in place)."""
+        np.clip(states[:, HX:HY + 1], self.params.min_half_axis, None, out=states[:, HX:HY + 1])
+
+    def _shared_quotient(self):
+        """A cached self-quotient image ``frame -> image`` of another cue, for the second grey histogram to share
+        (default: none, it computes its own)."""
+        return None
+
+    def _extra_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray,
+                       roi: tuple[int, int, int, int], feats) -> np.ndarray:
+        """Further log-likelihood terms multiplied into the colour likelihood (default: none).
+
+        ``feats`` is the quantised region ``roi`` (shared with the colour cue)."""
+        return log_lik
+
+    def _seir(self, frame: np.ndarray, ps: ParticleSet, log_lik: np.ndarray, rho: np.ndarray, tot: np.ndarray,
+              roi: tuple[int, int, int, int], feats):
+        """Book ch. 3's SEIR loop on the weighted particles (``resampler='seir'``).
+
+        New particles are scored with the same cues on the same prepared region; the likelihood's
+        sigma is the one this frame's weighting used (with ``adaptive_sigma`` it is frozen at the
+        batch's d_min, so that the new particles do not change the scale)."""
+        p = self.params
+        est = ps._mean
+        std = p.seir_mutation * self._step_std(est)
+        s2 = self._sigma2(rho, tot)
+
+        def score(states: np.ndarray) -> np.ndarray:
+            self._clip_states(states)
+            r, t = self._cue_rho(feats, self._ellipses(states))
+            return self._extra_log_lik(frame, states, self._log_lik(r, t, s2), roi, feats)
+
+        states, ll, info = seir(ps.states, log_lik, score, self.rng, mutation_std=std)
+        ps.states[:] = states
+        ps.set_log_likelihood(ll)
+        return info
+
+    def _loss_scores(self, frame: np.ndarray, ellipses: np.ndarray, rho: np.ndarray,
+                     roi: tuple[int, int, int, int]):
+        """The scores the loss test sees for a batch of ellipses (default: the colour ``rho``).
+
+        A subclass with further cues returns ``(M, C)`` scores in [0, 1] for a
+        :class:`~pftrack.filtering.loss.FusedLoss`."""
+        return rho
+
+    def _appearance_pass(self, rho: np.ndarray, threshold: float, log_lik: np.ndarray) -> np.ndarray:
+        """Which search samples look like the target: the appearance condition ``rho > mu + 2 sigma`` (Eq. 15)."""
+        return rho > threshold
+
+    def _search_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray, feats) -> np.ndarray:
+        """Further log-likelihood terms for the search's samples (default: none)."""
+        return log_lik
+
+    def _update_models(self, frame: np.ndarray, estimate: np.ndarray, feats, rho_e: float) -> None:
+        """Called when the colour model update gate passes (hook for further adaptive models)."""
+
+    def _after_estimate(self, frame: np.ndarray, estimate: np.ndarray) -> None:
+        """Called with the new mean state after each tracked frame."""
+
+    def _on_frame(self, frame: np.ndarray) -> None:
+        """Called at the end of every update (tracking or searching)."""
