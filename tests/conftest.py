@@ -41,3 +41,19 @@ def render_scene(spec):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+def face_proxy_run(name: str, seed: int, frames: int = 150, **params):
+    """Mean IoU and the raised lost flags of a tracker (run seed = scene seed) on the grey face proxy
+    (:func:`pftrack.synth.face.face_scene`; skipped without scikit-image, which provides the portrait)."""
+    pytest.importorskip("skimage")
+    import pftrack
+    from pftrack.eval.metrics import frame_ious
+    from pftrack.synth.face import face_scene
+
+    imgs, gt = face_scene(seed, frames)
+    t = pftrack.create_tracker(name, seed=seed, **params)
+    t.init(imgs[0], tuple(gt[0]))
+    states = [t.update(f) for f in imgs[1:]]
+    iou = frame_ious(np.array([s.box for s in states]), gt[1:])
+    return float(iou.mean()), [bool(s.lost) for s in states]

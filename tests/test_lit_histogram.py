@@ -11,6 +11,8 @@ from pftrack.cues.histogram_cue import ColorCue
 from pftrack.cues.lit_histogram import LitHistogram
 from pftrack.eval.metrics import frame_ious
 
+from .conftest import face_proxy_run
+
 TARGET = np.array([160.0, 120.0, 40.0, 40.0])  # ellipse (cx, cy, hx, hy): an 80 x 80 box
 
 
@@ -129,13 +131,6 @@ def test_tracking_scores_the_better_model_and_the_search_the_grey_levels_alone()
 def test_default_color_pf_holds_a_grey_face_under_a_lamp_and_a_shadow(seed):
     """The grey face proxy's two hardest tune seeds for the grey levels alone (docs/robustness.md). Measured on 150
     frames: mean IoU 0.679 and 0.748; with grey_histogram='levels' 0.261 and 0.303."""
-    pytest.importorskip("skimage")  # the portrait the scene is made from
-    from pftrack.synth.face import face_scene
-
-    frames, gt = face_scene(seed, 150)
-    t = pftrack.create_tracker("color-pf", seed=seed)
-    t.init(frames[0], tuple(gt[0]))
-    states = [t.update(f) for f in frames[1:]]
-    iou = frame_ious(np.array([s.box for s in states]), gt[1:])
-    assert iou.mean() >= 0.6, iou.mean()
-    assert not any(s.lost for s in states)  # the face is in view in every frame
+    iou, lost = face_proxy_run("color-pf", seed)
+    assert iou >= 0.6, iou
+    assert not any(lost)  # the face is in view in every frame

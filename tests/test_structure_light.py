@@ -11,6 +11,8 @@ from pftrack.cues.structure import StructureCue
 from pftrack.cues.structure_light import LitStructure
 from pftrack.eval.metrics import frame_ious
 
+from .conftest import face_proxy_run
+
 
 def _scene(seed: int = 0, size=(240, 320)):
     """A textured grey image (float levels 40-200, smooth texture); _bgr makes a frame of it."""
@@ -93,15 +95,8 @@ def test_fusion_pf_picks_the_grey_structure_from_the_input(gray, mode, kind):
 def test_default_fusion_pf_holds_a_grey_face_under_a_lamp_and_a_shadow(seed):
     """The grey face proxy's two hardest tune seeds for the grey levels alone (docs/robustness.md). Measured on 150
     frames: mean IoU 0.735 and 0.828; with grey_structure='levels' 0.535 and 0.690."""
-    pytest.importorskip("skimage")  # the portrait the scene is made from
-    from pftrack.synth.face import face_scene
-
-    frames, gt = face_scene(seed, 150)
-    t = pftrack.create_tracker("fusion-pf", seed=seed)
-    t.init(frames[0], tuple(gt[0]))
-    states = [t.update(f) for f in frames[1:]]
-    iou = frame_ious(np.array([s.box for s in states]), gt[1:])
-    assert iou.mean() >= 0.7, iou.mean()
+    iou, _ = face_proxy_run("fusion-pf", seed)
+    assert iou >= 0.7, iou
 
 
 @pytest.mark.parametrize("gray", [True, False])
