@@ -55,7 +55,7 @@ class LitHistogram:
         self._p_e = None
 
     def image(self) -> np.ndarray:
-        """This frame's self-quotient image (2-D ``uint8``), equalised by the cue's table."""
+        """This frame's self-quotient image (2-D ``uint8``); the cue's equalisation table is taken from it."""
         if self._image is None:
             self._image = self.quotient(self._frame)
             self.cue.new_frame(self._image)
