@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -111,6 +112,19 @@ def test_grey_features_from_lattice_neighbourhoods_equal_the_whole_region(rng, p
             finally:
                 it._NEIGHBOURHOOD_PITCH = previous
             assert got.shape == expected.shape and np.array_equal(got, expected), roi
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (2, 7), (7, 2), (3, 3), (61, 83), (170, 150)])
+def test_the_grey_gradients_are_the_float_sobel_filters(shape):
+    """One spatialGradient pass gives the numbers of the two float 3x3 Sobel filters (replicated border)."""
+    from pftrack.cues.intensity import _sobel3
+
+    g = cv2.GaussianBlur(np.random.default_rng(shape[0]).integers(0, 256, shape, dtype=np.uint8), (0, 0), 1.0)
+    dx, dy = _sobel3(g)
+    assert dx.dtype == np.int16 and dy.dtype == np.int16
+    ex = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    ey = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    assert np.array_equal(dx.astype(np.float32), ex) and np.array_equal(dy.astype(np.float32), ey)
 
 
 def test_grey_features_ignore_a_global_gain():
