@@ -1,6 +1,7 @@
 """A grey face under strong illumination change: a proxy built from a real portrait (docs/robustness.md).
 
     python scripts/grey_face_proxy.py [--seeds 0-7] [--trackers fusion-pf,color-pf,opencv-csrt] [--frames 150]
+                                      [--dark GAIN --noise SD]
 
 (scikit-image, from the `dev` extra, provides the portrait.)
 
@@ -16,7 +17,8 @@ changes size in the frame, and the frames are lit by
 
 The ground truth is the face box carried through the camera's motion, exact in every frame. It is a proxy
 for a real grey face sequence: the face does not turn or change expression, so it measures the trackers'
-tolerance of the light, not of pose. Prints the mean OTB AUC, the fraction of frames with ``lost`` raised
+tolerance of the light, not of pose. ``--dark 0.25 --noise 2`` darkens every frame by that gain and adds
+Gaussian sensor noise of that spread (grey levels, seeded per scene): a dim, noisy indoor camera. Prints the mean OTB AUC, the fraction of frames with ``lost`` raised
 (the face is visible in every frame, so every raised flag is a false alarm) and the update rate.
 """
 
@@ -58,6 +60,8 @@ def main() -> None:
                     help="tracker specs, as pftrack eval's (e.g. fusion-pf[illumination=quotient])")
     ap.add_argument("--frames", type=int, default=150)
     ap.add_argument("--save", help="write the first seed's frames as an OTB folder here")
+    ap.add_argument("--dark", type=float, default=1.0, help="a further gain on every frame (a dim camera)")
+    ap.add_argument("--noise", type=float, default=0.0, help="std of added Gaussian noise, grey levels")
     a = ap.parse_args()
     lo, _, hi = a.seeds.partition("-")
     seeds = list(range(int(lo), int(hi or lo) + 1))
@@ -65,6 +69,10 @@ def main() -> None:
     res = {n: [] for n in names}
     for sd in seeds:
         frames, gt = face_scene(sd, a.frames)
+        if a.dark != 1.0 or a.noise > 0:
+            rng = np.random.default_rng(sd)
+            frames = [np.clip(f.astype(np.float32) * a.dark + rng.normal(0.0, a.noise, f.shape), 0, 255)
+                      .astype(np.uint8) for f in frames]
         if a.save and sd == seeds[0]:
             export_face(frames, gt, a.save)
         for n in names:
