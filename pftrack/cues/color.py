@@ -366,6 +366,20 @@ def _blend_model_numba(q, p, alpha, out_q, out_sqrt):
         out_sqrt[u] = math.sqrt(out_q[u])
 
 
+def normalized_model(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A target model ``q`` scaled to unit mass (uniform if empty), and its square root: ``(q, sqrt(q))``."""
+    q = np.asarray(q, dtype=np.float64)
+    s = q.sum()
+    q = q / s if s > 0 else np.full_like(q, 1.0 / q.size)
+    return q, np.sqrt(q)
+
+
+def model_rho(p: np.ndarray, sqrt_q: np.ndarray) -> float:
+    """Bhattacharyya coefficient (Eq. 6) of one normalised histogram ``p`` with a model given as ``sqrt(q)``,
+    clipped to [0, 1]; an element-wise sum, not BLAS, so the result does not depend on the BLAS thread count."""
+    return min(max(float((np.sqrt(p) * sqrt_q).sum()), 0.0), 1.0)
+
+
 def blend_model(q: np.ndarray, p: np.ndarray, alpha: float) -> tuple[np.ndarray, np.ndarray]:
     """The model update of Nummiaro et al. (Eq. 12), ``q <- (1 - alpha) q + alpha p``, renormalised (uniform if
     empty), and its square root: ``(q, sqrt(q))`` as new arrays; the compiled path gives NumPy's numbers."""

@@ -23,7 +23,7 @@ from typing import Callable
 
 import numpy as np
 
-from .color import blend_model
+from .color import blend_model, model_rho, normalized_model
 from .histogram_cue import ColorCue, ColorFeatures
 from .illumination import QuotientImage
 
@@ -64,10 +64,7 @@ class LitHistogram:
     def init(self, frame: np.ndarray, ellipse) -> None:
         """Take the model from one ellipse of the first frame."""
         self.new_frame(frame)
-        q = self.cue.histogram(self.image(), ellipse)
-        s = q.sum()
-        self.q = q / s if s > 0 else np.full_like(q, 1.0 / q.size)
-        self.sqrt_q = np.sqrt(self.q)
+        self.q, self.sqrt_q = normalized_model(self.cue.histogram(self.image(), ellipse))
 
     def _features(self, roi: tuple[int, int, int, int], pitch: int) -> ColorFeatures:
         key = (tuple(int(v) for v in roi), int(pitch))
@@ -88,7 +85,7 @@ class LitHistogram:
             self._p_e = None
             return 0.0
         self._p_e = hist[0]  # normalised by the kernel histogram (its sum is 1)
-        return min(max(float((np.sqrt(self._p_e) * self.sqrt_q).sum()), 0.0), 1.0)
+        return model_rho(self._p_e, self.sqrt_q)
 
     def learn(self, alpha: float) -> None:
         """Blend the estimate's histogram of this frame into the model (Eqs. 11-12's update)."""

@@ -45,7 +45,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..cues.color import blend_model, reachable_roi, warmup
+from ..cues.color import blend_model, model_rho, normalized_model, reachable_roi, warmup
 from ..cues.histogram_cue import ColorCue
 from ..cues.illumination import QuotientImage
 from ..cues.lit_histogram import LitHistogram
@@ -135,10 +135,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self._lit: LitHistogram | None = None  # grey_histogram="both" on grey input (decided by _init)
 
     def _set_model(self, q: np.ndarray) -> None:
-        q = np.asarray(q, dtype=np.float64)
-        s = q.sum()
-        self.q = q / s if s > 0 else np.full_like(q, 1.0 / q.size)
-        self._sqrt_q = np.sqrt(self.q)
+        self.q, self._sqrt_q = normalized_model(q)
 
     # ------------------------------------------------------------------ likelihood
     def _ellipses(self, states: np.ndarray) -> np.ndarray:
@@ -328,8 +325,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         e_ell = est[_ELL_COLS].reshape(1, 4)
         hist_e, tot_e = self.cue.histograms(feats, e_ell)
         p_e = hist_e[0].copy()
-        # element-wise sums, not BLAS: results must not depend on the BLAS thread count of the process
-        rho_e = min(max(float((np.sqrt(p_e) * self._sqrt_q).sum()), 0.0), 1.0) if tot_e[0] > 0 else 0.0
+        rho_e = model_rho(p_e, self._sqrt_q) if tot_e[0] > 0 else 0.0
         if self._lit is not None and tot_e[0] > 0:
             rho_e = max(rho_e, self._lit.estimate_rho(feats.roi, feats.pitch, e_ell))
         cx, cy, hx, hy = (float(v) for v in e_ell[0])

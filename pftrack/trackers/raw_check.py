@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cues.color import blend_model, reachable_roi
+from ..cues.color import blend_model, model_rho, normalized_model, reachable_roi
 from ..cues.histogram_cue import ColorCue
 from ..cues.illumination import QuotientImage
 from ..cues.intensity import is_gray
@@ -54,10 +54,7 @@ class RawGreyCheck:
     def init(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
         self._stale = True
         self._equalised(frame)
-        q = self.cue.histogram(frame, ellipse)
-        s = q.sum()
-        self.q = q / s if s > 0 else np.full_like(q, 1.0 / q.size)
-        self.sqrt_q = np.sqrt(self.q)
+        self.q, self.sqrt_q = normalized_model(self.cue.histogram(frame, ellipse))
         self.detector.reset(1.0)
 
     def new_frame(self) -> None:
@@ -86,8 +83,7 @@ class RawGreyCheck:
         if total <= 0:
             return
         hist = hist / total
-        s = float(np.sum(np.sqrt(hist) * self.sqrt_q))
-        self.detector.learn(min(max(s, 0.0), 1.0), True)
+        self.detector.learn(model_rho(hist, self.sqrt_q), True)
         if self.alpha > 0:
             self.q, self.sqrt_q = blend_model(self.q, hist, self.alpha)
 
