@@ -91,7 +91,6 @@ def test_strided_lattice_copy_equals_numpy_slicing(rng):
 def test_grey_features_from_lattice_neighbourhoods_equal_the_whole_region(rng, pitch, size):
     """From pitch 5 on (4 on large regions), the grey features are computed on the lattice points' 3x3
     neighbourhoods only: the same bins as the whole-region computation, at the frame's edges and past them."""
-    import cv2
 
     import pftrack.cues.intensity as it
 
@@ -416,7 +415,6 @@ def test_a_look_alike_heading_out_through_the_exit_edge_is_not_acquired(seed):
 
 
 def test_patch_shift_recovers_a_shift_and_refuses_a_flat_patch():
-    import cv2
 
     from pftrack.cues.template import patch_shift
 
