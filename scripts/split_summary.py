@@ -1,18 +1,20 @@
 """Group a pftrack eval results.csv by kind of sequence: real, PETS pedestrians, grey, grey+light, synthetic scenes.
 
-    python scripts/split_summary.py reports/split/report/results.csv
+    python scripts/split_summary.py reports/split/report/results.csv [--scenes reports/split/report_synth]
 
 Columns: mean OTB AUC per group; lost recall and false-lost rate (means over the runs where each is defined);
 the fraction of reappearances re-acquired within 15 frames; the median update fps on the real sequences.
 A second table gives the tracking percentage (the fraction of frames with IoU > 0.5, book ch. 6 Table 1's
-measure, read from the ``runs/`` records beside results.csv).
+measure, read from the ``runs/`` records beside results.csv).  With ``--scenes DIR`` (the folder the synthetic
+scenes were written to by ``pftrack synth``), a third table splits the re-acquisitions by the scenes' drawn
+nuisance ``gray`` (``meta.json``): grey scenes, colour scenes, and the rest (real and PETS sequences).
 """
 
 from __future__ import annotations
 
+import argparse
 import csv
 import json
-import sys
 from pathlib import Path
 from collections import defaultdict
 
@@ -36,7 +38,33 @@ def _mean(vals: list[float]) -> float:
     return sum(vals) / len(vals) if vals else float("nan")
 
 
-def main(path: str) -> None:
+def scene_colours(roots: list[str]) -> dict[str, str]:
+    """``sequence -> "grey" | "colour"`` from the ``meta.json`` of the synthetic scenes under ``roots``."""
+    out = {}
+    for root in roots:
+        for meta in sorted(Path(root).glob("**/meta.json")):
+            nuisances = json.loads(meta.read_text()).get("nuisances") or {}
+            out[meta.parent.name] = "grey" if nuisances.get("gray") else "colour"
+    return out
+
+
+def reacquired_by_colour(rows: list[dict], kinds: dict[str, str]) -> None:
+    """Re-acquired / reappearances per tracker in grey scenes, colour scenes and the other sequences."""
+    counts: dict[tuple[str, str], list[float]] = defaultdict(lambda: [0.0, 0.0])
+    for r in rows:
+        if r.get("reappearances") in ("", None):
+            continue
+        c = counts[(r["tracker"], kinds.get(r["sequence"], "other"))]
+        c[0] += float(r["reacquired"] or 0)
+        c[1] += float(r["reappearances"])
+    print("\nre-acquired / reappearances, by the scenes' colour")
+    print(f"{'tracker':40s} {'grey':>12s} {'colour':>12s} {'other':>12s}")
+    for t in sorted({t for t, _ in counts}):
+        cells = [counts.get((t, k), [0.0, 0.0]) for k in ("grey", "colour", "other")]
+        print(f"{t:40s} " + " ".join(f"{int(a):>5d} / {int(b):<4d}" for a, b in cells))
+
+
+def main(path: str, scenes: list[str] | None = None) -> None:
     with open(path, encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     cells: dict[tuple[str, str], dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
@@ -73,5 +101,13 @@ def main(path: str) -> None:
             print(f"{t:40s} " + " ".join(f"{100 * _mean(v):10.1f}" for v in vals) + f" {100 * _mean(allv):10.1f}")
 
 
+    if scenes:
+        reacquired_by_colour(rows, scene_colours(scenes))
+
+
 if __name__ == "__main__":
-    main(sys.argv[1])
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("results", help="a pftrack eval results.csv")
+    ap.add_argument("--scenes", nargs="+", help="folders of the synthetic scenes (their meta.json)")
+    a = ap.parse_args()
+    main(a.results, a.scenes)
