@@ -60,6 +60,7 @@ from .base import Tracker, TrackState
 from .color_hooks import ColorHooks
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
+from .distractors import DistractorMemory
 from .raw_check import RawGreyCheck, illumination_stages
 
 __all__ = ["ColorModelParams", "ColorPF", "ColorPFParams", "ColorParticleFilter"]
@@ -98,6 +99,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self._quotient: QuotientImage | None = None  # illumination="quotient" on grey input (decided by init)
         self._raw_check: RawGreyCheck | None = None  # its re-acquisition check on the untransformed frames
         self._raw: np.ndarray | None = None  # the untransformed frame
+        self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames)  # look-alikes met during a loss
         warmup()
         self._reset()
 
@@ -120,6 +122,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self._confident_sizes: deque = deque()  # (frame index, hx, hy) of the recent confident estimates
         self._confident_motion = None  # (frame index, position, velocity) when last confident
         self._lost_at = None  # the same, for the current loss (search prediction)
+        self._distractors.clear()
         self._confident_track: deque = deque(maxlen=6)  # (frame index, x, y) of the last confident estimates
         self._exit_velocity = (0.0, 0.0)  # their mean displacement per frame when the loss was declared
         self._seen_levels: np.ndarray | None = None  # channel levels while the target was seen (relit_search)
@@ -247,6 +250,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self.loss.miss = 0
         self.loss.lost = False
         self._lost_at = None
+        self._distractors.clear()
         self._confident_track.clear()  # a velocity is measured within one stretch of tracking
         self._confident_sizes.clear()
         self._search_states = None

@@ -379,7 +379,12 @@ class SearchMixin:
         self._search_loglik = loglik
         thr = self._threshold()
         rank = loglik if prior is None else loglik + prior
-        best = int(np.argmax(np.where(tot > 0, rank, -np.inf))) if np.any(tot > 0) else 0
+        rank = np.where(tot > 0, rank, -np.inf)
+        # look-alikes met earlier in this loss are followed and not chosen (distractor_frames)
+        known = self._distractors.follow(states[:, X:Y + 1], rank, self.frame_index, self._lost_at, self.size)
+        if known.any() and not known.all():
+            rank = np.where(known, -np.inf, rank)
+        best = int(np.argmax(rank)) if np.any(tot > 0) else 0
         lp = 0.0 if prior is None else float(prior[best])
         # samples belonging to the best candidate: within one target size of it
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
@@ -406,7 +411,9 @@ class SearchMixin:
             var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
             found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
         vetoed = found and (self._leaving(frame, ell[best]) or (
-            self._raw_check is not None and self._raw_check.vetoes(self._raw, ell[best])))
+            self._raw_check is not None and self._raw_check.vetoes(self._raw, ell[best])) or
+            self._distractors.vetoes(ell[best, :2], self.frame_index, self._lost_at, self.size,
+                                    self._search_since, self._confident_track))
         if vetoed:
             found = False
             self.loss.lost = True  # acquire() ended the loss; the candidate is another object on its way out
