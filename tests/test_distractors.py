@@ -84,11 +84,13 @@ def test_follow_masks_the_samples_of_a_remembered_look_alike():
     assert mem.vetoes((250.0, 60.0), 46, LOST_AT, SIZE, 45)
     xy = np.array([[252.0, 61.0], [258.0, 64.0], [120.0, 100.0], [400.0, 300.0]])
     rank = np.array([1.0, 3.0, 2.0, 0.0])
-    mask = mem.follow(xy, rank, 47, LOST_AT, SIZE)
+    mask = mem.follow(xy, rank, 47, LOST_AT, SIZE, 45)
     assert mask.tolist() == [True, True, False, False]
     assert mem.items[0][:2] == [258.0, 64.0]  # moved to its best sample
+    assert not mem.follow(xy, rank, 45 + LIFE * 10, LOST_AT, SIZE, 45).any()  # forgotten
+    assert mem.items == []
     empty = DistractorMemory(10, lost_frames=3)
-    assert not empty.follow(xy, rank, 47, LOST_AT, SIZE).any()
+    assert not empty.follow(xy, rank, 47, LOST_AT, SIZE, 45).any()
 
 
 def test_defaults():

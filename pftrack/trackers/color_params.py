@@ -204,11 +204,13 @@ class ColorModelParams(Params):
         "With search_prior, only penalise (the log prior odds capped at 0): a candidate near the prediction "
         "needs the usual evidence, not less."))
     distractor_frames: int = param(0, ge=0, le=100_000, doc=(
-        "Distractor memory (pftrack.trackers.distractors): during the first this many frames of a search after a "
-        "gradual loss (frames of doubt between the last confident frame and the loss), a candidate that passes the acquisition test beyond the target's reach (four "
-        "spreads of search_prior's position model from the constant-velocity prediction) is another object of "
-        "the target's appearance: it is not acquired, and it is remembered and followed for the rest of the "
-        "loss. 0: off."))
+        "Distractor memory (pftrack.trackers.distractors). After a gradual loss (frames of doubt between the "
+        "last confident estimate and the loss), a candidate that passes the acquisition test during the first "
+        "this many frames of the search but lies beyond the target's reach is another object of its appearance. "
+        "The reach is four spreads of search_prior's position model plus the distance covered at the fastest "
+        "speed seen, from the prediction and from the last confident position. Such a look-alike is not "
+        "acquired; it is remembered and followed, and the search picks its candidate among the other samples, "
+        "for up to 6 times this many frames. 0: off."))
     acquire_samples: int = param(3, ge=1, le=1_000_000, doc=(
         "With the likelihood loss test: search samples near the best candidate that must pass the appearance "
         "condition before the candidate is tested against the target's history (at most the paper's b N)."))
@@ -261,10 +263,11 @@ class ColorPFParams(ColorModelParams):
         "keeps 'levels' (its structural cue has the quotient)."))
     distractor_frames: int = param(10, ge=0, le=100_000, doc=(
         "See ColorModelParams.distractor_frames (off there). 10 for color-pf and fusion-pf, chosen on the tune "
-        "data (docs/robustness.md): grey vanish scenes of seeds 0-19, 3 seeds, re-acquired 17 / 60 against 12 "
-        "(color-pf) and 31 / 60 against 25 (fusion-pf), lost recall 0.683 against 0.537 and 0.783 against 0.613; "
-        "the tune split's 213 runs +0.002 +- 0.002 and -0.0003 +- 0.0003 mean AUC, re-acquired 0.69 against "
-        "0.66 and 0.84 against 0.84; colour vanish scenes unchanged; 5 and 20 the same as 10."))
+        "data (docs/robustness.md; 5 and 20 gave the same): grey vanish scenes of seeds 0-19, 3 seeds, "
+        "re-acquired 17 / 60 against 12 (color-pf) and 29 / 60 against 25 (fusion-pf), lost recall 0.683 "
+        "against 0.537 and 0.734 against 0.613; the tune split +0.0019 +- 0.0017 mean AUC and re-acquired 61 / "
+        "90 against 59 (color-pf), unchanged (fusion-pf); colour vanish scenes unchanged. Report split "
+        "(reports/final_r8): within +-0.001, re-acquired 66 / 96 (the same) and 74 / 96 (73)."))
     position_noise: float = param(0.2, ge=0, le=10, doc=(
         "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
         "(scale-invariant). The paper leaves it open."))

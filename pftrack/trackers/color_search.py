@@ -381,7 +381,8 @@ class SearchMixin:
         rank = loglik if prior is None else loglik + prior
         rank = np.where(tot > 0, rank, -np.inf)
         # look-alikes met earlier in this loss are followed and not chosen (distractor_frames)
-        known = self._distractors.follow(states[:, X:Y + 1], rank, self.frame_index, self._lost_at, self.size)
+        known = self._distractors.follow(states[:, X:Y + 1], rank, self.frame_index, self._lost_at, self.size,
+                                         self._search_since)
         if known.any() and not known.all():
             rank = np.where(known, -np.inf, rank)
         best = int(np.argmax(rank)) if np.any(tot > 0) else 0

@@ -1,18 +1,21 @@
 """Look-alikes seen while the target cannot be there: a distractor memory for the colour trackers' search.
 
 Right after a gradual loss the target is close to where it was last seen: a target moving a few pixels a
-frame that was being covered by an occluder cannot be 150 px away two frames later.  A candidate of the search that passes the
-acquisition test out there is therefore another object of the target's appearance (in grey video, or among
-distractors of similar hue, it can score as high as the target itself).  :class:`DistractorMemory` records
-such candidates during the first ``record_frames`` frames of the search and follows them while the search goes
-on (a candidate near a remembered one, within the distance it can have moved since, is that object again).
-The search does not acquire a remembered look-alike; the target coming out from behind its occluder, away
-from them, is acquired as before.  A target that reappears far away (a cut, a jump) is acquired once the
-first ``record_frames`` frames have passed, unless it is where a look-alike was seen.  Nothing is recorded
-after an abrupt loss (:func:`gradual`): a target whose score falls from confident to absent within a frame
-has jumped or been cut away from, and may be anywhere.
+frame that was being covered by an occluder cannot be 150 px away two frames later.  A candidate of the
+search that passes the acquisition test out there is therefore another object of the target's appearance (in
+grey video, or among distractors of similar hue, it can score as high as the target itself).
 
-The geometry is pure functions (:func:`beyond_reach`, :func:`follow_radius`); the class holds the positions.
+:class:`DistractorMemory` records such candidates during the first ``record_frames`` frames of the search and
+follows them while the search goes on: a candidate near a remembered one, within the distance it can have
+moved since, is that object again, and the search chooses its candidate among the other samples.  The target
+coming out from behind its occluder, away from them, is acquired as before.  Nothing is recorded after an
+abrupt loss (:func:`gradual`): a target whose score falls from confident to absent within a frame has jumped,
+or the camera cut away, and it may be anywhere.  The memory is forgotten ``LIFE`` times ``record_frames``
+frames after the search began, because the estimate the reach is measured from may itself have been on the
+wrong object.
+
+The geometry is pure functions (:func:`prediction`, :func:`beyond_reach`, :func:`follow_radius`,
+:func:`peak_speed`, :func:`gradual`); the class holds the positions.
 """
 
 from __future__ import annotations
@@ -88,24 +91,24 @@ class DistractorMemory:
         self.record_frames = int(record_frames)
         self.lost_frames = int(lost_frames)
         self.items: list[list[float]] = []  # [x, y, frame index last seen]
-        self.since = 0  # frame index at which the current search began
 
     def clear(self) -> None:
         self.items = []
 
-    def follow(self, xy: np.ndarray, rank: np.ndarray, frame_index: int, lost_at,
-               size: tuple[float, float]) -> np.ndarray:
+    def follow(self, xy: np.ndarray, rank: np.ndarray, frame_index: int, lost_at, size: tuple[float, float],
+               since: int) -> np.ndarray:
         """Follow the remembered look-alikes through this frame's search samples and mask them out.
 
         ``xy``: ``(M, 2)`` sample positions; ``rank``: their scores (higher is better, ``-inf`` unusable).
         Each remembered look-alike moves to the best sample within the distance it can have moved since it
         was last seen, if there is one.  Returns the ``(M,)`` mask of the samples within that distance of a
-        look-alike: the search chooses its candidate among the others."""
+        look-alike: the search chooses its candidate among the others.  ``since``: the frame index at which
+        the search began."""
         mask = np.zeros(len(xy), dtype=bool)
         if not self.items or lost_at is None:
             return mask
-        if frame_index - self.since >= LIFE * self.record_frames:
-            self.items = []  # forgotten: a confident estimate may have been on the wrong object
+        if frame_index - since >= LIFE * self.record_frames:
+            self.items = []  # forgotten: the last confident estimate may have been on the wrong object
             return mask
         speed = math.hypot(*(float(v) for v in lost_at[2]))
         for item in self.items:
@@ -125,7 +128,6 @@ class DistractorMemory:
         last confident ``(frame index, x, y)`` estimates before the loss (their :func:`peak_speed`)."""
         if self.record_frames <= 0 or lost_at is None:
             return False
-        self.since = since
         if frame_index - since >= LIFE * self.record_frames:
             self.items = []
             return False
