@@ -262,7 +262,9 @@ class ColorPFParams(ColorModelParams):
         "24 below 0.5, against 18), re-acquired 35 against 33 of 123, but vanish 0.419 against 0.457. fusion-pf "
         "keeps 'levels' (its structural cue has the quotient)."))
     distractor_frames: int = param(10, ge=0, le=100_000, doc=(
-        "See ColorModelParams.distractor_frames (off there). 10 for color-pf and fusion-pf, chosen on the tune "
+        "Distractor memory: after a gradual loss, a look-alike found beyond the target's reach during the first "
+        "this many frames of the search is not acquired but remembered and followed (ColorModelParams."
+        "distractor_frames; off there). 10 for color-pf and fusion-pf, chosen on the tune "
         "data (docs/robustness.md; 5 and 20 gave the same): grey vanish scenes of seeds 0-19, 3 seeds, "
         "re-acquired 17 / 60 against 12 (color-pf) and 29 / 60 against 25 (fusion-pf), lost recall 0.683 "
         "against 0.537 and 0.734 against 0.613; the tune split +0.0019 +- 0.0017 mean AUC and re-acquired 61 / "
