@@ -99,8 +99,6 @@ def main(path: str, scenes: list[str] | None = None) -> None:
             vals = [tp.get((t, g), []) for g in GROUPS]
             allv = [v for vs in vals for v in vs]
             print(f"{t:40s} " + " ".join(f"{100 * _mean(v):10.1f}" for v in vals) + f" {100 * _mean(allv):10.1f}")
-
-
     if scenes:
         reacquired_by_colour(rows, scene_colours(scenes))
 
