@@ -258,7 +258,8 @@ class ColorPFParams(ColorModelParams):
     grey_histogram: Literal["levels", "both"] = param("both", doc=(
         "Grey input: 'both' also keeps a histogram model of the self-quotient image, and while tracking every "
         "particle scores the better of its two coefficients (the search scores the grey levels alone); 'levels': "
-        "the grey levels alone (ColorModelParams' default). 'both' for color-pf, chosen on the grey tune set (docs/robustness.md): mean AUC 0.499 against 0.458, face proxies 0.647 against 0.424 (no run of "
+        "the grey levels alone (ColorModelParams' default). 'both' for color-pf, chosen on the grey tune set "
+        "(docs/robustness.md): mean AUC 0.499 against 0.458, face proxies 0.647 against 0.424 (no run of "
         "24 below 0.5, against 18), re-acquired 35 against 33 of 123, but vanish 0.419 against 0.457. fusion-pf "
         "keeps 'levels' (its structural cue has the quotient)."))
     distractor_frames: int = param(10, ge=0, le=100_000, doc=(
