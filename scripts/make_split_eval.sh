@@ -35,5 +35,5 @@ for split in tune report; do
     "$WORK/${split}_synth"/{vanish,leave,exit,varied,camouflage,teleport} \
     --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet --report "$WORK/$split" \
     --title "pftrack: $split split" > "$WORK/$split.md"
-  "$PY" scripts/split_summary.py "$WORK/$split/results.csv"
+  "$PY" scripts/split_summary.py "$WORK/$split/results.csv" --scenes "$WORK/${split}_synth"
 done
