@@ -18,8 +18,9 @@ changes size in the frame, and the frames are lit by
 The ground truth is the face box carried through the camera's motion, exact in every frame. It is a proxy
 for a real grey face sequence: the face does not turn or change expression, so it measures the trackers'
 tolerance of the light, not of pose. ``--dark 0.25 --noise 2`` darkens every frame by that gain and adds
-Gaussian sensor noise of that spread (grey levels, seeded per scene): a dim, noisy indoor camera. Prints the mean OTB AUC, the fraction of frames with ``lost`` raised
-(the face is visible in every frame, so every raised flag is a false alarm) and the update rate.
+Gaussian sensor noise of that spread (grey levels, seeded per scene): a dim, noisy indoor camera. Prints the
+mean OTB AUC, the fraction of frames with ``lost`` raised (the face is visible in every frame, so every raised
+flag is a false alarm) and the update rate.
 """
 
 from __future__ import annotations

@@ -8,8 +8,8 @@ import pytest
 import pftrack
 from pftrack.eval.metrics import lost_detection
 from pftrack.synth import Scene, hidden_frames, vanish_scene
-from pftrack.trackers.distractors import (LIFE, DistractorMemory, beyond_reach, follow_radius, gradual, peak_speed,
-                                          prediction)
+from pftrack.filtering.dynamics import lost_prediction
+from pftrack.trackers.distractors import LIFE, DistractorMemory, beyond_reach, follow_radius, gradual, peak_speed
 
 SIZE = (10.0, 15.0)  # searched half-axes
 # last confident estimate at frame 40, at (100, 100), moving right at 2 px a frame
@@ -17,10 +17,10 @@ LOST_AT = (40, np.array([100.0, 100.0]), np.array([2.0, 0.0]))
 
 
 def test_prediction_moves_on_and_spreads():
-    centre, sd = prediction(LOST_AT, 45, SIZE)
+    centre, sd = lost_prediction(LOST_AT, 45, SIZE)
     assert np.allclose(centre, [110.0, 100.0])
     assert sd == pytest.approx(0.5 * 25.0 * (0.5 + 0.5))
-    assert prediction(LOST_AT, 50, SIZE)[1] > sd
+    assert lost_prediction(LOST_AT, 50, SIZE)[1] > sd
 
 
 def test_peak_speed_is_the_fastest_step():

@@ -136,6 +136,16 @@ class NCVRandomWalk:
                                 keep_aspect=self.keep_aspect, width=w, height=h)
 
 
+def lost_prediction(lost_at, frame_index: int, size) -> tuple[np.ndarray, float]:
+    """Where a lost target would be ``frame_index - lost_at[0]`` frames after its last confident estimate
+    ``lost_at = (frame index, position, velocity)``, moving on at its velocity, and the spread of that guess:
+    half the mean of the half-axes ``size``, growing by a tenth of it a frame (the search's prediction)."""
+    k = frame_index - lost_at[0]
+    centre = np.asarray(lost_at[1], dtype=np.float64) + k * np.asarray(lost_at[2], dtype=np.float64)
+    hx, hy = size
+    return centre, 0.5 * (hx + hy) * (0.5 + 0.1 * k)
+
+
 def reappearance_log_prior(positions: np.ndarray, centre, sd: float, area: float, eps: float, *,
                            cap: bool = True) -> np.ndarray:
     """Log prior odds of where a lost target reappears: ``log((1 - eps) A N(x; m, sd^2 I) + eps)``.

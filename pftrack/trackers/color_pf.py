@@ -140,6 +140,12 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
     def _set_model(self, q: np.ndarray) -> None:
         self.q, self._sqrt_q = normalized_model(q)
 
+    def _learn_model(self, p_e: np.ndarray) -> None:
+        """Eq. 12's update with the estimate's histogram ``p_e``, and of the quotient model beside it."""
+        self.q, self._sqrt_q = blend_model(self.q, p_e, self.params.alpha)
+        if self._lit is not None:
+            self._lit.learn(self.params.alpha)
+
     # ------------------------------------------------------------------ likelihood
     def _ellipses(self, states: np.ndarray) -> np.ndarray:
         n = states.shape[0]
@@ -395,9 +401,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
             if gate == "confident" and p.loss_test != "likelihood":
                 gate = "threshold"
             if (gate == "confident" and confident) or (gate == "threshold" and rho_e > p.update_rho):
-                self.q, self._sqrt_q = blend_model(self.q, p_e, p.alpha)
-                if self._lit is not None:
-                    self._lit.learn(p.alpha)
+                self._learn_model(p_e)
                 self._update_models(frame, est, feats, rho_e)
             elif gate == "lambda":
                 pi_e = self._pi(rho_e)
@@ -405,9 +409,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
                     self.lam = pi_e
                 else:
                     if pi_e > self.lam and self.miss == 0:
-                        self.q, self._sqrt_q = blend_model(self.q, p_e, p.alpha)
-                        if self._lit is not None:
-                            self._lit.learn(p.alpha)
+                        self._learn_model(p_e)
                     self.lam = (1.0 - p.lambda_rate) * self.lam + p.lambda_rate * pi_e
         if p.background_interval and confident:
             self._since_bg += 1

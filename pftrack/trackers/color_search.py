@@ -20,7 +20,7 @@ from ..cues.intensity import channel_levels, gain_maps
 from ..cues.lk import gray_of
 from ..cues.template import patch_shift
 from ..errors import ParameterError
-from ..filtering.dynamics import HX, HY, X, Y, reappearance_log_prior
+from ..filtering.dynamics import HX, HY, X, Y, lost_prediction, reappearance_log_prior
 from ..filtering.loss import confidence
 from ..frames import as_bgr_uint8
 from ..geometry import Box, box_to_ellipse, ellipse_to_box, in_frame_fraction, validate_box
@@ -256,10 +256,7 @@ class SearchMixin:
         eps = self.params.search_prior
         if eps <= 0 or self._lost_at is None:
             return None
-        hx, hy = self.size
-        k = self.frame_index - self._lost_at[0]
-        centre = self._lost_at[1] + k * self._lost_at[2]
-        sd = 0.5 * (hx + hy) * (0.5 + 0.1 * k)
+        centre, sd = lost_prediction(self._lost_at, self.frame_index, self.size)
         fh, fw = self._shape
         return reappearance_log_prior(states[:, X:Y + 1], centre, sd, fw * fh, eps, cap=self.params.search_prior_cap)
 
@@ -347,10 +344,8 @@ class SearchMixin:
         if self._lost_at is not None and p.search_predict > 0:
             # a share of the new samples where the target would be had it kept its velocity (behind an
             # occluder, a target usually comes out on the far side), spreading as time passes
-            k = self.frame_index - self._lost_at[0]
             n_pred = int(round(p.search_predict * n_new))
-            centre = self._lost_at[1] + k * self._lost_at[2]
-            sd = 0.5 * (hx + hy) * (0.5 + 0.1 * k)
+            centre, sd = lost_prediction(self._lost_at, self.frame_index, self.size)
             states[n_keep:n_keep + n_pred, X:Y + 1] = centre + self.rng.normal(0.0, sd, (n_pred, 2))
         states[n_keep + n_pred:, X:Y + 1] = self._uniform_positions(n_new - n_pred)
         scale = np.exp(self.rng.normal(0.0, 0.1, (n_new, 1)))

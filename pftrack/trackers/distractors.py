@@ -14,7 +14,7 @@ or the camera cut away, and it may be anywhere.  The memory is forgotten ``LIFE`
 frames after the search began, because the estimate the reach is measured from may itself have been on the
 wrong object.
 
-The geometry is pure functions (:func:`prediction`, :func:`beyond_reach`, :func:`follow_radius`,
+The geometry is pure functions (:func:`beyond_reach`, :func:`follow_radius`,
 :func:`peak_speed`, :func:`gradual`); the class holds the positions.
 """
 
@@ -24,6 +24,8 @@ import math
 
 import numpy as np
 
+from ..filtering.dynamics import lost_prediction
+
 #: The memory is forgotten this many times ``record_frames`` after the search began: the estimate the reach is
 #: measured from may itself have been on a look-alike, and the object then refused is the target.
 LIFE = 6
@@ -31,16 +33,6 @@ LIFE = 6
 #: A candidate farther than this many spreads of the search's position prior from the predicted position is
 #: out of the target's reach.
 REACH_SIGMAS = 4.0
-
-
-def prediction(lost_at, frame_index: int, size: tuple[float, float]) -> tuple[np.ndarray, float]:
-    """Where the target would be ``frame_index - lost_at[0]`` frames after its last confident estimate, moving
-    on at its velocity, and the spread of that guess (``search_prior``'s: half the mean target size, growing
-    by a tenth of it a frame)."""
-    k = frame_index - lost_at[0]
-    centre = np.asarray(lost_at[1], dtype=np.float64) + k * np.asarray(lost_at[2], dtype=np.float64)
-    hx, hy = size
-    return centre, 0.5 * (hx + hy) * (0.5 + 0.1 * k)
 
 
 def peak_speed(track) -> float:
@@ -56,10 +48,10 @@ def peak_speed(track) -> float:
 def beyond_reach(xy, lost_at, frame_index: int, size: tuple[float, float], speed: float = 0.0, *,
                  sigmas: float = REACH_SIGMAS) -> bool:
     """Could the target not be at ``xy`` now?  True when ``xy`` is farther than ``sigmas`` spreads of
-    :func:`prediction`, plus the distance the target covers in the frames since at ``speed`` (its fastest
+    :func:`~pftrack.filtering.dynamics.lost_prediction`, plus the distance the target covers in the frames since at ``speed`` (its fastest
     seen; at least its velocity's and 1 px a frame), from both the predicted position and the last confident
     one (a target may stop or turn back, and a filter's velocity lags a turn)."""
-    centre, sd = prediction(lost_at, frame_index, size)
+    centre, sd = lost_prediction(lost_at, frame_index, size)
     k = frame_index - lost_at[0]
     speed = max(speed, math.hypot(*(float(v) for v in lost_at[2])), 1.0)
     reach = sigmas * sd + speed * k
