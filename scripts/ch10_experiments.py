@@ -93,7 +93,8 @@ def pets(data: Path) -> dict:
             r = estimate_radius(sub[:max(1, 70 // stride)], line)
             truth = track_crossings(seq.mot_gt, line, hysteresis=5)
             cft = [(c.frame, c.direction) for c in track_crossings(tracks, line, hysteresis=5)]
-            for name, kw in (("ntt", {}), ("ntt match", {"timing": "match"}), ("ntt faithful", {"faithful": True})):
+            for name, kw in (("ntt", {}), ("ntt feet=false", {"feet": False}), ("ntt match", {"timing": "match"}),
+                             ("ntt faithful", {"faithful": True})):
                 ev, f = ntt(sub, numbers, line, 7.0, stride, radius=r, **kw)
                 if name == "ntt":
                     fps_ntt.append(f)
@@ -148,7 +149,8 @@ def walkers(seeds: list[int], wire: str | None = None) -> dict:
         truth = track_crossings(sc.tracks, sc.wire, hysteresis=3)
         numbers = list(range(1, len(sc.frames) + 1))
         r = estimate_radius(sc.frames[:int(10 * sc.fps)], sc.wire)
-        for name, kw in (("ntt", {}), ("ntt confirm=false", {"confirm": False}), ("ntt match", {"timing": "match"})):
+        for name, kw in (("ntt", {}), ("ntt feet=false", {"feet": False}), ("ntt confirm=false", {"confirm": False}),
+                         ("ntt match", {"timing": "match"})):
             ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, radius=r, **kw)
             add(acc, name, score([(e.frame, e.direction) for e in ev], truth, 0, 1e9))
         if wire is None:

@@ -31,18 +31,21 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
+from .blobs import FootCrossings, FootEvent, label_stats
 from .geometry import polyline_project
 
 __all__ = ["CrossingTimer", "blob_labels", "blob_point", "follow"]
 
 
-def blob_labels(fg: np.ndarray, close: int) -> np.ndarray:
+def blob_labels(fg: np.ndarray, close: int, *, stats: bool = False):
     """8-connected labels of the foreground after a closing with a ``close`` × ``close`` square (0: none),
-    so that an upright object's head, torso and legs form one blob."""
+    so that an upright object's head, torso and legs form one blob; with ``stats``, also each label's box
+    and area (OpenCV's ``x, y, w, h, area``)."""
     m = fg.astype(np.uint8)
     if close > 1:
         m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, np.ones((close, close), np.uint8))
-    return cv2.connectedComponents(m, connectivity=8)[1]
+    labels = cv2.connectedComponents(m, connectivity=8)[1]
+    return (labels, label_stats(labels)) if stats else labels
 
 
 def follow(labels: np.ndarray, pixels: np.ndarray) -> tuple[int, np.ndarray | None]:
@@ -82,7 +85,7 @@ class CrossingTimer:
 
     def __init__(self, polyline: np.ndarray, origin: tuple[int, int], width: int, *, point: str, hold_time: float,
                  close: int, confirm: bool = False, lookback: int = 0, merge: bool = True,
-                 max_width: float = 0.0):
+                 max_width: float = 0.0, feet: FootCrossings | None = None):
         self.polyline = np.asarray(polyline, dtype=np.float64)
         self.x0, self.y0 = origin
         self.width = int(width)
@@ -90,6 +93,7 @@ class CrossingTimer:
         self.confirm, self.lookback = bool(confirm), int(lookback)
         self.merge = bool(merge)
         self.max_width = float(max_width)
+        self.feet = feet
         self.held: list[_Held] = []
         self.past: deque[tuple[int, float, np.ndarray]] = deque(maxlen=max(1, self.lookback))
 
@@ -119,9 +123,10 @@ class CrossingTimer:
         return bool(xs.max() - xs.min() + 1 > self.max_width)
 
     def _unconfirmed(self, ev, out: list) -> None:
-        """An event whose point was not seen to cross: kept at its matching frame, or dropped with ``confirm``."""
+        """An event whose point was not seen to cross: kept at its matching frame (blob unknown), or dropped
+        with ``confirm``."""
         if not self.confirm:
-            out.append(ev)
+            out.append((ev, 0))
 
     def finish(self) -> list:
         """The held events at the end of the stream: released at their matching frame, or none with confirm."""
@@ -129,21 +134,25 @@ class CrossingTimer:
         for h in self.held:
             self._unconfirmed(h.event, out)
         self.held = []
-        return out
+        return [ev for ev, _ in out]
 
-    def step(self, fg: np.ndarray, fired: list, number: int, t: float, disc_of) -> list:
+    def step(self, fg: np.ndarray, fired: list, number: int, t: float, disc_of) -> tuple[list, list[FootEvent]]:
         """Release the events due on this frame. ``fired``: the events that fired on it; ``disc_of(i)``:
-        the flat ROI pixels of patch ``i``'s disc (where a fired event's blob is looked up)."""
-        if not fired and not self.held and not (self.confirm and self.lookback):
-            return []
-        labels = blob_labels(fg, self.close)
+        the flat ROI pixels of patch ``i``'s disc (where a fired event's blob is looked up). Returns the
+        released events and, with ``feet``, the foot crossings of blobs that no released event counts."""
+        if not fired and not self.held and not (self.confirm and self.lookback) and self.feet is None:
+            return [], []
+        if self.feet is not None:
+            labels, stats = blob_labels(fg, self.close, stats=True)
+        else:
+            labels, stats = blob_labels(fg, self.close), None
         out: list = []
         keep: list[_Held] = []
         taken: set[tuple[int, int]] = set()   # (label, direction) of the objects already held or released
         for h in self.held:
             lab, pix = follow(labels, h.pixels)
             if pix is not None and self._crowd(pix):
-                out.append(h.event)  # merged with others: the matching frame
+                out.append((h.event, lab))  # merged with others: the matching frame
                 continue
             if pix is None or t > h.until:
                 self._unconfirmed(h.event, out)
@@ -153,13 +162,13 @@ class CrossingTimer:
             taken.add((lab, h.event.direction))
             s, x, y = self._side(pix)
             if s * h.event.direction > 0:
-                out.append(replace(h.event, frame=number, time_s=t, x=x, y=y))
+                out.append((replace(h.event, frame=number, time_s=t, x=x, y=y), lab))
             else:
                 keep.append(_Held(h.event, pix, h.until))
         for ev in fired:
             lab, pix = follow(labels, disc_of(ev.to_patch))
             if pix is not None and self._crowd(pix):
-                out.append(ev)  # merged with others: the matching frame
+                out.append((ev, lab))  # merged with others: the matching frame
                 continue
             if pix is None:
                 self._unconfirmed(ev, out)
@@ -171,13 +180,15 @@ class CrossingTimer:
             if s * ev.direction <= 0:
                 keep.append(_Held(ev, pix, t + self.hold_time))
             elif not self.confirm:
-                out.append(replace(ev, x=x, y=y))
+                out.append((replace(ev, x=x, y=y), lab))
             else:
                 when = self._crossed_at(pix, ev.direction, number, t)
                 if when is not None:
-                    out.append(replace(ev, frame=when[0], time_s=when[1], x=x, y=y))
+                    out.append((replace(ev, frame=when[0], time_s=when[1], x=x, y=y), lab))
         self.held = keep
         if self.lookback:
             # the look-back keeps a few seconds of label images: 2 bytes a pixel where that suffices
             self.past.append((number, t, labels.astype(np.uint16) if labels.max() < 65535 else labels))
-        return out
+        if self.feet is None:
+            return [ev for ev, _ in out], []
+        return self.feet.step(labels, stats, number, t, out)

@@ -36,6 +36,7 @@ import numpy as np
 from ..params import Params, param
 from .geometry import PatchLayout, build_patches
 from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
+from .blobs import FootCrossings
 from .timing import CrossingTimer
 
 __all__ = ["CrossingEvent", "TrackerlessTripwire", "TripwireParams", "estimate_radius"]
@@ -133,6 +134,21 @@ class TripwireParams(Params):
         "accuracy / precision 0.48 / 0.77 -> 0.64 / 0.70) but not on the PETS tune half (unchanged at stride 1, "
         "0.50 / 0.89 against 0.53 / 0.94 at stride 2, 0.22 / 0.41 against 0.28 / 1.00 at stride 3); the same "
         "trade with motion_prior (docs/tripwire.md)"))
+    feet: bool = param(True, doc=(
+        "with timing foot/centre: the blobs of the closed foreground near the wire are followed by overlap while "
+        "they are seen, and a blob whose point crosses the wire (hysteresis foot_hysteresis px) is a crossing, "
+        "unless a patch event already counted it (pftrack.events.blobs; pftrack's addition): a walker who "
+        "reaches a ground line along it covers both sides before its feet cross, and the patches see nothing "
+        "new arrive. On the PETS tune frames at strides 1-3: 72 of 96 crossings found at precision 0.84 / 0.96 / "
+        "0.90, against 57 at 0.88 / 1.00 / 0.94 without (docs/tripwire.md)"))
+    foot_hysteresis: float = param(5.0, ge=0, doc="with feet: px the point must pass each side of the wire")
+    foot_min_area: float = param(3.0, ge=0, doc="with feet: blobs of fewer than this many r^2 pixels are not "
+                                                "followed")
+    foot_persist: int = param(1, ge=1, doc="with feet: processed frames the point must stay beyond the "
+                                           "hysteresis on the far side (a blob's bottom jumps when MOG2 loses "
+                                           "and finds the feet)")
+    foot_window: float = param(6.0, gt=0, doc="with feet: seconds within which one blob's events of one direction "
+                                              "are one event")
     merge_blob: bool = param(True, doc="with timing foot/centre: events of one direction on one blob are one event")
     lookback: float = param(2.5, ge=0, doc=(
         "with confirm: seconds the blob is followed backwards from the frame an event fires (the event is then "
@@ -228,7 +244,10 @@ class TrackerlessTripwire:
             self.polyline, (self.x0, self.y0), rw, point=p.timing, hold_time=p.hold_time,
             close=int(round(p.blob_close * r)), confirm=p.confirm,
             lookback=int(np.ceil(p.lookback * self.fps / self.stride)), merge=p.merge_blob,
-            max_width=p.crowd_width * 2.0 * r)
+            max_width=p.crowd_width * 2.0 * r,
+            feet=FootCrossings(self.polyline, (self.x0, self.y0), rw, point=p.timing, hysteresis=p.foot_hysteresis,
+                               min_area=int(round(p.foot_min_area * r * r)),
+                               window=p.foot_window * self.fps, persist=p.foot_persist) if p.feet else None)
         self.frames = 0
 
     # -- per frame ------------------------------------------------------------------------------
@@ -285,7 +304,9 @@ class TrackerlessTripwire:
             if ev is not None:
                 events.append(ev)
         if self._timer is not None:
-            events = self._timer.step(fg2d, events, number, t, lambda i: self._disc[i])
+            events, feet = self._timer.step(fg2d, events, number, t, lambda i: self._disc[i])
+            events += [CrossingEvent(f.frame, f.time_s, f.direction, -1, -1, f.frame, float("nan"), float("nan"),
+                                     float("nan"), f.x, f.y, 0.0, 0.0) for f in feet]
         self._prev2_gray, self._prev_gray = self._prev_gray, gray
         self.frames += 1
         return events
