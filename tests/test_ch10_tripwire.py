@@ -470,3 +470,48 @@ def test_foot_timing_on_seeded_walkers():
     assert g >= 20
     assert tpc / dc >= 0.9 and tpc / dc > tpm / dm + 0.2, tot
     assert tp / d >= tpm / dm and tp > tpc, tot
+
+
+def _blob_frames(tracks, shape=(200, 220)):
+    """Label images and OpenCV-style statistics of rectangles ``(x0, x1, top, bottom)`` per frame (None: absent)."""
+    import cv2
+
+    from pftrack.events.blobs import label_stats
+
+    out = []
+    for rects in zip(*tracks):
+        m = np.zeros(shape, np.uint8)
+        for r in rects:
+            if r is not None:
+                x0, x1, top, bottom = r
+                m[top:bottom, x0:x1] = 1
+        labels = cv2.connectedComponents(m, connectivity=8)[1]
+        out.append((labels, label_stats(labels)))
+    return out
+
+
+def _foot_events(frames, inherit):
+    from pftrack.events.blobs import FootCrossings
+
+    fc = FootCrossings(np.array([[0.0, 100.0], [220.0, 100.0]]), (0, 0), 220, hysteresis=5, min_area=50,
+                       window=20, inherit=inherit)
+    ev = []
+    for n, (labels, stats) in enumerate(frames, 1):
+        ev += [(e.frame, e.direction) for e in fc.step(labels, stats, n, n / 10.0, [])[1]]
+    return ev
+
+
+def test_a_blob_split_off_on_the_wire_keeps_its_parents_side():
+    """Walker A (small) merges with walker B (large, its feet below the wire) and leaves it with its feet on the
+    wire: A came from below, so its later step above the wire is a crossing, which only the parent's side shows.
+    A walker that was above the wire and leaves the merged blob above it did not cross: its parent's side, read
+    from B's feet, must not be taken ('wire' takes it only on the wire; 'always' counts a false crossing)."""
+    big = [(100, 160, 40, 130)] * 5 + [(66, 126, 40, 130)] * 5 + [(90, 150, 40, 130)] * 6
+    came_up = [(40, 60, 50, 112)] * 5 + [(50, 70, 45, 106)] * 5 + [(40, 60, 45, 102)] * 3 + [(40, 60, 40, 90)] * 3
+    frames = _blob_frames([big, came_up])
+    assert [d for _, d in _foot_events(frames, "wire")] == [-1]
+    assert _foot_events(frames, "never") == []
+    stayed = [(40, 60, 20, 90)] * 5 + [(50, 70, 20, 88)] * 5 + [(40, 60, 20, 90)] * 6
+    frames = _blob_frames([big, stayed])
+    assert _foot_events(frames, "wire") == []
+    assert [d for _, d in _foot_events(frames, "always")] == [-1]

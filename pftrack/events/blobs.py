@@ -60,7 +60,8 @@ class FootCrossings:
     """
 
     def __init__(self, polyline: np.ndarray, origin: tuple[int, int], width: int, *, point: str = "foot",
-                 hysteresis: float = 5.0, min_area: int = 60, window: float = 20.0, persist: int = 1):
+                 hysteresis: float = 5.0, min_area: int = 60, window: float = 20.0, persist: int = 1,
+                 inherit: str = "wire"):
         self.polyline = np.asarray(polyline, dtype=np.float64)
         self.x0, self.y0 = origin
         self.width = int(width)
@@ -69,6 +70,9 @@ class FootCrossings:
         self.min_area = int(min_area)
         self.window = float(window)
         self.persist = max(1, int(persist))
+        if inherit not in ("wire", "always", "never"):
+            raise ValueError(f"inherit must be wire, always or never, got {inherit!r}")
+        self.inherit = inherit
         a, _b, u, _n, _l, _c = _segments(self.polyline)
         self._a0, self._u0, self._u1 = a[0], u[0], u[-1]
         self._nseg = len(a)
@@ -96,29 +100,35 @@ class FootCrossings:
         return np.where(off, np.nan, signed)
 
     # -- per frame -----------------------------------------------------------------------------
-    def _follow(self, flat: np.ndarray, areas: np.ndarray) -> dict[int, int]:
+    def _follow(self, flat: np.ndarray, areas: np.ndarray) -> tuple[dict[int, int], dict[int, int]]:
         """Each followed blob's label on this frame: the label covering most of its pixels of the previous
-        frame (where two blobs take one label, the larger overlap keeps it, and the other is forgotten)."""
+        frame (where two blobs take one label, the larger overlap keeps it, and the other is forgotten); and,
+        for the other labels, the blob they overlap most (a blob that split in two: its parent)."""
         prev = self._prev
         if prev is None or not self.blobs:
-            return {}
+            return {}, {}
         n = len(areas)
         idx = np.flatnonzero((prev > 0) & (flat > 0))  # a boolean mask: fast
         if idx.size == 0:
-            return {}
+            return {}, {}
         cnt = np.bincount(prev[idx].astype(np.int64) * n + flat[idx], minlength=0)
         pairs = np.flatnonzero(cnt)
         best: dict[int, tuple[int, int]] = {}   # previous label -> (overlap, label)
-        for k, c in zip((pairs // n).tolist(), zip(cnt[pairs].tolist(), (pairs % n).tolist())):
-            if k in self._bid_of and (k not in best or c > best[k]):
-                best[k] = c
+        parent: dict[int, tuple[int, int]] = {}  # label -> (overlap, previous label)
+        for k, lab, c in zip((pairs // n).tolist(), (pairs % n).tolist(), cnt[pairs].tolist()):
+            if k not in self._bid_of:
+                continue
+            if k not in best or (c, lab) > best[k]:
+                best[k] = (c, lab)
+            if lab not in parent or (c, k) > parent[lab]:
+                parent[lab] = (c, k)
         claims = sorted(((ov, self._bid_of[k], lab) for k, (ov, lab) in best.items() if areas[lab] >= self.min_area),
                         reverse=True)
         taken: dict[int, int] = {}
         for _, bid, lab in claims:
             if lab not in taken:
                 taken[lab] = bid
-        return taken
+        return taken, {lab: self._bid_of[k] for lab, (_, k) in parent.items() if lab not in taken}
 
     def step(self, labels: np.ndarray, stats: np.ndarray, number: int, t: float,
              patch_events: list) -> tuple[list, list[FootEvent]]:
@@ -131,20 +141,25 @@ class FootCrossings:
         """
         flat = labels.ravel()
         areas = stats[:, cv2.CC_STAT_AREA]
-        taken = self._follow(flat, areas)
+        taken, parents = self._follow(flat, areas)
         big = np.flatnonzero(areas >= self.min_area)
         big = big[big > 0]
         blobs: dict[int, _Blob] = {}
         by_label: dict[int, int] = {}
+        heirs: dict[int, int] = {}   # a blob split off a followed one -> that blob
         for lab in big.tolist():
             bid = taken.get(lab)
             if bid is None:
                 bid = self._next
                 self._next += 1
                 blobs[bid] = _Blob()
+                p = parents.get(lab)
+                if self.inherit != "never" and p is not None:  # split off a followed blob
+                    heirs[bid] = p
             else:
                 blobs[bid] = self.blobs[bid]
             by_label[lab] = bid
+        parents = {bid: self.blobs[p] for bid, p in heirs.items()}
         self.blobs = blobs
         self._bid_of = by_label
         self._prev = flat.copy()
@@ -154,14 +169,19 @@ class FootCrossings:
             if bid is not None and not self._count(blobs[bid], "patch", ev.direction, ev.frame, ("foot",)):
                 continue
             kept.append(ev)
+        found: list[FootEvent] = []
         if not by_label:
-            return kept, []
+            return kept, found
         labs = np.fromiter(by_label, np.int64, len(by_label))
         pts = self._points(stats[labs])
         signed = self._signed(pts)
-        found: list[FootEvent] = []
         for k, lab in enumerate(labs.tolist()):
-            b = blobs[by_label[lab]]
+            bid = by_label[lab]
+            b = blobs[bid]
+            if bid in parents and (self.inherit == "always" or abs(signed[k]) < self.hysteresis):
+                # split off a followed blob on the wire: it was on its parent's side (a child clear of the wire
+                # takes its own, with "wire": the parent's side may have been another object's, merged with it)
+                b.state, b.tail = parents[bid].state, list(parents[bid].tail)
             ev = self._advance(b, number, t, float(signed[k]), pts[k], int(areas[lab]))
             if ev is not None and self._count(b, "foot", ev.direction, ev.frame, ("patch", "foot")):
                 found.append(ev)
