@@ -515,3 +515,29 @@ def test_a_blob_split_off_on_the_wire_keeps_its_parents_side():
     frames = _blob_frames([big, stayed])
     assert _foot_events(frames, "wire") == []
     assert [d for _, d in _foot_events(frames, "always")] == [-1]
+
+
+def test_foot_crossings_of_a_polyline_segment_and_its_ends():
+    """A blob crossing the second segment of an L-shaped wire is counted once with that segment's direction
+    (right to left across a downward segment: from s < 0 to s > 0, positive); one passing beyond the wire's
+    end is not counted."""
+    import cv2
+
+    from pftrack.events.blobs import FootCrossings, label_stats
+
+    wire = np.array([[0.0, 100.0], [100.0, 100.0], [100.0, 200.0]])
+
+    def run(xs, bottom):
+        fc = FootCrossings(wire, (0, 0), 220, hysteresis=5, min_area=50, window=20)
+        ev = []
+        for n, x in enumerate(xs, 1):
+            m = np.zeros((240, 220), np.uint8)
+            m[bottom - 40:bottom, x - 8:x + 8] = 1
+            labels = cv2.connectedComponents(m, connectivity=8)[1]
+            ev += [(e.frame, e.direction, round(e.x)) for e in fc.step(labels, label_stats(labels), n, n / 10.0, [])[1]]
+        return ev
+
+    xs = list(range(150, 50, -4))                   # the foot point's x: 149.5, 145.5, ... (the box centre)
+    ev = run(xs, 160)
+    assert [(d, x) for _, d, x in ev] == [(1, 100)], ev
+    assert run(xs, 230) == []                       # below the wire's end (y = 200): no crossing
