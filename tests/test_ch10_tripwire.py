@@ -445,9 +445,9 @@ def test_walkers_scene_is_exact_and_seeded():
 
 def test_foot_timing_on_seeded_walkers():
     """Upright walkers crossing a horizontal ground line (4 seeds, docs/tripwire.md), without the blobs' foot
-    crossings (``feet``). The confirmed foot timing (the default) is precise (>= 0.9) at a lower recall; the crowd rule (crowd_width=2) finds more crossings
-    than the default and is at least as precise as the book's timing (measured with 2-bit histograms: 15, 11
-    and 16 of 31 found, precision 0.68, 1.00 and 0.62)."""
+    crossings (``feet``). The confirmed foot timing is precise (>= 0.9) at a lower recall; the crowd rule
+    (crowd_width=2) finds more crossings than the confirmed timing and is at least as precise as the book's
+    timing (measured with 2-bit histograms: 15, 11 and 16 of 31 found, precision 0.68, 1.00 and 0.62)."""
     from pftrack.synth.walkers import walkers_scene
 
     configs = {"crowd": {"crowd_width": 2.0}, "confirmed": {}, "match": {"timing": "match"}}
