@@ -11,9 +11,14 @@ near the wire (the blobs the foot timing already labels, :mod:`.timing`) is foll
 frame by overlap, for as long as it is seen, and its box's foot point goes through the same
 hysteresis state machine as the tracker-based tripwire (:func:`.geometry.crossings_of_track`). Nothing
 is tracked through occlusions or across gaps: a blob that is not seen on a frame is forgotten, and a
-blob that appears, or splits off another, starts without a side. A blob that already produced an
-event of the same direction from the patches (or from its foot point) within ``window`` frames is
-not counted again, and a patch event on a blob counted by its foot point is dropped.
+blob that appears starts without a side. A blob that splits off a followed one starts on its parent's
+side if its point is on the wire (``inherit="wire"``: a walker who crossed while merged with another),
+and on its own otherwise. A blob that already produced an event of the same direction from the
+patches (or from its foot point) within ``window`` frames is not counted again, and a patch event on a
+blob counted by its foot point is dropped.
+
+:func:`estimate_radius` reads the patch radius from the foreground blobs near the wire (``--radius
+auto``), and :func:`label_stats` the blobs' boxes from a label image.
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ import numpy as np
 
 from .geometry import _segments, polyline_project
 
-__all__ = ["FootCrossings", "FootEvent", "label_stats"]
+__all__ = ["FootCrossings", "FootEvent", "estimate_radius", "label_stats"]
 
 
 @dataclass(frozen=True)
@@ -146,7 +151,7 @@ class FootCrossings:
         big = big[big > 0]
         blobs: dict[int, _Blob] = {}
         by_label: dict[int, int] = {}
-        heirs: dict[int, int] = {}   # a blob split off a followed one -> that blob
+        heirs: dict[int, int] = {}   # a blob split off a followed one -> that blob's id
         for lab in big.tolist():
             bid = taken.get(lab)
             if bid is None:
@@ -159,7 +164,7 @@ class FootCrossings:
             else:
                 blobs[bid] = self.blobs[bid]
             by_label[lab] = bid
-        parents = {bid: self.blobs[p] for bid, p in heirs.items()}
+        parent_of = {bid: self.blobs[p] for bid, p in heirs.items()}
         self.blobs = blobs
         self._bid_of = by_label
         self._prev = flat.copy()
@@ -178,10 +183,10 @@ class FootCrossings:
         for k, lab in enumerate(labs.tolist()):
             bid = by_label[lab]
             b = blobs[bid]
-            if bid in parents and (self.inherit == "always" or abs(signed[k]) < self.hysteresis):
+            if bid in parent_of and (self.inherit == "always" or abs(signed[k]) < self.hysteresis):
                 # split off a followed blob on the wire: it was on its parent's side (a child clear of the wire
                 # takes its own, with "wire": the parent's side may have been another object's, merged with it)
-                b.state, b.tail = parents[bid].state, list(parents[bid].tail)
+                b.state, b.tail = parent_of[bid].state, list(parent_of[bid].tail)
             ev = self._advance(b, number, t, float(signed[k]), pts[k], int(areas[lab]))
             if ev is not None and self._count(b, "foot", ev.direction, ev.frame, ("patch", "foot")):
                 found.append(ev)
@@ -256,3 +261,26 @@ def label_stats(labels: np.ndarray) -> np.ndarray:
     out[ids, 3] = np.maximum.reduceat(ys, starts) - ys[starts] + 1
     out[ids, 4] = np.diff(np.r_[starts, lab.size])
     return out
+
+
+def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_area: int = 60,
+                    default: float = 12.0) -> float:
+    """``--radius auto`` (ch10.md §1.2, proposed): half the median short side of the foreground blobs whose
+    centroids lie within ``near`` px of the wire, over the given frames (e.g. the first 10 s)."""
+    pts = np.asarray(polyline, dtype=np.float64)
+    bgs = cv2.createBackgroundSubtractorMOG2(history=500, varThreshold=16, detectShadows=True)
+    kernel = np.ones((3, 3), np.uint8)
+    sides = []
+    for frame in frames:
+        fg = cv2.morphologyEx((bgs.apply(frame) == 255).astype(np.uint8), cv2.MORPH_OPEN, kernel)
+        n, _, stats, cent = cv2.connectedComponentsWithStats(fg)
+        if n <= 1:
+            continue
+        ok = stats[1:, cv2.CC_STAT_AREA] >= min_area
+        if not ok.any():
+            continue
+        c = cent[1:][ok]
+        d = polyline_project(c, pts)[0]
+        st = stats[1:][ok][d <= near]
+        sides += np.minimum(st[:, cv2.CC_STAT_WIDTH], st[:, cv2.CC_STAT_HEIGHT]).tolist()
+    return float(0.5 * np.median(sides)) if len(sides) >= 5 else float(default)

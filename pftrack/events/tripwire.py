@@ -22,7 +22,9 @@ recent one (``group_blob``), is merged into it (``group``); only patches of
 the other side within ``max_lateral``·r of arc are compared; C_d asks for a motion of at
 least ``min_motion`` pointing within ``away_angle`` of straight away from the wire; an event is
 dated, and confirmed, by the frame where its object's foot point passes the wire (``timing``,
-``confirm``; :mod:`.timing`).
+``confirm``; :mod:`.timing`); the blobs near the wire are followed while they are seen, and a blob
+whose foot point crosses the wire is a crossing unless a patch event counted it (``feet``;
+:mod:`.blobs`).
 """
 
 from __future__ import annotations
@@ -34,9 +36,9 @@ import cv2
 import numpy as np
 
 from ..params import Params, param
+from .blobs import FootCrossings, estimate_radius
 from .geometry import PatchLayout, build_patches
 from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
-from .blobs import FootCrossings
 from .timing import CrossingTimer
 
 __all__ = ["CrossingEvent", "TrackerlessTripwire", "TripwireParams", "estimate_radius"]
@@ -139,11 +141,12 @@ class TripwireParams(Params):
         "they are seen, and a blob whose point crosses the wire (hysteresis foot_hysteresis px) is a crossing, "
         "unless a patch event already counted it (pftrack.events.blobs; pftrack's addition): a walker who "
         "reaches a ground line along it covers both sides before its feet cross, and the patches see nothing "
-        "new arrive. On the PETS tune frames at strides 1-3: 72 of 96 crossings found at precision 0.84 / 0.96 / "
-        "0.90, against 57 at 0.88 / 1.00 / 0.94 without (docs/tripwire.md)"))
+        "new arrive. Their events have to_patch = from_patch = -1 and no scores. On the PETS tune frames at "
+        "strides 1-3: 74 of 96 crossings found at precision 0.82 / 0.96 / 0.91, against 57 at 0.88 / 1.00 / 0.94 "
+        "without (docs/tripwire.md)"))
     foot_hysteresis: float = param(5.0, ge=0, doc="with feet: px the point must pass each side of the wire")
     foot_min_area: float = param(3.0, ge=0, doc="with feet: blobs of fewer than this many r^2 pixels are not "
-                                                "followed")
+                                                "followed (3 chosen on the tune data among 1, 2, 3, 4, 8)")
     foot_persist: int = param(1, ge=1, doc="with feet: processed frames the point must stay beyond the "
                                            "hysteresis on the far side (a blob's bottom jumps when MOG2 loses "
                                            "and finds the feet)")
@@ -156,7 +159,7 @@ class TripwireParams(Params):
         "0.82; 'never' 72 at 0.84 / 0.96 / 0.90) and the walkers of tune seeds 0-9 (38 of 69 at 0.78; 46 at 0.64; "
         "36 at 0.75)"))
     foot_window: float = param(6.0, gt=0, doc="with feet: seconds within which one blob's events of one direction "
-                                              "are one event")
+                                              "are one event (6 chosen on the tune data among 1.5, 3, 6, 10)")
     merge_blob: bool = param(True, doc="with timing foot/centre: events of one direction on one blob are one event")
     lookback: float = param(2.5, ge=0, doc=(
         "with confirm: seconds the blob is followed backwards from the frame an event fires (the event is then "
@@ -173,8 +176,8 @@ class CrossingEvent:
     frame: int
     time_s: float
     direction: int          # +1 positive (inner -> outer), -1 negative
-    to_patch: int           # the patch where the object arrived
-    from_patch: int         # the patch of the matched earlier appearance
+    to_patch: int           # the patch where the object arrived (-1: a blob's foot crossing, ``feet``)
+    from_patch: int         # the patch of the matched earlier appearance (-1: a blob's foot crossing)
     tau_frame: int          # frame of that appearance (first seen)
     score: float
     s_color: float
@@ -461,27 +464,3 @@ class TrackerlessTripwire:
             return set(np.unique(win[win > 0]).tolist())
 
         return bool(blobs(a) & blobs(b))
-
-def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_area: int = 60,
-                    default: float = 12.0) -> float:
-    """``--radius auto`` (ch10.md §1.2, proposed): half the median short side of the foreground blobs whose
-    centroids lie within ``near`` px of the wire, over the given frames (e.g. the first 10 s)."""
-    from .geometry import polyline_project
-
-    pts = np.asarray(polyline, dtype=np.float64)
-    bgs = cv2.createBackgroundSubtractorMOG2(history=500, varThreshold=16, detectShadows=True)
-    kernel = np.ones((3, 3), np.uint8)
-    sides = []
-    for frame in frames:
-        fg = cv2.morphologyEx((bgs.apply(frame) == 255).astype(np.uint8), cv2.MORPH_OPEN, kernel)
-        n, _, stats, cent = cv2.connectedComponentsWithStats(fg)
-        if n <= 1:
-            continue
-        ok = stats[1:, cv2.CC_STAT_AREA] >= min_area
-        if not ok.any():
-            continue
-        c = cent[1:][ok]
-        d = polyline_project(c, pts)[0]
-        st = stats[1:][ok][d <= near]
-        sides += np.minimum(st[:, cv2.CC_STAT_WIDTH], st[:, cv2.CC_STAT_HEIGHT]).tolist()
-    return float(0.5 * np.median(sides)) if len(sides) >= 5 else float(default)
