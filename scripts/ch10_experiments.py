@@ -3,6 +3,8 @@
     python scripts/ch10_experiments.py [--data ../shared/data] [--seeds 100] [--json reports/ch10.json]
     python scripts/ch10_experiments.py --walkers     # synthetic upright walkers (reports/ch10_walkers.json)
     python scripts/ch10_experiments.py --angles      # PETS crossings found, by the walkers' angle to the line
+    python scripts/ch10_experiments.py --lines "X1,Y1;X2,Y2" ...   # PETS, stride 1, other lines (default: five
+                                                     # lines used for no choice, docs/tripwire.md)
 
 * PETS 2009 S2.L1 (7 fps, 768x576): four lines across the walkways; frames 1-200 are the tune
   half (the defaults were chosen there), 201-400 the report half; strides 1-3.
@@ -189,6 +191,31 @@ def crossing_angles(data: Path) -> dict:
     return {k: {"ntt": f, "cft": fc, "gt": g} for k, (f, fc, g) in sorted(out.items())}
 
 
+FRESH_LINES = ["150,200;700,200", "200,350;700,350", "300,120;300,450", "460,120;460,450", "200,150;650,420"]
+
+
+def pets_lines(data: Path, lines: list[str]) -> dict:
+    """PETS at 7 fps on the given lines: NTT (default and without ``feet``) and CFT, per half and per line."""
+    seq = read_sequence(data / "pets09_s2l1_dev")
+    frames = [cv2.imread(str(p)) for p in seq.frames]
+    numbers = list(range(1, len(frames) + 1))
+    tracks, _ = mot_tracks(frames, numbers)
+    acc: dict = {}
+    for text in lines:
+        line = parse_polyline(text)
+        truth = track_crossings(seq.mot_gt, line, hysteresis=5)
+        r = estimate_radius(frames[:70], line)
+        found = {"cft (pftrack mot)": [(c.frame, c.direction) for c in track_crossings(tracks, line, hysteresis=5)]}
+        for name, kw in (("ntt", {}), ("ntt feet=false", {"feet": False})):
+            ev, _ = ntt(frames, numbers, line, 7.0, 1, radius=r, **kw)
+            found[name] = [(e.frame, e.direction) for e in ev]
+        for name, det in found.items():
+            for half, (lo, hi) in (("frames 1-200", (1, 200)), ("frames 201-400", (201, 400))):
+                add(acc, f"{name} | {half}", score(det, truth, lo, hi))
+                add(acc, f"{name} | {half} | {text}", score(det, truth, lo, hi))
+    return summarise(acc)
+
+
 def speed(data: Path) -> dict:
     """NTT frames per second at 768x576 (decode excluded), one line and four lines."""
     seq = read_sequence(data / "pets09_s2l1_dev")
@@ -208,11 +235,18 @@ def main() -> None:
     ap.add_argument("--walkers", action="store_true", help="only the synthetic walkers (pftrack synth walkers)")
     ap.add_argument("--angles", action="store_true",
                     help="only PETS crossings found by the angle of the walker's motion to the line's normal")
+    ap.add_argument("--lines", nargs="*", metavar="LINE",
+                    help="only PETS at 7 fps on these lines (none given: five lines used for no choice)")
     args = ap.parse_args()
     cv2.setNumThreads(1)
     seeds = [int(s) for s in args.seeds.split(",")]
     out: dict = {}
     data = Path(args.data)
+    if args.lines is not None:
+        for k, v in pets_lines(data, args.lines or FRESH_LINES).items():
+            print(f"PETS {k}: accuracy {v['accuracy']:.2f} precision {(v['precision'] or 0):.2f} "
+                  f"(gt {v['gt']}, detected {v['det']})", flush=True)
+        return
     if args.angles:
         for k, v in crossing_angles(data).items():
             print(f"PETS frames 1-400, {k}: NTT {v['ntt']}, CFT {v['cft']} of {v['gt']} found", flush=True)
