@@ -494,15 +494,30 @@ def _blob_frames(tracks, shape=(200, 220)):
     return out
 
 
-def _foot_events(frames, inherit):
+def _foot_events(frames, inherit="wire", hold=0):
     from pftrack.events.blobs import FootCrossings
 
     fc = FootCrossings(np.array([[0.0, 100.0], [220.0, 100.0]]), (0, 0), 220, hysteresis=5, min_area=50,
-                       window=20, inherit=inherit)
+                       window=20, inherit=inherit, hold=hold)
     ev = []
     for n, (labels, stats) in enumerate(frames, 1):
         ev += [(e.frame, e.direction) for e in fc.step(labels, stats, n, n / 10.0, [])[1]]
-    return ev
+    return ev + [(e.frame, e.direction) for e in fc.finish()]
+
+
+def test_held_foot_crossings_drop_a_jump_and_back():
+    """A blob whose bottom jumps across the wire for one frame and back (MOG2 losing and finding feet) crosses
+    twice unless crossings are held a frame (``hold``); a real crossing is counted either way, with the same date,
+    also when the stream ends while it is held."""
+    jump = [(40, 60, 20, 90)] * 4 + [(40, 60, 20, 110)] + [(40, 60, 20, 90)] * 4
+    frames = _blob_frames([jump])
+    assert [d for _, d in _foot_events(frames)] == [1, -1]
+    assert _foot_events(frames, hold=1) == []
+    walk = [(40, 60, 20 + 3 * k, 80 + 3 * k) for k in range(14)]
+    frames = _blob_frames([walk])
+    assert _foot_events(frames, hold=2) == _foot_events(frames) and len(_foot_events(frames)) == 1
+    ended = _foot_events(frames[:10])                                   # the crossing completes on the last frame
+    assert len(ended) == 1 and _foot_events(frames[:10], hold=3) == ended  # held at the end: counted by finish()
 
 
 def test_a_blob_split_off_on_the_wire_keeps_its_parents_side():

@@ -50,8 +50,8 @@ class _Blob:
     state: int = 0                       # -1 / +1: the side its point was last seen clearly on; 0: none yet
     tail: list = field(default_factory=list)   # (number, t, signed, x, y) since the last clear point
     counted: dict = field(default_factory=dict)  # (source, direction) -> frame number of its last event
-    pending: FootEvent | None = None     # a crossing whose new side has not lasted ``persist`` frames yet
-    seen: int = 0                        # frames its point has been on the pending crossing's side
+    pending: FootEvent | None = None     # a crossing held for ``hold`` frames
+    age: int = 0                         # frames the pending crossing has been held
 
 
 class FootCrossings:
@@ -59,13 +59,14 @@ class FootCrossings:
 
     ``origin`` is the ROI's top-left pixel and ``width`` its width (the labels are ROI images).
     ``hysteresis`` px each side of the wire, ``min_area`` px of a blob to be followed, ``window`` frames
-    within which one blob's events of one direction are one event, ``persist`` processed frames the point
-    must stay on the far side (a blob whose bottom jumps when MOG2 loses and finds its feet would
-    otherwise cross and cross back).
+    within which one blob's events of one direction are one event, ``hold`` processed frames a crossing
+    waits before it is counted, dropped if the point goes back across the wire meanwhile (a blob whose
+    bottom jumps when MOG2 loses and finds the feet crosses and crosses back); a crossing of a blob that
+    is no longer seen is counted at once.
     """
 
     def __init__(self, polyline: np.ndarray, origin: tuple[int, int], width: int, *, point: str = "foot",
-                 hysteresis: float = 5.0, min_area: int = 60, window: float = 20.0, persist: int = 1,
+                 hysteresis: float = 5.0, min_area: int = 60, window: float = 20.0, hold: int = 0,
                  inherit: str = "wire"):
         self.polyline = np.asarray(polyline, dtype=np.float64)
         self.x0, self.y0 = origin
@@ -74,7 +75,7 @@ class FootCrossings:
         self.hysteresis = float(hysteresis)
         self.min_area = int(min_area)
         self.window = float(window)
-        self.persist = max(1, int(persist))
+        self.hold = max(0, int(hold))
         if inherit not in ("wire", "always", "never"):
             raise ValueError(f"inherit must be wire, always or never, got {inherit!r}")
         self.inherit = inherit
@@ -165,6 +166,7 @@ class FootCrossings:
                 blobs[bid] = self.blobs[bid]
             by_label[lab] = bid
         parent_of = {bid: self.blobs[p] for bid, p in heirs.items()}
+        gone = [b for bid, b in self.blobs.items() if bid not in blobs and b.pending is not None]
         self.blobs = blobs
         self._bid_of = by_label
         self._prev = flat.copy()
@@ -175,6 +177,10 @@ class FootCrossings:
                 continue
             kept.append(ev)
         found: list[FootEvent] = []
+        for b in gone:  # a held crossing of a blob no longer seen (merged, gone) is counted
+            ev, b.pending = b.pending, None
+            if self._count(b, "foot", ev.direction, ev.frame, ("patch", "foot")):
+                found.append(ev)
         if not by_label:
             return kept, found
         labs = np.fromiter(by_label, np.int64, len(by_label))
@@ -205,36 +211,43 @@ class FootCrossings:
 
     def _advance(self, b: _Blob, number: int, t: float, v: float, xy: np.ndarray, area: int) -> FootEvent | None:
         """The hysteresis state machine of :func:`.geometry.crossings_of_track`, one point at a time; a
-        crossing is released once its point has stayed ``persist`` frames on the far side."""
-        if not np.isfinite(v):
-            return None
-        b.tail.append((number, t, v, float(xy[0]), float(xy[1])))
-        h = self.hysteresis
-        new = -1 if v <= -h else (1 if v >= h else 0)
-        if new == 0:
-            return None
+        crossing is released after ``hold`` more frames unless the point has gone back meanwhile."""
         if b.pending is not None:
-            if new == b.pending.direction:
-                b.seen += 1
-            else:  # back on the old side: it did not cross
-                b.pending = None
-        elif b.state != 0 and new != b.state:
-            j = len(b.tail) - 1
-            while j > 1 and np.sign(b.tail[j - 1][2]) == np.sign(v):
-                j -= 1
-            (n0, t0, s0, x0, y0), (n1, t1, s1, x1, y1) = b.tail[j - 1], b.tail[j]
-            frac = 0.0 if s1 == s0 else float(np.clip(-s0 / (s1 - s0), 0.0, 1.0))
-            b.pending = FootEvent(int(round(n0 + frac * (n1 - n0))), t0 + frac * (t1 - t0), new,
-                                  x0 + frac * (x1 - x0), y0 + frac * (y1 - y0), area)
-            b.seen = 1
-        else:
-            b.state = new
-        b.tail = [b.tail[-1]]
-        if b.pending is not None and b.seen >= self.persist:
+            b.age += 1
+        if np.isfinite(v):
+            b.tail.append((number, t, v, float(xy[0]), float(xy[1])))
+            h = self.hysteresis
+            new = -1 if v <= -h else (1 if v >= h else 0)
+            if new != 0:
+                if b.pending is not None and new != b.pending.direction:
+                    b.pending = None  # back on the old side: it did not cross
+                elif b.pending is None and b.state != 0 and new != b.state:
+                    j = len(b.tail) - 1
+                    while j > 1 and np.sign(b.tail[j - 1][2]) == np.sign(v):
+                        j -= 1
+                    (n0, t0, s0, x0, y0), (n1, t1, s1, x1, y1) = b.tail[j - 1], b.tail[j]
+                    frac = 0.0 if s1 == s0 else float(np.clip(-s0 / (s1 - s0), 0.0, 1.0))
+                    b.pending = FootEvent(int(round(n0 + frac * (n1 - n0))), t0 + frac * (t1 - t0), new,
+                                          x0 + frac * (x1 - x0), y0 + frac * (y1 - y0), area)
+                    b.age = 0
+                elif b.pending is None:
+                    b.state = new
+                b.tail = [b.tail[-1]]
+        if b.pending is not None and b.age >= self.hold:
             ev, b.pending = b.pending, None
             b.state = ev.direction
             return ev
         return None
+
+    def finish(self) -> list[FootEvent]:
+        """At the end of the stream: the crossings still held."""
+        out = []
+        for b in self.blobs.values():
+            if b.pending is not None:
+                ev, b.pending = b.pending, None
+                if self._count(b, "foot", ev.direction, ev.frame, ("patch", "foot")):
+                    out.append(ev)
+        return out
 
 
 def label_stats(labels: np.ndarray) -> np.ndarray:

@@ -147,9 +147,9 @@ class TripwireParams(Params):
     foot_hysteresis: float = param(5.0, ge=0, doc="with feet: px the point must pass each side of the wire")
     foot_min_area: float = param(3.0, ge=0, doc="with feet: blobs of fewer than this many r^2 pixels are not "
                                                 "followed (3 chosen on the tune data among 1, 2, 3, 4, 8)")
-    foot_persist: int = param(1, ge=1, doc="with feet: processed frames the point must stay beyond the "
-                                           "hysteresis on the far side (a blob's bottom jumps when MOG2 loses "
-                                           "and finds the feet)")
+    foot_hold: int = param(0, ge=0, doc="with feet: processed frames a crossing waits before it is counted; it "
+                                        "is dropped if the point goes back across the wire meanwhile (a blob's "
+                                        "bottom jumps when MOG2 loses and finds the feet)")
     foot_inherit: Literal["wire", "always", "never"] = param("wire", doc=(
         "with feet: a blob that splits off a followed one (two walkers who overlapped part) starts on its "
         "parent's side when its point is on the wire, within the hysteresis ('wire'), whatever its point ('always'), "
@@ -258,7 +258,7 @@ class TrackerlessTripwire:
             max_width=p.crowd_width * 2.0 * r,
             feet=FootCrossings(self.polyline, (self.x0, self.y0), rw, point=p.timing, hysteresis=p.foot_hysteresis,
                                min_area=int(round(p.foot_min_area * r * r)),
-                               window=p.foot_window * self.fps, persist=p.foot_persist,
+                               window=p.foot_window * self.fps, hold=p.foot_hold,
                                inherit=p.foot_inherit) if p.feet else None)
         self.frames = 0
 
@@ -327,7 +327,9 @@ class TrackerlessTripwire:
         """At the end of the stream: the events still waiting for their point to cross (none with confirm)."""
         if self._timer is None:
             return []
-        return self._timer.finish()
+        feet = self._timer.feet.finish() if self._timer.feet is not None else []
+        return self._timer.finish() + [CrossingEvent(f.frame, f.time_s, f.direction, -1, -1, f.frame, float("nan"),
+                                                     float("nan"), float("nan"), f.x, f.y, 0.0, 0.0) for f in feet]
 
     def _update_history(self, i: int, hist: np.ndarray, t: float, number: int, gray: np.ndarray) -> bool:
         p = self.params
