@@ -3,6 +3,7 @@
     python scripts/ch10_experiments.py [--data ../shared/data] [--seeds 100] [--json reports/ch10.json]
     python scripts/ch10_experiments.py --walkers     # synthetic upright walkers (reports/ch10_walkers.json)
     python scripts/ch10_experiments.py --angles      # PETS crossings found, by the walkers' angle to the line
+    python scripts/ch10_experiments.py --grey        # PETS in grey (reports/ch10_grey.json)
     python scripts/ch10_experiments.py --lines "X1,Y1;X2,Y2" ...   # PETS, stride 1, other lines (default: five
                                                      # lines used for no choice, docs/tripwire.md)
 
@@ -79,9 +80,11 @@ def summarise(acc: dict) -> dict:
                 "f1": 2 * t / (g + d) if g + d else None} for k, (g, d, t) in acc.items()}
 
 
-def pets(data: Path) -> dict:
+def pets(data: Path, grey: bool = False) -> dict:
     seq = read_sequence(data / "pets09_s2l1_dev")
     frames = [cv2.imread(str(p)) for p in seq.frames]
+    if grey:  # grey video, three equal channels
+        frames = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
     res: dict = {}
     for stride in (1, 2, 3):
         numbers = list(range(1, len(frames) + 1, stride))
@@ -235,6 +238,7 @@ def main() -> None:
     ap.add_argument("--walkers", action="store_true", help="only the synthetic walkers (pftrack synth walkers)")
     ap.add_argument("--angles", action="store_true",
                     help="only PETS crossings found by the angle of the walker's motion to the line's normal")
+    ap.add_argument("--grey", action="store_true", help="only PETS, its frames in grey (reports/ch10_grey.json)")
     ap.add_argument("--lines", nargs="*", metavar="LINE",
                     help="only PETS at 7 fps on these lines (none given: five lines used for no choice)")
     args = ap.parse_args()
@@ -242,6 +246,11 @@ def main() -> None:
     seeds = [int(s) for s in args.seeds.split(",")]
     out: dict = {}
     data = Path(args.data)
+    if args.grey:
+        out = pets(data, grey=True)
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).with_name("ch10_grey.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
+        return
     if args.lines is not None:
         for k, v in pets_lines(data, args.lines or FRESH_LINES).items():
             print(f"PETS {k}: accuracy {v['accuracy']:.2f} precision {(v['precision'] or 0):.2f} "
