@@ -253,8 +253,8 @@ def main() -> None:
         return
     if args.lines is not None:
         for k, v in pets_lines(data, args.lines or FRESH_LINES).items():
-            print(f"PETS {k}: accuracy {v['accuracy']:.2f} precision {(v['precision'] or 0):.2f} "
-                  f"(gt {v['gt']}, detected {v['det']})", flush=True)
+            acc, prec = ("-" if x is None else f"{x:.2f}" for x in (v["accuracy"], v["precision"]))
+            print(f"PETS {k}: accuracy {acc} precision {prec} (gt {v['gt']}, detected {v['det']})", flush=True)
         return
     if args.angles:
         for k, v in crossing_angles(data).items():
