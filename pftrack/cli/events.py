@@ -19,8 +19,10 @@ def add_tripwire(sub) -> None:
                     "'positive' when the object passes from the screen-left of the direction of travel along the "
                     "line to its screen-right, i.e. from s < 0 to s > 0 with s(P) = (x2-x1)(Py-y1) - (y2-y1)(Px-x1) "
                     "(for a line drawn left to right: moving down the image). Trackerless by default (ground "
-                    "patches, colour histories and block-matching motion); --from-tracks runs the conventional "
-                    "tripwire on MOTChallenge tracks instead. Writes frame,direction,... per crossing, flushed.")
+                    "patches, colour histories and block-matching motion; with --point foot or centre also the "
+                    "foot points of the foreground blobs near the line, --param feet=false to turn off); "
+                    "--from-tracks runs the conventional tripwire on MOTChallenge tracks instead. Writes "
+                    "frame,direction,... per crossing, flushed.")
     p.add_argument("source", nargs="?", help="video file, frame folder or MOTChallenge folder (not needed with "
                                              "--from-tracks)")
     p.add_argument("--line", required=True, help='polyline "X1,Y1;X2,Y2[;...]" (at least two points)')
