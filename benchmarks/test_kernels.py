@@ -200,3 +200,51 @@ def test_spd_means(benchmark, covariances, mean):
     fn(covariances)          # compiled kernels load before timing (otherwise the first call sets the rounds)
     M = benchmark(fn, covariances)
     assert np.all(np.linalg.eigvalsh(M) > 0)
+
+
+@pytest.fixture(scope="module")
+def walkway():
+    """768x576 frames of six upright movers crossing a horizontal line (the PETS frame size)."""
+    rng = np.random.default_rng(0)
+    bg = np.clip(rng.normal(110, 10, (576, 768, 3)), 0, 255).astype(np.uint8)
+    frames = []
+    for k in range(80):
+        f = bg.copy()
+        for i in range(6):
+            x = int(60 + 110 * i + 2 * k) % 740
+            y = int(180 + (k * (2 + i % 3)) % 220)
+            f[y:y + 80, x:x + 26] = (40 + 30 * i, 200 - 20 * i, 90)
+        frames.append(f)
+    return frames
+
+
+@pytest.mark.parametrize("feet", [True, False])
+def test_tripwire_frame_768x576(benchmark, walkway, feet):
+    """One processed frame of the trackerless tripwire (one line, decode excluded), with and without the blobs'
+    foot points."""
+    from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams
+
+    tw = TrackerlessTripwire(np.array([[150.0, 300.0], [700.0, 300.0]]), walkway[0].shape[:2], 7.0,
+                             TripwireParams(radius=12.0, feet=feet))
+    state = {"n": 0}
+
+    def step():
+        n = state["n"] = state["n"] + 1
+        tw.process(walkway[n % len(walkway)], n)
+
+    benchmark(step)
+
+
+@pytest.mark.parametrize("how", ["pftrack", "opencv"])
+def test_blob_boxes(benchmark, walkway, how):
+    """Boxes and areas of the labelled blobs: from the labelled pixels, or OpenCV's statistics."""
+    import cv2
+
+    from pftrack.events.blobs import label_stats
+
+    m = (np.abs(walkway[10].astype(np.int16) - walkway[0]).max(axis=2) > 30).astype(np.uint8)
+    if how == "pftrack":
+        labels = cv2.connectedComponents(m, connectivity=8)[1]
+        benchmark(label_stats, labels)
+    else:
+        benchmark(cv2.connectedComponentsWithStats, m, connectivity=8)
