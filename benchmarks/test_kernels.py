@@ -171,6 +171,30 @@ def test_fusion_pf_update(benchmark, clip):
     benchmark(lambda: tr.update(next(it)))
 
 
+@pytest.mark.parametrize("tracker", ["fusion-pf", "color-pf"])
+@pytest.mark.parametrize("size", ["160x120", "320x240"])
+def test_update_small_frames(benchmark, tracker, size):
+    """One tracking update on small frames with a small target (20 x 30 px at 160 x 120, 30 x 60 px at 320 x 240):
+    the per-frame cost that does not shrink with the target, where CSRT is fastest (docs/performance.md)."""
+    w, h = (int(v) for v in size.split("x"))
+    box = (w // 2 - 10, h // 2 - 15, 20, 30) if w == 160 else (140, 100, 30, 60)
+    rng = np.random.default_rng(0)
+    frames = [np.clip(rng.normal(120, 30, (h, w, 3)), 0, 255).astype(np.uint8) for _ in range(5)]
+    for f in frames:
+        f[box[1]:box[1] + box[3], box[0]:box[0] + box[2]] = (200, 50, 50)
+    tr = pftrack.create_tracker(tracker, seed=0)
+    tr.init(frames[0], box)
+    for k in range(50):
+        tr.update(frames[k % 5])
+    state = {"k": 0}
+
+    def step():
+        state["k"] += 1
+        tr.update(frames[state["k"] % 5])
+
+    benchmark(step)
+
+
 # -- book ch. 6, C6.3: the Log-Euclidean mean against the affine-invariant (Karcher) mean -------------
 @pytest.fixture(scope="module")
 def covariances():
