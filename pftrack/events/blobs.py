@@ -169,18 +169,15 @@ class FootCrossings:
         gone = [b for bid, b in self.blobs.items() if bid not in blobs and b.pending is not None]
         self.blobs = blobs
         self._bid_of = by_label
-        self._prev = flat.copy()
+        self._prev = flat  # a fresh label image every frame: kept, not copied
         kept = []
         for ev, lab in patch_events:
             bid = by_label.get(lab)
             if bid is not None and not self._count(blobs[bid], "patch", ev.direction, ev.frame, ("foot",)):
                 continue
             kept.append(ev)
-        found: list[FootEvent] = []
-        for b in gone:  # a held crossing of a blob no longer seen (merged, gone) is counted
-            ev, b.pending = b.pending, None
-            if self._count(b, "foot", ev.direction, ev.frame, ("patch", "foot")):
-                found.append(ev)
+        # a held crossing of a blob no longer seen (merged, gone) is counted
+        found = [ev for ev in map(self._release, gone) if ev is not None]
         if not by_label:
             return kept, found
         labs = np.fromiter(by_label, np.int64, len(by_label))
@@ -239,15 +236,14 @@ class FootCrossings:
             return ev
         return None
 
+    def _release(self, b: _Blob) -> FootEvent | None:
+        """A blob's held crossing, now, unless an event already counted the blob."""
+        ev, b.pending = b.pending, None
+        return ev if ev is not None and self._count(b, "foot", ev.direction, ev.frame, ("patch", "foot")) else None
+
     def finish(self) -> list[FootEvent]:
         """At the end of the stream: the crossings still held."""
-        out = []
-        for b in self.blobs.values():
-            if b.pending is not None:
-                ev, b.pending = b.pending, None
-                if self._count(b, "foot", ev.direction, ev.frame, ("patch", "foot")):
-                    out.append(ev)
-        return out
+        return [ev for ev in map(self._release, self.blobs.values()) if ev is not None]
 
 
 def label_stats(labels: np.ndarray) -> np.ndarray:

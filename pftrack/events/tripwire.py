@@ -188,6 +188,12 @@ class CrossingEvent:
     vy: float
 
 
+def _foot_event(f) -> CrossingEvent:
+    """A blob's foot crossing (:class:`.blobs.FootEvent`) as a row of the output: no patches, no scores."""
+    nan = float("nan")
+    return CrossingEvent(f.frame, f.time_s, f.direction, -1, -1, f.frame, nan, nan, nan, f.x, f.y, 0.0, 0.0)
+
+
 @dataclass
 class _Entry:
     hist: np.ndarray
@@ -317,8 +323,7 @@ class TrackerlessTripwire:
                 events.append(ev)
         if self._timer is not None:
             events, feet = self._timer.step(fg2d, events, number, t, lambda i: self._disc[i])
-            events += [CrossingEvent(f.frame, f.time_s, f.direction, -1, -1, f.frame, float("nan"), float("nan"),
-                                     float("nan"), f.x, f.y, 0.0, 0.0) for f in feet]
+            events += [_foot_event(f) for f in feet]
         self._prev2_gray, self._prev_gray = self._prev_gray, gray
         self.frames += 1
         return events
@@ -328,8 +333,7 @@ class TrackerlessTripwire:
         if self._timer is None:
             return []
         feet = self._timer.feet.finish() if self._timer.feet is not None else []
-        return self._timer.finish() + [CrossingEvent(f.frame, f.time_s, f.direction, -1, -1, f.frame, float("nan"),
-                                                     float("nan"), float("nan"), f.x, f.y, 0.0, 0.0) for f in feet]
+        return self._timer.finish() + [_foot_event(f) for f in feet]
 
     def _update_history(self, i: int, hist: np.ndarray, t: float, number: int, gray: np.ndarray) -> bool:
         p = self.params

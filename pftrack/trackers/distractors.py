@@ -48,9 +48,10 @@ def peak_speed(track) -> float:
 def beyond_reach(xy, lost_at, frame_index: int, size: tuple[float, float], speed: float = 0.0, *,
                  sigmas: float = REACH_SIGMAS) -> bool:
     """Could the target not be at ``xy`` now?  True when ``xy`` is farther than ``sigmas`` spreads of
-    :func:`~pftrack.filtering.dynamics.lost_prediction`, plus the distance the target covers in the frames since at ``speed`` (its fastest
-    seen; at least its velocity's and 1 px a frame), from both the predicted position and the last confident
-    one (a target may stop or turn back, and a filter's velocity lags a turn)."""
+    :func:`~pftrack.filtering.dynamics.lost_prediction`, plus the distance the target covers in the frames
+    since at ``speed`` (its fastest seen; at least its velocity's and 1 px a frame), from both the predicted
+    position and the last confident one (a target may stop or turn back, and a filter's velocity lags a
+    turn)."""
     centre, sd = lost_prediction(lost_at, frame_index, size)
     k = frame_index - lost_at[0]
     speed = max(speed, math.hypot(*(float(v) for v in lost_at[2])), 1.0)
@@ -87,6 +88,14 @@ class DistractorMemory:
     def clear(self) -> None:
         self.items = []
 
+    def _expired(self, frame_index: int, since: int) -> bool:
+        """Forget the memory ``LIFE`` times ``record_frames`` after the search began (the last confident estimate
+        may have been on the wrong object); True when it is forgotten."""
+        if frame_index - since >= LIFE * self.record_frames:
+            self.items = []
+            return True
+        return False
+
     def follow(self, xy: np.ndarray, rank: np.ndarray, frame_index: int, lost_at, size: tuple[float, float],
                since: int) -> np.ndarray:
         """Follow the remembered look-alikes through this frame's search samples and mask them out.
@@ -97,10 +106,7 @@ class DistractorMemory:
         look-alike: the search chooses its candidate among the others.  ``since``: the frame index at which
         the search began."""
         mask = np.zeros(len(xy), dtype=bool)
-        if not self.items or lost_at is None:
-            return mask
-        if frame_index - since >= LIFE * self.record_frames:
-            self.items = []  # forgotten: the last confident estimate may have been on the wrong object
+        if not self.items or lost_at is None or self._expired(frame_index, since):
             return mask
         speed = math.hypot(*(float(v) for v in lost_at[2]))
         for item in self.items:
@@ -118,10 +124,7 @@ class DistractorMemory:
         when it is.  ``lost_at``: ``(frame index, position, velocity)`` of the last confident estimate;
         ``size``: the searched half-axes; ``since``: the frame index at which the search began; ``track``: the
         last confident ``(frame index, x, y)`` estimates before the loss (their :func:`peak_speed`)."""
-        if self.record_frames <= 0 or lost_at is None:
-            return False
-        if frame_index - since >= LIFE * self.record_frames:
-            self.items = []
+        if self.record_frames <= 0 or lost_at is None or self._expired(frame_index, since):
             return False
         x, y = float(xy[0]), float(xy[1])
         speed = math.hypot(*(float(v) for v in lost_at[2]))
