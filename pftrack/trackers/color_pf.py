@@ -61,6 +61,7 @@ from .color_hooks import ColorHooks
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
 from .distractors import DistractorMemory
+from .structure_check import StructureCheck
 from .raw_check import RawGreyCheck, illumination_stages
 
 __all__ = ["ColorModelParams", "ColorPF", "ColorPFParams", "ColorParticleFilter"]
@@ -98,6 +99,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self.detector = detector
         self._quotient: QuotientImage | None = None  # illumination="quotient" on grey input (decided by init)
         self._raw_check: RawGreyCheck | None = None  # its re-acquisition check on the untransformed frames
+        self._structure_check: StructureCheck | None = None  # grey_check="structure" on grey input
         self._raw: np.ndarray | None = None  # the untransformed frame
         self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames)  # look-alikes met during a loss
         warmup()
@@ -217,6 +219,8 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h))
         if self._raw_check is not None:
             self._raw_check.set_background(self._raw, ell)
+        if self._structure_check is not None:
+            self._structure_check.set_background(self._structure_frame(frame), ell)
         if np.count_nonzero(tot > 0) >= 2:
             # Eqs. 13-14, with a floor on the spread so a non-discriminative scene cannot collapse it
             self.loss.set_background(self._loss_scores(frame, ell[tot > 0], rho[tot > 0], (0, 0, w, h)))
@@ -237,6 +241,15 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         if self._raw_check is not None:
             self._raw_check.new_frame()
         return self._quotient(frame)
+
+    def _wants_grey_check(self) -> bool:
+        """Does this input get the structural check at re-acquisition (``grey_check`` on grey input)?"""
+        p = self.params
+        return p.grey_check == "structure" and p.loss_test == "likelihood" and self.cue.color_space == "gray"
+
+    def _structure_frame(self, frame: np.ndarray) -> np.ndarray:
+        """The frame the structural check sees: the untransformed one under the self-quotient illumination."""
+        return self._raw if self._quotient is not None and self._raw is not None else frame
 
     # ------------------------------------------------------------------ init
     def _start_tracking(self, states: np.ndarray, log_lik: np.ndarray | None = None) -> None:
@@ -277,6 +290,12 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
             self._lit.init(frame, ell)
         if self._raw_check is not None:
             self._raw_check.init(self._raw, ell)
+        self._structure_check = None
+        if self._wants_grey_check():
+            self._structure_check = StructureCheck(LossDetector(
+                history_rate=p.history_rate, sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor,
+                learn_z=p.history_z))
+            self._structure_check.init(self._structure_frame(frame), ell)
         self._set_model(self.cue.histogram(frame, ell))
         self.size = (float(ell[2]), float(ell[3]))
         self._confident_size = self.size
@@ -292,6 +311,8 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self.cue.new_frame(frame)
         if self._lit is not None:
             self._lit.new_frame(frame)
+        if self._structure_check is not None:
+            self._structure_check.new_frame()
         if self.mode == "tracking":
             state = self._track(frame)
         elif self.mode == "detecting":
@@ -369,6 +390,8 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
             self.cue.confirm(p.normalize_rate)
             if self._raw_check is not None:
                 self._raw_check.learn(self._raw, e_ell)
+            if self._structure_check is not None:
+                self._structure_check.learn(self._structure_frame(frame), e_ell)
             self._confident_size = (float(est[HX]), float(est[HY]))
             if p.search_size_frames:
                 sizes = self._confident_sizes

@@ -58,6 +58,7 @@ class SearchMixin:
         self.frame_index = 0
         self._reset()
         self._quotient, self._raw_check = None, None  # a given histogram is of the frames as they are
+        self._structure_check = None  # no reference patch without a box
         self._set_model(hist)
         self.size = (w / 2.0, h / 2.0)
         if regions is not None:
@@ -407,7 +408,8 @@ class SearchMixin:
             var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
             found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
         vetoed = found and (self._leaving(frame, ell[best]) or (
-            self._raw_check is not None and self._raw_check.vetoes(self._raw, ell[best])) or
+            self._raw_check is not None and self._raw_check.vetoes(self._raw, ell[best])) or (
+            self._structure_check is not None and self._structure_check.vetoes(self._structure_frame(frame), ell[best])) or
             self._distractors.vetoes(ell[best, :2], self.frame_index, self._lost_at, self.size,
                                     self._search_since, self._confident_track))
         if vetoed:

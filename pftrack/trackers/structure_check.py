@@ -1,0 +1,111 @@
+"""A structural second opinion on re-acquisition for the colour PFs on grey input (``grey_check``).
+
+On grey frames a histogram of equalised intensity and gradient orientation keeps little of a
+target's layout: a dark disc and the dark, noisy inside of an occluder give nearly the same
+histogram, and ``color-pf``'s search acquired such a patch while the target was in view
+elsewhere (docs/robustness.md). ``fusion-pf`` weighs the normalised cross-correlation (NCC) of
+small grey patches into every particle and into its loss test. :class:`StructureCheck` gives
+``color-pf`` that evidence where it is cheap and decisive: at re-acquisition only. Tracking
+frames keep the histogram's likelihood and loss test; they add one NCC (the estimate's) and,
+when the reference changes, one patch resampling.
+
+The check keeps the reference patches of :class:`~pftrack.cues.structure.StructureCue` (the
+first frame's and a running mean, drift-corrected), learned on the frames the tracker is
+confident on, with their own background statistics and score history
+(:class:`~pftrack.filtering.loss.LossDetector`, the two-class test of the colour PFs). A search
+candidate whose NCC that test calls background (``LLR < 0``) is refused, as
+:class:`~pftrack.trackers.raw_check.RawGreyCheck` refuses one by the untransformed frames'
+histogram. Like that check, its history learns from every frame the tracker is confident on.
+Learning only from the scores the check itself calls target-like (the rule of
+:class:`~pftrack.filtering.loss.FusedLoss`'s cues) refused true re-acquisitions of real grey
+targets whose appearance had changed (docs/robustness.md).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..cues.structure import StructureCue
+from ..filtering.loss import LossDetector
+
+#: fusion-pf's defaults for its structural cue (structure_pixels, structure_rate, structure_anchor_gate).
+TEMPLATE_PIXELS, RATE, ANCHOR_GATE = 256, 0.02, 0.5
+#: the running reference is refreshed on every this many confident frames, at the rate that gives the same time
+#: constant (the refresh is most of the check's cost; every frame re-acquired as many of the grey tune set's
+#: reappearances)
+UPDATE_EVERY = 5
+
+
+def ncc_score(ncc: np.ndarray) -> np.ndarray:
+    """NCC in [-1, 1] as a score in [0, 1] (the scale of the loss test's floors), as ``fusion-pf`` maps it."""
+    return (np.asarray(ncc, dtype=np.float64) + 1.0) * 0.5
+
+
+#: offsets of the boxes a candidate is checked with, in half-axes (a 5 x 5 grid reaching one half-axis each way)
+OFFSETS = (-1.0, -0.5, 0.0, 0.5, 1.0)
+
+
+def neighbourhood(ellipse: np.ndarray, offsets=OFFSETS) -> np.ndarray:
+    """Ellipses ``(len(offsets)^2, 4)`` of the candidate's size centred on a grid of offsets around it."""
+    cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
+    o = np.asarray(offsets, dtype=np.float64)
+    dx, dy = np.meshgrid(o * hx, o * hy)
+    n = dx.size
+    return np.column_stack([cx + dx.ravel(), cy + dy.ravel(), np.full(n, hx), np.full(n, hy)])
+
+
+class StructureCheck:
+    """Reference grey patches, their background statistics and score history (see the module docstring)."""
+
+    def __init__(self, detector: LossDetector, *, template_pixels: int = TEMPLATE_PIXELS, rate: float = RATE,
+                 anchor_gate: float = ANCHOR_GATE):
+        self.cue = StructureCue(template_pixels, anchor=True, weighting="uniform")
+        self.detector = detector
+        self.rate = float(rate)
+        self.anchor_gate = float(anchor_gate)
+
+    def init(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
+        self.cue.init(frame, np.asarray(ellipse, dtype=np.float64).reshape(1, 4))
+        self.detector.reset(1.0)
+        self._learned = 0
+
+    def new_frame(self) -> None:
+        """A new frame begins (its reduced grey region is computed when first needed)."""
+        self.cue.new_frame()
+
+    def scores(self, frame: np.ndarray, ellipses: np.ndarray) -> np.ndarray:
+        """Scores in [0, 1] of a batch of ellipses against the references (the better of the two)."""
+        e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
+        roi = None if e.shape[0] == 1 else (0, 0, frame.shape[1], frame.shape[0])
+        return ncc_score(self.cue.scores(frame, roi, e))
+
+    def learn(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
+        """A confident frame: the estimate's score joins the history, and its patch the running reference (unless
+        it drifted from the first frame's)."""
+        e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
+        s = float(self.scores(frame, e)[0])
+        if math.isfinite(s):
+            self.detector.learn(s, True)
+        self._learned += 1
+        if self._learned % UPDATE_EVERY == 0:
+            self.cue.update(frame, e[0], 1.0 - (1.0 - self.rate) ** UPDATE_EVERY, self.anchor_gate)
+
+    def set_background(self, frame: np.ndarray, ellipses: np.ndarray) -> None:
+        """Background statistics from boxes away from the target (the colour PF's background grid)."""
+        s = self.scores(frame, ellipses)
+        s = s[np.isfinite(s)]
+        if s.size >= 2:
+            self.detector.set_background(s)
+
+    def vetoes(self, frame: np.ndarray, ellipse: np.ndarray) -> bool:
+        """Does the structural evidence call this candidate, and every box around it, background?
+
+        The histogram's best candidate is often off the target by a fraction of its size (a histogram hardly
+        changes when half the box slides off the target onto similar clutter), and tracking would pull it on;
+        the NCC of such a box is low. So the candidate stands if any box of a grid around it
+        (:func:`neighbourhood`) scores as the target."""
+        s = self.scores(frame, neighbourhood(ellipse))
+        s = s[np.isfinite(s)]
+        return bool(s.size and self.detector.evaluate(float(s.max())) < 0.0)
