@@ -43,6 +43,26 @@ def rng():
     return np.random.default_rng(12345)
 
 
+def lost_flag_run(spec, tracker: str = "color-pf", seed: int = 0, **params):
+    """A tracker's lost flag scored as a detector (:func:`pftrack.eval.metrics.lost_detection`) on a synthetic
+    scene spec whose hidden frames are the absent ones."""
+    import pftrack
+    from pftrack.eval.metrics import lost_detection
+    from pftrack.synth import hidden_frames
+
+    scene = Scene(spec)
+    gt = scene.groundtruth(0)
+    hid = hidden_frames(spec)
+    t = pftrack.create_tracker(tracker, seed=seed, **params)
+    t.init(scene.render(0)[0], tuple(gt[0]))
+    boxes, lost = [gt[0]], [False]
+    for k in range(1, spec.n_frames):
+        st = t.update(scene.render(k)[0])
+        boxes.append(st.box)
+        lost.append(st.lost)
+    return lost_detection(np.array(lost[1:]), np.array(boxes[1:]), gt[1:], hid[1:])
+
+
 def face_proxy_run(name: str, seed: int, frames: int = 150, **params):
     """Mean IoU and the raised lost flags of a tracker (run seed = scene seed) on the grey face proxy
     (:func:`pftrack.synth.face.face_scene`; skipped without scikit-image, which provides the portrait)."""

@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.eval.metrics import lost_detection
-from pftrack.synth import Scene, hidden_frames, vanish_scene
+from pftrack.synth import vanish_scene
 from pftrack.filtering.dynamics import lost_prediction
 from pftrack.trackers.distractors import LIFE, DistractorMemory, beyond_reach, follow_radius, gradual, peak_speed
+
+from .conftest import lost_flag_run
 
 SIZE = (10.0, 15.0)  # searched half-axes
 # last confident estimate at frame 40, at (100, 100), moving right at 2 px a frame
@@ -99,27 +100,13 @@ def test_defaults():
     assert pftrack.create_tracker("local-motion-pf").params.distractor_frames == 0
 
 
-def _run(spec, tracker, **params):
-    scene = Scene(spec)
-    gt = scene.groundtruth(0)
-    hid = hidden_frames(spec)
-    t = pftrack.create_tracker(tracker, seed=0, **params)
-    t.init(scene.render(0)[0], tuple(gt[0]))
-    boxes, lost = [gt[0]], [False]
-    for k in range(1, spec.n_frames):
-        st = t.update(scene.render(k)[0])
-        boxes.append(st.box)
-        lost.append(st.lost)
-    return lost_detection(np.array(lost[1:]), np.array(boxes[1:]), gt[1:], hid[1:])
-
-
 @pytest.mark.parametrize("tracker, seed", [("fusion-pf", 4), ("color-pf", 6)])
 def test_grey_vanish_scene_the_look_alike_is_not_taken_for_the_target(tracker, seed):
     """Grey vanish scenes (tune seeds): as the target is covered, the search finds a look-alike 70-170 px
     away. Taken for the target, it keeps the flag down while the target is hidden and the target is never
     re-acquired; remembered, it is refused, the flag stays up and the target is re-acquired."""
     spec = vanish_scene(seed, gray=1.0)
-    on = _run(spec, tracker)
-    off = _run(spec, tracker, distractor_frames=0)
+    on = lost_flag_run(spec, tracker)
+    off = lost_flag_run(spec, tracker, distractor_frames=0)
     assert on.reacquired == on.reappearances == 1 and on.recall >= 0.9
     assert off.reacquired == 0 and off.recall <= 0.1

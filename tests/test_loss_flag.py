@@ -17,6 +17,8 @@ from pftrack.geometry import displacement_rate, iou
 from pftrack.synth import Scene, hidden_frames, leave_scene, vanish_scene, varied_scene
 from pftrack.synth.scenes import SceneSpec, Target
 
+from .conftest import lost_flag_run
+
 
 # ------------------------------------------------------------------------------ pure functions
 
@@ -165,18 +167,7 @@ def test_grey_input_tracking_on_varied_scenes(tracker):
 # ------------------------------------------------------------------------------ the flag over varied scenes
 
 def _run(spec, seed, tracker="color-pf", **params):
-    scene = Scene(spec)
-    gt = scene.groundtruth(0)
-    hid = hidden_frames(spec)
-    t = pftrack.create_tracker(tracker, seed=seed, **params)
-    boxes, lost = [gt[0]], [False]
-    t.init(scene.render(0)[0], tuple(gt[0]))
-    for k in range(1, spec.n_frames):
-        st = t.update(scene.render(k)[0])
-        boxes.append(st.box)
-        lost.append(st.lost)
-    gt = gt.copy()
-    return lost_detection(np.array(lost[1:]), np.array(boxes[1:]), gt[1:], hid[1:])
+    return lost_flag_run(spec, tracker, seed, **params)
 
 
 def test_lost_flag_recall_and_false_alarms_over_vanish_scenes():

@@ -7,10 +7,11 @@ import pytest
 
 import pftrack
 from pftrack.cues.color import model_rho
-from pftrack.eval.metrics import lost_detection
 from pftrack.filtering.loss import LossDetector
-from pftrack.synth import Scene, hidden_frames, teleport_scene, vanish_scene
+from pftrack.synth import Scene, teleport_scene, vanish_scene
 from pftrack.trackers.structure_check import StructureCheck, ncc_score
+
+from .conftest import lost_flag_run
 
 
 def _frame(rng, objects):
@@ -80,27 +81,13 @@ def test_the_check_is_chosen_from_the_input():
         assert (t._structure_check is not None) == has, (name, params, img is grey)
 
 
-def _run(spec, **params):
-    scene = Scene(spec)
-    gt = scene.groundtruth(0)
-    hid = hidden_frames(spec)
-    t = pftrack.create_tracker("color-pf", seed=0, **params)
-    t.init(scene.render(0)[0], tuple(gt[0]))
-    boxes, lost = [gt[0]], [False]
-    for k in range(1, spec.n_frames):
-        st = t.update(scene.render(k)[0])
-        boxes.append(st.box)
-        lost.append(st.lost)
-    return lost_detection(np.array(lost[1:]), np.array(boxes[1:]), gt[1:], hid[1:])
-
-
 @pytest.mark.parametrize("make, seed", [(teleport_scene, 204), (vanish_scene, 211)])
 def test_grey_scenes_the_target_is_reacquired_where_the_histogram_alone_takes_a_look_alike(make, seed):
     """Grey scenes of seeds in neither split: with the histogram alone color-pf takes another dark patch for
     the target and keeps its flag down while the target is away (it is never re-acquired); with the check that
     patch is refused, the flag goes up and the target is re-acquired."""
     spec = make(seed, gray=1.0)
-    on = _run(spec)
-    off = _run(spec, grey_check="off")
+    on = lost_flag_run(spec)
+    off = lost_flag_run(spec, grey_check="off")
     assert on.reacquired == on.reappearances == 1 and on.recall >= 0.9
     assert off.reacquired == 0 and off.recall <= 0.1
