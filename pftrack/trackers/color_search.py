@@ -407,9 +407,10 @@ class SearchMixin:
             mean = (ww[:, None] * pos).sum(axis=0)
             var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
             found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
+        check = self._structure_check
         vetoed = found and (self._leaving(frame, ell[best]) or (
             self._raw_check is not None and self._raw_check.vetoes(self._raw, ell[best])) or (
-            self._structure_check is not None and self._structure_check.vetoes(self._structure_frame(frame), ell[best])) or
+            check is not None and check.vetoes(self._structure_frame(frame), ell[best])) or
             self._distractors.vetoes(ell[best, :2], self.frame_index, self._lost_at, self.size,
                                     self._search_since, self._confident_track))
         if vetoed:

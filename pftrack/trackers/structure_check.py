@@ -6,14 +6,16 @@ histogram, and ``color-pf``'s search acquired such a patch while the target was 
 elsewhere (docs/robustness.md). ``fusion-pf`` weighs the normalised cross-correlation (NCC) of
 small grey patches into every particle and into its loss test. :class:`StructureCheck` gives
 ``color-pf`` that evidence where it is cheap and decisive: at re-acquisition only. Tracking
-frames keep the histogram's likelihood and loss test; they add one NCC (the estimate's) and,
-when the reference changes, one patch resampling.
+frames keep the histogram's likelihood and loss test; they add one NCC (the estimate's) and, on
+every 5th confident frame, one patch resampling for the running reference.
 
 The check keeps the reference patches of :class:`~pftrack.cues.structure.StructureCue` (the
 first frame's and a running mean, drift-corrected), learned on the frames the tracker is
 confident on, with their own background statistics and score history
 (:class:`~pftrack.filtering.loss.LossDetector`, the two-class test of the colour PFs). A search
-candidate whose NCC that test calls background (``LLR < 0``) is refused, as
+candidate is refused when that test calls background (``LLR < 0``) the NCC of every box of a small
+grid around it (:func:`neighbourhood`: the histogram's candidate is often off the target by a
+fraction of its size, and tracking would pull it on), as
 :class:`~pftrack.trackers.raw_check.RawGreyCheck` refuses one by the untransformed frames'
 histogram. Like that check, its history learns from every frame the tracker is confident on.
 Learning only from the scores the check itself calls target-like (the rule of
@@ -65,6 +67,7 @@ class StructureCheck:
         self.detector = detector
         self.rate = float(rate)
         self.anchor_gate = float(anchor_gate)
+        self._learned = 0  # confident frames learned since init (the reference is refreshed on every UPDATE_EVERY-th)
 
     def init(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
         self.cue.init(frame, np.asarray(ellipse, dtype=np.float64).reshape(1, 4))
