@@ -69,7 +69,8 @@ def test_the_inside_of_a_dark_occluder_is_refused_where_the_dark_disc_it_imitate
 
 
 def test_the_check_is_chosen_from_the_input():
-    """Grey input gets the check with the default; colour input, fusion-pf and grey_check='off' do not."""
+    """Grey input gets the check with the default; colour input, fusion-pf and grey_check="off" do not; under the
+    self-quotient illumination it sees the untransformed frames."""
     spec = vanish_scene(3, gray=0.0)  # a colour scene
     frame = Scene(spec).render(0)[0]
     grey = np.repeat(frame.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2)
@@ -79,6 +80,12 @@ def test_the_check_is_chosen_from_the_input():
         t = pftrack.create_tracker(name, seed=0, **params)
         t.init(img, box)
         assert (t._structure_check is not None) == has, (name, params, img is grey)
+    # with the self-quotient illumination the check sees the untransformed frames
+    t = pftrack.create_tracker("color-pf", seed=0, illumination="quotient")
+    t.init(grey, box)
+    assert t._structure_check is not None
+    assert t._structure_frame(np.zeros_like(grey)) is t._raw
+    assert t.update(grey).box is not None
 
 
 @pytest.mark.parametrize("make, seed", [(teleport_scene, 204), (vanish_scene, 211)])
