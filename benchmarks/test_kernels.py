@@ -195,6 +195,19 @@ def test_update_small_frames(benchmark, tracker, size):
     benchmark(step)
 
 
+@pytest.mark.parametrize("grey_check", ["structure", "off"])
+def test_color_pf_update_grey(benchmark, clip, grey_check):
+    """One color-pf update on grey frames (the synthetic clip in grey, 640 x 480, a 50 x 50 target), with and
+    without the structural check at re-acquisition (``grey_check``): on tracked frames it adds the estimate's NCC
+    and, every 5th frame, the running reference's refresh (docs/robustness.md)."""
+    frames, gt = clip
+    grey = [np.repeat(f.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2) for f in frames]
+    tr = pftrack.create_tracker("color-pf", seed=0, grey_check=grey_check)
+    tr.init(grey[0], gt[0])
+    it = iter(grey[1:] * 1000)
+    benchmark(lambda: tr.update(next(it)))
+
+
 # -- book ch. 6, C6.3: the Log-Euclidean mean against the affine-invariant (Karcher) mean -------------
 @pytest.fixture(scope="module")
 def covariances():
