@@ -102,3 +102,59 @@ def test_cotrain_pf_size_follows_a_growing_target(seed):
     true = np.sqrt(gt[-1, 2] * gt[-1, 3])  # 1.5 x the first size
     assert abs(sizes["ncc"] / true - 1.0) < 0.15, (sizes, true)
     assert sizes["none"] == pytest.approx(np.sqrt(gt[0, 2] * gt[0, 3]))
+
+
+def test_vertex_offset_is_vertex_ratios_step_fraction():
+    from pftrack.cues.scale_search import vertex_offset
+
+    for lo, mid, hi in [(0.5, 0.7, 0.6), (0.6, 0.7, 0.6), (0.2, 0.5, 0.9), (0.5, 0.4, 0.7), (0.9, 0.5, 0.2)]:
+        x = vertex_offset(lo, mid, hi)
+        assert -1.0 <= x <= 1.0
+        assert np.exp(x * np.log1p(0.05)) == pytest.approx(vertex_ratio(np.array([lo, mid, hi]), 0.05, 1)[0])
+    assert vertex_offset(0.5, 0.7, 0.6) == pytest.approx(1 / 6)
+    assert vertex_offset(0.5, 0.4, 0.7, margin=0.5) == 0.0
+
+
+@pytest.mark.parametrize("lit", [False, True])
+def test_size_scores_equal_the_batch_scores(lit):
+    """The per-size compiled path gives the batch's numbers (grey levels, and the quotient/levels pair)."""
+    from pftrack.cues.structure_light import LitStructure
+
+    rng = np.random.default_rng(3)
+    ell = (160.0, 120.0, 24.0, 36.0)
+    cue = LitStructure(256, weighting="uniform") if lit else StructureCue(template_pixels=256, anchor=True)
+    cue.init(_textured_frame(rng, 1.0), ell)
+    frame = _textured_frame(rng, 1.04)
+    ratios = (1 / 1.03, 1.0, 1.03)
+    cue.new_frame()
+    got = cue.size_scores(frame, ell, ratios)
+    cue.new_frame()
+    want = cue.scores(frame, None, scale_candidates(ell, np.array(ratios), np.zeros((1, 2))))
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+
+
+def test_particle_columns_and_mean_scale_together():
+    from pftrack.filtering.particles import ParticleSet
+
+    ps = ParticleSet(np.arange(12.0).reshape(3, 4), np.log(np.array([0.2, 0.3, 0.5])))
+    before = ps.mean().copy()
+    ps.scale_columns(2, 4, 1.5)
+    np.testing.assert_allclose(ps.states[:, 2:], 1.5 * np.arange(12.0).reshape(3, 4)[:, 2:])
+    np.testing.assert_allclose(ps.states[:, :2], np.arange(12.0).reshape(3, 4)[:, :2])
+    np.testing.assert_allclose(ps.mean(), np.r_[before[:2], 1.5 * before[2:]])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_fusion_pf_scale_search_follows_a_growing_target(seed):
+    """With the particles' own scale frozen, fusion-pf's size follows a target growing 1.5x only through the
+    NCC scale search (``scale_search``), at most (1 + s)^rate a frame."""
+    frames, gt = _growing_scene(seed)
+    sizes = {}
+    for s in (0.03, 0.0):
+        t = pftrack.create_tracker("fusion-pf", seed=seed, scale_search=s, scale_rate_noise=0.0)
+        t.init(frames[0], gt[0])
+        states = [t.update(f) for f in frames[1:]]
+        sizes[s] = np.sqrt(states[-1].box[2] * states[-1].box[3])
+    true = np.sqrt(gt[-1, 2] * gt[-1, 3])
+    assert abs(sizes[0.03] / true - 1.0) < 0.15, (sizes, true)
+    assert sizes[0.0] == pytest.approx(np.sqrt(gt[0, 2] * gt[0, 3]), rel=0.02)

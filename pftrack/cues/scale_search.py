@@ -51,16 +51,21 @@ def vertex_ratio(scores: np.ndarray, step: float, n_shifts: int, margin: float =
     Noise in the scores then moves the size by a fraction of a step, around zero, instead of a whole step.
     A response that is not concave (no maximum between the outer ratios) takes the better outer ratio
     when it beats ratio 1 by more than ``margin``, else keeps the size. Returns ``(ratio, best score, score at ratio 1)``."""
-    lo, mid, hi = np.asarray(scores, dtype=np.float64).reshape(3, n_shifts).max(axis=1)
-    best = max(lo, mid, hi)
+    lo, mid, hi = (float(v) for v in np.asarray(scores, dtype=np.float64).reshape(3, n_shifts).max(axis=1))
+    x = vertex_offset(lo, mid, hi, margin)
+    return float(np.exp(x * np.log1p(step))), max(lo, mid, hi), mid
+
+
+def vertex_offset(lo: float, mid: float, hi: float, margin: float = 0.0) -> float:
+    """Where the best of three equally spaced scores lies, in steps from the middle one, in ``[-1, 1]``: the vertex
+    of the parabola through them when it is a maximum; otherwise the better outer point when it beats the middle
+    by more than ``margin``, else 0."""
     curv = lo - 2.0 * mid + hi
     if curv < 0.0:  # concave: the vertex
-        x = float(np.clip(0.5 * (lo - hi) / curv, -1.0, 1.0))
-    elif max(lo, hi) - mid > margin:
-        x = -1.0 if lo > hi else 1.0
-    else:
-        x = 0.0
-    return float(np.exp(x * np.log1p(step))), float(best), float(mid)
+        return min(max(0.5 * (lo - hi) / curv, -1.0), 1.0)
+    if max(lo, hi) - mid > margin:
+        return -1.0 if lo > hi else 1.0
+    return 0.0
 
 
 def search_scale(cue: StructureCue, frame: np.ndarray, ellipse, *, step: float = 0.05, shift: float = 0.1,

@@ -384,6 +384,27 @@ class StructureCue:
             return np.array([self._one(red, ell)[0]])
         return ncc_reduced(red, ell, self.shape, self._templates, weights=self.weights, prepared=self._prepared)
 
+    def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
+        """NCC of the box of ``ellipse`` ``(cx, cy, hx, hy)`` at each of the half-axis ``ratios`` (same centre) with
+        the reference, as :meth:`scores` gives them: one compiled call per size on this frame's region (a size
+        search after the estimate, three sizes a frame, where building a batch cost more than scoring it)."""
+        cx, cy, hx, hy = (float(x) for x in ellipse)
+        if not numba_enabled():
+            e = np.array([[cx, cy, hx * r, hy * r] for r in ratios])
+            return self.scores(frame, None, e).tolist()
+        top = max(ratios)
+        red = self._region(frame, None, np.array([[cx, cy, hx * top, hy * top]]))
+        tw, w = self._prepared
+        u, v = _grid(self.shape)
+        gray = red.levels_for(u.size * v.size)
+        dots = np.empty(tw.shape[0])
+        e = np.empty(4)
+        out = []
+        for r in ratios:
+            e[0], e[1], e[2], e[3] = cx, cy, hx * r, hy * r
+            out.append(float(_ncc_one(gray, e, float(red.x0), float(red.y0), float(red.k), u, v, tw, w, 1.0, dots)))
+        return out
+
     def _one(self, red: Reduced, ell: np.ndarray) -> tuple[float, np.ndarray]:
         """``(best NCC, NCC per reference)`` of one ellipse ``(1, 4)``, computed once per frame and reference
         (compiled path)."""

@@ -95,6 +95,12 @@ class ParticleSet:
         """Effective sample size ``1 / sum(w^2)``."""
         return effective_sample_size(self.w)
 
+    def scale_columns(self, start: int, stop: int, factor: float) -> None:
+        """Multiply the state columns ``start:stop`` of every particle, and of the weighted mean, by ``factor`` (a
+        size correction found after the estimate; the weights are unchanged)."""
+        self.states[:, start:stop] *= factor
+        self._mean[start:stop] *= factor
+
     def resample(self, indices: np.ndarray) -> None:
         """Replace the set by the selected particles with uniform weights (in place)."""
         np.take(self.states, indices, axis=0, out=self._scratch, mode="clip")  # valid indices; "raise" buffers out

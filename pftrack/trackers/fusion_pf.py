@@ -23,6 +23,7 @@ documented parameter with an ablation in ``docs/fusion-pf.md``:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -37,6 +38,7 @@ from ..cues.contrast import (
 )
 from ..cues.intensity import channel_levels, gain_maps, is_gray
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
+from ..cues.scale_search import vertex_offset
 from ..cues.structure import StructureCue
 from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, VX, VY
@@ -72,6 +74,17 @@ class FusionPFParams(ColorPFParams):
     scale_rate_noise: float = param(0.01, ge=0, le=1, doc=(
         "Std of the noise on the scale rate (color-pf: 0.005). The contrast cue observes the extent, so "
         "the size may explore more."))
+    scale_search: float = param(0.0, ge=0, le=0.5, doc=(
+        "s > 0: after each tracked frame's estimate, its box at the sizes 1/(1+s), 1 and 1+s is compared with the "
+        "structural cue's references by NCC (DSST-style, cues.scale_search), and the estimate and every particle "
+        "move toward the vertex of the parabola through the three scores by scale_search_rate of it (in log "
+        "scale). The colour and contrast cues observe the size weakly: without it a shrinking face keeps its first "
+        "size. 0 (default): the particles' scale alone. 0.03 with rate 0.25 on the tune split (docs/fusion-pf.md): "
+        "mean AUC 0.688 against 0.664 over its 213 runs, PETS people 0.422 against 0.357, re-acquired 74 against "
+        "76 of 90; but on the grey tune set re-acquired 52 against 59 of 123, so it is an option for now."))
+    scale_search_rate: float = param(0.25, ge=0, le=1, doc=(
+        "Fraction (in log scale) of the scale search's vertex applied per frame: at most (1+s)^rate, 0.75 % with "
+        "the defaults, so noise in the three scores moves the size little."))
     max_pixels: int = param(1000, ge=0, le=10_000_000, doc=(
         "Larger ellipses are sampled on a lattice with about this many pixels (color-pf: 4000). With "
         "N = 100 particles, more particles beat more pixels per particle at the same cost."))
@@ -352,12 +365,30 @@ class FusionPF(ColorPF):
         return self._fused_log_lik(frame, self._ellipses(states), log_lik, feats.roi, feats)
 
     def _after_estimate(self, frame, estimate):
-        if not self.params.motion or self._flow is None:
+        p = self.params
+        if p.scale_search > 0 and p.scale_search_rate > 0 and p.structure and self.structure.ready:
+            self._search_scale(frame, estimate)
+        if not p.motion or self._flow is None:
             return
         v_obs, defined = local_motion(self._flow, estimate[_ELL_COLS].reshape(1, 4))
         if defined[0]:
             self.v_ref = (v_obs[0].copy() if self.v_ref is None
                           else self.motion_cue.adapt(self.v_ref, estimate[[VX, VY]], v_obs[0]))
+
+    def _search_scale(self, frame, estimate):
+        """``scale_search``: move the estimate's and the particles' size (in place) toward the size whose grey
+        patch best matches the structural references."""
+        p = self.params
+        step = p.scale_search
+        lo, mid, hi = self.structure.size_scores(frame, estimate[_ELL_COLS], (1.0 / (1.0 + step), 1.0, 1.0 + step))
+        if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
+            return
+        x = vertex_offset(lo, mid, hi)
+        if x != 0.0:
+            k = math.exp(x * math.log1p(step) * p.scale_search_rate)
+            estimate[HX] *= k
+            estimate[HY] *= k
+            self.ps.scale_columns(HX, HY + 1, k)
 
     def _update_models(self, frame, estimate, feats, rho_e):
         p = self.params
