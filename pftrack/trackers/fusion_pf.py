@@ -84,7 +84,7 @@ class FusionPFParams(ColorPFParams):
         "76 of 90; but on the grey tune set re-acquired 52 against 59 of 123, so it is an option for now."))
     scale_search_rate: float = param(0.25, ge=0, le=1, doc=(
         "Fraction (in log scale) of the scale search's vertex applied per frame: at most (1+s)^rate, 0.75 % with "
-        "the defaults, so noise in the three scores moves the size little."))
+        "s = 0.03 and this default, so noise in the three scores moves the size little."))
     max_pixels: int = param(1000, ge=0, le=10_000_000, doc=(
         "Larger ellipses are sampled on a lattice with about this many pixels (color-pf: 4000). With "
         "N = 100 particles, more particles beat more pixels per particle at the same cost."))
