@@ -166,13 +166,9 @@ def test_grey_input_tracking_on_varied_scenes(tracker):
 
 # ------------------------------------------------------------------------------ the flag over varied scenes
 
-def _run(spec, seed, tracker="color-pf", **params):
-    return lost_flag_run(spec, tracker, seed, **params)
-
-
 def test_lost_flag_recall_and_false_alarms_over_vanish_scenes():
     """Over 6 seeds of varied vanish scenes (grey or colour, light, similar-hued distractors)."""
-    res = [_run(vanish_scene(seed), seed) for seed in range(200, 206)]
+    res = [lost_flag_run(vanish_scene(seed), seed=seed) for seed in range(200, 206)]
     recall = np.nanmean([r.recall for r in res])
     false = np.nanmean([r.false_rate for r in res])
     assert recall >= 0.6, recall  # measured 0.77 (the paper's appearance test: 0.13)
@@ -180,7 +176,7 @@ def test_lost_flag_recall_and_false_alarms_over_vanish_scenes():
 
 
 def test_lost_flag_on_a_target_leaving_the_frame():
-    res = [_run(leave_scene(seed), seed) for seed in range(200, 205)]
+    res = [lost_flag_run(leave_scene(seed), seed=seed) for seed in range(200, 205)]
     recall = np.nanmean([r.recall for r in res])
     false = np.nanmean([r.false_rate for r in res])
     assert recall >= 0.7, recall
@@ -307,7 +303,7 @@ def test_color_pf_does_not_call_a_camouflaged_target_lost():
     """A target drawn in the background's colours: the colour cannot tell, so the flag stays down (no evidence)."""
     from pftrack.synth import camouflage_scene
 
-    res = [_run(camouflage_scene(seed), seed) for seed in (200, 201)]
+    res = [lost_flag_run(camouflage_scene(seed), seed=seed) for seed in (200, 201)]
     assert max(r.false_rate for r in res) <= 0.05, [r.false_rate for r in res]
 
 
@@ -315,7 +311,8 @@ def test_relit_search_reacquires_a_target_whose_light_changed_while_hidden():
     """color-pf's relit_search: a global light change while the target is hidden (fresh colour vanish scenes)."""
     specs = [vanish_scene(seed, gray=0.0, illumination=1.0, distractors=(0, 1)) for seed in (202, 204, 205, 206)]
     assert not any(dict(s.nuisances)["illumination_target_only"] for s in specs)
-    got = {m: sum(_run(s, 200 + i, relit_search=m).reacquired for i, s in enumerate(specs)) for m in ("off", "max")}
+    got = {m: sum(lost_flag_run(s, seed=200 + i, relit_search=m).reacquired for i, s in enumerate(specs))
+           for m in ("off", "max")}
     # measured 4 against 0 (scenes 200-215 with their own seed as run seed: 9 of 10 against 2)
     assert got["max"] >= 3 and got["max"] > got["off"], got
 

@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from ..cues.scale_search import scale_candidates
 from ..cues.structure import StructureCue
 from ..filtering.loss import LossDetector
 
@@ -50,12 +51,10 @@ OFFSETS = (-1.0, -0.5, 0.0, 0.5, 1.0)
 
 
 def neighbourhood(ellipse: np.ndarray, offsets=OFFSETS) -> np.ndarray:
-    """Ellipses ``(len(offsets)^2, 4)`` of the candidate's size centred on a grid of offsets around it."""
-    cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
-    o = np.asarray(offsets, dtype=np.float64)
-    dx, dy = np.meshgrid(o * hx, o * hy)
-    n = dx.size
-    return np.column_stack([cx + dx.ravel(), cy + dy.ravel(), np.full(n, hx), np.full(n, hy)])
+    """Ellipses ``(len(offsets)^2, 4)`` of the candidate's size centred on a grid of offsets around it (the scale
+    search's candidates at the one ratio 1)."""
+    shifts = np.array([(a, b) for b in offsets for a in offsets], dtype=np.float64)
+    return scale_candidates(np.asarray(ellipse, dtype=np.float64).ravel()[:4], np.ones(1), shifts)
 
 
 class StructureCheck:
