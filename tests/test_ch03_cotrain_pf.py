@@ -155,9 +155,9 @@ def test_seir_concentrates_the_particles_more_than_plain_resampling():
 
 def test_cotrain_pf_lost_flag_as_a_detector_over_vanish_scenes():
     """GUIDE §8's two rates over varied vanish scenes (the target walks behind a wide occluder)."""
-    from .test_loss_flag import _run as run_detector
+    from .conftest import lost_flag_run
 
-    res = [run_detector(vanish_scene(seed), seed, "cotrain-pf") for seed in range(200, 204)]
+    res = [lost_flag_run(vanish_scene(seed), "cotrain-pf", seed) for seed in range(200, 204)]
     recall = np.nanmean([r.recall for r in res])
     false = np.nanmean([r.false_rate for r in res])
     assert recall >= RECALL_MIN, recall

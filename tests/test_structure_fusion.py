@@ -344,10 +344,10 @@ def test_fusion_pf_follows_camouflaged_targets_that_colour_cannot_see():
     ("leave", range(200, 210), 0.6, 0.1),  # measured 0.68 / 0.05; one seed (200) swings it by 0.09
 ])
 def test_fused_lost_flag_as_a_detector_over_varied_scenes(kind, seeds, min_recall, max_false):
-    from .test_loss_flag import _run
+    from .conftest import lost_flag_run
 
     make = vanish_scene if kind == "vanish" else leave_scene
-    res = [_run(make(seed), seed, "fusion-pf") for seed in seeds]
+    res = [lost_flag_run(make(seed), "fusion-pf", seed) for seed in seeds]
     recall = np.nanmean([r.recall for r in res])
     false = np.nanmean([r.false_rate for r in res])
     assert recall >= min_recall, recall
@@ -428,11 +428,11 @@ def test_relit_colour_reacquires_a_target_whose_colours_drifted_while_hidden(see
     target is re-acquired within 15 frames of coming out; without it the colour cue vetoes it (measured on
     seeds 300-419 when the rule came in: 19 of 27 such reappearances re-acquired against 18, lost-flag rates
     unchanged; with the refined search, before acquire_margin, 32 such scenes: 24 of 33 against 18)."""
-    from .test_loss_flag import _run
+    from .conftest import lost_flag_run
 
     spec = vanish_scene(seed)
-    on = _run(spec, seed, "fusion-pf")
-    off = _run(spec, seed, "fusion-pf", relit_colour=False)
+    on = lost_flag_run(spec, "fusion-pf", seed)
+    off = lost_flag_run(spec, "fusion-pf", seed, relit_colour=False)
     assert on.reappearances == off.reappearances == 1
     assert (on.reacquired, off.reacquired) == (1, 0)
     assert on.recall == pytest.approx(off.recall) and on.false_rate <= off.false_rate + 1e-9
