@@ -63,15 +63,22 @@ def lost_flag_run(spec, tracker: str = "color-pf", seed: int = 0, **params):
     return lost_detection(np.array(lost[1:]), np.array(boxes[1:]), gt[1:], hid[1:])
 
 
-def face_proxy_run(name: str, seed: int, frames: int = 150, **params):
+def face_proxy_run(name: str, seed: int, frames: int = 150, *, dim: tuple[float, float] | None = None, **params):
     """Mean IoU and the raised lost flags of a tracker (run seed = scene seed) on the grey face proxy
-    (:func:`pftrack.synth.face.face_scene`; skipped without scikit-image, which provides the portrait)."""
+    (:func:`pftrack.synth.face.face_scene`; skipped without scikit-image, which provides the portrait).
+
+    ``dim=(gain, noise)``: every frame darkened by that gain, with Gaussian noise of that spread, as
+    ``scripts/grey_face_proxy.py --dark GAIN --noise SD`` (a dim, noisy camera)."""
     pytest.importorskip("skimage")
     import pftrack
     from pftrack.eval.metrics import frame_ious
     from pftrack.synth.face import face_scene
 
     imgs, gt = face_scene(seed, frames)
+    if dim is not None:
+        rng = np.random.default_rng(seed)
+        imgs = [np.clip(f.astype(np.float32) * dim[0] + rng.normal(0.0, dim[1], f.shape), 0, 255).astype(np.uint8)
+                for f in imgs]
     t = pftrack.create_tracker(name, seed=seed, **params)
     t.init(imgs[0], tuple(gt[0]))
     states = [t.update(f) for f in imgs[1:]]

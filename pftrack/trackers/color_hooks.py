@@ -41,9 +41,13 @@ class ColorHooks:
 
     def _extra_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray,
                        roi: tuple[int, int, int, int], feats) -> np.ndarray:
-        """Further log-likelihood terms multiplied into the colour likelihood (default: none).
+        """Further log-likelihood terms multiplied into the colour likelihood (default: the structural cue of
+        ``grey_check="fused"`` on grey input, else none).
 
         ``feats`` is the quantised region ``roi`` (shared with the colour cue)."""
+        check = self._structure_check
+        if check is not None and check.fused:
+            return log_lik + check.log_lik(self._structure_frame(frame), roi, self._ellipses(states))
         return log_lik
 
     def _seir(self, frame: np.ndarray, ps: ParticleSet, log_lik: np.ndarray, rho: np.ndarray, tot: np.ndarray,
@@ -73,11 +77,20 @@ class ColorHooks:
         """The scores the loss test sees for a batch of ellipses (default: the colour ``rho``).
 
         A subclass with further cues returns ``(M, C)`` scores in [0, 1] for a
-        :class:`~pftrack.filtering.loss.FusedLoss`."""
+        :class:`~pftrack.filtering.loss.FusedLoss`, as ``grey_check="fused"`` does on grey input."""
+        check = self._structure_check
+        if check is not None and check.fused:
+            return check.loss_scores(self._structure_frame(frame), roi, ellipses, rho)
         return rho
 
     def _appearance_pass(self, rho: np.ndarray, threshold: float, log_lik: np.ndarray) -> np.ndarray:
-        """Which search samples look like the target: the appearance condition ``rho > mu + 2 sigma`` (Eq. 15)."""
+        """Which search samples look like the target: the appearance condition ``rho > mu + 2 sigma`` (Eq. 15).
+
+        With the fused cues of ``grey_check="fused"``, as in ``fusion-pf``: the samples whose likelihood is within a
+        factor e^3 of the best one's (the colour threshold alone would veto a target the structure sees)."""
+        check = self._structure_check
+        if check is not None and check.fused:
+            return log_lik >= np.max(log_lik) - 3.0
         return rho > threshold
 
     def _search_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray, feats) -> np.ndarray:

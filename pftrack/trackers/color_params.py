@@ -54,12 +54,14 @@ class ColorModelParams(Params):
         "confident frames with its own background statistics and history (pftrack.trackers.raw_check): a "
         "candidate it calls background is refused. The quotient also divides out the scene's own shading, so "
         "background patches can resemble the target more than they did."))
-    grey_check: Literal["off", "structure"] = param("off", doc=(
+    grey_check: Literal["off", "structure", "fused"] = param("off", doc=(
         "Grey input: 'structure' also keeps reference grey patches of the target (fusion-pf's structural cue, "
         "pftrack.trackers.structure_check), learned on the confident frames with their own background statistics "
         "and score history; a search candidate whose normalised cross-correlation the two-class test calls "
-        "background is refused. Tracking frames keep the histogram's likelihood and loss test. 'off': the "
-        "histogram alone decides (ColorModelParams' default)."))
+        "background is refused. Tracking frames keep the histogram's likelihood and loss test. 'fused': the same "
+        "check, and the patches' NCC r also weighs every particle (exp(10 r), fusion-pf's structural likelihood) "
+        "and joins the loss test (fusion-pf's fused test on the coefficient and the NCC). 'off': the histogram "
+        "alone decides (ColorModelParams' default)."))
     grey_histogram: Literal["levels", "both"] = param("levels", doc=(
         "Grey input with illumination='none': 'both' keeps a second grey histogram model of the self-quotient "
         "image (pftrack.cues.lit_histogram, its scale illumination_sigma) beside the model of the grey levels, "
@@ -261,11 +263,11 @@ class ColorPFParams(ColorModelParams):
         "split's exit scenes (a target leaving in a flow of look-alikes, docs/robustness.md): color-pf AUC 0.783 "
         "against 0.757 off, lost recall 0.978 against 0.957 (0.25: the same; 1 and 2: no gain); fusion-pf and "
         "every other tune group unchanged."))
-    grey_check: Literal["off", "structure"] = param("structure", doc=(
-        "See ColorModelParams.grey_check. 'structure' for color-pf, chosen on the grey tune set (docs/robustness.md): "
-        "re-acquired 42 against 37 of 123 reappearances, lost recall 0.738 against 0.692, mean AUC 0.514 against "
-        "0.501, the grey copies of real sequences and the face proxies unchanged; about 8 % slower on grey input. "
-        "fusion-pf keeps it off (its structural cue is in every particle and in its loss test)."))
+    grey_check: Literal["off", "structure", "fused"] = param("fused", doc=(
+        "See ColorModelParams.grey_check. 'fused' for color-pf, chosen on the grey tune set (docs/robustness.md): "
+        "mean AUC 0.627 against 0.514 ('structure') and 0.501 ('off'), re-acquired 72 against 42 and 37 of 123 "
+        "reappearances, lost recall 0.819 against 0.738 and 0.692, false-lost 0.053 against 0.080. fusion-pf keeps "
+        "it off (its structural cue is in every particle and in its loss test)."))
     grey_histogram: Literal["levels", "both"] = param("both", doc=(
         "Grey input: 'both' also keeps a histogram model of the self-quotient image, and while tracking every "
         "particle scores the better of its two coefficients (the search scores the grey levels alone); 'levels': "

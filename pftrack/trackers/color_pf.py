@@ -61,7 +61,7 @@ from .color_hooks import ColorHooks
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
 from .distractors import DistractorMemory
-from .structure_check import StructureCheck
+from .structure_check import StructureCheck, fused_loss
 from .raw_check import RawGreyCheck, illumination_stages
 
 __all__ = ["ColorModelParams", "ColorPF", "ColorPFParams", "ColorParticleFilter"]
@@ -99,7 +99,8 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self.detector = detector
         self._quotient: QuotientImage | None = None  # illumination="quotient" on grey input (decided by init)
         self._raw_check: RawGreyCheck | None = None  # its re-acquisition check on the untransformed frames
-        self._structure_check: StructureCheck | None = None  # grey_check="structure" on grey input
+        self._structure_check: StructureCheck | None = None  # grey_check on grey input
+        self._plain_loss: LossDetector | None = None  # the histogram's test while grey_check="fused" replaces it
         self._raw: np.ndarray | None = None  # the untransformed frame
         self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames)  # look-alikes met during a loss
         warmup()
@@ -245,7 +246,13 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
     def _wants_grey_check(self) -> bool:
         """Does this input get the structural check at re-acquisition (``grey_check`` on grey input)?"""
         p = self.params
-        return p.grey_check == "structure" and p.loss_test == "likelihood" and self.cue.color_space == "gray"
+        return p.grey_check != "off" and p.loss_test == "likelihood" and self.cue.color_space == "gray"
+
+    def _drop_structure_check(self) -> None:
+        """No structural check (yet): the histogram's own loss test again if ``grey_check="fused"`` replaced it."""
+        self._structure_check = None
+        if self._plain_loss is not None:
+            self.loss, self._plain_loss = self._plain_loss, None
 
     def _structure_frame(self, frame: np.ndarray) -> np.ndarray:
         """The frame the structural check sees: the untransformed one under the self-quotient illumination."""
@@ -280,7 +287,6 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self._reset()
         self.cue.adapt_to(frame)  # grey features on grey input ("auto")
         self.cue.new_frame(frame)
-        self.loss.reset(1.0)
         ell = box_to_ellipse(box)
         p = self.params
         if p.grey_histogram == "both" and self.cue.color_space == "gray" and self._quotient is None:
@@ -290,12 +296,15 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
             self._lit.init(frame, ell)
         if self._raw_check is not None:
             self._raw_check.init(self._raw, ell)
-        self._structure_check = None
+        self._drop_structure_check()
         if self._wants_grey_check():
             self._structure_check = StructureCheck(LossDetector(
                 history_rate=p.history_rate, sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor,
-                learn_z=p.history_z))
+                learn_z=p.history_z), fused=p.grey_check == "fused")
             self._structure_check.init(self._structure_frame(frame), ell)
+            if self._structure_check.fused:
+                self._plain_loss, self.loss = self.loss, fused_loss(p)
+        self.loss.reset(1.0)
         self._set_model(self.cue.histogram(frame, ell))
         self.size = (float(ell[2]), float(ell[3]))
         self._confident_size = self.size

@@ -58,7 +58,7 @@ class SearchMixin:
         self.frame_index = 0
         self._reset()
         self._quotient, self._raw_check = None, None  # a given histogram is of the frames as they are
-        self._structure_check = None  # no reference patch without a box
+        self._drop_structure_check()  # no reference patch without a box
         self._set_model(hist)
         self.size = (w / 2.0, h / 2.0)
         if regions is not None:

@@ -1,4 +1,5 @@
-"""A structural second opinion on re-acquisition for the colour PFs on grey input (``grey_check``).
+"""A structural cue for the colour PFs on grey input (``grey_check``): a second opinion on re-acquisition, and with
+``"fused"`` a term of every particle's likelihood and a cue of the loss test.
 
 On grey frames a histogram of equalised intensity and gradient orientation keeps little of a
 target's layout: a dark disc and the dark, noisy inside of an occluder give nearly the same
@@ -21,6 +22,14 @@ histogram. Like that check, its history learns from every frame the tracker is c
 Learning only from the scores the check itself calls target-like (the rule of
 :class:`~pftrack.filtering.loss.FusedLoss`'s cues) refused true re-acquisitions of real grey
 targets whose appearance had changed (docs/robustness.md).
+
+With ``grey_check="fused"`` the same references also weigh every particle, ``exp(GAIN r)`` with ``r``
+the NCC in [-1, 1] (``fusion-pf``'s structural likelihood at its default ``structure_gain``), and the
+loss test becomes ``fusion-pf``'s :class:`~pftrack.filtering.loss.FusedLoss` on the histogram's
+coefficient and the NCC score (:func:`fused_loss`). A structural term in the likelihood alone pulls the
+particles where the histogram scores lower, and the histogram's test alone then declared a deforming
+target lost (the grey copy of ``vot_bag``); the two cues must be weighed and tested together. The
+running reference is then refreshed on every confident frame.
 """
 
 from __future__ import annotations
@@ -31,7 +40,7 @@ import numpy as np
 
 from ..cues.scale_search import scale_candidates
 from ..cues.structure import StructureCue
-from ..filtering.loss import LossDetector
+from ..filtering.loss import FusedLoss, LossDetector
 
 #: fusion-pf's defaults for its structural cue (structure_pixels, structure_rate, structure_anchor_gate).
 TEMPLATE_PIXELS, RATE, ANCHOR_GATE = 256, 0.02, 0.5
@@ -39,6 +48,10 @@ TEMPLATE_PIXELS, RATE, ANCHOR_GATE = 256, 0.02, 0.5
 #: constant (the refresh is most of the check's cost; every frame re-acquired as many of the grey tune set's
 #: reappearances)
 UPDATE_EVERY = 5
+#: sharpness of the structural likelihood exp(GAIN r) with grey_check="fused" (fusion-pf's structure_gain)
+GAIN = 10.0
+#: fusion-pf's defaults for its fused loss test (loss_cue_clip, loss_cue_floor, acquire_z, acquire_margin)
+CUE_CLIP, CUE_FLOOR, ACQUIRE_Z, ACQUIRE_MARGIN = 10.0, 2.0, 4.0, 2.0
 
 
 def ncc_score(ncc: np.ndarray) -> np.ndarray:
@@ -57,13 +70,25 @@ def neighbourhood(ellipse: np.ndarray, offsets=OFFSETS) -> np.ndarray:
     return scale_candidates(np.asarray(ellipse, dtype=np.float64).ravel()[:4], np.ones(1), shifts)
 
 
-class StructureCheck:
-    """Reference grey patches, their background statistics and score history (see the module docstring)."""
+def fused_loss(p) -> FusedLoss:
+    """``fusion-pf``'s two-cue loss test (colour coefficient, NCC score) with the colour PF's parameters ``p``."""
+    return FusedLoss(2, cue_clip=CUE_CLIP, cue_floor=CUE_FLOOR, acquire_z=ACQUIRE_Z, acquire_margin=ACQUIRE_MARGIN,
+                     lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin, history_rate=p.history_rate,
+                     sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
 
-    def __init__(self, detector: LossDetector, *, template_pixels: int = TEMPLATE_PIXELS, rate: float = RATE,
-                 anchor_gate: float = ANCHOR_GATE):
+
+class StructureCheck:
+    """Reference grey patches, their background statistics and score history (see the module docstring).
+
+    ``fused``: the references also score every particle (:meth:`log_lik`) and join the loss test
+    (:meth:`loss_scores`); the running reference is then refreshed on every confident frame."""
+
+    def __init__(self, detector: LossDetector, *, fused: bool = False, template_pixels: int = TEMPLATE_PIXELS,
+                 rate: float = RATE, anchor_gate: float = ANCHOR_GATE):
         self.cue = StructureCue(template_pixels, anchor=True, weighting="uniform")
         self.detector = detector
+        self.fused = bool(fused)
+        self.update_every = 1 if self.fused else UPDATE_EVERY
         self.rate = float(rate)
         self.anchor_gate = float(anchor_gate)
         self._learned = 0  # confident frames learned since init (the reference is refreshed on every UPDATE_EVERY-th)
@@ -83,6 +108,19 @@ class StructureCheck:
         roi = None if e.shape[0] == 1 else (0, 0, frame.shape[1], frame.shape[0])
         return ncc_score(self.cue.scores(frame, roi, e))
 
+    def log_lik(self, frame: np.ndarray, roi, ellipses: np.ndarray) -> np.ndarray:
+        """The structural log-likelihood ``GAIN r`` of a batch of particles' ellipses (``roi`` covers them; a box
+        with no NCC scores as r = -1)."""
+        r = self.cue.scores(frame, roi, ellipses)
+        return GAIN * np.nan_to_num(r, nan=-1.0)
+
+    def loss_scores(self, frame: np.ndarray, roi, ellipses: np.ndarray, rho: np.ndarray) -> np.ndarray:
+        """``(M, 2)`` scores of the fused loss test: the histogram's coefficient and the NCC score in [0, 1]."""
+        out = np.empty((len(rho), 2))
+        out[:, 0] = rho
+        out[:, 1] = ncc_score(self.cue.scores(frame, roi, ellipses))
+        return out
+
     def learn(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
         """A confident frame: the estimate's score joins the history, and its patch the running reference (unless
         it drifted from the first frame's)."""
@@ -91,8 +129,8 @@ class StructureCheck:
         if math.isfinite(s):
             self.detector.learn(s, True)
         self._learned += 1
-        if self._learned % UPDATE_EVERY == 0:
-            self.cue.update(frame, e[0], 1.0 - (1.0 - self.rate) ** UPDATE_EVERY, self.anchor_gate)
+        if self._learned % self.update_every == 0:
+            self.cue.update(frame, e[0], 1.0 - (1.0 - self.rate) ** self.update_every, self.anchor_gate)
 
     def set_background(self, frame: np.ndarray, ellipses: np.ndarray) -> None:
         """Background statistics from boxes away from the target (the colour PF's background grid)."""
