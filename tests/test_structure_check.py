@@ -130,6 +130,14 @@ def test_fused_grey_cue_replaces_the_loss_test_on_grey_input_only():
         u = pftrack.create_tracker("color-pf", seed=0, grey_check=mode)
         u.init(grey, box)
         assert isinstance(u.loss, LossDetector)
+    # another colour PF takes the option with its own likelihood terms (local-motion-pf keeps its motion term);
+    # fusion-pf has its own structural cue and test, and refuses it
+    lm = pftrack.create_tracker("local-motion-pf", seed=0, grey_check="fused")
+    lm.init(grey, box)
+    assert isinstance(lm.loss, FusedLoss)
+    assert np.ptp(lm._extra_log_lik(grey, states, np.zeros(2), (0, 0, 320, 240), None)) > 1.0
+    with pytest.raises(pftrack.errors.ParameterError):
+        pftrack.create_tracker("fusion-pf", grey_check="fused")
 
 
 def test_fused_grey_cue_keeps_a_dim_noisy_face():

@@ -58,7 +58,7 @@ class FusionPFParams(ColorPFParams):
         "0.618 against 0.588, re-acquired 66 against 56 of 123), but on the grey report set the report's real grey "
         "copies fell (grey 0.473 against 0.502, grey + light 0.454 against 0.467) and it re-acquired 69 against "
         "70 of 129; about 14 % slower on grey input."))
-    grey_check: Literal["off", "structure", "fused"] = param("off", doc=(
+    grey_check: Literal["off", "structure"] = param("off", doc=(
         "See ColorModelParams.grey_check: off for fusion-pf, whose structural cue already scores every particle "
         "and enters its loss test."))
     contrast: bool = param(True, doc=(

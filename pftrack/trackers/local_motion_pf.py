@@ -105,6 +105,7 @@ class LocalMotionPF(ColorParticleFilter):
 
     # ------------------------------------------------------------------ local motion
     def _extra_log_lik(self, frame, states, log_lik, roi, feats):
+        log_lik = super()._extra_log_lik(frame, states, log_lik, roi, feats)  # grey_check="fused" on grey input
         if not self.params.motion:
             return log_lik
         self._gray = to_gray(frame)
