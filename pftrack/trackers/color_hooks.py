@@ -101,7 +101,16 @@ class ColorHooks:
         """Called when the colour model update gate passes (hook for further adaptive models)."""
 
     def _after_estimate(self, frame: np.ndarray, estimate: np.ndarray) -> None:
-        """Called with the new mean state after each tracked frame."""
+        """Called with the new mean state after each tracked frame (default: the size search of
+        ``grey_scale_search`` with the structural cue of ``grey_check="fused"`` on grey input)."""
+        check = self._structure_check
+        step = self.params.grey_scale_search
+        if step > 0 and check is not None and check.fused:
+            k = check.scale_factor(self._structure_frame(frame), estimate[[X, Y, HX, HY]], step)
+            if k != 1.0:
+                estimate[HX] *= k
+                estimate[HY] *= k
+                self.ps.scale_columns(HX, HY + 1, k)
 
     def _on_frame(self, frame: np.ndarray) -> None:
         """Called at the end of every update (tracking or searching)."""

@@ -62,6 +62,11 @@ class ColorModelParams(Params):
         "check, and the patches' NCC r also weighs every particle (exp(10 r), fusion-pf's structural likelihood) "
         "and joins the loss test (fusion-pf's fused test on the coefficient and the NCC). 'off': the histogram "
         "alone decides (ColorModelParams' default)."))
+    grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
+        "Grey input with grey_check='fused': after each estimate its box is scored by the structural cue at the "
+        "sizes 1/(1+s), 1 and 1+s, and the estimate and every particle move a quarter of the way toward the vertex "
+        "of the parabola through the three NCCs (fusion-pf's scale_search); skipped while the largest box is not "
+        "inside the frame. 0: off (ColorModelParams' default)."))
     grey_histogram: Literal["levels", "both"] = param("levels", doc=(
         "Grey input with illumination='none': 'both' keeps a second grey histogram model of the self-quotient "
         "image (pftrack.cues.lit_histogram, its scale illumination_sigma) beside the model of the grey levels, "
@@ -268,6 +273,11 @@ class ColorPFParams(ColorModelParams):
         "mean AUC 0.627 against 0.514 ('structure') and 0.501 ('off'), re-acquired 72 against 42 and 37 of 123 "
         "reappearances, lost recall 0.819 against 0.738 and 0.692, false-lost 0.053 against 0.080. fusion-pf keeps "
         "it off (its structural cue is in every particle and in its loss test)."))
+    grey_scale_search: float = param(0.03, ge=0, le=0.5, doc=(
+        "See ColorModelParams.grey_scale_search. 0.03 for color-pf (fusion-pf's scale_search step), chosen on the "
+        "tune data (docs/robustness.md): tune face proxies 0.891 against 0.744 mean AUC, dim and noisy 0.767 "
+        "against 0.645; the grey tune set's reappearance scenes (8 seeds) 0.624 against 0.628, re-acquired 184 "
+        "against 179 of 328; tune split 0.555 against 0.549."))
     grey_histogram: Literal["levels", "both"] = param("both", doc=(
         "Grey input: 'both' also keeps a histogram model of the self-quotient image, and while tracking every "
         "particle scores the better of its two coefficients (the search scores the grey levels alone); 'levels': "

@@ -58,6 +58,9 @@ class FusionPFParams(ColorPFParams):
         "0.618 against 0.588, re-acquired 66 against 56 of 123), but on the grey report set the report's real grey "
         "copies fell (grey 0.473 against 0.502, grey + light 0.454 against 0.467) and it re-acquired 69 against "
         "70 of 129; about 14 % slower on grey input."))
+    grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
+        "See ColorModelParams.grey_scale_search (color-pf's, with grey_check='fused'): off for fusion-pf, whose "
+        "own option is scale_search."))
     grey_check: Literal["off", "structure"] = param("off", doc=(
         "See ColorModelParams.grey_check: off for fusion-pf, whose structural cue already scores every particle "
         "and enters its loss test."))

@@ -115,6 +115,7 @@ class LocalMotionPF(ColorParticleFilter):
         return log_lik + self.motion.log_likelihood(self._flow, self._ellipses(states), self.v_ref)
 
     def _after_estimate(self, frame, estimate):
+        super()._after_estimate(frame, estimate)  # grey_scale_search with grey_check="fused" on grey input
         if not self.params.motion or self._flow is None:
             return
         v_obs, defined = local_motion(self._flow, estimate[_ELL_COLS].reshape(1, 4))

@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from ..cues.scale_search import scale_candidates
+from ..cues.scale_search import scale_candidates, vertex_offset
 from ..cues.structure import StructureCue
 from ..filtering.loss import FusedLoss, LossDetector
 
@@ -50,6 +50,8 @@ TEMPLATE_PIXELS, RATE, ANCHOR_GATE = 256, 0.02, 0.5
 UPDATE_EVERY = 5
 #: sharpness of the structural likelihood exp(GAIN r) with grey_check="fused" (fusion-pf's structure_gain)
 GAIN = 10.0
+#: the share of the parabola's vertex the size moves by a frame with grey_scale_search (fusion-pf's scale_search_rate)
+SCALE_RATE = 0.25
 #: fusion-pf's defaults for its fused loss test (loss_cue_clip, loss_cue_floor, acquire_z, acquire_margin)
 CUE_CLIP, CUE_FLOOR, ACQUIRE_Z, ACQUIRE_MARGIN = 10.0, 2.0, 4.0, 2.0
 
@@ -113,6 +115,22 @@ class StructureCheck:
         with no NCC scores as r = -1)."""
         r = self.cue.scores(frame, roi, ellipses)
         return GAIN * np.nan_to_num(r, nan=-1.0)
+
+    def scale_factor(self, frame: np.ndarray, ellipse, step: float) -> float:
+        """The factor the half-axes of ``ellipse`` move by toward the size whose patch best matches the references
+        (``grey_scale_search``, as ``fusion-pf``'s ``scale_search``): the NCC at the sizes 1/(1+step), 1 and
+        1+step, the vertex of the parabola through them, ``SCALE_RATE`` of the way. 1 when the largest of the three
+        boxes is not inside the frame: the part of a box beyond the border has no pixels to correlate, and
+        comparing sizes there favours the box that fits (measured on the grey tune set's leave scenes, below)."""
+        cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
+        fh, fw = frame.shape[:2]
+        ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
+        if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:
+            return 1.0
+        lo, mid, hi = self.cue.size_scores(frame, (cx, cy, hx, hy), (1.0 / (1.0 + step), 1.0, 1.0 + step))
+        if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
+            return 1.0
+        return math.exp(vertex_offset(lo, mid, hi) * math.log1p(step) * SCALE_RATE)
 
     def loss_scores(self, frame: np.ndarray, roi, ellipses: np.ndarray, rho: np.ndarray) -> np.ndarray:
         """``(M, 2)`` scores of the fused loss test: the histogram's coefficient and the NCC score in [0, 1]."""
