@@ -122,7 +122,7 @@ def test_quotient_tracks_a_grey_target_under_a_drifting_lamp(name):
     if name == "color-pf":
         # the histogram of the grey levels alone is lost without the quotient (measured 0.54); a second model of
         # the quotient beside it (grey_histogram="both") holds (measured 0.80), and so does the grey levels'
-        # histogram fused with the structural cue (grey_check="fused", measured 0.89; the default 0.93)
+        # histogram fused with the structural cue (grey_check="fused", measured 0.90; the default 0.91)
         assert scores["levels"] < scores["both"] - 0.2
         assert scores["levels"] < scores["levels_fused"] - 0.2
         assert scores["none"] > 0.75

@@ -300,7 +300,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         if self._wants_grey_check():
             self._structure_check = StructureCheck(LossDetector(
                 history_rate=p.history_rate, sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor,
-                learn_z=p.history_z), fused=p.grey_check == "fused")
+                learn_z=p.history_z), fused=p.grey_check == "fused", sigma=p.illumination_sigma)
             self._structure_check.init(self._structure_frame(frame), ell)
             if self._structure_check.fused:
                 self._plain_loss, self.loss = self.loss, fused_loss(p)

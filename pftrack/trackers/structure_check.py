@@ -40,6 +40,7 @@ import numpy as np
 
 from ..cues.scale_search import scale_candidates, vertex_offset
 from ..cues.structure import StructureCue
+from ..cues.structure_light import LitStructure
 from ..filtering.loss import FusedLoss, LossDetector
 
 #: fusion-pf's defaults for its structural cue (structure_pixels, structure_rate, structure_anchor_gate).
@@ -83,11 +84,16 @@ class StructureCheck:
     """Reference grey patches, their background statistics and score history (see the module docstring).
 
     ``fused``: the references also score every particle (:meth:`log_lik`) and join the loss test
-    (:meth:`loss_scores`); the running reference is then refreshed on every confident frame."""
+    (:meth:`loss_scores`); they are kept for the grey levels and for their self-quotient image, and the running
+    references are refreshed on every confident frame."""
 
     def __init__(self, detector: LossDetector, *, fused: bool = False, template_pixels: int = TEMPLATE_PIXELS,
-                 rate: float = RATE, anchor_gate: float = ANCHOR_GATE):
-        self.cue = StructureCue(template_pixels, anchor=True, weighting="uniform")
+                 rate: float = RATE, anchor_gate: float = ANCHOR_GATE, sigma: float = 0.1):
+        # fused: the patches of the grey levels and of their self-quotient image (scale sigma), the better of the
+        # two (fusion-pf's grey_structure="both"): a lamp or a shadow across a face lowered the grey levels' NCC
+        # alone until the fused test declared the face lost (docs/robustness.md)
+        self.cue = (LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both") if fused
+                    else StructureCue(template_pixels, anchor=True, weighting="uniform"))
         self.detector = detector
         self.fused = bool(fused)
         self.update_every = 1 if self.fused else UPDATE_EVERY
