@@ -59,9 +59,10 @@ class ColorModelParams(Params):
         "pftrack.trackers.structure_check), learned on the confident frames with their own background statistics "
         "and score history; a search candidate whose normalised cross-correlation the two-class test calls "
         "background is refused. Tracking frames keep the histogram's likelihood and loss test. 'fused': the same "
-        "check, and the patches' NCC r also weighs every particle (exp(10 r), fusion-pf's structural likelihood) "
-        "and joins the loss test (fusion-pf's fused test on the coefficient and the NCC). 'off': the histogram "
-        "alone decides (ColorModelParams' default)."))
+        "check with patches of the grey levels and of their self-quotient image (the better NCC r of the two), and r "
+        "also weighs every particle (exp(10 r), fusion-pf's structural likelihood) and joins the loss test "
+        "(fusion-pf's fused test on the coefficient and the NCC). 'off': the histogram alone decides "
+        "(ColorModelParams' default)."))
     grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
         "Grey input with grey_check='fused': after each estimate its box is scored by the structural cue at the "
         "sizes 1/(1+s), 1 and 1+s, and the estimate and every particle move a quarter of the way toward the vertex "
@@ -269,15 +270,15 @@ class ColorPFParams(ColorModelParams):
         "against 0.757 off, lost recall 0.978 against 0.957 (0.25: the same; 1 and 2: no gain); fusion-pf and "
         "every other tune group unchanged."))
     grey_check: Literal["off", "structure", "fused"] = param("fused", doc=(
-        "See ColorModelParams.grey_check. 'fused' for color-pf, chosen on the grey tune set (docs/robustness.md): "
-        "mean AUC 0.627 against 0.514 ('structure') and 0.501 ('off'), re-acquired 72 against 42 and 37 of 123 "
-        "reappearances, lost recall 0.819 against 0.738 and 0.692, false-lost 0.053 against 0.080. fusion-pf keeps "
-        "it off (its structural cue is in every particle and in its loss test)."))
+        "See ColorModelParams.grey_check. 'fused' for color-pf, chosen on the grey tune set (docs/robustness.md; "
+        "without the size search): mean AUC 0.627 against 0.514 ('structure') and 0.501 ('off'), re-acquired 72 "
+        "against 42 and 37 of 123 reappearances, lost recall 0.819 against 0.738 and 0.692, false-lost 0.053 against "
+        "0.080. fusion-pf keeps it off (its structural cue is in every particle and in its loss test)."))
     grey_scale_search: float = param(0.03, ge=0, le=0.5, doc=(
         "See ColorModelParams.grey_scale_search. 0.03 for color-pf (fusion-pf's scale_search step), chosen on the "
-        "tune data (docs/robustness.md): tune face proxies 0.891 against 0.744 mean AUC, dim and noisy 0.767 "
-        "against 0.645; the grey tune set's reappearance scenes (8 seeds) 0.624 against 0.628, re-acquired 184 "
-        "against 179 of 328; tune split 0.555 against 0.549."))
+        "tune data (docs/robustness.md; the grey levels' patches only): tune face proxies 0.891 against 0.744 mean "
+        "AUC, dim and noisy 0.767 against 0.645; the grey tune set's reappearance scenes (8 seeds) 0.624 against "
+        "0.628, re-acquired 184 against 179 of 328; tune split 0.555 against 0.549."))
     grey_histogram: Literal["levels", "both"] = param("both", doc=(
         "Grey input: 'both' also keeps a histogram model of the self-quotient image, and while tracking every "
         "particle scores the better of its two coefficients (the search scores the grey levels alone); 'levels': "
