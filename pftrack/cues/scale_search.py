@@ -11,6 +11,8 @@ of the centre, so that a position error of a pixel or two does not decide the sc
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .structure import StructureCue
@@ -83,3 +85,22 @@ def search_scale(cue: StructureCue, frame: np.ndarray, ellipse, *, step: float =
     if interpolate:
         return vertex_ratio(scores, step, len(shifts), margin)
     return best_ratio(scores, ratios, len(shifts), margin)
+
+
+def size_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> float:
+    """The factor by which the half-axes of ``ellipse`` ``(cx, cy, hx, hy)`` move toward the size whose patch best
+    matches ``cue``'s references (anything with ``size_scores(frame, ellipse, ratios)``, as
+    :class:`~pftrack.cues.structure.StructureCue`): the NCC at the sizes 1/(1+step), 1 and 1+step, the vertex of
+    the parabola through them (:func:`vertex_offset`), ``rate`` of the way.
+
+    1 when the largest of the three boxes is not inside the frame: the part of a box beyond the border has no
+    pixels to correlate, and comparing sizes there favours the box that fits (docs/robustness.md)."""
+    cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
+    fh, fw = frame.shape[:2]
+    ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
+    if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:
+        return 1.0
+    lo, mid, hi = cue.size_scores(frame, (cx, cy, hx, hy), (1.0 / (1.0 + step), 1.0, 1.0 + step))
+    if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
+        return 1.0
+    return math.exp(vertex_offset(lo, mid, hi) * math.log1p(step) * rate)

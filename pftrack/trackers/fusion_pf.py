@@ -23,7 +23,6 @@ documented parameter with an ablation in ``docs/fusion-pf.md``:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -38,7 +37,7 @@ from ..cues.contrast import (
 )
 from ..cues.intensity import channel_levels, gain_maps, is_gray
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
-from ..cues.scale_search import vertex_offset
+from ..cues.scale_search import size_factor
 from ..cues.structure import StructureCue
 from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, VX, VY
@@ -382,13 +381,8 @@ class FusionPF(ColorPF):
         """``scale_search``: move the estimate's and the particles' size (in place) toward the size whose grey
         patch best matches the structural references."""
         p = self.params
-        step = p.scale_search
-        lo, mid, hi = self.structure.size_scores(frame, estimate[_ELL_COLS], (1.0 / (1.0 + step), 1.0, 1.0 + step))
-        if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
-            return
-        x = vertex_offset(lo, mid, hi)
-        if x != 0.0:
-            k = math.exp(x * math.log1p(step) * p.scale_search_rate)
+        k = size_factor(self.structure, frame, estimate[_ELL_COLS], p.scale_search, p.scale_search_rate)
+        if k != 1.0:
             estimate[HX] *= k
             estimate[HY] *= k
             self.ps.scale_columns(HX, HY + 1, k)

@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from ..cues.scale_search import scale_candidates, vertex_offset
+from ..cues.scale_search import scale_candidates, size_factor
 from ..cues.structure import StructureCue
 from ..cues.structure_light import LitStructure
 from ..filtering.loss import FusedLoss, LossDetector
@@ -124,19 +124,9 @@ class StructureCheck:
 
     def scale_factor(self, frame: np.ndarray, ellipse, step: float) -> float:
         """The factor the half-axes of ``ellipse`` move by toward the size whose patch best matches the references
-        (``grey_scale_search``, as ``fusion-pf``'s ``scale_search``): the NCC at the sizes 1/(1+step), 1 and
-        1+step, the vertex of the parabola through them, ``SCALE_RATE`` of the way. 1 when the largest of the three
-        boxes is not inside the frame: the part of a box beyond the border has no pixels to correlate, and
-        comparing sizes there favours the box that fits (measured on the grey tune set's leave scenes, below)."""
-        cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
-        fh, fw = frame.shape[:2]
-        ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
-        if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:
-            return 1.0
-        lo, mid, hi = self.cue.size_scores(frame, (cx, cy, hx, hy), (1.0 / (1.0 + step), 1.0, 1.0 + step))
-        if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
-            return 1.0
-        return math.exp(vertex_offset(lo, mid, hi) * math.log1p(step) * SCALE_RATE)
+        (``grey_scale_search``, as ``fusion-pf``'s ``scale_search``; :func:`~pftrack.cues.scale_search.size_factor`,
+        ``SCALE_RATE`` of the way; 1 while the largest box is not inside the frame)."""
+        return size_factor(self.cue, frame, ellipse, step, SCALE_RATE)
 
     def loss_scores(self, frame: np.ndarray, roi, ellipses: np.ndarray, rho: np.ndarray) -> np.ndarray:
         """``(M, 2)`` scores of the fused loss test: the histogram's coefficient and the NCC score in [0, 1]."""
