@@ -105,7 +105,7 @@ def test_color_pf_picks_the_quotient_model_from_the_input(gray, params, has_lit)
     assert (t._lit is not None) is has_lit
     if has_lit:  # one quotient image per frame for both grey cues
         assert t._lit.quotient == t.structure._qf
-    assert pftrack.create_tracker("fusion-pf").params.grey_histogram == "levels"
+    assert pftrack.create_tracker("fusion-pf").params.grey_histogram == "both"
 
 
 def test_tracking_scores_the_better_model_and_the_search_the_grey_levels_alone():

@@ -51,12 +51,13 @@ from .color_pf import _ELL_COLS, ColorPF, ColorPFParams
 class FusionPFParams(ColorPFParams):
     """Parameters of ``fusion-pf`` (colour-pf's plus the fusion ingredients)."""
 
-    grey_histogram: Literal["levels", "both"] = param("levels", doc=(
+    grey_histogram: Literal["levels", "both"] = param("both", doc=(
         "See ColorModelParams.grey_histogram; with 'both' the quotient image is shared with the structural cue of "
-        "grey_structure. 'levels' for fusion-pf (docs/robustness.md): 'both' led on the grey tune set (mean AUC "
-        "0.618 against 0.588, re-acquired 66 against 56 of 123), but on the grey report set the report's real grey "
-        "copies fell (grey 0.473 against 0.502, grey + light 0.454 against 0.467) and it re-acquired 69 against "
-        "70 of 129; about 14 % slower on grey input."))
+        "grey_structure. 'both' for fusion-pf, chosen with scale_search on the tune data (docs/fusion-pf.md): "
+        "8 seeds of the tune reappearance scenes, re-acquired 365 against 345 of 568, lost recall 0.789 against "
+        "0.767; grey tune set 0.633 against 0.592 mean AUC, dim tune face proxies 0.872 against 0.727. (An earlier "
+        "round had kept 'levels' after seeing the grey report set: the report's real grey copies fell, grey 0.473 "
+        "against 0.502.) About 14 % slower on grey input."))
     grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
         "See ColorModelParams.grey_scale_search (color-pf's, with grey_check='fused'): off for fusion-pf, whose "
         "own option is scale_search."))
@@ -76,14 +77,15 @@ class FusionPFParams(ColorPFParams):
     scale_rate_noise: float = param(0.01, ge=0, le=1, doc=(
         "Std of the noise on the scale rate (color-pf: 0.005). The contrast cue observes the extent, so "
         "the size may explore more."))
-    scale_search: float = param(0.0, ge=0, le=0.5, doc=(
+    scale_search: float = param(0.03, ge=0, le=0.5, doc=(
         "s > 0: after each tracked frame's estimate, its box at the sizes 1/(1+s), 1 and 1+s is compared with the "
         "structural cue's references by NCC (DSST-style, cues.scale_search), and the estimate and every particle "
         "move toward the vertex of the parabola through the three scores by scale_search_rate of it (in log "
         "scale). The colour and contrast cues observe the size weakly: without it a shrinking face keeps its first "
-        "size. 0 (default): the particles' scale alone. 0.03 with rate 0.25 on the tune split (docs/fusion-pf.md): "
-        "mean AUC 0.688 against 0.664 over its 213 runs, PETS people 0.422 against 0.357, re-acquired 74 against "
-        "76 of 90; but on the grey tune set re-acquired 52 against 59 of 123, so it is an option for now."))
+        "size. Skipped while the largest box is not inside the frame. 0: the particles' scale alone. 0.03 (default) "
+        "with rate 0.25, chosen with grey_histogram='both' on the tune data (docs/fusion-pf.md): tune split mean "
+        "AUC 0.684 against 0.664 over its 213 runs, PETS people 0.422 against 0.357; 8 seeds of the tune "
+        "reappearance scenes 0.658 against 0.630, re-acquired 365 against 345 of 568."))
     scale_search_rate: float = param(0.25, ge=0, le=1, doc=(
         "Fraction (in log scale) of the scale search's vertex applied per frame: at most (1+s)^rate, 0.75 % with "
         "s = 0.03 and this default, so noise in the three scores moves the size little."))
