@@ -29,7 +29,10 @@ loss test becomes ``fusion-pf``'s :class:`~pftrack.filtering.loss.FusedLoss` on 
 coefficient and the NCC score (:func:`fused_loss`). A structural term in the likelihood alone pulls the
 particles where the histogram scores lower, and the histogram's test alone then declared a deforming
 target lost (the grey copy of ``vot_bag``); the two cues must be weighed and tested together. The
-running reference is then refreshed on every confident frame.
+fused check keeps patches of the grey levels and of their self-quotient image, scores a box by the
+better of the two (``fusion-pf``'s ``grey_structure="both"``), refreshes the running references on
+every confident frame, and gives the box's size a search after each estimate (:meth:`StructureCheck.scale_factor`,
+``grey_scale_search``).
 """
 
 from __future__ import annotations
