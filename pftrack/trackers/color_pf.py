@@ -298,9 +298,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
             self._raw_check.init(self._raw, ell)
         self._drop_structure_check()
         if self._wants_grey_check():
-            self._structure_check = StructureCheck(LossDetector(
-                history_rate=p.history_rate, sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor,
-                learn_z=p.history_z), fused=p.grey_check == "fused", sigma=p.illumination_sigma)
+            self._structure_check = StructureCheck.for_params(p)
             self._structure_check.init(self._structure_frame(frame), ell)
             if self._structure_check.fused:
                 self._plain_loss, self.loss = self.loss, fused_loss(p)

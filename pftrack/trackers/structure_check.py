@@ -104,6 +104,13 @@ class StructureCheck:
         self.anchor_gate = float(anchor_gate)
         self._learned = 0  # confident frames learned since init (the reference is refreshed on every UPDATE_EVERY-th)
 
+    @classmethod
+    def for_params(cls, p) -> "StructureCheck":
+        """The check a colour PF's parameters ``p`` ask for (``grey_check``), its test with their history settings."""
+        return cls(LossDetector(history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
+                                sd_floor_background=p.score_sd_floor, learn_z=p.history_z),
+                   fused=p.grey_check == "fused", sigma=p.illumination_sigma)
+
     def init(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
         self.cue.init(frame, np.asarray(ellipse, dtype=np.float64).reshape(1, 4))
         self.detector.reset(1.0)
