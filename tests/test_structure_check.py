@@ -170,3 +170,16 @@ def test_grey_scale_search_follows_a_zooming_face_and_skips_boxes_beyond_the_bor
     assert check.scale_factor(small, (160.0, 120.0, 21.0, 21.0), 0.1) > 1.0
     assert check.scale_factor(small, (160.0, 120.0, 30.0, 30.0), 0.1) < 1.0
     assert check.scale_factor(small, (300.0, 120.0, 21.0, 21.0), 0.1) == 1.0
+
+
+def test_the_fused_check_uses_fusion_pf_defaults():
+    """The check's structural cue and fused test mirror fusion-pf's defaults (kept as constants: the check sits
+    below fusion-pf); a changed default there must be carried over here."""
+    from pftrack.trackers import structure_check as sc
+
+    p = pftrack.create_tracker("fusion-pf").params
+    assert (sc.TEMPLATE_PIXELS, sc.RATE, sc.ANCHOR_GATE) == (p.structure_pixels, p.structure_rate,
+                                                             p.structure_anchor_gate)
+    assert (sc.GAIN, sc.SCALE_RATE) == (p.structure_gain, p.scale_search_rate)
+    assert (sc.CUE_CLIP, sc.CUE_FLOOR, sc.ACQUIRE_Z, sc.ACQUIRE_MARGIN) == (p.loss_cue_clip, p.loss_cue_floor,
+                                                                           p.acquire_z, p.acquire_margin)

@@ -9,7 +9,16 @@ from ..filtering.dynamics import HX, HY, X, Y
 from ..filtering.particles import ParticleSet
 from ..filtering.seir import seir
 
-__all__ = ["ColorHooks"]
+__all__ = ["ColorHooks", "fused_supporters"]
+
+#: with fused cues, the search samples supporting a candidate are those within this log-likelihood of the best
+SUPPORT_LOG_MARGIN = 3.0
+
+
+def fused_supporters(log_lik: np.ndarray) -> np.ndarray:
+    """The search samples that look like the target when several cues are fused: those whose likelihood is within a
+    factor e^3 of the best one's (the colour threshold alone would veto a target that only the structure sees)."""
+    return log_lik >= np.max(log_lik) - SUPPORT_LOG_MARGIN
 
 
 class ColorHooks:
@@ -86,11 +95,10 @@ class ColorHooks:
     def _appearance_pass(self, rho: np.ndarray, threshold: float, log_lik: np.ndarray) -> np.ndarray:
         """Which search samples look like the target: the appearance condition ``rho > mu + 2 sigma`` (Eq. 15).
 
-        With the fused cues of ``grey_check="fused"``, as in ``fusion-pf``: the samples whose likelihood is within a
-        factor e^3 of the best one's (the colour threshold alone would veto a target the structure sees)."""
+        With the fused cues of ``grey_check="fused"``, as in ``fusion-pf``: :func:`fused_supporters`."""
         check = self._structure_check
         if check is not None and check.fused:
-            return log_lik >= np.max(log_lik) - 3.0
+            return fused_supporters(log_lik)
         return rho > threshold
 
     def _search_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray, feats) -> np.ndarray:

@@ -44,6 +44,7 @@ from ..filtering.dynamics import HX, HY, VX, VY
 from ..filtering.loss import FusedLoss
 from ..geometry import box_to_ellipse, ellipse_to_box
 from ..params import param
+from .color_hooks import fused_supporters
 from .color_pf import _ELL_COLS, ColorPF, ColorPFParams
 
 
@@ -353,9 +354,7 @@ class FusionPF(ColorPF):
     def _appearance_pass(self, rho, threshold, log_lik):
         if not self._fused:
             return rho > threshold
-        # with fused cues the colour threshold alone would veto a target that only the structure sees: the
-        # supporters are the samples whose fused likelihood is within a factor e^3 of the best one's
-        return log_lik >= np.max(log_lik) - 3.0
+        return fused_supporters(log_lik)
 
     def _search_proposals(self, frame):
         k = self.params.search_proposals

@@ -127,10 +127,8 @@ class StructureCheck:
         return ncc_score(self.cue.scores(frame, roi, e))
 
     def log_lik(self, frame: np.ndarray, roi, ellipses: np.ndarray) -> np.ndarray:
-        """The structural log-likelihood ``GAIN r`` of a batch of particles' ellipses (``roi`` covers them; a box
-        with no NCC scores as r = -1)."""
-        r = self.cue.scores(frame, roi, ellipses)
-        return GAIN * np.nan_to_num(r, nan=-1.0)
+        """The structural log-likelihood ``GAIN r`` of a batch of particles' ellipses (``roi`` covers them)."""
+        return GAIN * self.cue.scores(frame, roi, ellipses)
 
     def scale_factor(self, frame: np.ndarray, ellipse, step: float) -> float:
         """The factor the half-axes of ``ellipse`` move by toward the size whose patch best matches the references
