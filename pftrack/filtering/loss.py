@@ -155,6 +155,7 @@ class LossDetector:
         self.sd_b = self.app_sd = self.sd_floor_background
         self.miss = 0
         self.lost = False
+        self.frozen = False
         self.llr = _LOG_CLIP
 
     @property
@@ -205,7 +206,9 @@ class LossDetector:
 
     def learn(self, s: float, ok: bool) -> None:
         """Blend ``s`` into the target history when ``ok`` (exponential mean and variance); otherwise one
-        more frame unseen."""
+        more frame unseen.  Nothing changes while ``frozen`` (a candidate on probation)."""
+        if self.frozen:
+            return
         if ok:
             a = self.history_rate
             d = s - self.mu_t
@@ -233,6 +236,17 @@ class LossDetector:
             self.miss = 0
             return True
         return False
+
+    def would_acquire(self, s: float, log_prior: float = 0.0) -> tuple[bool, float]:
+        """:meth:`acquire`'s answer and ratio for a candidate (this frame counted unseen, as there), with no
+        change of state."""
+        self.unseen += 1
+        try:
+            llr = self.evaluate(s) + log_prior
+            ok = math.isfinite(s) and llr > self.reacquire_margin and (s - self.mu_t) / self.sd_t > -self.learn_z
+        finally:
+            self.unseen -= 1
+        return bool(ok), llr
 
 
 class RunningThreshold:
@@ -316,6 +330,7 @@ class FusedLoss:
             m.reset(initial_score, sd=sd)
         self.miss = 0
         self.lost = False
+        self.frozen = False
         self.llr = _LOG_CLIP
 
     @property
@@ -352,6 +367,8 @@ class FusedLoss:
         return float(min(max(llr, -_LOG_CLIP), _LOG_CLIP))
 
     def _learn(self, s: list[float]) -> None:
+        if self.frozen:
+            return
         confident = self.llr > self.reacquire_margin
         for m, v in zip(self.members, s):
             m.learn(v, confident and math.isfinite(v) and (v - m.mu_t) / m.sd_t > -m.learn_z and m.evaluate(v) >= 0.0)
@@ -365,12 +382,14 @@ class FusedLoss:
         self.lost = self.miss >= self.lost_frames
         return self.lost, confidence(self.llr)
 
-    def confident(self, s, *, veto_z: float = 0.0, margin: float | None = None) -> bool:
-        """The fused ratio is clearly the target's, and no cue vetoes it: a cue vetoes when its score is far
-        below its own history (``learn_z`` spreads) *and* its own ratio says background, or (``veto_z`` > 0)
-        when it is more than ``veto_z`` spreads below its history, whatever its ratio."""
+    def confident(self, s, *, veto_z: float = 0.0, margin: float | None = None, llr: float | None = None) -> bool:
+        """The fused ratio (``llr``, default the last one computed) is clearly the target's, and no cue vetoes
+        it: a cue vetoes when its score is far below its own history (``learn_z`` spreads) *and* its own ratio
+        says background, or (``veto_z`` > 0) when it is more than ``veto_z`` spreads below its history,
+        whatever its ratio."""
         s = self._vector(s)
-        if not any(math.isfinite(v) for v in s) or self.llr <= (self.reacquire_margin if margin is None else margin):
+        llr = self.llr if llr is None else llr
+        if not any(math.isfinite(v) for v in s) or llr <= (self.reacquire_margin if margin is None else margin):
             return False
         for m, v in zip(self.members, s):
             if math.isfinite(v):
@@ -393,3 +412,15 @@ class FusedLoss:
             self.miss = 0
             return True
         return False
+
+    def would_acquire(self, s, log_prior: float = 0.0) -> tuple[bool, float]:
+        """:meth:`acquire`'s answer and fused ratio for a candidate (this frame counted unseen, as there), with
+        no change of state."""
+        for m in self.members:
+            m.unseen += 1
+        try:
+            llr = self.evaluate(s) + log_prior
+            return self.confident(s, veto_z=self.acquire_z, margin=self.acquire_margin, llr=llr), llr
+        finally:
+            for m in self.members:
+                m.unseen -= 1

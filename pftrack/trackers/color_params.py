@@ -144,6 +144,16 @@ class ColorModelParams(Params):
         "confident, and the target was searched for, and re-acquired, at that shrunken size. 30 chosen on the "
         "tune split (docs/robustness.md): fusion-pf re-acquired 244 of 300 tune reappearances against 230 "
         "(10 seeds), color-pf 198 against 187; 15 and 45 re-acquired fewer."))
+    probation_llr: float = param(0.0, ge=0, le=50, doc=(
+        "Probation after a weak re-acquisition (pftrack.trackers.probation): an acquisition whose loss-test "
+        "ratio is below this starts a probation, during which the tracker follows the candidate without "
+        "learning from it (models and score histories frozen) while the search goes on beside it; a candidate "
+        "elsewhere that passes the acquisition test probation_margin above it takes over. Probation ends on the "
+        "first frame whose ratio reaches this, after probation_frames frames, or on a loss. 0: off. Likelihood "
+        "loss test only."))
+    probation_frames: int = param(30, ge=0, le=100_000, doc="Longest probation, in frames (see probation_llr).")
+    probation_margin: float = param(3.0, ge=0, le=50, doc=(
+        "Ratio by which a candidate found beside a track on probation must beat the followed one to take over."))
     reacquire_margin: float = param(1.0, ge=0, le=20, doc=(
         "Hysteresis of the loss test: LLR a candidate must exceed to end a loss (and, with the 'confident' "
         "gate, for the model to update). Larger: fewer false re-acquisitions on distractors, slower recovery."))

@@ -61,6 +61,7 @@ from .color_hooks import ColorHooks
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
 from .distractors import DistractorMemory
+from .probation import ProbationMixin
 from .structure_check import StructureCheck, fused_loss
 from .raw_check import RawGreyCheck, illumination_stages
 
@@ -70,7 +71,7 @@ Detector = Callable[[np.ndarray], Sequence]
 _ELL_COLS = np.array([X, Y, HX, HY])
 
 
-class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
+class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
     Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
@@ -272,6 +273,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
         self.ps = ParticleSet(states)
         self.estimate = self.ps._mean.copy()
         self.mode = "tracking"
+        self._end_probation()
         self.miss = 0
         self.loss.miss = 0
         self.loss.lost = False
@@ -392,7 +394,7 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
                 self.miss = 0
             lost_now, score = self.miss >= p.lost_frames or not ok, rho_e
             confident = self.miss == 0
-        confident = confident and not out  # no learning from a sliver
+        confident = confident and not out and not self._probation_left  # no learning from a sliver, or on probation
         if confident:
             self.cue.confirm(p.normalize_rate)
             if self._raw_check is not None:
@@ -446,6 +448,8 @@ class ColorParticleFilter(SearchMixin, ColorHooks, Tracker):
             if self._since_bg >= p.background_interval:
                 self.size = (float(est[HX]), float(est[HY]))
                 self._background_stats(frame, e_ell[0])
+        if self._probation_left and p.search and (switched := self._probation_step(frame, e_ell, lost_now)):
+            return switched
         if self.miss == 0:
             self.last_box = box
         self.last_score = rho_e

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -27,6 +28,23 @@ from ..geometry import Box, box_to_ellipse, ellipse_to_box, in_frame_fraction, v
 from .base import TrackState
 
 _ELL_COLS = np.array([X, Y, HX, HY])
+
+
+class SearchCandidates(NamedTuple):
+    """The samples of one search (states, ellipses, colour scores, pixel totals, log-likelihoods, the scored
+    region) and its best candidate: index, log prior, the samples near it, its loss-test scores."""
+
+    states: np.ndarray
+    ell: np.ndarray
+    rho: np.ndarray
+    tot: np.ndarray
+    loglik: np.ndarray
+    roi: tuple
+    best: int
+    lp: float
+    near: np.ndarray
+    s_best: np.ndarray
+    n_keep: int
 
 
 class SearchMixin:
@@ -322,8 +340,10 @@ class SearchMixin:
         return (np.concatenate([states, extra]), np.concatenate([ell, e_ell]), np.concatenate([rho, e_rho]),
                 np.concatenate([tot, e_tot]), np.concatenate([loglik, e_ll]), both, box)
 
-    def _search(self, frame: np.ndarray) -> TrackState:
-        """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
+    def _search_candidates(self, frame: np.ndarray, exclude: np.ndarray | None = None) -> SearchCandidates:
+        """One search layer (or two, ``search_refine``) over the frame and its best candidate.  ``exclude``: an
+        ellipse whose neighbourhood (two half-axes each way) is left out of the ranking, and look-alikes are not
+        followed (a search beside tracking, :mod:`.probation`)."""
         p = self.params
         n_s = self._n_search()
         hx, hy = self.size
@@ -373,21 +393,35 @@ class SearchMixin:
                                                                              prior, feats)
         self._search_states = states
         self._search_loglik = loglik
-        thr = self._threshold()
         rank = loglik if prior is None else loglik + prior
         rank = np.where(tot > 0, rank, -np.inf)
-        # look-alikes met earlier in this loss are followed and not chosen (distractor_frames)
-        known = self._distractors.follow(states[:, X:Y + 1], rank, self.frame_index, self._lost_at, self.size,
-                                         self._search_since)
-        if known.any() and not known.all():
-            rank = np.where(known, -np.inf, rank)
+        if exclude is not None:
+            ex, ey, ehx, ehy = (float(v) for v in exclude)
+            rank = np.where((np.abs(states[:, X] - ex) < 2 * ehx) & (np.abs(states[:, Y] - ey) < 2 * ehy), -np.inf,
+                            rank)
+        else:
+            # look-alikes met earlier in this loss are followed and not chosen (distractor_frames)
+            known = self._distractors.follow(states[:, X:Y + 1], rank, self.frame_index, self._lost_at, self.size,
+                                             self._search_since)
+            if known.any() and not known.all():
+                rank = np.where(known, -np.inf, rank)
         best = int(np.argmax(rank)) if np.any(tot > 0) else 0
         lp = 0.0 if prior is None else float(prior[best])
         # samples belonging to the best candidate: within one target size of it
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
+        s_best = self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1], roi)[0]
+        return SearchCandidates(states, ell, rho, tot, loglik, roi, best, lp, near, s_best, n_keep)
+
+    def _search(self, frame: np.ndarray) -> TrackState:
+        """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
+        p = self.params
+        self._end_probation()  # lost while on probation
+        c = self._search_candidates(frame)
+        states, ell, rho, tot, loglik, roi = c.states, c.ell, c.rho, c.tot, c.loglik, c.roi
+        best, lp, near, s_best, n_keep = c.best, c.lp, c.near, c.s_best, c.n_keep
+        thr = self._threshold()
         found = False
         conf = None
-        s_best = self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1], roi)[0]
         if p.search_method == "appearance":
             cluster = near & self._appearance_pass(rho, thr, loglik) & (tot > 0)
             if p.loss_test == "likelihood":
@@ -434,7 +468,9 @@ class SearchMixin:
                                        info={"mode": "acquired", "threshold": thr})
         info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr, "vetoed": vetoed}
         if found:
+            lost_at = self._lost_at
             self._start_tracking(states[cluster], loglik[cluster])
+            self._begin_probation(lost_at)
             est = self.estimate
             box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
             self.last_box = box

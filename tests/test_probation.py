@@ -1,0 +1,99 @@
+"""Probation after a weak re-acquisition (pftrack.trackers.probation) and the loss test's parts it uses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.filtering.loss import FusedLoss, LossDetector
+
+
+def _trained(det):
+    det.reset(1.0)
+    rng = np.random.default_rng(1)
+    det.set_background(rng.normal(0.3, 0.05, (200, 2)) if isinstance(det, FusedLoss) else rng.normal(0.3, 0.05, 200))
+    for _ in range(30):
+        det.step(np.array([0.92, 0.9]) if isinstance(det, FusedLoss) else 0.92)
+    return det
+
+
+def _histories(det):
+    members = det.members if isinstance(det, FusedLoss) else [det]
+    return [(m.mu_t, m.var_t, m.unseen) for m in members]
+
+
+@pytest.mark.parametrize("det", [LossDetector(lost_frames=3), FusedLoss(2, acquire_z=4.0, acquire_margin=2.0)])
+def test_frozen_histories_learn_nothing_and_reset_thaws_them(det):
+    _trained(det)
+    before = _histories(det)
+    det.frozen = True
+    for s in (0.95, 0.8, 0.2):  # confident, doubtful and absent scores alike
+        det.step(np.array([s, s]) if isinstance(det, FusedLoss) else s)
+    assert _histories(det) == before
+    det.frozen = False
+    det.step(np.array([0.95, 0.95]) if isinstance(det, FusedLoss) else 0.95)
+    assert _histories(det) != before
+    det.frozen = True
+    det.reset(1.0)
+    assert not det.frozen
+
+
+@pytest.mark.parametrize("det", [LossDetector(lost_frames=3), FusedLoss(2, acquire_z=4.0, acquire_margin=2.0)])
+@pytest.mark.parametrize("s, log_prior", [(0.9, 0.0), (0.9, -30.0), (0.6, 0.0), (0.3, 0.0), (float("nan"), 0.0)])
+def test_would_acquire_answers_as_acquire_without_changing_state(det, s, log_prior):
+    _trained(det)
+    score = np.array([s, s]) if isinstance(det, FusedLoss) else s
+    state = (_histories(det), det.llr, det.lost, det.miss)
+    ok, llr = det.would_acquire(score, log_prior)
+    assert (_histories(det), det.llr, det.lost, det.miss) == state
+    det.lost = True
+    assert det.acquire(score, log_prior) == ok
+    assert det.llr == pytest.approx(llr)
+
+
+def test_probation_is_off_by_default_and_only_for_weak_acquisitions():
+    t = pftrack.create_tracker("color-pf", seed=0)
+    assert t.params.probation_llr == 0.0
+    frame = np.full((120, 160, 3), 90, np.uint8)
+    frame[40:70, 50:80] = (30, 40, 200)
+    t.init(frame, (50, 40, 30, 30))
+    t.loss.llr = 2.0
+    t._begin_probation(None)
+    assert not t.on_probation and not t.loss.frozen
+    on = pftrack.create_tracker("color-pf", seed=0, probation_llr=6.0, probation_frames=4)
+    on.init(frame, (50, 40, 30, 30))
+    lost_at = (0, np.array([65.0, 55.0]), np.zeros(2))
+    on.loss.llr = 7.0  # a strong acquisition
+    on._begin_probation(lost_at)
+    assert not on.on_probation
+    on.loss.llr = 2.0  # a weak one: frozen, and the search beside it keeps the prior of the loss
+    on._begin_probation(lost_at)
+    assert on.on_probation and on.loss.frozen and on._lost_at is lost_at
+    # the first frame whose ratio reaches probation_llr ends it (the target is in view: the ratio is high)
+    on.update(frame)
+    assert not on.on_probation and not on.loss.frozen
+
+
+def test_on_probation_nothing_is_learned_and_it_ends_after_probation_frames():
+    rng = np.random.default_rng(0)
+    frames = []
+    for _ in range(6):
+        f = np.clip(rng.normal(90, 20, (120, 160, 3)), 0, 255).astype(np.uint8)
+        f[40:70, 50:80] = np.clip(rng.normal((30, 40, 200), 25, (30, 30, 3)), 0, 255).astype(np.uint8)
+        frames.append(f)
+    # a ratio no frame reaches (the ratio is clipped at 30): only probation_frames ends the probation
+    t = pftrack.create_tracker("color-pf", seed=0, probation_llr=50.0, probation_frames=4)
+    t.init(frames[0], (50, 40, 30, 30))
+    t.loss.llr = 2.0
+    t._begin_probation(None)
+    q, hist = t.q.copy(), (t.loss.mu_t, t.loss.var_t)
+    for f in frames[1:4]:
+        st = t.update(f)
+        assert t.on_probation and not st.lost
+    np.testing.assert_array_equal(t.q, q)
+    assert (t.loss.mu_t, t.loss.var_t) == hist
+    t.update(frames[4])
+    assert not t.on_probation
+    t.update(frames[5])
+    assert not np.array_equal(t.q, q)  # learning resumed
