@@ -63,7 +63,7 @@ from .color_search import SearchMixin
 from .distractors import DistractorMemory
 from .probation import ProbationMixin
 from .structure_check import StructureCheck, fused_loss
-from .raw_check import RawGreyCheck, illumination_stages
+from .raw_check import RawGreyCheck
 
 __all__ = ["ColorModelParams", "ColorPF", "ColorPFParams", "ColorParticleFilter"]
 
@@ -233,32 +233,6 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
             self._seen_levels = channel_levels(frame, stride=16)  # the light while the target is seen
 
     # ------------------------------------------------------------------ input
-    def _transform_input(self, frame: np.ndarray, *, first: bool) -> np.ndarray:
-        """Grey input with ``illumination="quotient"``: the self-quotient image (decided on the first frame)."""
-        if first:
-            self._quotient, self._raw_check = illumination_stages(self.params, frame)
-        if self._quotient is None:
-            return frame
-        self._raw = frame
-        if self._raw_check is not None:
-            self._raw_check.new_frame()
-        return self._quotient(frame)
-
-    def _wants_grey_check(self) -> bool:
-        """Does this input get the structural check at re-acquisition (``grey_check`` on grey input)?"""
-        p = self.params
-        return p.grey_check != "off" and p.loss_test == "likelihood" and self.cue.color_space == "gray"
-
-    def _drop_structure_check(self) -> None:
-        """No structural check (yet): the histogram's own loss test again if ``grey_check="fused"`` replaced it."""
-        self._structure_check = None
-        if self._plain_loss is not None:
-            self.loss, self._plain_loss = self._plain_loss, None
-
-    def _structure_frame(self, frame: np.ndarray) -> np.ndarray:
-        """The frame the structural check sees: the untransformed one under the self-quotient illumination."""
-        return self._raw if self._quotient is not None and self._raw is not None else frame
-
     # ------------------------------------------------------------------ init
     def _start_tracking(self, states: np.ndarray, log_lik: np.ndarray | None = None) -> None:
         n = self.params.n_particles
