@@ -52,9 +52,11 @@ def test_would_acquire_answers_as_acquire_without_changing_state(det, s, log_pri
     assert det.llr == pytest.approx(llr)
 
 
-def test_probation_is_off_by_default_and_only_for_weak_acquisitions():
+def test_probation_defaults_and_only_for_weak_acquisitions():
+    assert pftrack.create_tracker("fusion-pf").params.probation_llr == 15.0
+    for name in ("color-pf", "local-motion-pf"):  # off there
+        assert pftrack.create_tracker(name).params.probation_llr == 0.0
     t = pftrack.create_tracker("color-pf", seed=0)
-    assert t.params.probation_llr == 0.0
     frame = np.full((120, 160, 3), 90, np.uint8)
     frame[40:70, 50:80] = (30, 40, 200)
     t.init(frame, (50, 40, 30, 30))
@@ -83,10 +85,13 @@ def test_on_probation_nothing_is_learned_and_it_ends_after_probation_frames():
         f[40:70, 50:80] = np.clip(rng.normal((30, 40, 200), 25, (30, 30, 3)), 0, 255).astype(np.uint8)
         frames.append(f)
     # a ratio no frame reaches (the ratio is clipped at 30): only probation_frames ends the probation
-    t = pftrack.create_tracker("color-pf", seed=0, probation_llr=50.0, probation_frames=4)
+    t = pftrack.create_tracker("color-pf", seed=0, probation_llr=50.0, probation_frames=4, probation_interval=2)
     t.init(frames[0], (50, 40, 30, 30))
     t.loss.llr = 2.0
     t._begin_probation(None)
+    searches = []
+    search = t._search_candidates
+    t._search_candidates = lambda frame, exclude=None: searches.append(exclude) or search(frame, exclude)
     q, hist = t.q.copy(), (t.loss.mu_t, t.loss.var_t)
     for f in frames[1:4]:
         st = t.update(f)
@@ -95,5 +100,22 @@ def test_on_probation_nothing_is_learned_and_it_ends_after_probation_frames():
     assert (t.loss.mu_t, t.loss.var_t) == hist
     t.update(frames[4])
     assert not t.on_probation
+    assert len(searches) == 1 and searches[0] is not None  # beside the track, on every 2nd probation frame
     t.update(frames[5])
     assert not np.array_equal(t.q, q)  # learning resumed
+
+
+@pytest.mark.parametrize("kind, seed", [("vanish", 315), ("teleport", 301), ("teleport", 317)])
+def test_fusion_pf_reacquires_after_a_weak_wrong_acquisition_with_probation(kind, seed):
+    """Fresh scenes (seeds of neither split, picked from a run over seeds 300-319 as the scenes where probation makes
+    the difference for fusion-pf): without probation the target is not re-acquired within 15 frames of coming
+    back; with it (the default) it is."""
+    from pftrack.synth import teleport_scene, vanish_scene
+
+    from .conftest import lost_flag_run
+
+    spec = {"vanish": vanish_scene, "teleport": teleport_scene}[kind](seed)
+    off = lost_flag_run(spec, "fusion-pf", probation_llr=0.0)
+    on = lost_flag_run(spec, "fusion-pf")
+    assert off.reappearances == on.reappearances == 1
+    assert off.reacquired == 0 and on.reacquired == 1

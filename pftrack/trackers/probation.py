@@ -14,8 +14,8 @@ most ``probation_frames`` frames, during which
 * the tracker follows the candidate and reports it (the flag is down), but learns nothing from it: neither
   the appearance models nor the score histories move, so the candidate's ratio keeps measuring it against the
   target as last seen;
-* the search goes on beside the tracking (its samples kept from frame to frame, the candidate's neighbourhood
-  left out), and a candidate elsewhere that passes the acquisition test with a ratio ``probation_margin``
+* the search goes on beside the tracking, on every ``probation_interval``-th frame (its samples kept from one
+  search to the next, the candidate's neighbourhood left out), and a candidate elsewhere that passes the acquisition test with a ratio ``probation_margin``
   above the followed one takes over (its own probation starting if it is weak too);
 * probation ends, and learning resumes, on the first frame whose ratio reaches ``probation_llr``, or after
   ``probation_frames`` frames; a loss ends it too, and the search resumes as before.
@@ -69,6 +69,8 @@ class ProbationMixin:
         if self._probation_left <= 0:
             self._end_probation()
             return None
+        if (p.probation_frames - self._probation_left) % p.probation_interval:
+            return None  # the search beside the track runs on every probation_interval-th frame
         # the followed candidate's posterior odds: its ratio and the search's prior at its position
         prior = self._position_log_prior(self.estimate.reshape(1, -1))
         tracked = float(self.loss.llr) + (0.0 if prior is None else float(prior[0]))
