@@ -154,9 +154,6 @@ class ColorModelParams(Params):
     probation_frames: int = param(30, ge=0, le=100_000, doc="Longest probation, in frames (see probation_llr).")
     probation_interval: int = param(1, ge=1, le=1000, doc=(
         "On probation, the search beside the track runs on every this many frames (its cost: one search each)."))
-    probation_models: bool = param(False, doc=(
-        "On probation, the appearance models (and the confident size and track) still learn; only the loss test's "
-        "score histories are frozen. False: nothing learns."))
     probation_margin: float = param(3.0, ge=0, le=50, doc=(
         "Ratio by which a candidate found beside a track on probation must beat the followed one to take over."))
     reacquire_margin: float = param(1.0, ge=0, le=20, doc=(

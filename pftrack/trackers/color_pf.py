@@ -368,8 +368,7 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
                 self.miss = 0
             lost_now, score = self.miss >= p.lost_frames or not ok, rho_e
             confident = self.miss == 0
-        # no learning from a sliver, or from a candidate on probation (unless its models may learn)
-        confident = confident and not out and (not self._probation_left or p.probation_models)
+        confident = confident and not out and not self._probation_left  # no learning from a sliver, or on probation
         if confident:
             self.cue.confirm(p.normalize_rate)
             if self._raw_check is not None:
