@@ -169,19 +169,19 @@ class FusionPFParams(ColorPFParams):
         "sequences 0.006 AUC; relit_colour above does the same for the one candidate the structure backs."))
     probation_llr: float = param(15.0, ge=0, le=50, doc=(
         "See ColorModelParams.probation_llr (0, off, there and for color-pf). 15 for fusion-pf, with probation_frames "
-        "60, chosen on the tune data (docs/robustness.md, 'Probation'): on the 568 tune reappearances (8 seeds) "
-        "re-acquired 416 against 365 (grey scenes 273 against 223 of 408, colour 143 against 142 of 160), mean AUC "
-        "0.687 against 0.658, lost recall 0.805 against 0.789; 4, 6, 10, 20 and 30 gave 375-409. Tune split: mean "
-        "AUC 0.689 against 0.684, re-acquired 75 / 90 against 70 (both with the search beside the track on every "
-        "frame; probation_interval)."))
+        "60, chosen on the tune data (docs/robustness.md, 'fusion-pf doubts a weak re-acquisition'): on the 568 tune "
+        "reappearances (8 seeds) re-acquired 402 against 365 with the defaults (416 with the search beside the track "
+        "on every frame: grey scenes 273 against 223 of 408, colour 143 against 142 of 160), mean AUC 0.681 against "
+        "0.658, lost recall 0.805 against 0.789; 4, 6, 10, 20 and 30 gave 375-409 (30 frames, every frame). Tune "
+        "split: mean AUC 0.687 against 0.684, re-acquired 73 / 90 against 70."))
     probation_frames: int = param(60, ge=0, le=100_000, doc=(
-        "See ColorModelParams.probation_frames. 60 (tune reappearances: 15 and 30 re-acquired 379 and 407, 120 and "
-        "250 the same 416)."))
+        "See ColorModelParams.probation_frames. 60 (tune reappearances, the search beside the track on every frame: "
+        "15 and 30 re-acquired 379 and 407, 60 416, 120 and 250 the same 416)."))
     probation_interval: int = param(4, ge=1, le=1000, doc=(
         "See ColorModelParams.probation_interval. 4 for fusion-pf: on the tune reappearances 402 re-acquired "
-        "against 416 (every frame) and 407 (every 2nd), at a fifth of the cost: on otb_dragonbaby, whose target is "
-        "lost and found again often, 1786 update fps against 1070 (every frame) and 2237 without probation (one "
-        "worker)."))
+        "against 416 (every frame) and 407 (every 2nd), at about a quarter of the cost: on otb_dragonbaby, whose "
+        "target is lost and found again often, 1786 update fps against 1070 (every frame) and 2237 without "
+        "probation (one worker)."))
     search_prior: float = param(0.05, ge=0, le=1, doc=(
         "Re-acquisition with a position prior (color-pf: 0, off): a candidate far from the constant-velocity "
         "prediction needs e^3 more evidence (see ColorModelParams.search_prior). Chosen on the tune split "
