@@ -95,14 +95,14 @@ def test_on_probation_nothing_is_learned_and_it_ends_after_probation_frames():
     q, hist = t.q.copy(), (t.loss.mu_t, t.loss.var_t)
     for f in frames[1:4]:
         st = t.update(f)
-        assert t.on_probation and not st.lost
+        assert t.on_probation and not st.lost and st.info["probation"]
     np.testing.assert_array_equal(t.q, q)
     assert (t.loss.mu_t, t.loss.var_t) == hist
     t.update(frames[4])
     assert not t.on_probation
     assert len(searches) == 1 and searches[0] is not None  # beside the track, on every 2nd probation frame
-    t.update(frames[5])
-    assert not np.array_equal(t.q, q)  # learning resumed
+    st = t.update(frames[5])
+    assert not np.array_equal(t.q, q) and "probation" not in st.info  # learning resumed
 
 
 @pytest.mark.parametrize("kind, seed", [("vanish", 315), ("teleport", 301), ("teleport", 317)])

@@ -348,6 +348,8 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
         thr = self._threshold()
         n_pass = int(np.count_nonzero(rho > thr))
         info = {"mode": "tracking", "n_pass": n_pass, "threshold": thr, "rho": rho_e}
+        if self._probation_left:
+            info["probation"] = True  # following a weak acquisition without learning from it (.probation)
         # a target leaving the view still matches on its last visible sliver: out of view, it is reported absent
         out = p.min_in_frame > 0 and in_frame_fraction(box, fw, fh) < p.min_in_frame
         if out:

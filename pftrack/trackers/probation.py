@@ -21,7 +21,7 @@ most ``probation_frames`` frames, during which
 * probation ends, and learning resumes, on the first frame whose ratio reaches ``probation_llr``, or after
   ``probation_frames`` frames; a loss ends it too (at the next search), and the search resumes as before.
 
-On by default for ``fusion-pf`` only (``FusionPFParams``): on ``color-pf`` it made no measurable difference.
+A tracked frame on probation says so in ``state.info["probation"]``.  On by default for ``fusion-pf`` only (``FusionPFParams``): on ``color-pf`` it made no measurable difference.
 """
 
 from __future__ import annotations
