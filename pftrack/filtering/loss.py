@@ -218,12 +218,13 @@ class LossDetector:
         else:
             self.unseen += 1
 
-    def confident(self, s: float) -> bool:
-        """Is ``s`` clearly the target's (``LLR > reacquire_margin``) and consistent with its history?
+    def confident(self, s: float, *, llr: float | None = None) -> bool:
+        """Is ``s`` clearly the target's (its ratio ``llr``, default the last one computed, above
+        ``reacquire_margin``) and consistent with its history?
 
         The same condition gates the model update of the trackers, so the update and
         the loss test never disagree."""
-        return (math.isfinite(s) and self.llr > self.reacquire_margin
+        return (math.isfinite(s) and (self.llr if llr is None else llr) > self.reacquire_margin
                 and (s - self.mu_t) / self.sd_t > -self.learn_z)
 
     def acquire(self, s: float, log_prior: float = 0.0) -> bool:
@@ -243,10 +244,9 @@ class LossDetector:
         self.unseen += 1
         try:
             llr = self.evaluate(s) + log_prior
-            ok = math.isfinite(s) and llr > self.reacquire_margin and (s - self.mu_t) / self.sd_t > -self.learn_z
+            return self.confident(s, llr=llr), llr
         finally:
             self.unseen -= 1
-        return bool(ok), llr
 
 
 class RunningThreshold:

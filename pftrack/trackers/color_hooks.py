@@ -55,8 +55,8 @@ class ColorHooks:
         ``grey_check="fused"`` on grey input, else none).
 
         ``feats`` is the quantised region ``roi`` (shared with the colour cue)."""
-        check = self._structure_check
-        if check is not None and check.fused:
+        check = self._fused_check
+        if check is not None:
             return log_lik + check.log_lik(self._structure_frame(frame), roi, self._ellipses(states))
         return log_lik
 
@@ -88,8 +88,8 @@ class ColorHooks:
 
         A subclass with further cues returns ``(M, C)`` scores in [0, 1] for a
         :class:`~pftrack.filtering.loss.FusedLoss`, as ``grey_check="fused"`` does on grey input."""
-        check = self._structure_check
-        if check is not None and check.fused:
+        check = self._fused_check
+        if check is not None:
             return check.loss_scores(self._structure_frame(frame), roi, ellipses, rho)
         return rho
 
@@ -97,8 +97,7 @@ class ColorHooks:
         """Which search samples look like the target: the appearance condition ``rho > mu + 2 sigma`` (Eq. 15).
 
         With the fused cues of ``grey_check="fused"``, as in ``fusion-pf``: :func:`fused_supporters`."""
-        check = self._structure_check
-        if check is not None and check.fused:
+        if self._fused_check is not None:
             return fused_supporters(log_lik)
         return rho > threshold
 
@@ -112,19 +111,28 @@ class ColorHooks:
     def _after_estimate(self, frame: np.ndarray, estimate: np.ndarray) -> None:
         """Called with the new mean state after each tracked frame (default: the size search of
         ``grey_scale_search`` with the structural cue of ``grey_check="fused"`` on grey input)."""
-        check = self._structure_check
+        check = self._fused_check
         step = self.params.grey_scale_search
-        if step > 0 and check is not None and check.fused:
-            k = check.scale_factor(self._structure_frame(frame), estimate[[X, Y, HX, HY]], step)
-            if k != 1.0:
-                estimate[HX] *= k
-                estimate[HY] *= k
-                self.ps.scale_columns(HX, HY + 1, k)
+        if step > 0 and check is not None:
+            self._scale_size(estimate, check.scale_factor(self._structure_frame(frame), estimate[[X, Y, HX, HY]], step))
+
+    def _scale_size(self, estimate: np.ndarray, k: float) -> None:
+        """Multiply the half-axes of the estimate and of every particle by ``k`` (in place; a size search's step)."""
+        if k != 1.0:
+            estimate[HX] *= k
+            estimate[HY] *= k
+            self.ps.scale_columns(HX, HY + 1, k)
 
     def _on_frame(self, frame: np.ndarray) -> None:
         """Called at the end of every update (tracking or searching)."""
 
     # ------------------------------------------------------------------ grey input
+    @property
+    def _fused_check(self):
+        """The structural check of ``grey_check="fused"`` when it is on (grey input), else None."""
+        check = self._structure_check
+        return check if check is not None and check.fused else None
+
     def _transform_input(self, frame: np.ndarray, *, first: bool) -> np.ndarray:
         """Grey input with ``illumination="quotient"``: the self-quotient image (decided on the first frame)."""
         if first:

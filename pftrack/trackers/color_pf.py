@@ -424,7 +424,7 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
             if self._since_bg >= p.background_interval:
                 self.size = (float(est[HX]), float(est[HY]))
                 self._background_stats(frame, e_ell[0])
-        if self._probation_left and p.search and (switched := self._probation_step(frame, e_ell, lost_now)):
+        if self._probation_left and p.search and (switched := self._probation_step(frame, e_ell)):
             return switched
         if self.miss == 0:
             self.last_box = box

@@ -397,11 +397,8 @@ class FusionPF(ColorPF):
         """``scale_search``: move the estimate's and the particles' size (in place) toward the size whose grey
         patch best matches the structural references."""
         p = self.params
-        k = size_factor(self.structure, frame, estimate[_ELL_COLS], p.scale_search, p.scale_search_rate)
-        if k != 1.0:
-            estimate[HX] *= k
-            estimate[HY] *= k
-            self.ps.scale_columns(HX, HY + 1, k)
+        self._scale_size(estimate, size_factor(self.structure, frame, estimate[_ELL_COLS], p.scale_search,
+                                               p.scale_search_rate))
 
     def _update_models(self, frame, estimate, feats, rho_e):
         p = self.params

@@ -21,7 +21,8 @@ most ``probation_frames`` frames, during which
 * probation ends, and learning resumes, on the first frame whose ratio reaches ``probation_llr``, or after
   ``probation_frames`` frames; a loss ends it too (at the next search), and the search resumes as before.
 
-A tracked frame on probation says so in ``state.info["probation"]``.  On by default for ``fusion-pf`` only (``FusionPFParams``): on ``color-pf`` it made no measurable difference.
+A tracked frame on probation says so in ``state.info["probation"]``.  On by default for ``fusion-pf`` only
+(``FusionPFParams``): on ``color-pf`` it made no measurable difference.
 """
 
 from __future__ import annotations
@@ -61,11 +62,11 @@ class ProbationMixin:
         self._probation_left = 0
         self.loss.frozen = False
 
-    def _probation_step(self, frame: np.ndarray, e_ell: np.ndarray, lost: bool) -> TrackState | None:
-        """After a tracked frame on probation: end it, or search beside the track and switch to a clearly
-        better candidate (returns its state), or go on (None)."""
+    def _probation_step(self, frame: np.ndarray, e_ell: np.ndarray) -> TrackState | None:
+        """After a tracked frame on probation that did not end in a loss (a loss ends it in ``_search``): end it,
+        or search beside the track and switch to a clearly better candidate (returns its state), or go on (None)."""
         p = self.params
-        if lost or self.loss.llr >= p.probation_llr:  # (a loss with the search on ends it in _search)
+        if self.loss.llr >= p.probation_llr:
             self._end_probation()
             return None
         self._probation_left -= 1
