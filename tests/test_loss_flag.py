@@ -340,8 +340,8 @@ def test_a_target_that_left_the_view_is_not_replaced_by_its_twin_inside(seed):
     frames = scene.frames()
     gt = scene.groundtruth()
     runs = {}
-    for border in (0.0, 1.0):
-        t = pftrack.create_tracker("color-pf", seed=seed, reenter_border=border)
+    for border in (0.0, 1.0):  # the rule alone: the still twin is also the scene's (static_ncc)
+        t = pftrack.create_tracker("color-pf", seed=seed, reenter_border=border, static_ncc=0.0)
         t.init(frames[0], tuple(gt[0]))
         runs[border] = [t.update(f) for f in frames[1:]]
     gone = [s for k, s in enumerate(runs[1.0], start=1) if k >= 30]  # the target is out of view from frame 27

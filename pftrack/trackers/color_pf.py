@@ -62,6 +62,7 @@ from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
 from .distractors import DistractorMemory
 from .probation import ProbationMixin
+from .static_lookalikes import SceneReference, SceneTestMixin
 from .structure_check import StructureCheck, fused_loss
 from .raw_check import RawGreyCheck
 
@@ -71,7 +72,7 @@ Detector = Callable[[np.ndarray], Sequence]
 _ELL_COLS = np.array([X, Y, HX, HY])
 
 
-class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
+class ColorParticleFilter(SearchMixin, ProbationMixin, SceneTestMixin, ColorHooks, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
     Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
@@ -104,6 +105,7 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
         self._plain_loss: LossDetector | None = None  # the histogram's test while grey_check="fused" replaces it
         self._raw: np.ndarray | None = None  # the untransformed frame
         self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames)  # look-alikes met during a loss
+        self._scene = SceneReference(p.static_ncc)  # a confident frame: the scene's look-alikes (static_ncc)
         warmup()
         self._reset()
 
@@ -127,6 +129,7 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
         self._confident_motion = None  # (frame index, position, velocity) when last confident
         self._lost_at = None  # the same, for the current loss (search prediction)
         self._distractors.clear()
+        self._scene.clear()
         self._confident_track: deque = deque(maxlen=6)  # (frame index, x, y) of the last confident estimates
         self._exit_velocity = (0.0, 0.0)  # their mean displacement per frame when the loss was declared
         self._seen_levels: np.ndarray | None = None  # channel levels while the target was seen (relit_search)
@@ -385,6 +388,7 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, ColorHooks, Tracker):
                     sizes.popleft()
             self._confident_motion = (self.frame_index, est[[X, Y]].copy(), est[[VX, VY]].copy())
             self._confident_track.append((self.frame_index, float(est[X]), float(est[Y])))
+            self._keep_scene(frame, box)
         if p.search and lost_now:
             # search at the size the target had when last seen clearly (a target that is leaving the
             # frame or being covered shrinks the estimate on its way out)

@@ -405,7 +405,7 @@ class SearchMixin:
                                              self._search_since)
             if known.any() and not known.all():
                 rank = np.where(known, -np.inf, rank)
-        best = int(np.argmax(rank)) if np.any(tot > 0) else 0
+        best = self._skip_scene(frame, ell, rank, int(np.argmax(rank))) if np.any(tot > 0) else 0
         lp = 0.0 if prior is None else float(prior[best])
         # samples belonging to the best candidate: within one target size of it
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)

@@ -1,0 +1,139 @@
+"""Look-alikes that are part of the scene: a background test for the colour trackers' search.
+
+Most of ``fusion-pf``'s missed reappearances on the tune scenes (docs/robustness.md, "The search passes over
+what was there before") were not moving distractors: the search had taken a piece of the *scene* that looks
+like the target: an occluder's edge with the target's two grey levels, a patch of textured clutter. It then
+followed it, motionless, while the target came back elsewhere. Such a look-alike was in view, unchanged, while
+the target was still tracked somewhere else; the target coming back was not there then. With a still camera,
+a reference frame taken while the target was tracked tells the two apart without any appearance model: the
+candidate's grey patch now is compared, by normalised correlation (insensitive to a change of gain and
+offset), with the same place in the reference.
+
+* While the target is tracked confidently, :class:`SceneReference` keeps the grey frame of every
+  ``REFRESH``-th such frame, with the target's box on it.
+* The search tests its best candidates before choosing one: a candidate whose patch is found again, within
+  ``SHIFT`` px, in the reference at correlation ``static_ncc`` or more is the scene, and the next best sample
+  is taken (up to ``TRIES`` candidates a frame). Nothing is remembered: a target that passes over such a
+  place later is tested afresh there.
+* The test abstains (the candidate is kept) where the reference cannot answer: a candidate overlapping the
+  target's box on the reference, a flat patch, a patch at the frame's edge. A moving camera makes every patch
+  differ from the reference, so the test then abstains in effect.
+
+The correlation is pure functions (:func:`scene_correlation`, :func:`overlaps`); the class holds the reference.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from ..cues.lk import gray_of
+from ..geometry import ellipse_to_box
+
+#: A reference is taken on every this many confident frames (its cost, a grey conversion, spread over them).
+REFRESH = 10
+
+#: The candidate's patch is looked for this many pixels around its place in the reference (jitter, rounding).
+SHIFT = 2
+
+#: At most this many candidates a search frame are tested.
+TRIES = 3
+
+#: A patch whose grey levels vary less than this (standard deviation) is flat: the correlation says nothing.
+FLAT_SD = 2.0
+
+#: A candidate box overlapping the target's reference box by more than this fraction of its area: abstain.
+OVERLAP = 0.1
+
+
+def overlaps(box, ref_box, fraction: float = OVERLAP) -> bool:
+    """Does ``box`` (x, y, w, h) cover ``ref_box`` by more than ``fraction`` of its own area?"""
+    x, y, w, h = (float(v) for v in box)
+    rx, ry, rw, rh = (float(v) for v in ref_box)
+    iw = min(x + w, rx + rw) - max(x, rx)
+    ih = min(y + h, ry + rh) - max(y, ry)
+    return iw > 0 and ih > 0 and iw * ih > fraction * max(w * h, 1e-9)
+
+
+def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = SHIFT) -> float:
+    """The best normalised correlation of ``gray``'s patch under ``box`` (x, y, w, h, clipped to the frame)
+    with ``ref_gray`` within ``shift`` px of the same place; NaN when the patch is flat, smaller than 4 x 4 px,
+    or has no room to shift within the frame."""
+    h, w = gray.shape[:2]
+    bx, by, bw, bh = (float(v) for v in box)
+    x0, y0 = max(int(round(bx)), shift), max(int(round(by)), shift)
+    x1, y1 = min(int(round(bx + bw)), w - shift), min(int(round(by + bh)), h - shift)
+    if x1 - x0 < 4 or y1 - y0 < 4:
+        return float("nan")
+    patch = gray[y0:y1, x0:x1].astype(np.float32)
+    if float(patch.std()) < FLAT_SD:
+        return float("nan")
+    area = ref_gray[y0 - shift:y1 + shift, x0 - shift:x1 + shift].astype(np.float32)
+    return float(cv2.matchTemplate(area, patch, cv2.TM_CCOEFF_NORMED).max())
+
+
+class SceneReference:
+    """The grey frame of a recent confident frame and the target's box on it; :meth:`is_scene` tests a
+    candidate against it.  ``threshold`` <= 0: off (nothing is kept, nothing is the scene)."""
+
+    __slots__ = ("box", "frame_index", "gray", "threshold")
+
+    def __init__(self, threshold: float):
+        self.threshold = float(threshold)
+        self.clear()
+
+    def clear(self) -> None:
+        self.gray: np.ndarray | None = None
+        self.box = None
+        self.frame_index = -REFRESH
+
+    def refresh(self, frame: np.ndarray, box, frame_index: int) -> None:
+        """A confident frame: keep it (grey) with the target's ``box`` when ``REFRESH`` frames have passed."""
+        if self.threshold > 0 and frame_index - self.frame_index >= REFRESH:
+            g = gray_of(frame)
+            self.gray = g.copy() if g is frame or g.base is not None else g
+            self.box = tuple(float(v) for v in box)
+            self.frame_index = frame_index
+
+    def is_scene(self, frame: np.ndarray, box) -> bool:
+        """Was the candidate under ``box`` (x, y, w, h) already in view, unchanged, on the reference frame,
+        away from the target?"""
+        if self.gray is None or self.gray.shape[:2] != frame.shape[:2] or overlaps(box, self.box):
+            return False
+        bx, by, bw, bh = (float(v) for v in box)
+        h, w = frame.shape[:2]
+        x0, y0 = max(int(bx) - SHIFT - 1, 0), max(int(by) - SHIFT - 1, 0)
+        x1, y1 = min(int(bx + bw) + SHIFT + 2, w), min(int(by + bh) + SHIFT + 2, h)
+        if x1 - x0 < 4 or y1 - y0 < 4:
+            return False
+        sub = gray_of(np.ascontiguousarray(frame[y0:y1, x0:x1]))
+        r = scene_correlation(sub, self.gray[y0:y1, x0:x1], (bx - x0, by - y0, bw, bh))
+        return bool(r >= self.threshold)
+
+
+class SceneTestMixin:
+    """The background test in the search of :class:`pftrack.trackers.color_pf.ColorParticleFilter`
+    (``static_ncc``): the reference is kept on confident frames, and the search's best candidates are tested."""
+
+    _scene: SceneReference
+
+    def _keep_scene(self, frame: np.ndarray, box) -> None:
+        """A confident frame with the target at ``box``."""
+        self._scene.refresh(self._structure_frame(frame), box, self.frame_index)
+
+    def _skip_scene(self, frame: np.ndarray, ell: np.ndarray, rank: np.ndarray, best: int) -> int:
+        """The best-ranked sample that is not the scene: up to ``TRIES`` candidates are tested in rank order, and
+        the samples near one found to be the scene (within two half-axes of it each way) leave the ranking.
+        ``ell``: the samples' ellipses; ``rank`` is changed in place."""
+        if self._scene.gray is None:
+            return best
+        view = self._structure_frame(frame)
+        for _ in range(TRIES):
+            if not np.isfinite(rank[best]) or not self._scene.is_scene(view, ellipse_to_box(ell[best])):
+                return best
+            x, y, hx, hy = ell[best]
+            rank[(np.abs(ell[:, 0] - x) < 2 * hx) & (np.abs(ell[:, 1] - y) < 2 * hy)] = -np.inf
+            if not np.isfinite(rank).any():
+                return best
+            best = int(np.argmax(rank))
+        return best
