@@ -107,3 +107,15 @@ def test_the_target_is_reacquired_where_a_piece_of_the_scene_was_taken_without_t
     off = lost_flag_run(spec, tracker, static_ncc=0.0, **params)
     assert off.reappearances == on.reappearances == 1
     assert off.reacquired == 0 and on.reacquired == 1
+
+
+def test_a_search_frame_without_a_candidate_to_test_still_counts_unseen():
+    from pftrack.filtering.loss import FusedLoss, LossDetector
+
+    det = LossDetector()
+    sd = det.sd_t
+    det.unseen_frame()
+    assert det.unseen == 1 and det.sd_t > sd
+    fused = FusedLoss(2)
+    fused.unseen_frame()
+    assert [m.unseen for m in fused.members] == [1, 1]

@@ -238,6 +238,10 @@ class LossDetector:
             return True
         return False
 
+    def unseen_frame(self) -> None:
+        """A search frame with no candidate to test: one more frame unseen, as :meth:`acquire` counts it."""
+        self.unseen += 1
+
     def would_acquire(self, s: float, log_prior: float = 0.0) -> tuple[bool, float]:
         """:meth:`acquire`'s answer and ratio for a candidate (this frame counted unseen, as there), with no
         change of state."""
@@ -412,6 +416,12 @@ class FusedLoss:
             self.miss = 0
             return True
         return False
+
+    def unseen_frame(self) -> None:
+        """A search frame with no candidate to test: one more frame unseen for every cue, as :meth:`acquire`
+        counts it."""
+        for m in self.members:
+            m.unseen += 1
 
     def would_acquire(self, s, log_prior: float = 0.0) -> tuple[bool, float]:
         """:meth:`acquire`'s answer and fused ratio for a candidate (this frame counted unseen, as there), with

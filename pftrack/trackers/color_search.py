@@ -427,8 +427,10 @@ class SearchMixin:
             if p.loss_test == "likelihood":
                 # the best candidate must look like the target's score history (hysteresis); that test is
                 # stricter than the count of passing samples, which then only needs a few supporters
-                found = cluster.sum() >= min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1) and \
-                    self.loss.acquire(s_best, lp)
+                if cluster.sum() >= min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1):
+                    found = self.loss.acquire(s_best, lp)
+                else:  # no candidate to test: the frame still counts unseen (the histories' spread grows with it)
+                    self.loss.unseen_frame()
                 conf = confidence(self.loss.llr)
             else:
                 found = cluster.sum() > p.kickoff_fraction * p.n_particles
