@@ -12,8 +12,8 @@ offset), with the same place in the reference.
 * While the target is tracked confidently, :class:`SceneReference` keeps the grey frame of every
   ``REFRESH``-th such frame, with the target's box on it.
 * The search tests its best candidates before choosing one: a candidate whose patch is found again, within
-  ``SHIFT`` px, in the reference at correlation ``static_ncc`` or more is the scene, and the next best sample
-  is taken (up to ``TRIES`` candidates a frame). Nothing is remembered: a target that passes over such a
+  ``SHIFT`` px (blocks of a larger patch, compared at a reduced resolution), in the reference at correlation
+  ``static_ncc`` or more is the scene, and the next best sample is taken (up to ``TRIES`` candidates a frame). Nothing is remembered: a target that passes over such a
   place later is tested afresh there.
 * The test abstains (the candidate is kept) where the reference cannot answer: a candidate overlapping the
   target's box on the reference, a flat patch, a patch at the frame's edge. A moving camera makes every patch
@@ -23,6 +23,8 @@ The correlation is pure functions (:func:`scene_correlation`, :func:`overlaps`);
 """
 
 from __future__ import annotations
+
+import math
 
 import cv2
 import numpy as np
@@ -39,6 +41,10 @@ SHIFT = 2
 
 #: At most this many candidates a search frame are tested.
 TRIES = 3
+
+#: A larger patch is compared at a reduced resolution, block means of k x k pixels, so that its longer side is at most
+#: this many blocks (the test's cost stays bounded: 0.74 ms for a 160 x 240 box at full resolution, 3 px shifts).
+PATCH = 32
 
 #: A patch whose grey levels vary less than this (standard deviation) is flat: the correlation says nothing.
 FLAT_SD = 2.0
@@ -103,12 +109,20 @@ class SceneReference:
             return False
         bx, by, bw, bh = (float(v) for v in box)
         h, w = frame.shape[:2]
-        x0, y0 = max(int(bx) - SHIFT - 1, 0), max(int(by) - SHIFT - 1, 0)
-        x1, y1 = min(int(bx + bw) + SHIFT + 2, w), min(int(by + bh) + SHIFT + 2, h)
-        if x1 - x0 < 4 or y1 - y0 < 4:
+        k = max(1, math.ceil(max(bw, bh) / PATCH))  # block size of the comparison
+        m = (SHIFT + 1) * k
+        x0, y0 = max(int(bx) - m, 0), max(int(by) - m, 0)
+        x1, y1 = min(int(bx + bw) + m + 1, w), min(int(by + bh) + m + 1, h)
+        x1, y1 = x0 + (x1 - x0) // k * k, y0 + (y1 - y0) // k * k
+        if x1 - x0 < 4 * k or y1 - y0 < 4 * k:
             return False
         sub = gray_of(np.ascontiguousarray(frame[y0:y1, x0:x1]))
-        r = scene_correlation(sub, self.gray[y0:y1, x0:x1], (bx - x0, by - y0, bw, bh))
+        ref = self.gray[y0:y1, x0:x1]
+        if k > 1:
+            size = ((x1 - x0) // k, (y1 - y0) // k)
+            sub = cv2.resize(sub, size, interpolation=cv2.INTER_AREA)
+            ref = cv2.resize(ref, size, interpolation=cv2.INTER_AREA)
+        r = scene_correlation(sub, ref, ((bx - x0) / k, (by - y0) / k, bw / k, bh / k))
         return bool(r >= self.threshold)
 
 
