@@ -405,11 +405,13 @@ class SearchMixin:
                                              self._search_since)
             if known.any() and not known.all():
                 rank = np.where(known, -np.inf, rank)
-        best = self._skip_scene(frame, ell, rank, int(np.argmax(rank))) if np.any(tot > 0) else 0
-        lp = 0.0 if prior is None else float(prior[best])
+        def scores(i):  # a candidate's loss-test scores and log prior
+            return self._loss_scores(frame, ell[i:i + 1], rho[i:i + 1], roi)[0], 0.0 if prior is None else float(prior[i])
+
+        best = int(np.argmax(rank)) if np.any(tot > 0) else 0
+        best, (s_best, lp) = self._skip_scene(frame, ell, rank, best, scores)
         # samples belonging to the best candidate: within one target size of it
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
-        s_best = self._loss_scores(frame, ell[best:best + 1], rho[best:best + 1], roi)[0]
         return SearchCandidates(states, ell, rho, tot, loglik, roi, best, lp, near, s_best, n_keep)
 
     def _search(self, frame: np.ndarray) -> TrackState:

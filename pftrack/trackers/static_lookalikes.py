@@ -62,10 +62,19 @@ def overlaps(box, ref_box, fraction: float = OVERLAP) -> bool:
     return iw > 0 and ih > 0 and iw * ih > fraction * max(w * h, 1e-9)
 
 
+def _ncc(a: np.ndarray, b: np.ndarray) -> float:
+    a = a - a.mean()
+    b = b - b.mean()
+    den = math.sqrt(float((a * a).sum()) * float((b * b).sum()))
+    return float((a * b).sum()) / den if den > 0 else float("nan")
+
+
 def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = SHIFT) -> float:
-    """The best normalised correlation of ``gray``'s patch under ``box`` (x, y, w, h, clipped to the frame)
-    with ``ref_gray`` within ``shift`` px of the same place; NaN when the patch is flat, smaller than 4 x 4 px,
-    or has no room to shift within the frame."""
+    """How well ``gray``'s patch under ``box`` (x, y, w, h, clipped to the frame) is found again in ``ref_gray``
+    within ``shift`` px of the same place: the normalised correlation of each quarter of the patch (2 x 2) at the
+    patch's best shift, the lowest of the quarters that are not flat, so that a patch only partly the scene's (a
+    target coming out from behind an occluder) is not.  NaN when the patch is flat, smaller than 4 x 4 px, or has
+    no room to shift within the frame."""
     h, w = gray.shape[:2]
     bx, by, bw, bh = (float(v) for v in box)
     x0, y0 = max(int(round(bx)), shift), max(int(round(by)), shift)
@@ -76,7 +85,20 @@ def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = 
     if float(patch.std()) < FLAT_SD:
         return float("nan")
     area = ref_gray[y0 - shift:y1 + shift, x0 - shift:x1 + shift].astype(np.float32)
-    return float(cv2.matchTemplate(area, patch, cv2.TM_CCOEFF_NORMED).max())
+    score = cv2.matchTemplate(area, patch, cv2.TM_CCOEFF_NORMED)
+    dy, dx = np.unravel_index(int(np.argmax(score)), score.shape)
+    ref = area[dy:dy + patch.shape[0], dx:dx + patch.shape[1]]
+    ph, pw = patch.shape
+    worst = float("nan")
+    for ys in (slice(0, ph // 2), slice(ph // 2, ph)):
+        for xs in (slice(0, pw // 2), slice(pw // 2, pw)):
+            q = patch[ys, xs]
+            if q.size < 4 or float(q.std()) < FLAT_SD:
+                continue
+            r = _ncc(q.astype(np.float64), ref[ys, xs].astype(np.float64))
+            r = -1.0 if math.isnan(r) else r  # the same place flat on the reference: changed
+            worst = r if math.isnan(worst) else min(worst, r)
+    return worst
 
 
 class SceneReference:
@@ -136,19 +158,24 @@ class SceneTestMixin:
         """A confident frame with the target at ``box``."""
         self._scene.refresh(self._structure_frame(frame), box, self.frame_index)
 
-    def _skip_scene(self, frame: np.ndarray, ell: np.ndarray, rank: np.ndarray, best: int) -> int:
-        """The best-ranked sample that is not the scene: up to ``TRIES`` candidates are tested in rank order, and
-        the samples near one found to be the scene (within two half-axes of it each way) leave the ranking.
-        ``ell``: the samples' ellipses; ``rank`` is changed in place."""
+    def _skip_scene(self, frame: np.ndarray, ell: np.ndarray, rank: np.ndarray, best: int, scores):
+        """The best-ranked sample that is not the scene, and its ``scores(i)`` (loss-test scores, log prior): a
+        candidate that would end the loss (``loss.would_acquire``) is tested, and when it is the scene's, the samples
+        near it (within two half-axes each way) leave the ranking and the next best is taken, up to ``TRIES``
+        times. A candidate that would not end the loss is not tested (nothing would be acquired). ``ell``: the
+        samples' ellipses; ``rank`` is changed in place."""
+        s = scores(best)
         if self._scene.gray is None:
-            return best
+            return best, s
         view = self._structure_frame(frame)
         for _ in range(TRIES):
-            if not np.isfinite(rank[best]) or not self._scene.is_scene(view, ellipse_to_box(ell[best])):
-                return best
+            if (not np.isfinite(rank[best]) or not self.loss.would_acquire(*s)[0]
+                    or not self._scene.is_scene(view, ellipse_to_box(ell[best]))):
+                return best, s
             x, y, hx, hy = ell[best]
             rank[(np.abs(ell[:, 0] - x) < 2 * hx) & (np.abs(ell[:, 1] - y) < 2 * hy)] = -np.inf
             if not np.isfinite(rank).any():
-                return best
+                return best, s
             best = int(np.argmax(rank))
-        return best
+            s = scores(best)
+        return best, s
