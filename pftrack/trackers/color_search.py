@@ -406,7 +406,8 @@ class SearchMixin:
             if known.any() and not known.all():
                 rank = np.where(known, -np.inf, rank)
         def scores(i):  # a candidate's loss-test scores and log prior
-            return self._loss_scores(frame, ell[i:i + 1], rho[i:i + 1], roi)[0], 0.0 if prior is None else float(prior[i])
+            lp_i = 0.0 if prior is None else float(prior[i])
+            return self._loss_scores(frame, ell[i:i + 1], rho[i:i + 1], roi)[0], lp_i
 
         best = int(np.argmax(rank)) if np.any(tot > 0) else 0
         best, (s_best, lp) = self._skip_scene(frame, ell, rank, best, scores)

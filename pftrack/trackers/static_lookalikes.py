@@ -1,25 +1,28 @@
 """Look-alikes that are part of the scene: a background test for the colour trackers' search.
 
-Most of ``fusion-pf``'s missed reappearances on the tune scenes (docs/robustness.md, "The search passes over
-what was there before") were not moving distractors: the search had taken a piece of the *scene* that looks
-like the target: an occluder's edge with the target's two grey levels, a patch of textured clutter. It then
-followed it, motionless, while the target came back elsewhere. Such a look-alike was in view, unchanged, while
-the target was still tracked somewhere else; the target coming back was not there then. With a still camera,
-a reference frame taken while the target was tracked tells the two apart without any appearance model: the
-candidate's grey patch now is compared, by normalised correlation (insensitive to a change of gain and
-offset), with the same place in the reference.
+Most of ``fusion-pf``'s missed reappearances on the tune scenes that probation left (docs/robustness.md, "The
+search passes over what was in view before") were not moving distractors: the search had taken a piece of the
+*scene* that looks like the target (an occluder's edge with the target's two grey levels, a patch of textured
+clutter) and followed it, motionless, while the target came back elsewhere.  Such a look-alike was in view,
+unchanged, while the target was still tracked somewhere else; the target coming back was not there then.  With
+a still camera, a reference frame taken while the target was tracked tells the two apart without any appearance
+model: the candidate's grey patch now is compared, by normalised correlation (insensitive to a change of gain
+and offset), with the same place in the reference.
 
-* While the target is tracked confidently, :class:`SceneReference` keeps the grey frame of every
-  ``REFRESH``-th such frame, with the target's box on it.
-* The search tests its best candidates before choosing one: a candidate whose patch is found again, within
-  ``SHIFT`` px (blocks of a larger patch, compared at a reduced resolution), in the reference at correlation
-  ``static_ncc`` or more is the scene, and the next best sample is taken (up to ``TRIES`` candidates a frame). Nothing is remembered: a target that passes over such a
-  place later is tested afresh there.
+* While the target is tracked confidently, :class:`SceneReference` keeps the grey frame of every ``REFRESH``-th
+  such frame, with the target's box on it.
+* A search candidate that would end the loss is tested before it is taken: its patch is found again within
+  ``SHIFT`` px of its place in the reference, and it is the scene's when every quarter of it (2 x 2) correlates
+  at ``static_ncc`` or more at that shift (a target half out from behind its occluder is not: the quarter where
+  it is differs).  The samples near a candidate of the scene leave the ranking and the next best is taken (up to
+  ``TRIES`` a frame).  A patch longer than ``PATCH`` px is compared in block means.  Nothing is remembered: a
+  target that passes over such a place later is tested afresh there.
 * The test abstains (the candidate is kept) where the reference cannot answer: a candidate overlapping the
-  target's box on the reference, a flat patch, a patch at the frame's edge. A moving camera makes every patch
+  target's box on the reference, a flat patch, a patch at the frame's edge.  A moving camera makes every patch
   differ from the reference, so the test then abstains in effect.
 
-The correlation is pure functions (:func:`scene_correlation`, :func:`overlaps`); the class holds the reference.
+The correlation is pure functions (:func:`scene_correlation`, :func:`overlaps`); :class:`SceneReference` holds the
+reference and :class:`SceneTestMixin` puts the test in the search.
 """
 
 from __future__ import annotations
