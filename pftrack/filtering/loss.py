@@ -230,7 +230,7 @@ class LossDetector:
     def acquire(self, s: float, log_prior: float = 0.0) -> bool:
         """While lost: does a candidate with score ``s`` end the loss (hysteresis margin)?  ``log_prior``: the
         log prior odds of the candidate's position, added to its ratio (posterior odds)."""
-        self.unseen += 1
+        self.unseen_frame()
         self.llr = self.evaluate(s) + log_prior
         if self.confident(s):
             self.lost = False
@@ -408,8 +408,7 @@ class FusedLoss:
         ``acquire_z`` spreads of its own history: a candidate the fused ratio favours because one cue is far
         above the background, while another sees it far below the target as last seen, is not taken."""
         s = self._vector(s)
-        for m in self.members:
-            m.unseen += 1
+        self.unseen_frame()
         self.llr = self.evaluate(s) + log_prior
         if self.confident(s, veto_z=self.acquire_z, margin=self.acquire_margin):
             self.lost = False

@@ -32,7 +32,7 @@ import math
 import cv2
 import numpy as np
 
-from ..cues.lk import gray_of
+from ..cues.lk import gray_of, ncc
 from ..geometry import ellipse_to_box
 
 #: A reference is taken on every this many confident frames: its cost, a grey conversion of the frame (about
@@ -65,13 +65,6 @@ def overlaps(box, ref_box, fraction: float = OVERLAP) -> bool:
     return iw > 0 and ih > 0 and iw * ih > fraction * max(w * h, 1e-9)
 
 
-def _ncc(a: np.ndarray, b: np.ndarray) -> float:
-    a = a - a.mean()
-    b = b - b.mean()
-    den = math.sqrt(float((a * a).sum()) * float((b * b).sum()))
-    return float((a * b).sum()) / den if den > 0 else float("nan")
-
-
 def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = SHIFT) -> float:
     """How well ``gray``'s patch under ``box`` (x, y, w, h, clipped to the frame) is found again in ``ref_gray``
     within ``shift`` px of the same place: the normalised correlation of each quarter of the patch (2 x 2) at the
@@ -98,8 +91,7 @@ def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = 
             q = patch[ys, xs]
             if q.size < 4 or float(q.std()) < FLAT_SD:
                 continue
-            r = _ncc(q.astype(np.float64), ref[ys, xs].astype(np.float64))
-            r = -1.0 if math.isnan(r) else r  # the same place flat on the reference: changed
+            r = float(ncc(q[None], ref[ys, xs][None])[0])  # 0 where the reference is flat there: changed
             worst = r if math.isnan(worst) else min(worst, r)
     return worst
 
