@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.trackers.static_lookalikes import REFRESH, SceneReference, overlaps, scene_correlation
+from pftrack.trackers.static_lookalikes import REFRESH, SceneReference, noise_sd, overlaps, scene_correlation
 
 
 def _textured(seed: int, shape=(120, 160)) -> np.ndarray:
@@ -38,6 +38,43 @@ def test_scene_correlation_finds_the_patch_again_within_the_shift_and_abstains_o
     flat = np.full_like(ref, 128)
     assert np.isnan(scene_correlation(flat, ref, box))
     assert np.isnan(scene_correlation(ref, ref, (158, 30, 10, 10)))  # a sliver at the frame's edge
+
+
+def test_noise_is_measured_between_consecutive_frames_and_taken_out_of_the_correlation():
+    """Two noisy views of an unchanged, nearly plain patch (an occluder's face) correlate far below 1; knowing the
+    noise, the test still finds it unchanged, and still tells a changed quarter."""
+    rng = np.random.default_rng(7)
+    yy, xx = np.mgrid[0:120, 0:160]
+    scene = 120.0 + 4.0 * np.sin(xx / 3.0) + 4.0 * np.cos(yy / 4.0)  # faint texture: standard deviation ~4
+    a = scene + rng.normal(0.0, 2.0, scene.shape)
+    b = scene + rng.normal(0.0, 2.0, scene.shape)
+    mover = a.copy()
+    mover[10:40, 10:40] = 200.0  # something moved between the two frames: a minority of the pixels
+    assert noise_sd(np.round(mover), np.round(b)) == pytest.approx(2.0, rel=0.15)
+    assert noise_sd(scene, scene) == 0.0
+    box = (60, 40, 24, 28)
+    raw = scene_correlation(b, a, box)
+    assert raw < 0.8  # the noise alone keeps an unchanged quarter below the threshold
+    assert scene_correlation(b, a, box, noise=2.0) > 0.9
+    changed = b.copy()
+    changed[40:54, 72:84] = 120.0 + rng.normal(0.0, 6.0, (14, 12))  # one quarter is something else now
+    assert scene_correlation(changed, a, box, noise=2.0) < 0.3
+    assert np.isnan(scene_correlation(np.full_like(a, 120.0) + rng.normal(0.0, 2.0, a.shape), a, box, noise=2.0))
+
+
+def test_scene_reference_learns_the_noise_on_the_confident_frame_after_the_reference():
+    rng = np.random.default_rng(8)
+    scene = _textured(9).astype(np.float64)
+    frames = [np.clip(scene + rng.normal(0.0, 3.0, scene.shape), 0, 255).astype(np.uint8) for _ in range(3)]
+    ref = SceneReference(0.8)
+    ref.refresh(frames[0], (10, 10, 20, 20), 40)
+    assert ref.noise == 0.0  # not known yet: the correlation is taken as is
+    ref.refresh(frames[2], (10, 10, 20, 20), 42)  # not the next frame: nothing learnt
+    assert ref.noise == 0.0
+    ref.refresh(frames[1], (10, 10, 20, 20), 41)
+    assert ref.noise == pytest.approx(3.0, rel=0.3)
+    ref.refresh(frames[2], (10, 10, 20, 20), 40 + REFRESH)  # a new reference forgets it
+    assert ref.noise == 0.0
 
 
 def test_scene_reference_refreshes_every_few_confident_frames_and_off_keeps_nothing():

@@ -49,7 +49,8 @@ TRIES = 3
 #: this many blocks (the test's cost stays bounded: 0.74 ms for a 160 x 240 box at full resolution, 3 px shifts).
 PATCH = 32
 
-#: A patch whose grey levels vary less than this (standard deviation) is flat: the correlation says nothing.
+#: A patch whose grey levels vary less than this (standard deviation, the noise's taken out) is flat: the
+#: correlation says nothing.
 FLAT_SD = 2.0
 
 #: A candidate box overlapping the target's reference box by more than this fraction of its area: abstain.
@@ -65,12 +66,26 @@ def overlaps(box, ref_box, fraction: float = OVERLAP) -> bool:
     return iw > 0 and ih > 0 and iw * ih > fraction * max(w * h, 1e-9)
 
 
-def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = SHIFT) -> float:
+def noise_sd(gray: np.ndarray, next_gray: np.ndarray, step: int = 2) -> float:
+    """The standard deviation of a still camera's pixel noise, from two consecutive grey frames: the median absolute
+    difference (on every ``step``-th row and column) over 0.6745 sqrt(2). What moves between the two frames is a
+    minority of the pixels and leaves the median alone; a single frame cannot tell fine texture from noise."""
+    d = np.asarray(next_gray[::step, ::step], np.float32) - np.asarray(gray[::step, ::step], np.float32)
+    return float(np.median(np.abs(d))) / (0.6745 * math.sqrt(2.0)) if d.size else 0.0
+
+
+def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = SHIFT, noise: float = 0.0) -> float:
     """How well ``gray``'s patch under ``box`` (x, y, w, h, clipped to the frame) is found again in ``ref_gray``
     within ``shift`` px of the same place: the normalised correlation of each quarter of the patch (2 x 2) at the
     patch's best shift, the lowest of the quarters that are not flat, so that a patch only partly the scene's (a
     target coming out from behind an occluder) is not.  NaN when the patch is flat, smaller than 4 x 4 px, or has
-    no room to shift within the frame."""
+    no room to shift within the frame.
+
+    ``noise``: the standard deviation of independent pixel noise in both images.  Two noisy views of one unchanged
+    quarter of variance ``v`` correlate at ``1 - noise**2 / v`` only, which is far below 1 on a nearly flat quarter
+    (an occluder's plain face: 0.78 at a standard deviation of 4.3 with noise of 2). Each quarter's correlation is
+    divided by that ceiling (at most 1), and a quarter is flat when its variance less the noise's is below
+    ``FLAT_SD**2``."""
     h, w = gray.shape[:2]
     bx, by, bw, bh = (float(v) for v in box)
     x0, y0 = max(int(round(bx)), shift), max(int(round(by)), shift)
@@ -78,7 +93,8 @@ def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = 
     if x1 - x0 < 4 or y1 - y0 < 4:
         return float("nan")
     patch = gray[y0:y1, x0:x1].astype(np.float32)
-    if float(patch.std()) < FLAT_SD:
+    n2 = float(noise) ** 2
+    if float(patch.var()) - n2 < FLAT_SD ** 2:
         return float("nan")
     area = ref_gray[y0 - shift:y1 + shift, x0 - shift:x1 + shift].astype(np.float32)
     score = cv2.matchTemplate(area, patch, cv2.TM_CCOEFF_NORMED)
@@ -89,9 +105,11 @@ def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = 
     for ys in (slice(0, ph // 2), slice(ph // 2, ph)):
         for xs in (slice(0, pw // 2), slice(pw // 2, pw)):
             q = patch[ys, xs]
-            if q.size < 4 or float(q.std()) < FLAT_SD:
+            v = float(q.var())
+            if q.size < 4 or v - n2 < FLAT_SD ** 2:
                 continue
             r = float(ncc(q[None], ref[ys, xs][None])[0])  # 0 where the reference is flat there: changed
+            r = min(r / (1.0 - n2 / v), 1.0)
             worst = r if math.isnan(worst) else min(worst, r)
     return worst
 
@@ -100,7 +118,7 @@ class SceneReference:
     """The grey frame of a recent confident frame and the target's box on it; :meth:`is_scene` tests a
     candidate against it.  ``threshold`` <= 0: off (nothing is kept, nothing is the scene)."""
 
-    __slots__ = ("box", "frame_index", "gray", "threshold")
+    __slots__ = ("_noise", "box", "frame_index", "gray", "threshold")
 
     def __init__(self, threshold: float):
         self.threshold = float(threshold)
@@ -110,14 +128,26 @@ class SceneReference:
         self.gray: np.ndarray | None = None
         self.box = None
         self.frame_index = -REFRESH
+        self._noise: float | None = None
 
     def refresh(self, frame: np.ndarray, box, frame_index: int) -> None:
-        """A confident frame: keep it (grey) with the target's ``box`` when ``REFRESH`` frames have passed."""
-        if self.threshold > 0 and frame_index - self.frame_index >= REFRESH:
+        """A confident frame: keep it (grey) with the target's ``box`` when ``REFRESH`` frames have passed; on the
+        confident frame right after, estimate the noise (:func:`noise_sd`)."""
+        if self.threshold <= 0:
+            return
+        if frame_index - self.frame_index >= REFRESH:
             g = gray_of(frame)
             self.gray = g.copy() if g is frame or g.base is not None else g
             self.box = tuple(float(v) for v in box)
             self.frame_index = frame_index
+            self._noise = None
+        elif self._noise is None and frame_index == self.frame_index + 1 and self.gray.shape == frame.shape[:2]:
+            self._noise = noise_sd(self.gray, gray_of(frame))
+
+    @property
+    def noise(self) -> float:
+        """The pixel noise of the reference's camera (0 until it is known: the correlation is then taken as is)."""
+        return 0.0 if self._noise is None else self._noise
 
     def is_scene(self, frame: np.ndarray, box) -> bool:
         """Was the candidate under ``box`` (x, y, w, h) already in view, unchanged, on the reference frame,
@@ -139,7 +169,7 @@ class SceneReference:
             size = ((x1 - x0) // k, (y1 - y0) // k)
             sub = cv2.resize(sub, size, interpolation=cv2.INTER_AREA)
             ref = cv2.resize(ref, size, interpolation=cv2.INTER_AREA)
-        r = scene_correlation(sub, ref, ((bx - x0) / k, (by - y0) / k, bw / k, bh / k))
+        r = scene_correlation(sub, ref, ((bx - x0) / k, (by - y0) / k, bw / k, bh / k), noise=self.noise / k)
         return bool(r >= self.threshold)
 
 
