@@ -42,6 +42,9 @@ REFRESH = 30
 #: The candidate's patch is looked for this many pixels around its place in the reference (jitter, rounding).
 SHIFT = 2
 
+#: While tracking, the estimate is tested on every this many frames (and before the reference is replaced).
+CHECK_EVERY = 5
+
 #: At most this many candidates a search frame are tested.
 TRIES = 3
 
@@ -182,6 +185,26 @@ class SceneTestMixin:
     def _keep_scene(self, frame: np.ndarray, box) -> None:
         """A confident frame with the target at ``box``."""
         self._scene.refresh(self._structure_frame(frame), box, self.frame_index)
+
+    def _on_scene(self, frame: np.ndarray, box) -> bool:
+        """While tracking: is the estimate's ``box`` a piece of the scene, unchanged since the reference, where the
+        target was not? Then what is tracked is not the target (it went behind something and the estimate stayed on
+        its occluder, or slid onto clutter that looks like it). Tested on every ``CHECK_EVERY``-th frame after the
+        reference, and on the frame that would replace it, against the outgoing one: a reference is never taken of
+        the estimate on the scene without the estimate being tested first. Not tested within half the box's size of
+        the frame's edge: an estimate left behind there by a target that walked out is where it comes back
+        (``min_in_frame``, ``reenter_border``)."""
+        sc = self._scene
+        if sc.gray is None:
+            return False
+        x, y, w, h = box
+        fh, fw = frame.shape[:2]
+        if x < 0.5 * w or y < 0.5 * h or x + 1.5 * w > fw or y + 1.5 * h > fh:
+            return False
+        age = self.frame_index - sc.frame_index
+        if age < REFRESH and age % CHECK_EVERY:
+            return False
+        return sc.is_scene(self._structure_frame(frame), box)
 
     def _skip_scene(self, frame: np.ndarray, ell: np.ndarray, rank: np.ndarray, best: int, scores):
         """The best-ranked sample that is not the scene, and its ``scores(i)`` (loss-test scores, log prior): a
