@@ -56,6 +56,9 @@ PATCH = 32
 #: correlation says nothing.
 FLAT_SD = 2.0
 
+#: The noise is measured on a regular grid of at most this many pixels (60 us at 854 x 480, once a reference).
+NOISE_SAMPLES = 10000
+
 #: A candidate box overlapping the target's reference box by more than this fraction of its area: abstain.
 OVERLAP = 0.1
 
@@ -69,12 +72,17 @@ def overlaps(box, ref_box, fraction: float = OVERLAP) -> bool:
     return iw > 0 and ih > 0 and iw * ih > fraction * max(w * h, 1e-9)
 
 
-def noise_sd(gray: np.ndarray, next_gray: np.ndarray, step: int = 2) -> float:
-    """The standard deviation of a still camera's pixel noise, from two consecutive grey frames: the median absolute
-    difference (on every ``step``-th row and column) over 0.6745 sqrt(2). What moves between the two frames is a
+def noise_sd(gray: np.ndarray, next_gray: np.ndarray) -> float:
+    """The standard deviation of a still camera's pixel noise, from two consecutive grey frames (or the same grid
+    of pixels of each): the median absolute difference over 0.6745 sqrt(2). What moves between the two frames is a
     minority of the pixels and leaves the median alone; a single frame cannot tell fine texture from noise."""
-    d = np.asarray(next_gray[::step, ::step], np.float32) - np.asarray(gray[::step, ::step], np.float32)
+    d = np.asarray(next_gray, np.float32) - np.asarray(gray, np.float32)
     return float(np.median(np.abs(d))) / (0.6745 * math.sqrt(2.0)) if d.size else 0.0
+
+
+def noise_grid(shape) -> int:
+    """The step of the regular grid of at most ``NOISE_SAMPLES`` pixels the noise is measured on."""
+    return max(1, math.ceil(math.sqrt(shape[0] * shape[1] / NOISE_SAMPLES)))
 
 
 def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = SHIFT, noise: float = 0.0) -> float:
@@ -145,7 +153,8 @@ class SceneReference:
             self.frame_index = frame_index
             self._noise = None
         elif self._noise is None and frame_index == self.frame_index + 1 and self.gray.shape == frame.shape[:2]:
-            self._noise = noise_sd(self.gray, gray_of(frame))
+            k = noise_grid(self.gray.shape)
+            self._noise = noise_sd(self.gray[::k, ::k], gray_of(np.ascontiguousarray(frame[::k, ::k])))
 
     @property
     def noise(self) -> float:
