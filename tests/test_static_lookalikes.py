@@ -122,11 +122,12 @@ def test_while_tracking_an_estimate_on_an_unchanged_piece_of_the_scene_is_caught
     now = background.copy()
     now[60:84, 100:124] = _textured(11, (24, 24))  # the target, now at (100, 60)
     on_clutter, on_target = (50, 40, 24, 24), (100, 60, 24, 24)
-    for k in range(1, REFRESH + 1):
+    for k in range(1, 2 * REFRESH):
         host.frame_index = k
-        due = k % CHECK_EVERY == 0 or k >= REFRESH  # on every CHECK_EVERY-th frame, and before a new reference
-        assert host._on_scene(now, on_clutter) == due
-        assert not host._on_scene(now, on_target)
+        assert host._on_scene(now, on_clutter) == (k % CHECK_EVERY == 0)  # on every CHECK_EVERY-th frame
+        # and on a frame that would replace the reference: confident, REFRESH frames or more after it
+        assert host._on_scene(now, on_clutter, keep=True) == (k % CHECK_EVERY == 0 or k >= REFRESH)
+        assert not host._on_scene(now, on_target, keep=True)
     host.frame_index = CHECK_EVERY
     assert not host._on_scene(now, (12, 12, 20, 20))  # where the target was on the reference: no answer
     assert not host._on_scene(now, (145, 40, 14, 20))  # at the frame's edge, where a target that left comes back
@@ -207,7 +208,7 @@ def test_an_estimate_left_on_the_scene_raises_the_flag_and_the_search_finds_the_
     make_spec = {"vanish": vanish_scene, "teleport": teleport_scene}[make]
     spec = make_spec(seed, gray=1.0) if gray else make_spec(seed)
     on = lost_flag_run(spec, tracker)
-    monkeypatch.setattr(SceneTestMixin, "_on_scene", lambda self, frame, box: False)
+    monkeypatch.setattr(SceneTestMixin, "_on_scene", lambda self, *args: False)
     off = lost_flag_run(spec, tracker)
     assert off.reappearances == on.reappearances == 1
     assert off.recall == 0.0 and off.reacquired == 0

@@ -32,7 +32,7 @@ import math
 import cv2
 import numpy as np
 
-from ..cues.lk import gray_of, ncc
+from ..cues.lk import gray_of
 from ..geometry import ellipse_to_box
 
 #: A reference is taken on every this many confident frames: its cost, a grey conversion of the frame (about
@@ -43,7 +43,7 @@ REFRESH = 30
 SHIFT = 2
 
 #: While tracking, the estimate is tested on every this many frames (and before the reference is replaced).
-CHECK_EVERY = 5
+CHECK_EVERY = 10
 
 #: At most this many candidates a search frame are tested.
 TRIES = 3
@@ -111,18 +111,26 @@ def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = 
     score = cv2.matchTemplate(area, patch, cv2.TM_CCOEFF_NORMED)
     dy, dx = np.unravel_index(int(np.argmax(score)), score.shape)
     ref = area[dy:dy + patch.shape[0], dx:dx + patch.shape[1]]
+    vp, vr, cov, n = _quarter_moments(patch, ref)
+    ok = vp - n2 >= FLAT_SD ** 2  # the quarters that are not flat
+    if not ok.any():
+        return float("nan")
+    den = n * np.sqrt(np.maximum(vp * vr, 0.0))  # as cues.lk.ncc: 0 where the reference is flat there (changed)
+    r = np.where(den > 1e-9, n * cov / np.where(den > 1e-9, den, 1.0), 0.0)
+    return float(np.minimum(r[ok] / (1.0 - n2 / vp[ok]), 1.0).min())
+
+
+def _quarter_moments(patch: np.ndarray, ref: np.ndarray):
+    """Each quarter's (2 x 2) variances of ``patch`` and ``ref``, their covariance and pixel count, as (2, 2) arrays:
+    the sums of the five moments over the four quarters at once."""
     ph, pw = patch.shape
-    worst = float("nan")
-    for ys in (slice(0, ph // 2), slice(ph // 2, ph)):
-        for xs in (slice(0, pw // 2), slice(pw // 2, pw)):
-            q = patch[ys, xs]
-            v = float(q.var())
-            if q.size < 4 or v - n2 < FLAT_SD ** 2:
-                continue
-            r = float(ncc(q[None], ref[ys, xs][None])[0])  # 0 where the reference is flat there: changed
-            r = min(r / (1.0 - n2 / v), 1.0)
-            worst = r if math.isnan(worst) else min(worst, r)
-    return worst
+    p = patch.astype(np.float64)
+    q = ref.astype(np.float64)
+    m = np.add.reduceat(np.add.reduceat(np.stack((p, q, p * p, q * q, p * q)), (0, ph // 2), axis=1), (0, pw // 2),
+                        axis=2)
+    n = np.outer((ph // 2, ph - ph // 2), (pw // 2, pw - pw // 2)).astype(np.float64)
+    mp, mq = m[0] / n, m[1] / n
+    return m[2] / n - mp * mp, m[3] / n - mq * mq, m[4] / n - mp * mq, n
 
 
 class SceneReference:
@@ -195,12 +203,13 @@ class SceneTestMixin:
         """A confident frame with the target at ``box``."""
         self._scene.refresh(self._structure_frame(frame), box, self.frame_index)
 
-    def _on_scene(self, frame: np.ndarray, box) -> bool:
+    def _on_scene(self, frame: np.ndarray, box, keep: bool = False) -> bool:
         """While tracking: is the estimate's ``box`` a piece of the scene, unchanged since the reference, where the
         target was not? Then what is tracked is not the target (it went behind something and the estimate stayed on
         its occluder, or slid onto clutter that looks like it). Tested on every ``CHECK_EVERY``-th frame after the
-        reference, and on the frame that would replace it, against the outgoing one: a reference is never taken of
-        the estimate on the scene without the estimate being tested first. Not tested within half the box's size of
+        reference, and on a frame that would replace it (``keep``: a confident frame, ``REFRESH`` frames or more
+        after the reference), against the outgoing one: a reference is never taken of the estimate on the scene
+        without the estimate being tested first. Not tested within half the box's size of
         the frame's edge: an estimate left behind there by a target that walked out is where it comes back
         (``min_in_frame``, ``reenter_border``)."""
         sc = self._scene
@@ -211,7 +220,7 @@ class SceneTestMixin:
         if x < 0.5 * w or y < 0.5 * h or x + 1.5 * w > fw or y + 1.5 * h > fh:
             return False
         age = self.frame_index - sc.frame_index
-        if age < REFRESH and age % CHECK_EVERY:
+        if age % CHECK_EVERY and not (keep and age >= REFRESH):
             return False
         return sc.is_scene(self._structure_frame(frame), box)
 
