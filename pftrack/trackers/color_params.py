@@ -151,7 +151,7 @@ class ColorModelParams(Params):
         "part of the scene (an occluder's edge, clutter), and the search takes its next best candidate. "
         "Abstains near the target's box on that frame and on flat patches; with a moving camera nothing "
         "matches. Each quarter's correlation is divided by its ceiling under the camera's noise, measured between "
-        "that frame and the next confident one. While tracking, the estimate is tested the same way on every 5th "
+        "that frame and the next confident one. While tracking, the estimate is tested the same way on every 10th "
         "frame (not at the frame's edge): an estimate that is an unchanged piece of the scene is lost, and the "
         "search starts. 0: off."))
     probation_llr: float = param(0.0, ge=0, le=50, doc=(
@@ -324,7 +324,7 @@ class ColorPFParams(ColorModelParams):
         "recall 0.838 against 0.804 and 0.880 against 0.858; the tune split's real, PETS and grey variants "
         "unchanged. Report data: the split the same 72 and 68 of 96, the 8-seed report sets 362 against 357 and "
         "317 against 314 of 520. With the noise and the estimate's test: tune 427 and 391 of 568, the report "
-        "split 76 and 66 of 96."))
+        "split 75 and 69 of 96."))
     position_noise: float = param(0.2, ge=0, le=10, doc=(
         "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
         "(scale-invariant). The paper leaves it open."))
