@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.trackers.static_lookalikes import (CHECK_EVERY, REFRESH, SceneReference, SceneTestMixin, noise_sd, overlaps,
-                                                scene_correlation)
+from pftrack.trackers.static_lookalikes import (CHECK_EVERY, REFRESH, SceneReference, SceneTestMixin, noise_sd,
+                                                overlaps, scene_correlation)
 
 
 def _textured(seed: int, shape=(120, 160)) -> np.ndarray:

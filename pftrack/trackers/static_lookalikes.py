@@ -1,4 +1,4 @@
-"""Look-alikes that are part of the scene: a background test for the colour trackers' search.
+"""Look-alikes that are part of the scene: a background test for the colour trackers' search and estimate.
 
 Most of ``fusion-pf``'s missed reappearances on the tune scenes that probation left (docs/robustness.md, "The
 search passes over what was in view before") were not moving distractors: the search had taken a piece of the
@@ -20,9 +20,14 @@ and offset), with the same place in the reference.
 * The test abstains (the candidate is kept) where the reference cannot answer: a candidate overlapping the
   target's box on the reference, a flat patch, a patch at the frame's edge.  A moving camera makes every patch
   differ from the reference, so the test then abstains in effect.
+* The camera's pixel noise is measured between the reference and the next confident frame (:func:`noise_sd`), and
+  each quarter's correlation is divided by the ceiling that noise puts on it: a nearly plain piece of the scene
+  (an occluder's face) does not correlate with itself near 1 under noise.
+* While tracking, the estimate is tested the same way (every ``CHECK_EVERY``-th frame, and before the reference is
+  replaced): an estimate that is an unchanged piece of the scene, where the target was not, is lost.
 
-The correlation is pure functions (:func:`scene_correlation`, :func:`overlaps`); :class:`SceneReference` holds the
-reference and :class:`SceneTestMixin` puts the test in the search.
+The correlation and the noise are pure functions (:func:`scene_correlation`, :func:`noise_sd`, :func:`overlaps`);
+:class:`SceneReference` holds the reference and :class:`SceneTestMixin` puts the test in the search and the tracking.
 """
 
 from __future__ import annotations
@@ -194,8 +199,8 @@ class SceneReference:
 
 
 class SceneTestMixin:
-    """The background test in the search of :class:`pftrack.trackers.color_pf.ColorParticleFilter`
-    (``static_ncc``): the reference is kept on confident frames, and the search's best candidates are tested."""
+    """The background test of :class:`pftrack.trackers.color_pf.ColorParticleFilter` (``static_ncc``): the
+    reference is kept on confident frames, the search's best candidates are tested, and so is the estimate."""
 
     _scene: SceneReference
 
@@ -209,9 +214,9 @@ class SceneTestMixin:
         its occluder, or slid onto clutter that looks like it). Tested on every ``CHECK_EVERY``-th frame after the
         reference, and on a frame that would replace it (``keep``: a confident frame, ``REFRESH`` frames or more
         after the reference), against the outgoing one: a reference is never taken of the estimate on the scene
-        without the estimate being tested first. Not tested within half the box's size of
-        the frame's edge: an estimate left behind there by a target that walked out is where it comes back
-        (``min_in_frame``, ``reenter_border``)."""
+        without the estimate being tested first. Not tested within half the box's size of the frame's edge: an
+        estimate left behind there by a target that walked out is where it comes back (``min_in_frame``,
+        ``reenter_border``)."""
         sc = self._scene
         if sc.gray is None:
             return False
