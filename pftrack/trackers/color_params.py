@@ -318,12 +318,13 @@ class ColorPFParams(ColorModelParams):
         "90 against 59 (color-pf), unchanged (fusion-pf); colour vanish scenes unchanged. Report split "
         "(reports/final_r8): within +-0.001, re-acquired 66 / 96 (the same) and 74 / 96 (73)."))
     static_ncc: float = param(0.8, ge=0, le=1, doc=(
-        "See ColorModelParams.static_ncc (off there). 0.8 for color-pf and fusion-pf, chosen on the tune data "
-        "(docs/robustness.md; 0.7-0.95 within 6 of each other in a first design): the tune reappearance scenes (8 "
-        "seeds, 568 reappearances) re-acquired 417 against 401 (fusion-pf) and 384 against 364 (color-pf), lost "
-        "recall 0.838 against 0.804 and 0.880 against 0.858; the tune split's real, PETS and grey variants "
-        "unchanged. Report data: the split the same 72 and 68 of 96, the 8-seed report sets 362 against 357 and "
-        "317 against 314 of 520. With the noise and the estimate's test: tune 427 and 391 of 568, the report "
+        "Background test (pftrack.trackers.static_lookalikes): a frame is kept (grey) every 30 confident frames; "
+        "a search candidate that would end the loss, or the estimate while tracking (every 10th frame, not at the "
+        "frame's edge), whose patch is found unchanged at the same place on it, every quarter correlating at this "
+        "or more once the camera's noise is taken out, is a piece of the scene: the search takes its next "
+        "candidate, and the estimate is lost. Abstains near the target's box on that frame and on flat patches. "
+        "0: off (local-motion-pf). 0.8 chosen on the tune data (docs/robustness.md): 8 seeds of the tune "
+        "reappearance scenes re-acquired 427 of 568 (fusion-pf) and 391 (color-pf), against 401 and 364 off; report "
         "split 75 and 69 of 96."))
     position_noise: float = param(0.2, ge=0, le=10, doc=(
         "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
