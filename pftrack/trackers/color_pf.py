@@ -373,10 +373,9 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, SceneTestMixin, ColorHook
                 self.miss = 0
             lost_now, score = self.miss >= p.lost_frames or not ok, rho_e
             confident = self.miss == 0
-        keep = confident and not out and not self._probation_left  # a frame the reference may be taken of
-        if p.search and not lost_now and not out and self._on_scene(frame, box, keep):  # the estimate is the scene's
-            lost_now, confident, info["on_scene"] = True, False, True
         confident = confident and not out and not self._probation_left  # no learning from a sliver, or on probation
+        if p.search and not lost_now and not out and self._on_scene(frame, box, confident):  # the scene's
+            lost_now, confident, info["on_scene"] = True, False, True
         if confident:
             self.cue.confirm(p.normalize_rate)
             if self._raw_check is not None:

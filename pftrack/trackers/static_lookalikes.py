@@ -38,7 +38,7 @@ import cv2
 import numpy as np
 
 from ..cues.lk import gray_of
-from ..geometry import ellipse_to_box
+from ..geometry import ellipse_to_box, intersection_area
 
 #: A reference is taken on every this many confident frames: its cost, a grey conversion of the frame (about
 #: 70 us at 854 x 480, 3-4 % of color-pf's time per frame when taken every 10th frame), spread over them.
@@ -70,11 +70,7 @@ OVERLAP = 0.1
 
 def overlaps(box, ref_box, fraction: float = OVERLAP) -> bool:
     """Does ``box`` (x, y, w, h) cover ``ref_box`` by more than ``fraction`` of its own area?"""
-    x, y, w, h = (float(v) for v in box)
-    rx, ry, rw, rh = (float(v) for v in ref_box)
-    iw = min(x + w, rx + rw) - max(x, rx)
-    ih = min(y + h, ry + rh) - max(y, ry)
-    return iw > 0 and ih > 0 and iw * ih > fraction * max(w * h, 1e-9)
+    return float(intersection_area(box, ref_box)) > fraction * max(float(box[2]) * float(box[3]), 1e-9)
 
 
 def noise_sd(gray: np.ndarray, next_gray: np.ndarray) -> float:
@@ -212,9 +208,9 @@ class SceneTestMixin:
         """While tracking: is the estimate's ``box`` a piece of the scene, unchanged since the reference, where the
         target was not? Then what is tracked is not the target (it went behind something and the estimate stayed on
         its occluder, or slid onto clutter that looks like it). Tested on every ``CHECK_EVERY``-th frame after the
-        reference, and on a frame that would replace it (``keep``: a confident frame, ``REFRESH`` frames or more
-        after the reference), against the outgoing one: a reference is never taken of the estimate on the scene
-        without the estimate being tested first. Not tested within half the box's size of the frame's edge: an
+        reference, and on a frame that would replace it (``keep``: the caller's confidence, ``REFRESH`` frames or
+        more after the reference), against the outgoing one: a reference is never taken of the estimate on the
+        scene without the estimate being tested first. Not tested within half the box's size of the frame's edge: an
         estimate left behind there by a target that walked out is where it comes back (``min_in_frame``,
         ``reenter_border``)."""
         sc = self._scene
