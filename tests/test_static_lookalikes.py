@@ -104,6 +104,24 @@ def test_is_scene_tells_a_fixture_of_the_view_from_an_object_that_arrived():
     assert not ref.is_scene(np.zeros((60, 80), np.uint8), (10, 10, 8, 8))  # another frame size
 
 
+def test_where_the_target_stood_on_the_reference_the_one_before_answers():
+    """A candidate on the target's place on the newest reference is tested against the reference before, where
+    the target was elsewhere: an estimate left behind where the target last stood is caught."""
+    background = _textured(3)
+    ref = SceneReference(0.9)
+    ref.refresh(background, (10, 10, 20, 20), 0)  # the target at the top left
+    ref.refresh(background, (40, 70, 24, 24), REFRESH)  # then at (40, 70); the target has left it since
+    assert ref.frame_index == REFRESH
+    assert ref.is_scene(background, (42, 70, 24, 24))  # the reference before shows the same clutter there
+    arrived = background.copy()
+    arrived[70:94, 42:66] = _textured(4, (24, 24))  # the target is there now
+    assert not ref.is_scene(arrived, (42, 70, 24, 24))
+    assert ref.is_scene(background, (14, 12, 20, 20))  # the target left its first place before the newest reference
+    ref.refresh(background, (46, 74, 24, 24), 2 * REFRESH)  # it hardly moved: it stood there on both references
+    assert not ref.is_scene(background, (42, 70, 24, 24))  # no answer
+    assert ref.is_scene(background, (14, 12, 20, 20))
+
+
 class _Host(SceneTestMixin):
     """The background test's host: a frame counter and the grey view of a frame."""
 
@@ -228,3 +246,27 @@ def test_knowing_the_noise_the_search_passes_over_a_plain_piece_of_the_scene(mon
     off = lost_flag_run(spec, "color-pf")
     assert off.reappearances == on.reappearances == 1
     assert off.reacquired == 0 and on.reacquired == 1
+
+
+@pytest.mark.parametrize("make, seed", [("teleport", 600), ("leave", 613)])
+def test_the_reference_before_catches_an_estimate_left_where_the_target_last_stood(make, seed, monkeypatch):
+    """Colour scenes of seeds in neither split, found by a run over seeds 600-619: the target jumps away, or walks
+    out, and ``fusion-pf``'s estimate stays where it last stood, on its box of the newest reference, with the flag
+    down. Only the reference before, where the target was elsewhere, shows that place as the scene's."""
+    from pftrack.synth import leave_scene, teleport_scene
+
+    from .conftest import lost_flag_run
+
+    spec = {"teleport": teleport_scene, "leave": leave_scene}[make](seed)
+    on = lost_flag_run(spec, "fusion-pf")
+    refresh = SceneReference.refresh
+
+    def newest_only(self, *args):
+        refresh(self, *args)
+        self._previous = None
+
+    monkeypatch.setattr(SceneReference, "refresh", newest_only)
+    off = lost_flag_run(spec, "fusion-pf")
+    assert off.reappearances == on.reappearances == 1
+    assert off.reacquired == 0 and on.reacquired == 1
+    assert on.recall > off.recall

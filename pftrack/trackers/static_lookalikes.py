@@ -17,9 +17,11 @@ and offset), with the same place in the reference.
   it is differs).  The samples near a candidate of the scene leave the ranking and the next best is taken (up to
   ``TRIES`` a frame).  A patch longer than ``PATCH`` px is compared in block means.  Nothing is remembered: a
   target that passes over such a place later is tested afresh there.
-* The test abstains (the candidate is kept) where the reference cannot answer: a candidate overlapping the
-  target's box on the reference, a flat patch, a patch at the frame's edge.  A moving camera makes every patch
-  differ from the reference, so the test then abstains in effect.
+* The test abstains (the candidate is kept) where the reference cannot answer: a flat patch, a patch at the frame's
+  edge, a candidate overlapping the target's box on the reference.  In the last case the reference before it (the
+  one it replaced) answers instead when the target was elsewhere then: an estimate left behind where the target last
+  stood, as it turned to go behind something or jumped away, is a piece of the scene on that older frame.  A moving
+  camera makes every patch differ from the reference, so the test then abstains in effect.
 * The camera's pixel noise is measured between the reference and the next confident frame (:func:`noise_sd`), and
   each quarter's correlation is divided by the ceiling that noise puts on it: a nearly plain piece of the scene
   (an occluder's face) does not correlate with itself near 1 under noise.
@@ -138,7 +140,7 @@ class SceneReference:
     """The grey frame of a recent confident frame and the target's box on it; :meth:`is_scene` tests a
     candidate against it.  ``threshold`` <= 0: off (nothing is kept, nothing is the scene)."""
 
-    __slots__ = ("_noise", "box", "frame_index", "gray", "threshold")
+    __slots__ = ("_noise", "_previous", "box", "frame_index", "gray", "threshold")
 
     def __init__(self, threshold: float):
         self.threshold = float(threshold)
@@ -149,6 +151,7 @@ class SceneReference:
         self.box = None
         self.frame_index = -REFRESH
         self._noise: float | None = None
+        self._previous: tuple | None = None  # the reference before: (grey frame, target's box)
 
     def refresh(self, frame: np.ndarray, box, frame_index: int) -> None:
         """A confident frame: keep it (grey) with the target's ``box`` when ``REFRESH`` frames have passed; on the
@@ -156,6 +159,8 @@ class SceneReference:
         if self.threshold <= 0:
             return
         if frame_index - self.frame_index >= REFRESH:
+            if self.gray is not None:
+                self._previous = (self.gray, self.box)
             g = gray_of(frame)
             self.gray = g.copy() if g is frame or g.base is not None else g
             self.box = tuple(float(v) for v in box)
@@ -172,26 +177,37 @@ class SceneReference:
 
     def is_scene(self, frame: np.ndarray, box) -> bool:
         """Was the candidate under ``box`` (x, y, w, h) already in view, unchanged, on the reference frame,
-        away from the target?"""
-        if self.gray is None or self.gray.shape[:2] != frame.shape[:2] or overlaps(box, self.box):
-            return False
-        bx, by, bw, bh = (float(v) for v in box)
-        h, w = frame.shape[:2]
-        k = max(1, math.ceil(max(bw, bh) / PATCH))  # block size of the comparison
-        m = (SHIFT + 1) * k
-        x0, y0 = max(int(bx) - m, 0), max(int(by) - m, 0)
-        x1, y1 = min(int(bx + bw) + m + 1, w), min(int(by + bh) + m + 1, h)
-        x1, y1 = x0 + (x1 - x0) // k * k, y0 + (y1 - y0) // k * k
-        if x1 - x0 < 4 * k or y1 - y0 < 4 * k:
-            return False
-        sub = gray_of(np.ascontiguousarray(frame[y0:y1, x0:x1]))
-        ref = self.gray[y0:y1, x0:x1]
-        if k > 1:
-            size = ((x1 - x0) // k, (y1 - y0) // k)
-            sub = cv2.resize(sub, size, interpolation=cv2.INTER_AREA)
-            ref = cv2.resize(ref, size, interpolation=cv2.INTER_AREA)
-        r = scene_correlation(sub, ref, ((bx - x0) / k, (by - y0) / k, bw / k, bh / k), noise=self.noise / k)
-        return bool(r >= self.threshold)
+        away from the target?  Where the candidate overlaps the target's box on the reference, the reference
+        before it answers instead (the target was elsewhere then, if it moved): an estimate left behind on the
+        place the target last stood, or a candidate there, is not passed for want of a reference."""
+        for gray, ref_box in ((self.gray, self.box), self._previous or (None, None)):
+            if gray is None or gray.shape[:2] != frame.shape[:2]:
+                return False
+            if not overlaps(box, ref_box):  # one camera: the noise measured last stands for both references
+                return _unchanged(frame, box, gray, self.threshold, self.noise)
+        return False
+
+
+def _unchanged(frame: np.ndarray, box, ref_gray: np.ndarray, threshold: float, noise: float) -> bool:
+    """Is the patch of ``frame`` under ``box`` found again, correlating at ``threshold`` or more (every quarter, the
+    ``noise`` taken out), in the grey reference frame ``ref_gray``?"""
+    bx, by, bw, bh = (float(v) for v in box)
+    h, w = frame.shape[:2]
+    k = max(1, math.ceil(max(bw, bh) / PATCH))  # block size of the comparison
+    m = (SHIFT + 1) * k
+    x0, y0 = max(int(bx) - m, 0), max(int(by) - m, 0)
+    x1, y1 = min(int(bx + bw) + m + 1, w), min(int(by + bh) + m + 1, h)
+    x1, y1 = x0 + (x1 - x0) // k * k, y0 + (y1 - y0) // k * k
+    if x1 - x0 < 4 * k or y1 - y0 < 4 * k:
+        return False
+    sub = gray_of(np.ascontiguousarray(frame[y0:y1, x0:x1]))
+    ref = ref_gray[y0:y1, x0:x1]
+    if k > 1:
+        size = ((x1 - x0) // k, (y1 - y0) // k)
+        sub = cv2.resize(sub, size, interpolation=cv2.INTER_AREA)
+        ref = cv2.resize(ref, size, interpolation=cv2.INTER_AREA)
+    r = scene_correlation(sub, ref, ((bx - x0) / k, (by - y0) / k, bw / k, bh / k), noise=noise / k)
+    return bool(r >= threshold)
 
 
 class SceneTestMixin:
