@@ -149,8 +149,8 @@ class ColorModelParams(Params):
         "and whose grey patch is found again at the same place (2 px of play), every quarter of it at this "
         "normalised correlation or more, in a frame kept while the target was tracked confidently elsewhere, is "
         "part of the scene (an occluder's edge, clutter), and the search takes its next best candidate. "
-        "Abstains near the target's box on that frame and on flat patches; with a moving camera nothing "
-        "matches. Each quarter's correlation is divided by its ceiling under the camera's noise, measured between "
+        "Abstains on flat patches, and near the target's box on that frame unless the frame kept before it (the "
+        "target elsewhere then) answers; with a moving camera nothing matches. Each quarter's correlation is divided by its ceiling under the camera's noise, measured between "
         "that frame and the next confident one. While tracking, the estimate is tested the same way on every 10th "
         "frame (not at the frame's edge): an estimate that is an unchanged piece of the scene is lost, and the "
         "search starts. 0: off."))
@@ -322,10 +322,10 @@ class ColorPFParams(ColorModelParams):
         "a search candidate that would end the loss, or the estimate while tracking (every 10th frame, not at the "
         "frame's edge), whose patch is found unchanged at the same place on it, every quarter correlating at this "
         "or more once the camera's noise is taken out, is a piece of the scene: the search takes its next "
-        "candidate, and the estimate is lost. Abstains near the target's box on that frame and on flat patches. "
-        "0: off (local-motion-pf). 0.8 chosen on the tune data (docs/robustness.md): 8 seeds of the tune "
-        "reappearance scenes re-acquired 427 of 568 (fusion-pf) and 391 (color-pf), against 401 and 364 off; report "
-        "split 75 and 69 of 96."))
+        "candidate, and the estimate is lost. Abstains on flat patches, and near the target's box on that frame "
+        "unless the frame kept before it answers. 0: off (local-motion-pf). 0.8 chosen on the tune data "
+        "(docs/robustness.md): 8 seeds of the tune reappearance scenes re-acquired 439 of 568 (fusion-pf) and 401 "
+        "(color-pf), against 401 and 364 off; report split 79 and 70 of 96."))
     position_noise: float = param(0.2, ge=0, le=10, doc=(
         "Std of the Gaussian noise w on x and y (Eq. 9), as a fraction of the mean half-axis "
         "(scale-invariant). The paper leaves it open."))
