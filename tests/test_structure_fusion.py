@@ -307,6 +307,28 @@ def test_refined_search_layer_samples_the_best_mode_and_is_reproducible():
     assert st1.box == st2.box
 
 
+def test_color_pf_refines_its_search_on_grey_input_only():
+    """grey_search_refine: color-pf's search gets the refined layer on grey input (0.5 of the first layer) and
+    none on colour input (search_refine 0); None leaves search_refine in charge whatever the input."""
+    def search_sizes(gray, **kw):
+        scene = Scene(vanish_scene(3, gray=1.0 if gray else 0.0))
+        frames, gt = scene.frames(), scene.groundtruth(0)
+        t = pftrack.create_tracker("color-pf", seed=5, search_particles=200, **kw)
+        t.init(frames[0], tuple(gt[0]))
+        for f in frames[1:6]:
+            t.update(f)
+        t.lost, t.mode = True, "searching"
+        t.loss.lost = True
+        t._search_since = t.frame_index
+        return t.cue.color_space, len(t._search_candidates(frames[6]).states)
+
+    assert search_sizes(True) == ("gray", 300)
+    assert search_sizes(False)[1] == 200 and search_sizes(False)[0] != "gray"
+    assert search_sizes(True, grey_search_refine=None) == ("gray", 200)
+    assert search_sizes(False, search_refine=1.0, grey_search_refine=0.0)[1] == 400
+    assert pftrack.create_tracker("fusion-pf").params.grey_search_refine is None
+
+
 def _track(spec, seed, **kw):
     scene = Scene(spec)
     frames, gt = scene.frames(), scene.groundtruth(0)

@@ -68,6 +68,9 @@ class ColorModelParams(Params):
         "sizes 1/(1+s), 1 and 1+s, and the estimate and every particle move a quarter of the way toward the vertex "
         "of the parabola through the three NCCs (fusion-pf's scale_search); skipped while the largest box is not "
         "inside the frame. 0: off (ColorModelParams' default)."))
+    grey_search_refine: float | None = param(None, ge=0, le=4, doc=(
+        "search_refine on grey input (the cue's features are grey levels); None: search_refine, whatever the "
+        "input (ColorModelParams' default)."))
     grey_histogram: Literal["levels", "both"] = param("levels", doc=(
         "Grey input with illumination='none': 'both' keeps a second grey histogram model of the self-quotient "
         "image (pftrack.cues.lit_histogram, its scale illumination_sigma) beside the model of the grey levels, "
@@ -301,6 +304,11 @@ class ColorPFParams(ColorModelParams):
         "tune data (docs/robustness.md; the grey levels' patches only): tune face proxies 0.891 against 0.744 mean "
         "AUC, dim and noisy 0.767 against 0.645; the grey tune set's reappearance scenes (8 seeds) 0.624 against "
         "0.628, re-acquired 184 against 179 of 328; tune split 0.555 against 0.549."))
+    grey_search_refine: float | None = param(0.5, ge=0, le=4, doc=(
+        "See ColorModelParams.grey_search_refine and search_refine (off for color-pf on colour input). 0.5 for "
+        "color-pf (fusion-pf's search_refine), chosen on the tune data (docs/robustness.md): 8 seeds of the tune "
+        "reappearance scenes re-acquired 415 of 568 against 401 (1: 414; search_refine=0.5 on every input: 413), "
+        "tune split mean AUC 0.566 against 0.565, grey face proxies unchanged."))
     grey_histogram: Literal["levels", "both"] = param("both", doc=(
         "Grey input: 'both' also keeps a histogram model of the self-quotient image, and while tracking every "
         "particle scores the better of its two coefficients (the search scores the grey levels alone); 'levels': "

@@ -304,6 +304,12 @@ class SearchMixin:
                 return rho, tot, relit
         return self._rho(frame, ell)
 
+    def _search_refine(self) -> float:
+        """The refined layer's share: ``grey_search_refine`` on grey input when set, else ``search_refine``."""
+        p = self.params
+        grey = p.grey_search_refine
+        return p.search_refine if grey is None or self.cue.color_space != "gray" else grey
+
     def _refine_layer(self, frame, states, ell, rho, tot, loglik, prior, feats):
         """``search_refine``: a second layer of samples drawn from the first layer's posterior, moved by a quarter
         of the half-axes and scored the same way (sizes kept: drawn afresh around the searched size instead, the
@@ -316,7 +322,7 @@ class SearchMixin:
         if not np.isfinite(rank).any():
             return states, ell, rho, tot, loglik, prior, roi
         rho, tot = rho.copy(), tot.copy()  # the cue's result buffers are reused by the next call
-        m = int(round(p.search_refine * len(states)))
+        m = int(round(self._search_refine() * len(states)))
         w = np.exp(rank - rank.max())
         idx = self.rng.choice(len(w), size=m, p=w / w.sum())
         extra = states[idx].copy()
@@ -388,7 +394,7 @@ class SearchMixin:
             loglik = np.zeros_like(loglik)
         prior = self._position_log_prior(states)
         roi = feats.roi
-        if p.search_refine > 0:
+        if self._search_refine() > 0:
             states, ell, rho, tot, loglik, prior, roi = self._refine_layer(frame, states, ell, rho, tot, loglik,
                                                                              prior, feats)
         self._search_states = states

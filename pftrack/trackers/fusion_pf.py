@@ -150,10 +150,13 @@ class FusionPFParams(ColorPFParams):
         "against None (1): lost recall 0.867 against 0.854, re-acquired 0.77 against 0.76, vanish 0.569 against "
         "0.555, real 0.589 against 0.593; 3 gave real 0.578."))
     search_refine: float = param(0.5, ge=0, le=4, doc=(
-        "color-pf's refined search layer (ColorModelParams.search_refine; color-pf: 0, off). Chosen on the tune "
+        "color-pf's refined search layer (ColorModelParams.search_refine; color-pf: off on colour input, 0.5 on grey "
+        "input, grey_search_refine). Chosen on the tune "
         "split (docs/fusion-pf.md): with acquire_z = 4, real AUC 0.593 against 0.582, PETS 0.369 against 0.364, "
         "teleport 0.645 against 0.601, leave 0.746 against 0.726; 1 gave less. It costs speed on lost frames "
         "only, and the report split's lost recall after an exit (a look-alike met at its exact peak)."))
+    grey_search_refine: float | None = param(None, ge=0, le=4, doc=(
+        "See ColorModelParams.grey_search_refine; None: search_refine on every input (fusion-pf)."))
     relit_colour: bool = param(True, doc=(
         "While searching, when the colour cue would veto the best candidate that the structural cue alone could "
         "acquire, its colour score is retaken after undoing a global per-channel gain (von Kries: the frame's "
