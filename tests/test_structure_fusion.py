@@ -266,6 +266,18 @@ def test_fused_acquisition_margin_is_separate_from_the_tracking_gate():
         assert 1.0 < det.llr < 2.0
 
 
+def _searching_after(name, frames, box, **params):
+    """A tracker run on ``frames[:6]`` and then put into search mode, as if the loss were declared on frame 5."""
+    t = pftrack.create_tracker(name, seed=5, **params)
+    t.init(frames[0], box)
+    for f in frames[1:6]:
+        t.update(f)
+    t.lost, t.mode = True, "searching"
+    t.loss.lost = True
+    t._search_since = t.frame_index
+    return t
+
+
 def test_refined_search_layer_samples_the_best_mode_and_is_reproducible():
     """search_refine: the second layer is drawn from the first layer's posterior and moved by a quarter of the
     half-axes, so its samples gather around the best first-layer sample; the search stays seeded."""
@@ -273,15 +285,8 @@ def test_refined_search_layer_samples_the_best_mode_and_is_reproducible():
     frames, gt = scene.frames(), scene.groundtruth(0)
 
     def run(refine):
-        t = pftrack.create_tracker("fusion-pf", seed=5, search_refine=refine)
-        t.init(frames[0], tuple(gt[0]))
-        for f in frames[1:6]:
-            t.update(f)
-        t.lost, t.mode = True, "searching"
-        t.loss.lost = True
-        t._search_since = t.frame_index
-        st = t._search(frames[6])
-        return t, st
+        t = _searching_after("fusion-pf", frames, tuple(gt[0]), search_refine=refine)
+        return t, t._search(frames[6])
 
     t0, _ = run(0.0)
     t1, st1 = run(1.0)
@@ -313,13 +318,7 @@ def test_color_pf_refines_its_search_on_grey_input_only():
     def search_sizes(gray, **kw):
         scene = Scene(vanish_scene(3, gray=1.0 if gray else 0.0))
         frames, gt = scene.frames(), scene.groundtruth(0)
-        t = pftrack.create_tracker("color-pf", seed=5, search_particles=200, **kw)
-        t.init(frames[0], tuple(gt[0]))
-        for f in frames[1:6]:
-            t.update(f)
-        t.lost, t.mode = True, "searching"
-        t.loss.lost = True
-        t._search_since = t.frame_index
+        t = _searching_after("color-pf", frames, tuple(gt[0]), search_particles=200, **kw)
         return t.cue.color_space, len(t._search_candidates(frames[6]).states)
 
     assert search_sizes(True) == ("gray", 300)

@@ -153,9 +153,10 @@ class ColorModelParams(Params):
         "normalised correlation or more, in a frame kept while the target was tracked confidently elsewhere, is "
         "part of the scene (an occluder's edge, clutter), and the search takes its next best candidate. "
         "Abstains on flat patches, and near the target's box on that frame unless the frame kept before it (the "
-        "target elsewhere then) answers; with a moving camera nothing matches. Each quarter's correlation is divided by its ceiling under the camera's noise, measured between "
-        "that frame and the next confident one. While tracking, the estimate is tested the same way on every 10th "
-        "frame (not at the frame's edge): an estimate that is an unchanged piece of the scene is lost, and the "
+        "target elsewhere then) answers; with a moving camera nothing matches. Each quarter's correlation is "
+        "divided by its ceiling under the camera's noise, measured between that frame and the next confident one. "
+        "While tracking, the estimate is tested the same way on every 10th frame (not at the frame's edge): an "
+        "estimate that is an unchanged piece of the scene is lost, and the "
         "search starts. 0: off."))
     probation_llr: float = param(0.0, ge=0, le=50, doc=(
         "Probation after a weak re-acquisition (pftrack.trackers.probation): an acquisition whose loss-test "
