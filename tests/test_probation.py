@@ -54,9 +54,9 @@ def test_would_acquire_answers_as_acquire_without_changing_state(det, s, log_pri
 
 def test_probation_defaults_and_only_for_weak_acquisitions():
     assert pftrack.create_tracker("fusion-pf").params.probation_llr == 15.0
-    for name in ("color-pf", "local-motion-pf"):  # off there
-        assert pftrack.create_tracker(name).params.probation_llr == 0.0
-    t = pftrack.create_tracker("color-pf", seed=0)
+    assert pftrack.create_tracker("color-pf").params.probation_llr == 15.0
+    assert pftrack.create_tracker("local-motion-pf").params.probation_llr == 0.0  # off there
+    t = pftrack.create_tracker("color-pf", seed=0, probation_llr=0.0)
     frame = np.full((120, 160, 3), 90, np.uint8)
     frame[40:70, 50:80] = (30, 40, 200)
     t.init(frame, (50, 40, 30, 30))

@@ -305,6 +305,12 @@ class ColorPFParams(ColorModelParams):
         "tune data (docs/robustness.md; the grey levels' patches only): tune face proxies 0.891 against 0.744 mean "
         "AUC, dim and noisy 0.767 against 0.645; the grey tune set's reappearance scenes (8 seeds) 0.624 against "
         "0.628, re-acquired 184 against 179 of 328; tune split 0.555 against 0.549."))
+    probation_llr: float = param(15.0, ge=0, le=50, doc=(
+        "See ColorModelParams.probation_llr (0, off, there). 15 for color-pf (fusion-pf's value), with "
+        "ColorModelParams' probation_frames 30 and probation_interval 1, chosen on the tune data "
+        "(docs/robustness.md): 8 seeds of the tune reappearance scenes re-acquired 427 of 568 against 415 off (8: "
+        "418, 25: 430, 40: 429); tune split mean AUC 0.568 against 0.566, PETS 0.305 against 0.296 (25: 0.569, "
+        "PETS 0.287)."))
     grey_search_refine: float | None = param(0.5, ge=0, le=4, doc=(
         "See ColorModelParams.grey_search_refine and search_refine (off for color-pf on colour input). 0.5 for "
         "color-pf (fusion-pf's search_refine), chosen on the tune data (docs/robustness.md): 8 seeds of the tune "

@@ -171,7 +171,7 @@ class FusionPFParams(ColorPFParams):
         "on the tune split ('max', before its 5 % dead zone) it re-acquired 0.69 against 0.67 but cost the real "
         "sequences 0.006 AUC; relit_colour above does the same for the one candidate the structure backs."))
     probation_llr: float = param(15.0, ge=0, le=50, doc=(
-        "See ColorModelParams.probation_llr (0, off, there and for color-pf). 15 for fusion-pf, with probation_frames "
+        "See ColorModelParams.probation_llr (0, off, there; 15 for color-pf). 15 for fusion-pf, with probation_frames "
         "60, chosen on the tune data (docs/robustness.md, 'fusion-pf doubts a weak re-acquisition'): on the 568 tune "
         "reappearances (8 seeds) re-acquired 402 against 365 with the defaults (416 with the search beside the track "
         "on every frame: grey scenes 273 against 223 of 408, colour 143 against 142 of 160), mean AUC 0.681 against "
