@@ -61,6 +61,7 @@ from .color_hooks import ColorHooks
 from .color_params import ColorModelParams, ColorPFParams
 from .color_search import SearchMixin
 from .distractors import DistractorMemory
+from .persistence import PersistenceMixin
 from .probation import ProbationMixin
 from .static_lookalikes import SceneReference, SceneTestMixin
 from .structure_check import StructureCheck, fused_loss
@@ -72,7 +73,7 @@ Detector = Callable[[np.ndarray], Sequence]
 _ELL_COLS = np.array([X, Y, HX, HY])
 
 
-class ColorParticleFilter(SearchMixin, ProbationMixin, SceneTestMixin, ColorHooks, Tracker):
+class ColorParticleFilter(SearchMixin, ProbationMixin, PersistenceMixin, SceneTestMixin, ColorHooks, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
     Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
@@ -256,6 +257,7 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, SceneTestMixin, ColorHook
         self.loss.lost = False
         self._lost_at = None
         self._distractors.clear()
+        self._persist_reset()
         self._confident_track.clear()  # a velocity is measured within one stretch of tracking
         self._confident_sizes.clear()
         self._search_states = None

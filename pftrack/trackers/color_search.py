@@ -477,6 +477,8 @@ class SearchMixin:
                     self.last_box = box
                     return self._state(box=box, score=float(d_rho[k]), lost=False,
                                        info={"mode": "acquired", "threshold": thr})
+        if not found and (restart := self._persist_step(frame, ell[best], s_best)) is not None:
+            return restart  # a changed target the search keeps finding in one place (.persistence)
         info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr, "vetoed": vetoed}
         if found:
             lost_at = self._lost_at
