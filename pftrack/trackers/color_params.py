@@ -177,7 +177,7 @@ class ColorModelParams(Params):
         "more than persist_z spreads below that cue's history, the tracker starts afresh on it, unless its grey "
         "patch is unchanged since the first of those searches (a still piece of the scene). A target that "
         "changed while lost (a head that turned, a camera that panned) is otherwise refused by every acquisition "
-        "test. 0: off. Likelihood loss test only."))
+        "test. 0: off; 1 acts as 2 (the still test compares two searches). Likelihood loss test only."))
     persist_z: float = param(2.5, gt=0, le=50, doc="See persist_frames: how far below its history a cue may score.")
     reacquire_margin: float = param(1.0, ge=0, le=20, doc=(
         "Hysteresis of the loss test: LLR a candidate must exceed to end a loss (and, with the 'confident' "

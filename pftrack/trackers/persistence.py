@@ -95,7 +95,7 @@ class PersistenceMixin:
         if streak is not None and streak[0] == 1:
             self._persist_gray = gray_of(np.ascontiguousarray(self._structure_frame(frame)))
         self._persist = streak
-        if streak is None or streak[0] < p.persist_frames:
+        if streak is None or streak[0] < max(p.persist_frames, 2):  # the still test compares two search frames
             return None
         gray0 = self._persist_gray
         self._persist_reset()
