@@ -14,10 +14,10 @@ The rule: while searching, the best candidate of each search is followed. It cou
   :data:`START_RADIUS` half-axes of where the target was lost.
 
 After ``frames`` such searches in a row, the tracker starts afresh on the candidate (new models and histories), unless
-the candidate's grey patch is unchanged since the streak began (:func:`.static_lookalikes._unchanged`): a still piece
-of the scene near the place of a loss (an occluder's edge) persists too, and a target that changed while it moved
-does not stay unchanged. The rule is for a target lost in view: after the target left the view (the search confined
-to the strip along the edge it left by, ``reenter_border``), a look-alike walking out there persists as well.
+the candidate's grey patch is unchanged since the streak began (:func:`.static_lookalikes.unchanged_patch`): a still
+piece of the scene near the place of a loss (an occluder's edge) persists too, and a target that changed while it
+moved does not stay unchanged. The rule is for a target lost in view: after the target left the view (the search
+confined to the strip along the edge it left by, ``reenter_border``), a look-alike walking out there persists as well.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import numpy as np
 
 from ..cues.lk import gray_of
 from ..geometry import ellipse_to_box
-from .static_lookalikes import _unchanged
+from .static_lookalikes import unchanged_patch
 
 __all__ = ["PersistenceMixin", "START_RADIUS", "plausible", "streak_step"]
 
@@ -101,7 +101,7 @@ class PersistenceMixin:
         self._persist_reset()
         box = tuple(float(v) for v in ellipse_to_box(np.asarray(ellipse, dtype=np.float64)[:4]))
         still = p.static_ncc if p.static_ncc > 0 else STILL_NCC
-        if gray0 is not None and _unchanged(self._structure_frame(frame), box, gray0, still, self._scene.noise):
+        if gray0 is not None and unchanged_patch(self._structure_frame(frame), box, gray0, still, self._scene.noise):
             return None  # the same patch of the scene as when the streak began: not a target that changed
         state = self._init(frame, box)
         return replace(state, info={**(state.info or {}), "mode": "acquired", "persist": True})

@@ -184,11 +184,11 @@ class SceneReference:
             if gray is None or gray.shape[:2] != frame.shape[:2]:
                 return False
             if not overlaps(box, ref_box):  # one camera: the noise measured last stands for both references
-                return _unchanged(frame, box, gray, self.threshold, self.noise)
+                return unchanged_patch(frame, box, gray, self.threshold, self.noise)
         return False
 
 
-def _unchanged(frame: np.ndarray, box, ref_gray: np.ndarray, threshold: float, noise: float) -> bool:
+def unchanged_patch(frame: np.ndarray, box, ref_gray: np.ndarray, threshold: float, noise: float) -> bool:
     """Is the patch of ``frame`` under ``box`` found again, correlating at ``threshold`` or more (every quarter, the
     ``noise`` taken out), in the grey reference frame ``ref_gray``?"""
     bx, by, bw, bh = (float(v) for v in box)
