@@ -322,10 +322,10 @@ class ColorPFParams(ColorModelParams):
         "PETS 0.287)."))
     persist_frames: int = param(3, ge=0, le=1000, doc=(
         "See ColorModelParams.persist_frames (0, off, there). 3 for color-pf and fusion-pf, with persist_z 2.5, "
-        "chosen on the tune data (docs/robustness.md): tune split mean AUC 0.693 against 0.687 (fusion-pf; grey "
+        "chosen on the tune data (docs/robustness.md): tune split mean AUC 0.690 against 0.687 (fusion-pf; grey "
         "copies 0.534 against 0.511, grey + light 0.494 against 0.477) and 0.570 against 0.568 (color-pf); 8 seeds "
-        "of the tune reappearance scenes re-acquired 442 and 428 of 568 against 439 and 427, lost recall 0.877 "
-        "and 0.914 against 0.879 and 0.916. persist_z 4 and 3 took distractors in grey vanish scenes; 5 frames "
+        "of the tune reappearance scenes re-acquired 440 and 427 of 568 against 439 and 427, lost recall 0.878 "
+        "and 0.916 against 0.879 and 0.916. persist_z 4 and 3 took distractors in grey vanish scenes; 5 frames "
         "gained less on the grey copies."))
     grey_search_refine: float | None = param(0.5, ge=0, le=4, doc=(
         "See ColorModelParams.grey_search_refine and search_refine (off for color-pf on colour input). 0.5 for "
