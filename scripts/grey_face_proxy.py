@@ -1,7 +1,7 @@
 """A grey face under strong illumination change: a proxy built from a real portrait (docs/robustness.md).
 
     python scripts/grey_face_proxy.py [--seeds 0-7] [--trackers fusion-pf,color-pf,opencv-csrt] [--frames 150]
-                                      [--dark GAIN --noise SD]
+                                      [--dark GAIN --noise SD] [--turn DEGREES]
 
 (scikit-image, from the `dev` extra, provides the portrait.)
 
@@ -63,13 +63,15 @@ def main() -> None:
     ap.add_argument("--save", help="write the first seed's frames as an OTB folder here")
     ap.add_argument("--dark", type=float, default=1.0, help="a further gain on every frame (a dim camera)")
     ap.add_argument("--noise", type=float, default=0.0, help="std of added Gaussian noise, grey levels")
+    ap.add_argument("--turn", type=float, default=0.0,
+                    help="the face turns back and forth up to this angle, degrees (face_scene's turn; 0: it does not)")
     a = ap.parse_args()
     lo, _, hi = a.seeds.partition("-")
     seeds = list(range(int(lo), int(hi or lo) + 1))
     names = _split_top(a.trackers)
     res = {n: [] for n in names}
     for sd in seeds:
-        frames, gt = face_scene(sd, a.frames)
+        frames, gt = face_scene(sd, a.frames, turn=a.turn)
         if a.dark != 1.0 or a.noise > 0:
             rng = np.random.default_rng(sd)
             frames = [np.clip(f.astype(np.float32) * a.dark + rng.normal(0.0, a.noise, f.shape), 0, 255)

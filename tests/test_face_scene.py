@@ -11,7 +11,7 @@ from pftrack.eval.metrics import frame_ious
 
 pytest.importorskip("skimage")
 
-from pftrack.synth.face import ASTRONAUT_FACE, face_scene  # noqa: E402
+from pftrack.synth.face import ASTRONAUT_FACE, face_scene, turned_face  # noqa: E402
 
 
 def _normalised_crop(img: np.ndarray, box, size=(48, 60)) -> np.ndarray:
@@ -41,6 +41,29 @@ def test_face_scene_is_seeded_and_its_boxes_follow_the_face():
     # the light changes strongly: the darkest frame is under half the brightest
     means = [f.mean() for f in frames]
     assert min(means) < 0.5 * max(means)
+
+
+def test_a_turning_face_changes_only_the_face_box():
+    """``turn``: the face box is redrawn as a cylinder seen turned; the rest of the image, the boxes and the scene
+    without a turn are unchanged."""
+    rng = np.random.default_rng(0)
+    base = rng.uniform(0, 255, (200, 300)).astype(np.float32)
+    face = (100.0, 50.0, 60.0, 80.0)
+    assert np.array_equal(turned_face(base, face, 0.0), base)
+    out = turned_face(base, face, np.radians(40))
+    inside = np.zeros(base.shape, bool)
+    inside[50:130, 100:160] = True
+    assert np.array_equal(out[~inside], base[~inside]) and not np.array_equal(out[inside], base[inside])
+    # each row of the box is the same resampling of the same row: one side foreshortened, the other widened
+    ramp = np.tile(np.arange(300, dtype=np.float32), (200, 1))
+    cols = turned_face(ramp, face, np.radians(40))[60, 100:160]
+    assert np.all(np.diff(cols) >= -1e-3)
+    assert cols[-1] < 159.5 - 5.0 and np.allclose(cols[:5], 99.5)  # one edge turned out of view, the other in
+    frames, boxes = face_scene(1, 20)
+    turned, tboxes = face_scene(1, 20, turn=50)
+    assert np.array_equal(boxes, tboxes)
+    assert all(np.array_equal(a, b) for a, b in zip(frames, face_scene(1, 20, turn=0.0)[0]))
+    assert any(not np.array_equal(a, b) for a, b in zip(frames, turned))
 
 
 @pytest.mark.parametrize("seed", [0, 1])

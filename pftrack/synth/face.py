@@ -11,8 +11,11 @@ is in the ``dev`` extra), or from any grey image and face box given:
   (one side at 40 %);
 * Gaussian noise (std 2 grey levels).
 
-The face box is carried through the camera's motion: exact in every frame.  The face does not turn or change
-expression, so the scene measures a tracker's tolerance of the light, not of pose.
+The face box is carried through the camera's motion: exact in every frame.  The face does not change expression,
+and by default it does not turn, so the scene measures a tracker's tolerance of the light, not of pose.  With
+``turn`` (degrees) the face region turns about a vertical axis, back and forth along a seeded smooth path up to that
+angle: the region is drawn as a cylinder seen turned (:func:`turned_face`), one side foreshortened and the other
+widened, a rough stand-in for a head that turns.  Its box stays the face box.
 """
 
 from __future__ import annotations
@@ -37,11 +40,34 @@ def astronaut_grey() -> np.ndarray:
     return cv2.cvtColor(data.astronaut()[:, :, ::-1].copy(), cv2.COLOR_BGR2GRAY)
 
 
+def turned_face(base: np.ndarray, face: tuple[float, float, float, float], yaw: float) -> np.ndarray:
+    """``base`` with the ``face`` box's pixels drawn as a vertical cylinder (its diameter the box's width) turned by
+    ``yaw`` radians: the column at ``u`` in [-1, 1] across the box shows the surface point whose angle is
+    ``asin(u) - yaw``, clamped to the visible half."""
+    fx, fy, fw, fh = (int(round(v)) for v in face)
+    out = base.copy()
+    if yaw == 0.0 or fw < 2 or fh < 1:
+        return out
+    u = (np.arange(fw, dtype=np.float64) + 0.5) / fw * 2.0 - 1.0
+    phi = np.clip(np.arcsin(np.clip(u, -1.0, 1.0)) - yaw, -np.pi / 2, np.pi / 2)
+    src = (np.sin(phi) + 1.0) / 2.0 * fw - 0.5 + fx
+    map_x = np.broadcast_to(src.astype(np.float32), (fh, fw)).copy()
+    map_y = np.broadcast_to(np.arange(fy, fy + fh, dtype=np.float32)[:, None], (fh, fw)).copy()
+    region = cv2.remap(base, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    out[fy:fy + fh, fx:fx + fw] = region
+    return out
+
+
 def face_scene(seed: int = 0, n_frames: int = 150, *, image: np.ndarray | None = None,
-               face: tuple[float, float, float, float] = ASTRONAUT_FACE) -> tuple[list[np.ndarray], np.ndarray]:
-    """Frames (grey uint8, 240 x 320) and the exact face boxes ``(n_frames, 4)`` of one seeded sequence."""
+               face: tuple[float, float, float, float] = ASTRONAUT_FACE,
+               turn: float = 0.0) -> tuple[list[np.ndarray], np.ndarray]:
+    """Frames (grey uint8, 240 x 320) and the exact face boxes ``(n_frames, 4)`` of one seeded sequence; ``turn``:
+    the largest angle, in degrees, the face turns to (0: it does not turn)."""
     rng = np.random.default_rng(seed)
-    base = (astronaut_grey() if image is None else image).astype(np.float32)
+    turn_rng = np.random.default_rng([seed, 7])  # its own draws: the scenes without a turn stay as they were
+    tf, tp = turn_rng.uniform(0.5, 1.5), turn_rng.uniform(0, 2 * np.pi)
+    base0 = (astronaut_grey() if image is None else image).astype(np.float32)
+    base = base0
     fx, fy, fw, fh = (float(v) for v in face)
     f1, f2, f3 = rng.uniform(0.5, 1.5, 3)
     p1, p2, p3, p4 = rng.uniform(0, 2 * np.pi, 4)
@@ -54,6 +80,8 @@ def face_scene(seed: int = 0, n_frames: int = 150, *, image: np.ndarray | None =
     frames, boxes = [], []
     for k in range(n_frames):
         t = k / max(n_frames - 1, 1)
+        if turn:
+            base = turned_face(base0, face, np.radians(turn) * np.sin(2 * np.pi * tf * t + tp))
         s = 0.9 * (1.0 + 0.2 * np.sin(2 * np.pi * f3 * t + p3))  # image pixels -> frame pixels
         cx = fx + fw / 2 + 40 * np.sin(2 * np.pi * f1 * t + p1)  # the view's centre in the image
         cy = fy + fh / 2 + 20 * np.sin(2 * np.pi * f2 * t + p2) + 15
