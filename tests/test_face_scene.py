@@ -89,3 +89,6 @@ def test_synth_face_writes_otb_folders(tmp_path):
     frames, boxes = face_scene(4)
     assert len(seq.frames) == len(frames) and np.allclose(seq.groundtruth, boxes, atol=0.01)
     assert np.array_equal(cv2.imread(str(seq.frames[7]), cv2.IMREAD_GRAYSCALE), frames[7])
+    assert main(["synth", "face", "--seeds", "4", "--turn", "45", "--out", str(tmp_path / "t")]) == 0
+    turned = read_sequence(tmp_path / "t" / "face-004")
+    assert np.array_equal(cv2.imread(str(turned.frames[7]), cv2.IMREAD_GRAYSCALE), face_scene(4, turn=45)[0][7])

@@ -124,6 +124,9 @@ def add_synth(sub) -> None:
                                     "sequence folder")
     p.add_argument("--response", choices=["mild", "strong"], default="mild",
                    help="twocam: camera B's colour response ('strong': wider gamma, gain and offset; a stress test)")
+    p.add_argument("--turn", type=float, default=0.0, metavar="DEGREES",
+                   help="face: the face turns back and forth up to this angle (a rough stand-in; default 0: it "
+                        "does not turn)")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.add_argument("--gray", type=float, default=None, metavar="P",
@@ -210,7 +213,7 @@ def cmd_synth(args) -> int:
         elif args.kind == "face":
             from ..synth.face import export_face, face_scene
 
-            export_face(*face_scene(sd, image=portrait), out / f"face-{sd:03d}")
+            export_face(*face_scene(sd, image=portrait, turn=args.turn), out / f"face-{sd:03d}")
         elif args.kind == "stereo-rail":
             from ..synth.occluder import export_stereo_scene, stereo_rail_scene
 
