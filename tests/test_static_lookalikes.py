@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.trackers.static_lookalikes import (CHECK_EVERY, REFRESH, SceneReference, SceneTestMixin, noise_sd,
-                                                overlaps, scene_correlation)
+from pftrack.trackers.static_lookalikes import (CHECK_EVERY, REFRESH, SceneReference, SceneTestMixin, clear_part,
+                                                noise_sd, overlaps, scene_correlation)
 
 
 def _textured(seed: int, shape=(120, 160)) -> np.ndarray:
@@ -117,9 +117,42 @@ def test_where_the_target_stood_on_the_reference_the_one_before_answers():
     arrived[70:94, 42:66] = _textured(4, (24, 24))  # the target is there now
     assert not ref.is_scene(arrived, (42, 70, 24, 24))
     assert ref.is_scene(background, (14, 12, 20, 20))  # the target left its first place before the newest reference
-    ref.refresh(background, (46, 74, 24, 24), 2 * REFRESH)  # it hardly moved: it stood there on both references
-    assert not ref.is_scene(background, (42, 70, 24, 24))  # no answer
+    ref.refresh(background, (46, 74, 24, 24), 2 * REFRESH)  # it hardly moved: it stood there on both references,
+    # so the newest keeps the reference before it, where the target was elsewhere, and that one answers
+    assert ref.is_scene(background, (42, 70, 24, 24))
+    assert not ref.is_scene(arrived, (42, 70, 24, 24))
     assert ref.is_scene(background, (14, 12, 20, 20))
+    back = background.copy()
+    back[10:30, 12:32] = _textured(6, (20, 20))  # back at its first place
+    ref.refresh(back, (12, 10, 20, 20), 3 * REFRESH)  # it left the outgoing reference's box: that one is kept
+    assert not ref.is_scene(back, (14, 12, 20, 20))  # the target, against the reference before (clutter there)
+    assert ref.is_scene(back, (42, 70, 24, 24))  # its place on the reference before, against the newest
+
+
+def test_clear_part_cuts_the_candidate_by_the_side_that_keeps_most_of_it():
+    assert clear_part((0, 0, 10, 10), (20, 0, 10, 10)) == (0, 0, 10, 10)  # apart: the whole box
+    assert clear_part((0, 0, 10, 10), (10, 0, 10, 10)) == (0, 0, 10, 10)  # touching: the whole box
+    assert clear_part((0, 0, 10, 10), (8, -5, 10, 30)) == (0, 0, 8, 10)  # a strip on the right
+    assert clear_part((0, 0, 10, 10), (-5, -5, 30, 7)) == (0, 2, 10, 8)  # a strip at the top
+    assert clear_part((0, 0, 10, 10), (3, 3, 10, 10)) is None  # 30 % clear at most
+    assert clear_part((0, 0, 10, 10), (3, 3, 10, 10), fraction=0.3) == (0, 0, 3, 10)
+
+
+def test_a_strip_of_the_target_on_the_reference_does_not_hide_the_scene():
+    """An estimate that slid onto clutter beside the place the target had on the reference: the few columns where
+    the target was then would spoil a quarter's correlation; the part clear of them answers."""
+    background = _textured(3)
+    on_ref = background.copy()
+    on_ref[40:70, 60:84] = _textured(9, (30, 24))  # the target on the reference
+    ref = SceneReference(0.9)
+    ref.refresh(on_ref, (60, 40, 24, 30), 0)
+    box = (40, 40, 24, 30)  # the estimate now: clutter, with the target's first 4 columns under its right edge
+    assert 0.0 < float(np.prod(box[2:])) - 20 * 30 < 0.2 * np.prod(box[2:])
+    assert scene_correlation(background, on_ref, box) < 0.9  # the whole box: one quarter changed
+    assert ref.is_scene(background, box)
+    arrived = background.copy()
+    arrived[40:70, 40:64] = _textured(4, (30, 24))
+    assert not ref.is_scene(arrived, box)
 
 
 class _Host(SceneTestMixin):

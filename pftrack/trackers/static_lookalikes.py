@@ -17,11 +17,16 @@ and offset), with the same place in the reference.
   it is differs).  The samples near a candidate of the scene leave the ranking and the next best is taken (up to
   ``TRIES`` a frame).  A patch longer than ``PATCH`` px is compared in block means.  Nothing is remembered: a
   target that passes over such a place later is tested afresh there.
-* The test abstains (the candidate is kept) where the reference cannot answer: a flat patch, a patch at the frame's
-  edge, a candidate overlapping the target's box on the reference.  In the last case the reference before it (the
-  one it replaced) answers instead when the target was elsewhere then: an estimate left behind where the target last
-  stood, as it turned to go behind something or jumped away, is a piece of the scene on that older frame.  A moving
-  camera makes every patch differ from the reference, so the test then abstains in effect.
+* Where the candidate overlaps the target's box on the reference, only its part clear of that box is compared (the
+  box cut along the side that keeps most of it, :func:`clear_part`): a strip of the target on the reference would
+  spoil a quarter's correlation.  When less than ``CLEAR`` of the candidate is clear, the reference before it
+  answers instead (the target was elsewhere then): an estimate left behind where the target last stood, as it
+  turned to go behind something or jumped away, is a piece of the scene on that older frame.  A new reference
+  keeps the one before when the target has not left the outgoing one's box, so that an estimate that stays put
+  does not leave the test with two references of itself.
+* The test abstains (the candidate is kept) where the references cannot answer: a flat patch, a patch at the frame's
+  edge, a candidate mostly on the target's box of both references.  A moving camera makes every patch differ from
+  the reference, so the test then abstains in effect.
 * The camera's pixel noise is measured between the reference and the next confident frame (:func:`noise_sd`), and
   each quarter's correlation is divided by the ceiling that noise puts on it: a nearly plain piece of the scene
   (an occluder's face) does not correlate with itself near 1 under noise.
@@ -66,13 +71,33 @@ FLAT_SD = 2.0
 #: The noise is measured on a regular grid of at most this many pixels (60 us at 854 x 480, once a reference).
 NOISE_SAMPLES = 10000
 
-#: A candidate box overlapping the target's reference box by more than this fraction of its area: abstain.
+#: A candidate box overlapping the target's reference box by more than this fraction of its area: the target has
+#: not left the reference's box (a new reference then keeps the one before).
 OVERLAP = 0.1
+
+#: At least this fraction of a candidate's box must lie clear of the target's box on a reference for that reference
+#: to answer (:func:`clear_part`).
+CLEAR = 0.5
 
 
 def overlaps(box, ref_box, fraction: float = OVERLAP) -> bool:
     """Does ``box`` (x, y, w, h) cover ``ref_box`` by more than ``fraction`` of its own area?"""
     return float(intersection_area(box, ref_box)) > fraction * max(float(box[2]) * float(box[3]), 1e-9)
+
+
+def clear_part(box, ref_box, fraction: float = CLEAR):
+    """The part of ``box`` (x, y, w, h) clear of ``ref_box``: the box itself when they do not intersect, else the
+    largest of the four cuts of ``box`` by ``ref_box``'s sides (left of it, right of it, above, below); None when
+    that part is less than ``fraction`` of the box."""
+    x, y, w, h = (float(v) for v in box)
+    rx, ry, rw, rh = (float(v) for v in ref_box)
+    if min(x + w, rx + rw) <= max(x, rx) or min(y + h, ry + rh) <= max(y, ry):
+        return (x, y, w, h)
+    right, below = max(rx + rw, x), max(ry + rh, y)
+    parts = ((x, y, min(rx - x, w), h), (right, y, x + w - right, h),
+             (x, y, w, min(ry - y, h)), (x, below, w, y + h - below))
+    best = max(parts, key=lambda p: max(p[2], 0.0) * max(p[3], 0.0))
+    return best if best[2] > 0 and best[3] > 0 and best[2] * best[3] >= fraction * w * h else None
 
 
 def noise_sd(gray: np.ndarray, next_gray: np.ndarray) -> float:
@@ -159,7 +184,10 @@ class SceneReference:
         if self.threshold <= 0:
             return
         if frame_index - self.frame_index >= REFRESH:
-            if self.gray is not None:
+            prev = self._previous
+            # the one before is kept while the target has not left the outgoing reference's box, and had left it
+            stayed = prev is not None and overlaps(box, self.box) and not overlaps(box, prev[1])
+            if self.gray is not None and not stayed:
                 self._previous = (self.gray, self.box)
             g = gray_of(frame)
             self.gray = g.copy() if g is frame or g.base is not None else g
@@ -177,14 +205,16 @@ class SceneReference:
 
     def is_scene(self, frame: np.ndarray, box) -> bool:
         """Was the candidate under ``box`` (x, y, w, h) already in view, unchanged, on the reference frame,
-        away from the target?  Where the candidate overlaps the target's box on the reference, the reference
-        before it answers instead (the target was elsewhere then, if it moved): an estimate left behind on the
-        place the target last stood, or a candidate there, is not passed for want of a reference."""
+        away from the target?  Its part clear of the target's box on the reference is compared; where less than
+        ``CLEAR`` of it is clear, the reference before it answers instead (the target was elsewhere then, if it
+        moved): an estimate left behind on the place the target last stood, or a candidate there, is not passed for
+        want of a reference."""
         for gray, ref_box in ((self.gray, self.box), self._previous or (None, None)):
             if gray is None or gray.shape[:2] != frame.shape[:2]:
                 return False
-            if not overlaps(box, ref_box):  # one camera: the noise measured last stands for both references
-                return unchanged_patch(frame, box, gray, self.threshold, self.noise)
+            part = clear_part(box, ref_box)
+            if part is not None:  # one camera: the noise measured last stands for both references
+                return unchanged_patch(frame, part, gray, self.threshold, self.noise)
         return False
 
 
