@@ -129,6 +129,23 @@ def test_where_the_target_stood_on_the_reference_the_one_before_answers():
     assert ref.is_scene(back, (42, 70, 24, 24))  # its place on the reference before, against the newest
 
 
+def test_a_reference_on_which_the_whole_candidate_is_clear_answers_first():
+    """The box kept with a reference is the estimate's, which may fall short of the target: a candidate cut by it
+    can still hold a strip of the target on that reference.  A reference on which the whole candidate is clear of
+    the target's box answers before any cut part is compared."""
+    background = _textured(3)
+    ref = SceneReference(0.9)
+    ref.refresh(background, (10, 10, 20, 20), 0)  # the target far away on the older reference
+    on_ref = background.copy()
+    on_ref[40:76, 60:84] = _textured(9, (36, 24))  # the target, 6 rows longer than the estimate's box below
+    ref.refresh(on_ref, (60, 40, 24, 30), REFRESH)
+    box = (60, 64, 24, 30)  # clutter now, under the estimate's box by 6 rows, and over the target's last 6 rows
+    part = clear_part(box, ref.box)
+    assert part == (60, 70, 24, 24)
+    assert scene_correlation(background, on_ref, part) < 0.9  # the cut part still holds the target's strip
+    assert ref.is_scene(background, box)  # the older reference answers, on the whole box
+
+
 def test_clear_part_cuts_the_candidate_by_the_side_that_keeps_most_of_it():
     assert clear_part((0, 0, 10, 10), (20, 0, 10, 10)) == (0, 0, 10, 10)  # apart: the whole box
     assert clear_part((0, 0, 10, 10), (10, 0, 10, 10)) == (0, 0, 10, 10)  # touching: the whole box

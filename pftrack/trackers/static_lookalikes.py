@@ -204,18 +204,26 @@ class SceneReference:
         return 0.0 if self._noise is None else self._noise
 
     def is_scene(self, frame: np.ndarray, box) -> bool:
-        """Was the candidate under ``box`` (x, y, w, h) already in view, unchanged, on the reference frame,
-        away from the target?  Its part clear of the target's box on the reference is compared; where less than
-        ``CLEAR`` of it is clear, the reference before it answers instead (the target was elsewhere then, if it
-        moved): an estimate left behind on the place the target last stood, or a candidate there, is not passed for
-        want of a reference."""
+        """Was the candidate under ``box`` (x, y, w, h) already in view, unchanged, on a reference frame, away from
+        the target?  The newest reference on which the whole candidate is clear of the target's box answers; if
+        there is none, the candidate's part clear of the target's box is compared on the reference where that part
+        is largest, when it is at least ``CLEAR`` of the box.  The reference before the newest answers where the
+        target stood on the newest (it was elsewhere then, if it moved): an estimate left behind on the place the
+        target last stood, or a candidate there, is not passed for want of a reference."""
+        refs = []
         for gray, ref_box in ((self.gray, self.box), self._previous or (None, None)):
             if gray is None or gray.shape[:2] != frame.shape[:2]:
-                return False
+                break
             part = clear_part(box, ref_box)
-            if part is not None:  # one camera: the noise measured last stands for both references
-                return unchanged_patch(frame, part, gray, self.threshold, self.noise)
-        return False
+            if part is not None and tuple(part) == tuple(float(v) for v in box):
+                # one camera: the noise measured last stands for both references
+                return unchanged_patch(frame, box, gray, self.threshold, self.noise)
+            if part is not None:
+                refs.append((part[2] * part[3], part, gray))
+        if not refs:
+            return False
+        _, part, gray = max(refs, key=lambda r: r[0])
+        return unchanged_patch(frame, part, gray, self.threshold, self.noise)
 
 
 def unchanged_patch(frame: np.ndarray, box, ref_gray: np.ndarray, threshold: float, noise: float) -> bool:
