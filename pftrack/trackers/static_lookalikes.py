@@ -17,13 +17,15 @@ and offset), with the same place in the reference.
   it is differs).  The samples near a candidate of the scene leave the ranking and the next best is taken (up to
   ``TRIES`` a frame).  A patch longer than ``PATCH`` px is compared in block means.  Nothing is remembered: a
   target that passes over such a place later is tested afresh there.
-* Where the candidate overlaps the target's box on the reference, only its part clear of that box is compared (the
-  box cut along the side that keeps most of it, :func:`clear_part`): a strip of the target on the reference would
-  spoil a quarter's correlation.  When less than ``CLEAR`` of the candidate is clear, the reference before it
-  answers instead (the target was elsewhere then): an estimate left behind where the target last stood, as it
-  turned to go behind something or jumped away, is a piece of the scene on that older frame.  A new reference
-  keeps the one before when the target has not left the outgoing one's box, so that an estimate that stays put
-  does not leave the test with two references of itself.
+* The newest reference on which the whole candidate is clear of the target's box answers; where the target stood on
+  the newest, the reference before it (the one it replaced) answers instead, the target was elsewhere then: an
+  estimate left behind where the target last stood, as it turned to go behind something or jumped away, is a piece
+  of the scene on that older frame.  A new reference keeps the one before when the target has not left the
+  outgoing one's box, so that an estimate that stays put does not leave the test with two references of itself.
+* When the candidate overlaps the target's box on both references, only its part clear of such a box is compared
+  (the box cut along the side that keeps most of it, :func:`clear_part`, on the reference where that part is
+  largest, if it is at least ``CLEAR`` of the box): a strip of the target on the reference would spoil a quarter's
+  correlation.  The kept box is the estimate's, which can fall short of the target, so the cut is the fallback.
 * The test abstains (the candidate is kept) where the references cannot answer: a flat patch, a patch at the frame's
   edge, a candidate mostly on the target's box of both references.  A moving camera makes every patch differ from
   the reference, so the test then abstains in effect.
