@@ -216,10 +216,10 @@ class SceneReference:
         for gray, ref_box in ((self.gray, self.box), self._previous or (None, None)):
             if gray is None or gray.shape[:2] != frame.shape[:2]:
                 break
-            part = clear_part(box, ref_box)
-            if part is not None and tuple(part) == tuple(float(v) for v in box):
+            if float(intersection_area(box, ref_box)) <= 0.0:
                 # one camera: the noise measured last stands for both references
                 return unchanged_patch(frame, box, gray, self.threshold, self.noise)
+            part = clear_part(box, ref_box)
             if part is not None:
                 refs.append((part[2] * part[3], part, gray))
         if not refs:
