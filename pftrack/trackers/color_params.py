@@ -260,6 +260,11 @@ class ColorModelParams(Params):
         "speed seen, from the prediction and from the last confident position. Such a look-alike is not "
         "acquired; it is remembered and followed, and the search picks its candidate among the other samples, "
         "for up to 6 times this many frames. 0: off."))
+    search_retries: int = param(0, ge=0, le=20, doc=(
+        "With the likelihood loss test: a search candidate that would end the loss but is refused by a veto "
+        "(reenter_outward, the raw or grey structure check, the distractor memory) gives way to the next best "
+        "candidate away from it, tested the same way, up to this many more a frame (pftrack.trackers.vetoes). "
+        "0: the frame's search ends with the refusal."))
     acquire_samples: int = param(3, ge=1, le=1_000_000, doc=(
         "With the likelihood loss test: search samples near the best candidate that must pass the appearance "
         "condition before the candidate is tested against the target's history (at most the paper's b N)."))
@@ -339,6 +344,11 @@ class ColorPFParams(ColorModelParams):
         "(docs/robustness.md): mean AUC 0.499 against 0.458, face proxies 0.647 against 0.424 (no run of "
         "24 below 0.5, against 18), re-acquired 35 against 33 of 123, but vanish 0.419 against 0.457. fusion-pf "
         "keeps 'levels' (its structural cue has the quotient)."))
+    search_retries: int = param(2, ge=0, le=20, doc=(
+        "See ColorModelParams.search_retries (0 there). 2 for color-pf and fusion-pf, chosen on the tune data "
+        "(docs/robustness.md): 8 seeds of the tune reappearance scenes re-acquired 436 of 568 (color-pf) and 444 "
+        "(fusion-pf), against 435 and 444 with 0; the tune split unchanged. It acts only when a veto refuses a "
+        "candidate."))
     distractor_frames: int = param(10, ge=0, le=100_000, doc=(
         "Distractor memory: after a gradual loss, a look-alike found beyond the target's reach during the first "
         "this many frames of the search is not acquired but remembered and followed (ColorModelParams."

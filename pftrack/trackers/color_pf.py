@@ -65,6 +65,7 @@ from .persistence import PersistenceMixin
 from .probation import ProbationMixin
 from .static_lookalikes import SceneReference, SceneTestMixin
 from .structure_check import StructureCheck, fused_loss
+from .vetoes import VetoMixin
 from .raw_check import RawGreyCheck
 
 __all__ = ["ColorModelParams", "ColorPF", "ColorPFParams", "ColorParticleFilter"]
@@ -73,7 +74,7 @@ Detector = Callable[[np.ndarray], Sequence]
 _ELL_COLS = np.array([X, Y, HX, HY])
 
 
-class ColorParticleFilter(SearchMixin, ProbationMixin, PersistenceMixin, SceneTestMixin, ColorHooks, Tracker):
+class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMixin, SceneTestMixin, ColorHooks, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
     Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
@@ -141,7 +142,7 @@ class ColorParticleFilter(SearchMixin, ProbationMixin, PersistenceMixin, SceneTe
         self._last_search: TrackState | None = None  # its latest result (re-reported between searches)
         self._search_gray: tuple[int, np.ndarray] | None = None  # (frame index, grey frame) while searching
         self._gray_now: tuple[int, np.ndarray] | None = None  # this frame's grey image, once converted
-        self._vetoed = None  # (frame index, centre, shift) of the last candidate reenter_outward refused
+        self._vetoed: list = []  # (frame index, centre, shift) of the candidates reenter_outward refused lately
         self._ell = np.empty((0, 4))
         self._lit: LitHistogram | None = None  # grey_histogram="both" on grey input (decided by _init)
 

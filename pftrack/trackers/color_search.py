@@ -10,7 +10,7 @@ resumes.  A detector callable may propose candidates too.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import NamedTuple
 
@@ -19,7 +19,6 @@ import numpy as np
 from ..cues.color import reachable_roi
 from ..cues.intensity import channel_levels, gain_maps
 from ..cues.lk import gray_of
-from ..cues.template import patch_shift
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, X, Y, lost_prediction, reappearance_log_prior
 from ..filtering.loss import confidence
@@ -45,6 +44,8 @@ class SearchCandidates(NamedTuple):
     near: np.ndarray
     s_best: np.ndarray
     n_keep: int
+    rank: np.ndarray | None = None     # the samples' ranking (refused and scene candidates at -inf)
+    scores: Callable | None = None     # scores(i): sample i's loss-test scores and log prior
 
 
 class SearchMixin:
@@ -235,30 +236,6 @@ class SearchMixin:
         gate = np.where(near, 0.0, -np.inf)
         return gate if out is None else out + gate
 
-    def _leaving(self, frame: np.ndarray, ell: np.ndarray) -> bool:
-        """``reenter_outward``: is a candidate of the exit strip (ellipse ``ell``) moving out through the edge the
-        target left by, faster than ``reenter_outward`` times the speed the target left with (at least 1 px per
-        frame)?  Its motion is its patch's shift since the previous frame (normalised correlation within three
-        exit speeds, at least 8 px).  When that is unknown (a flat patch, no match, a sliver at the edge), a
-        candidate where the object vetoed on the previous frame has moved to is that object; otherwise unknown
-        motion vetoes nothing."""
-        k = self.params.reenter_outward
-        prev = self._search_gray
-        strip = self._exit_strip() if k > 0 and prev is not None else None
-        if strip is None or self.frame_index - prev[0] != 1:
-            return False
-        speed = max(math.hypot(*self._exit_velocity), 1.0)
-        d = patch_shift(prev[1], self._frame_gray(frame), ellipse_to_box(ell), max(8, math.ceil(3.0 * speed)))
-        last, self._vetoed = self._vetoed, None
-        if d is None:
-            return bool(last is not None and last[0] == self.frame_index - 1
-                        and np.all(np.abs(ell[:2] - last[1] - last[2]) <= np.asarray(self.size)))
-        outward = (-d[0], d[0], -d[1], d[1])[strip[0]]
-        if outward > k * speed:
-            self._vetoed = (self.frame_index, np.array(ell[:2], dtype=np.float64), d)
-            return True
-        return False
-
     def _frame_gray(self, frame: np.ndarray) -> np.ndarray:
         """This frame's grey image, converted once (``_leaving`` needs it, and the search keeps it for the next
         frame)."""
@@ -419,7 +396,7 @@ class SearchMixin:
         best, (s_best, lp) = self._skip_scene(frame, ell, rank, best, scores)
         # samples belonging to the best candidate: within one target size of it
         near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
-        return SearchCandidates(states, ell, rho, tot, loglik, roi, best, lp, near, s_best, n_keep)
+        return SearchCandidates(states, ell, rho, tot, loglik, roi, best, lp, near, s_best, n_keep, rank, scores)
 
     def _search(self, frame: np.ndarray) -> TrackState:
         """Initialisation mode (§6): spread samples, test the appearance condition, re-acquire."""
@@ -429,38 +406,32 @@ class SearchMixin:
         states, ell, rho, tot, loglik, roi = c.states, c.ell, c.rho, c.tot, c.loglik, c.roi
         best, lp, near, s_best, n_keep = c.best, c.lp, c.near, c.s_best, c.n_keep
         thr = self._threshold()
-        found = False
         conf = None
-        if p.search_method == "appearance":
-            cluster = near & self._appearance_pass(rho, thr, loglik) & (tot > 0)
-            if p.loss_test == "likelihood":
-                # the best candidate must look like the target's score history (hysteresis); that test is
-                # stricter than the count of passing samples, which then only needs a few supporters
-                if cluster.sum() >= min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1):
-                    found = self.loss.acquire(s_best, lp)
-                else:  # no candidate to test: the frame still counts unseen (the histories' spread grows with it)
-                    self.loss.unseen_frame()
-                conf = confidence(self.loss.llr)
-            else:
-                found = cluster.sum() > p.kickoff_fraction * p.n_particles
+        vetoed = False
+        if p.search_method == "appearance" and p.loss_test == "likelihood":
+            # the best candidate must look like the target's score history (hysteresis); that test is stricter
+            # than the count of passing samples, which then only needs a few supporters; a candidate a veto
+            # refuses gives way to the next (search_retries, .vetoes)
+            a = self._choose(frame, c, self._appearance_pass(rho, thr, loglik) & (tot > 0))
+            best, s_best, lp, near, cluster, found, vetoed = a
+            conf = confidence(self.loss.llr)
         else:
-            cluster = near & (tot > 0)
-            lw = np.where(cluster, loglik, -np.inf)
-            ww = np.exp(lw - lw.max())
-            ww /= ww.sum()
-            pos = states[:, X:Y + 1]
-            mean = (ww[:, None] * pos).sum(axis=0)
-            var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
-            found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
-        check = self._structure_check
-        vetoed = found and (self._leaving(frame, ell[best]) or (
-            self._raw_check is not None and self._raw_check.vetoes(self._raw, ell[best])) or (
-            check is not None and check.vetoes(self._structure_frame(frame), ell[best])) or
-            self._distractors.vetoes(ell[best, :2], self.frame_index, self._lost_at, self.size,
-                                    self._search_since, self._confident_track))
-        if vetoed:
-            found = False
-            self.loss.lost = True  # acquire() ended the loss; the candidate is another object on its way out
+            if p.search_method == "appearance":
+                cluster = near & self._appearance_pass(rho, thr, loglik) & (tot > 0)
+                found = cluster.sum() > p.kickoff_fraction * p.n_particles
+            else:
+                cluster = near & (tot > 0)
+                lw = np.where(cluster, loglik, -np.inf)
+                ww = np.exp(lw - lw.max())
+                ww /= ww.sum()
+                pos = states[:, X:Y + 1]
+                mean = (ww[:, None] * pos).sum(axis=0)
+                var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
+                found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
+            vetoed = found and self._vetoed_by(frame, ell[best]) is not None
+            if vetoed:
+                found = False
+                self.loss.lost = True
         if not found and self.detector is not None and self.frame_index % p.detector_interval == 0:
             boxes, _ = self._detections(frame)
             if boxes.shape[0]:

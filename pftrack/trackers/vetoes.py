@@ -1,0 +1,137 @@
+"""The vetoes of a search candidate, and the next candidate when one is vetoed (colour trackers' search).
+
+While the target is lost the search tests its best candidate for acquisition (:mod:`.color_search`). A
+candidate that would end the loss can still be refused, as another object of the target's appearance:
+
+- ``reenter_outward``: after the target left the view, a candidate of the exit strip moving out through that
+  edge (:meth:`VetoMixin._leaving`);
+- the raw-colour check and the grey structure check (:mod:`.raw_check`, :mod:`.structure_check`): their own
+  evidence calls the candidate background;
+- the distractor memory (:mod:`.distractors`): a look-alike met beyond the target's reach early in the loss.
+
+A refused best candidate used to end the frame's search, and the samples that ranked below it were never
+tested. Traced on the grey tune scene ``exit-019`` (``color-pf`` and ``fusion-pf``, seed 0): a look-alike
+walking out through the left edge ranks first on every frame of the target's return through that edge, is
+refused as leaving each time, and the target, ranked below it, is not taken within the 15 frames.
+
+With ``search_retries`` = k the samples near a refused candidate (within two half-axes each way) leave the
+ranking, and the next best candidate that is not the scene (:meth:`~.static_lookalikes.SceneTestMixin.
+_skip_scene`) is tested in the same way, up to k more a frame. The acquisition itself is unchanged: the
+chosen candidate must end the loss by the same test, with the same supporters, as the first would have.
+Nothing changes on a frame whose best candidate is not refused.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..cues.template import patch_shift
+from ..filtering.dynamics import X, Y
+from ..geometry import ellipse_to_box
+
+__all__ = ["Acquisition", "VetoMixin", "near_mask"]
+
+
+class Acquisition(NamedTuple):
+    """The candidate a search frame settled on: its index, loss-test scores and log prior, the samples near it,
+    the supporters (``cluster``) it would start tracking from, whether it ends the loss, and whether a veto
+    refused a candidate on this frame."""
+
+    best: int
+    s_best: np.ndarray
+    lp: float
+    near: np.ndarray
+    cluster: np.ndarray
+    found: bool
+    vetoed: bool
+
+
+def near_mask(states: np.ndarray, centre_xy, size: tuple[float, float]) -> np.ndarray:
+    """The samples within two half-axes (each way) of ``centre_xy``: those belonging to one candidate."""
+    hx, hy = size
+    return (np.abs(states[:, X] - centre_xy[0]) < 2 * hx) & (np.abs(states[:, Y] - centre_xy[1]) < 2 * hy)
+
+
+class VetoMixin:
+    """:meth:`_vetoed_by` and :meth:`_choose` for :class:`~.color_pf.ColorParticleFilter`'s search."""
+
+    def _leaving(self, frame: np.ndarray, ell: np.ndarray) -> bool:
+        """``reenter_outward``: is a candidate of the exit strip (ellipse ``ell``) moving out through the edge the
+        target left by, faster than ``reenter_outward`` times the speed the target left with (at least 1 px per
+        frame)?  Its motion is its patch's shift since the previous frame (normalised correlation within three
+        exit speeds, at least 8 px).  When that is unknown (a flat patch, no match, a sliver at the edge), a
+        candidate where an object vetoed on the previous frame has moved to is that object; otherwise unknown
+        motion vetoes nothing. Several candidates of one frame may be asked."""
+        k = self.params.reenter_outward
+        prev = self._search_gray
+        strip = self._exit_strip() if k > 0 and prev is not None else None
+        if strip is None or self.frame_index - prev[0] != 1:
+            return False
+        speed = max(math.hypot(*self._exit_velocity), 1.0)
+        d = patch_shift(prev[1], self._frame_gray(frame), ellipse_to_box(ell), max(8, math.ceil(3.0 * speed)))
+        # the objects refused on the previous frame (and those of this one, kept for the next)
+        self._vetoed = [v for v in self._vetoed if v[0] >= self.frame_index - 1]
+        if d is None:
+            return any(v[0] == self.frame_index - 1 and np.all(np.abs(ell[:2] - v[1] - v[2]) <= np.asarray(self.size))
+                       for v in self._vetoed)
+        outward = (-d[0], d[0], -d[1], d[1])[strip[0]]
+        if outward > k * speed:
+            self._vetoed.append((self.frame_index, np.array(ell[:2], dtype=np.float64), d))
+            return True
+        return False
+
+    def _vetoed_by(self, frame: np.ndarray, ell: np.ndarray) -> str | None:
+        """The veto that refuses candidate ``ell`` (``(4,)``), or ``None``."""
+        if self._leaving(frame, ell):
+            return "leaving"
+        if self._raw_check is not None and self._raw_check.vetoes(self._raw, ell):
+            return "raw"
+        check = self._structure_check
+        if check is not None and check.vetoes(self._structure_frame(frame), ell):
+            return "structure"
+        if self._distractors.vetoes(ell[:2], self.frame_index, self._lost_at, self.size, self._search_since,
+                                    self._confident_track):
+            return "distractor"
+        return None
+
+    def _choose(self, frame: np.ndarray, c, supporters: np.ndarray) -> Acquisition:
+        """The candidate of search ``c`` (:class:`~.color_search.SearchCandidates`) to acquire, if any.
+
+        ``supporters``: the samples whose appearance passes (and that have pixels). A candidate is tested by
+        the loss test (:meth:`loss.would_acquire`) when enough supporters lie near it, then by the vetoes; a
+        refused candidate gives way to the next best, ``search_retries`` times. The loss test is then run once
+        (:meth:`loss.acquire`) on the candidate chosen, or on the first when none would end the loss, so the
+        loss's state moves exactly one frame."""
+        p = self.params
+        need = min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1)
+        best, s_best, lp, near = c.best, c.s_best, c.lp, c.near
+        first = (best, s_best, lp, near)
+        rank = c.rank
+        vetoed = False
+        for attempt in range(1 + max(int(p.search_retries), 0)):
+            cluster = near & supporters
+            if cluster.sum() < need or not self.loss.would_acquire(s_best, lp)[0]:
+                break
+            if self._vetoed_by(frame, c.ell[best]) is None:
+                self.loss.acquire(s_best, lp)
+                return Acquisition(best, s_best, lp, near, cluster, True, vetoed)
+            vetoed = True
+            if attempt == p.search_retries or rank is None:
+                break
+            rank[near_mask(c.states, c.states[best, X:Y + 1], self.size)] = -np.inf
+            if not np.isfinite(rank).any():
+                break
+            best, (s_best, lp) = self._skip_scene(frame, c.ell, rank, int(np.argmax(rank)), c.scores)
+            near = near_mask(c.states, c.states[best, X:Y + 1], self.size)
+        # nothing acquired: the loss test counts the frame on the first candidate, as it always has
+        best, s_best, lp, near = first
+        cluster = near & supporters
+        if cluster.sum() >= need:
+            if self.loss.acquire(s_best, lp):
+                self.loss.lost = True  # acquire() ended the loss; a veto refused the candidate
+        else:
+            self.loss.unseen_frame()  # no candidate to test: the frame still counts unseen
+        return Acquisition(best, s_best, lp, near, cluster, False, vetoed)

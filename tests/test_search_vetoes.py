@@ -1,0 +1,119 @@
+"""A refused search candidate gives way to the next (pftrack.trackers.vetoes, ``search_retries``)."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.trackers.color_search import SearchCandidates
+from pftrack.trackers.vetoes import VetoMixin, near_mask
+
+
+class _Loss:
+    """A loss test that ends the loss for a score above 0.5 and counts its frames unseen."""
+
+    def __init__(self):
+        self.lost, self.unseen, self.acquired, self.llr = True, 0, [], 0.0
+
+    def would_acquire(self, s, lp=0.0):
+        return float(s[0]) > 0.5, float(s[0])
+
+    def acquire(self, s, lp=0.0):
+        self.unseen += 1
+        self.llr = float(s[0])
+        self.acquired.append(float(s[0]))
+        if float(s[0]) > 0.5:
+            self.lost = False
+            return True
+        return False
+
+    def unseen_frame(self):
+        self.unseen += 1
+
+
+class _Host(VetoMixin):
+    """Three candidates 100 px apart; the ones at ``refused`` x positions are vetoed."""
+
+    def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3)):
+        self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
+                                      n_particles=30)
+        self.loss = _Loss()
+        self.size = (10.0, 10.0)
+        self.refused = set(refused)
+        self.asked = []
+        xs = np.repeat([50.0, 150.0, 250.0], 10)
+        self.states = np.zeros((30, 7))
+        self.states[:, 0] = xs
+        self.states[:, 1] = 60.0
+        self.states[:, 4:6] = 10.0
+        self.score = dict(zip((50.0, 150.0, 250.0), scores))
+
+    def _vetoed_by(self, frame, ell):
+        self.asked.append(float(ell[0]))
+        return "leaving" if float(ell[0]) in self.refused else None
+
+    def _skip_scene(self, frame, ell, rank, best, scores):
+        return best, scores(best)
+
+    def candidates(self):
+        ell = self.states[:, [0, 1, 4, 5]]
+        rank = np.array([self.score[x] for x in self.states[:, 0]]) + np.linspace(0, 1e-3, 30)
+        best = int(np.argmax(rank))
+
+        def scores(i):
+            return np.array([self.score[float(self.states[i, 0])]]), 0.0
+        s, lp = scores(best)
+        near = near_mask(self.states, self.states[best, :2], self.size)
+        return SearchCandidates(self.states, ell, None, None, None, None, best, lp, near, s, 0, rank, scores)
+
+
+def _choose(host):
+    return host._choose(None, host.candidates(), np.ones(30, bool))
+
+
+def test_the_best_candidate_is_taken_when_no_veto_refuses_it():
+    host = _Host(2, refused=())
+    a = _choose(host)
+    assert a.found and not a.vetoed and host.states[a.best, 0] == 50.0
+    assert a.cluster.sum() == 10 and host.loss.unseen == 1 and host.asked == [50.0]
+
+
+def test_a_refused_candidate_gives_way_to_the_next():
+    host = _Host(2, refused=(50.0,))
+    a = _choose(host)
+    assert a.found and a.vetoed and host.states[a.best, 0] == 150.0
+    assert set(host.states[a.cluster, 0]) == {150.0}
+    assert host.loss.unseen == 1 and host.loss.acquired == [0.8]  # the loss test moved one frame
+
+
+def test_without_retries_the_refusal_ends_the_frame():
+    host = _Host(0, refused=(50.0,))
+    a = _choose(host)
+    assert not a.found and a.vetoed and host.states[a.best, 0] == 50.0
+    assert host.loss.lost and host.loss.unseen == 1  # acquire() ended the loss, the veto restored it
+    assert host.asked == [50.0]
+
+
+def test_a_candidate_that_would_not_end_the_loss_is_not_asked():
+    host = _Host(2, refused=(50.0,), scores=(0.9, 0.3, 0.2))
+    a = _choose(host)
+    assert not a.found and a.vetoed and host.states[a.best, 0] == 50.0  # the first is reported
+    assert host.asked == [50.0] and host.loss.lost and host.loss.unseen == 1
+
+
+def test_retries_are_bounded():
+    host = _Host(1, refused=(50.0, 150.0), scores=(0.9, 0.8, 0.7))
+    a = _choose(host)
+    assert not a.found and host.asked == [50.0, 150.0]
+    host = _Host(2, refused=(50.0, 150.0), scores=(0.9, 0.8, 0.7))
+    a = _choose(host)
+    assert a.found and host.states[a.best, 0] == 250.0
+
+
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
+def test_the_trackers_default_to_two_retries(name):
+    assert pftrack.create_tracker(name).params.search_retries == 2
+    assert pftrack.create_tracker(name, search_retries=0).params.search_retries == 0
