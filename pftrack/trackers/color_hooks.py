@@ -102,7 +102,12 @@ class ColorHooks:
         return rho > threshold
 
     def _search_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray, feats) -> np.ndarray:
-        """Further log-likelihood terms for the search's samples (default: none)."""
+        """Further log-likelihood terms for the search's samples (default: the structural cue of
+        ``grey_check="fused"`` on grey input with ``grey_search_structure``, as every tracked particle has it; else
+        none)."""
+        check = self._fused_check
+        if check is not None and self.params.grey_search_structure:
+            return log_lik + check.log_lik(self._structure_frame(frame), feats.roi, self._ellipses(states))
         return log_lik
 
     def _update_models(self, frame: np.ndarray, estimate: np.ndarray, feats, rho_e: float) -> None:

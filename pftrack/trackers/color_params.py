@@ -260,6 +260,10 @@ class ColorModelParams(Params):
         "speed seen, from the prediction and from the last confident position. Such a look-alike is not "
         "acquired; it is remembered and followed, and the search picks its candidate among the other samples, "
         "for up to 6 times this many frames. 0: off."))
+    grey_search_structure: bool = param(False, doc=(
+        "With grey_check='fused' on grey input: the search ranks its samples by the same likelihood as the tracked "
+        "particles, the histogram's and the structural cue's, instead of the histogram's alone (the candidate it "
+        "tests must pass the fused loss test of both)."))
     search_retries: int = param(0, ge=0, le=20, doc=(
         "With the likelihood loss test: a search candidate that would end the loss but is refused by a veto "
         "(reenter_outward, the raw or grey structure check, the distractor memory) gives way to the next best "
@@ -344,6 +348,12 @@ class ColorPFParams(ColorModelParams):
         "(docs/robustness.md): mean AUC 0.499 against 0.458, face proxies 0.647 against 0.424 (no run of "
         "24 below 0.5, against 18), re-acquired 35 against 33 of 123, but vanish 0.419 against 0.457. fusion-pf "
         "keeps 'levels' (its structural cue has the quotient)."))
+    grey_search_structure: bool = param(True, doc=(
+        "See ColorModelParams.grey_search_structure (off there). On for color-pf, chosen on the tune data "
+        "(docs/robustness.md): 8 seeds of the tune reappearance scenes re-acquired 471 of 568 against 436, mean AUC "
+        "0.705 against 0.689, lost recall lower on the teleport scenes (0.895 against 0.957); the tune split "
+        "0.576 against 0.570 mean AUC (grey copies 0.509 against 0.491, grey + light 0.486 against 0.461), "
+        "false-lost 0.035 against 0.046. fusion-pf's search has its own structural cue."))
     search_retries: int = param(2, ge=0, le=20, doc=(
         "See ColorModelParams.search_retries (0 there). 2 for color-pf and fusion-pf, chosen on the tune data "
         "(docs/robustness.md): 8 seeds of the tune reappearance scenes re-acquired 436 of 568 (color-pf) and 444 "
