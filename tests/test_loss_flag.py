@@ -271,6 +271,31 @@ def test_acquire_adds_the_position_log_prior():
     assert det.acquire(s)
 
 
+def test_acquire_z_widens_the_acquisition_bound_only():
+    """``acquire_z`` (color-pf's ``reacquire_z``): a candidate far above the background but between 2 and 3 spreads
+    below the history re-acquires with the bound 3, not with the learning bound 2; learning keeps 2."""
+    def trained(**kw):
+        det = LossDetector(lost_frames=3, **kw)
+        det.reset(1.0)
+        det.set_background(np.random.default_rng(1).normal(0.3, 0.05, 200))
+        for _ in range(30):
+            det.step(0.92)
+        return det
+    det = trained()
+    s = det.mu_t - 2.5 * det.sd_t
+    assert det.evaluate(s) > det.reacquire_margin
+    assert not det.would_acquire(s)[0] and not det.acquire(s)
+    wide = trained(acquire_z=3.0)
+    assert wide.would_acquire(s)[0] and wide.acquire(s)
+    assert not wide.confident(s)  # the update gate and the learning still use learn_z
+    assert not wide.acquire(wide.mu_t - 3.5 * wide.sd_t)
+
+
+@pytest.mark.parametrize("name, z", [("color-pf", 3.0), ("fusion-pf", 0.0), ("local-motion-pf", 0.0)])
+def test_reacquire_z_defaults(name, z):
+    assert pftrack.create_tracker(name).params.reacquire_z == z
+
+
 def test_search_position_prior_penalises_only_far_candidates():
     """fusion-pf's search_prior: log((1 - e) A N(x; m, s^2) + e), capped at 0: 0 at the prediction, log(e) far."""
     t = pftrack.create_tracker("fusion-pf", seed=0)

@@ -130,6 +130,8 @@ class LossDetector:
     background_tail : the absent hypothesis is the top fraction of the background scores.
     learn_z : a score more than this many spreads below the history's mean is not
         learned and does not re-acquire (see :meth:`confident`).
+    acquire_z : with a value > 0, the bound of :meth:`acquire` instead of ``learn_z`` (the learning bound
+        stays ``learn_z``).
     """
 
     lost_frames: int = 3
@@ -141,6 +143,7 @@ class LossDetector:
     unseen_max: float = 0.1
     background_tail: float = 0.1
     learn_z: float = 2.0
+    acquire_z: float = 0.0
 
     def __post_init__(self) -> None:
         self.reset(1.0)
@@ -218,21 +221,26 @@ class LossDetector:
         else:
             self.unseen += 1
 
-    def confident(self, s: float, *, llr: float | None = None) -> bool:
+    def confident(self, s: float, *, llr: float | None = None, z: float | None = None) -> bool:
         """Is ``s`` clearly the target's (its ratio ``llr``, default the last one computed, above
-        ``reacquire_margin``) and consistent with its history?
+        ``reacquire_margin``) and consistent with its history (no more than ``z`` spreads below it, default
+        ``learn_z``)?
 
         The same condition gates the model update of the trackers, so the update and
         the loss test never disagree."""
         return (math.isfinite(s) and (self.llr if llr is None else llr) > self.reacquire_margin
-                and (s - self.mu_t) / self.sd_t > -self.learn_z)
+                and (s - self.mu_t) / self.sd_t > -(self.learn_z if z is None else z))
+
+    @property
+    def _acquire_bound(self) -> float:
+        return self.acquire_z if self.acquire_z > 0 else self.learn_z
 
     def acquire(self, s: float, log_prior: float = 0.0) -> bool:
         """While lost: does a candidate with score ``s`` end the loss (hysteresis margin)?  ``log_prior``: the
         log prior odds of the candidate's position, added to its ratio (posterior odds)."""
         self.unseen_frame()
         self.llr = self.evaluate(s) + log_prior
-        if self.confident(s):
+        if self.confident(s, z=self._acquire_bound):
             self.lost = False
             self.miss = 0
             return True
@@ -248,7 +256,7 @@ class LossDetector:
         self.unseen += 1
         try:
             llr = self.evaluate(s) + log_prior
-            return self.confident(s, llr=llr), llr
+            return self.confident(s, llr=llr, z=self._acquire_bound), llr
         finally:
             self.unseen -= 1
 
