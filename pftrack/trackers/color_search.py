@@ -25,6 +25,7 @@ from ..filtering.loss import confidence
 from ..frames import as_bgr_uint8
 from ..geometry import Box, box_to_ellipse, ellipse_to_box, in_frame_fraction, validate_box
 from .base import TrackState
+from .vetoes import near_mask
 
 _ELL_COLS = np.array([X, Y, HX, HY])
 
@@ -394,8 +395,7 @@ class SearchMixin:
 
         best = int(np.argmax(rank)) if np.any(tot > 0) else 0
         best, (s_best, lp) = self._skip_scene(frame, ell, rank, best, scores)
-        # samples belonging to the best candidate: within one target size of it
-        near = (np.abs(states[:, X] - states[best, X]) < 2 * hx) & (np.abs(states[:, Y] - states[best, Y]) < 2 * hy)
+        near = near_mask(states, states[best, X:Y + 1], self.size)  # the samples belonging to the best candidate
         return SearchCandidates(states, ell, rho, tot, loglik, roi, best, lp, near, s_best, n_keep, rank, scores)
 
     def _search(self, frame: np.ndarray) -> TrackState:

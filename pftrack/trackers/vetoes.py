@@ -12,7 +12,9 @@ candidate that would end the loss can still be refused, as another object of the
 A refused best candidate used to end the frame's search, and the samples that ranked below it were never
 tested. Traced on the grey tune scene ``exit-019`` (``color-pf`` and ``fusion-pf``, seed 0): a look-alike
 walking out through the left edge ranks first on every frame of the target's return through that edge, is
-refused as leaving each time, and the target, ranked below it, is not taken within the 15 frames.
+refused as leaving each time, and the target, ranked below it, is not taken within the 15 frames. (Passed over,
+the target there is still below the acquisition bar while half outside the view: the retries change few
+re-acquisitions, docs/robustness.md.)
 
 With ``search_retries`` = k the samples near a refused candidate (within two half-axes each way) leave the
 ranking, and the next best candidate that is not the scene (:meth:`~.static_lookalikes.SceneTestMixin.
