@@ -291,7 +291,7 @@ def test_acquire_z_widens_the_acquisition_bound_only():
     assert not wide.acquire(wide.mu_t - 3.5 * wide.sd_t)
 
 
-@pytest.mark.parametrize("name, z", [("color-pf", 3.0), ("fusion-pf", 0.0), ("local-motion-pf", 0.0)])
+@pytest.mark.parametrize("name, z", [("color-pf", 0.0), ("fusion-pf", 0.0), ("local-motion-pf", 0.0)])
 def test_reacquire_z_defaults(name, z):
     assert pftrack.create_tracker(name).params.reacquire_z == z
 

@@ -136,9 +136,6 @@ class FusionPFParams(ColorPFParams):
     loss_cue_floor: float = param(2.0, gt=0, le=30, doc=(
         "Lower clip of each cue's log-likelihood ratio in the fused loss test: the most odds one cue alone can "
         "give against the target (a single cue also drops for reasons other than absence)."))
-    reacquire_z: float = param(0.0, ge=0, le=20, doc=(
-        "See ColorModelParams.reacquire_z: the single-cue test's acquisition bound, used only without the fused "
-        "loss test (fused_loss=false); 0, history_z (the fused test has acquire_z)."))
     acquire_z: float = param(4.0, ge=0, le=50, doc=(
         "Re-acquisition with the fused loss test: a cue also vetoes a candidate whose score is more than "
         "acquire_z spreads below that cue's target history, even when its own ratio favours the target (a "
