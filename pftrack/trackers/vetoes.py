@@ -112,8 +112,9 @@ class VetoMixin:
         best, s_best, lp, near = c.best, c.s_best, c.lp, c.near
         first = (best, s_best, lp, near)
         rank = c.rank
+        retries = int(p.search_retries)
         vetoed = False
-        for attempt in range(1 + max(int(p.search_retries), 0)):
+        for attempt in range(retries + 1):
             cluster = near & supporters
             if cluster.sum() < need or not self.loss.would_acquire(s_best, lp)[0]:
                 break
@@ -121,9 +122,9 @@ class VetoMixin:
                 self.loss.acquire(s_best, lp)
                 return Acquisition(best, s_best, lp, near, cluster, True, vetoed)
             vetoed = True
-            if attempt == p.search_retries or rank is None:
+            if attempt == retries or rank is None:
                 break
-            rank[near_mask(c.states, c.states[best, X:Y + 1], self.size)] = -np.inf
+            rank[near] = -np.inf  # the refused candidate's samples leave the ranking
             if not np.isfinite(rank).any():
                 break
             best, (s_best, lp) = self._skip_scene(frame, c.ell, rank, int(np.argmax(rank)), c.scores)
