@@ -291,6 +291,33 @@ def test_acquire_z_widens_the_acquisition_bound_only():
     assert not wide.acquire(wide.mu_t - 3.5 * wide.sd_t)
 
 
+def test_acquire_llr_waives_the_history_bound_for_a_strong_ratio_only():
+    """``acquire_llr`` (color-pf's ``reacquire_llr``): a candidate whose ratio reaches it re-acquires however far
+    below the history it lies; a weaker one is still held to the bound, and learning is unchanged."""
+    def trained(**kw):
+        det = LossDetector(lost_frames=3, **kw)
+        det.reset(1.0)
+        det.set_background(np.random.default_rng(1).normal(0.3, 0.05, 200))
+        for _ in range(30):
+            det.step(0.92)
+        return det
+    det = trained()
+    far = det.mu_t - 5.0 * det.sd_t  # well above the background: a strong ratio
+    llr = det.evaluate(far)
+    assert llr > 5.0 and not det.would_acquire(far)[0]
+    assert trained(acquire_llr=llr + 1.0).would_acquire(far)[0] is False
+    strong = trained(acquire_llr=llr - 1.0)
+    assert strong.would_acquire(far)[0] and not strong.confident(far, llr=llr)
+    assert strong.acquire(far) and not strong.lost
+
+
+@pytest.mark.parametrize("name, v", [("color-pf", 20.0), ("fusion-pf", 0.0), ("local-motion-pf", 0.0)])
+def test_reacquire_llr_defaults(name, v):
+    tracker = pftrack.create_tracker(name)
+    assert tracker.params.reacquire_llr == v
+    assert getattr(tracker.loss, "acquire_llr", 0.0) == v
+
+
 @pytest.mark.parametrize("name, z", [("color-pf", 0.0), ("fusion-pf", 0.0), ("local-motion-pf", 0.0)])
 def test_reacquire_z_defaults(name, z):
     assert pftrack.create_tracker(name).params.reacquire_z == z

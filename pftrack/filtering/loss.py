@@ -132,6 +132,8 @@ class LossDetector:
         learned and does not re-acquire (see :meth:`confident`).
     acquire_z : with a value > 0, the bound of :meth:`acquire` instead of ``learn_z`` (the learning bound
         stays ``learn_z``).
+    acquire_llr : with a value > 0, a candidate whose ratio reaches it is acquired whatever its distance below
+        the history (far above the background, but changed while unseen).
     """
 
     lost_frames: int = 3
@@ -144,6 +146,7 @@ class LossDetector:
     background_tail: float = 0.1
     learn_z: float = 2.0
     acquire_z: float = 0.0
+    acquire_llr: float = 0.0
 
     def __post_init__(self) -> None:
         self.reset(1.0)
@@ -231,8 +234,9 @@ class LossDetector:
         return (math.isfinite(s) and (self.llr if llr is None else llr) > self.reacquire_margin
                 and (s - self.mu_t) / self.sd_t > -(self.learn_z if z is None else z))
 
-    @property
-    def _acquire_bound(self) -> float:
+    def _acquire_bound(self, llr: float) -> float:
+        if 0.0 < self.acquire_llr <= llr:
+            return math.inf
         return self.acquire_z if self.acquire_z > 0 else self.learn_z
 
     def acquire(self, s: float, log_prior: float = 0.0) -> bool:
@@ -240,7 +244,7 @@ class LossDetector:
         log prior odds of the candidate's position, added to its ratio (posterior odds)."""
         self.unseen_frame()
         self.llr = self.evaluate(s) + log_prior
-        if self.confident(s, z=self._acquire_bound):
+        if self.confident(s, z=self._acquire_bound(self.llr)):
             self.lost = False
             self.miss = 0
             return True
@@ -256,7 +260,7 @@ class LossDetector:
         self.unseen += 1
         try:
             llr = self.evaluate(s) + log_prior
-            return self.confident(s, llr=llr, z=self._acquire_bound), llr
+            return self.confident(s, llr=llr, z=self._acquire_bound(llr)), llr
         finally:
             self.unseen -= 1
 

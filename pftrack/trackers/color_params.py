@@ -195,6 +195,10 @@ class ColorModelParams(Params):
         "scenes (8 seeds: 472 of 568 re-acquired against 471; 120 more tune scenes: 315 of 363 against 309) but "
         "lost on the tune sequence otb_dragonbaby (10 seeds: 0.483 against 0.498 mean AUC) and lowered lost recall "
         "(docs/robustness.md)."))
+    reacquire_llr: float = param(0.0, ge=0, le=30, doc=(
+        "With the likelihood loss test (single cue): a search candidate whose ratio reaches this value "
+        "re-acquires however far below the target history's mean its score lies (reacquire_z then does not "
+        "apply): a target far above the background whose colours changed while it was hidden. 0: off."))
     score_sd_floor: float = param(0.03, gt=0, le=1, doc=(
         "Floor on the spreads of the background and target score distributions, so neither collapses "
         "(grey or flat scenes)."))
@@ -366,6 +370,12 @@ class ColorPFParams(ColorModelParams):
         "(docs/robustness.md): 8 seeds of the tune reappearance scenes re-acquired 436 of 568 (color-pf) and 444 "
         "(fusion-pf), against 435 and 444 with 0; the tune split unchanged. It acts only when a veto refuses a "
         "candidate."))
+    reacquire_llr: float = param(20.0, ge=0, le=30, doc=(
+        "See ColorModelParams.reacquire_llr (off there). 20 for color-pf, chosen on the tune data "
+        "(docs/robustness.md): 8 seeds of the tune reappearance scenes re-acquired 474 of 568 against 471 (10: "
+        "474), 120 more tune scenes 318 of 363 against 309 (mean AUC 0.675 against 0.655); the tune split 79 "
+        "of 90 against 77, mean AUC 0.577 against 0.576; otb_dragonbaby, 10 seeds, 0.505 against 0.498 (5: "
+        "0.485). It acts on colour input; the fused test of grey input has none."))
     distractor_frames: int = param(10, ge=0, le=100_000, doc=(
         "Distractor memory: after a gradual loss, a look-alike found beyond the target's reach during the first "
         "this many frames of the search is not acquired but remembered and followed (ColorModelParams."

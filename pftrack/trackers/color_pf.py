@@ -98,7 +98,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
                                  history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                  sd_floor_background=p.score_sd_floor, learn_z=p.history_z,
-                                 acquire_z=p.reacquire_z)
+                                 acquire_z=p.reacquire_z, acquire_llr=p.reacquire_llr)
         self.resampler = get_resampler("systematic" if p.resampler == "seir" else p.resampler)
         if detector is not None and not callable(detector):
             raise ParameterError("detector must be a callable frame -> boxes")

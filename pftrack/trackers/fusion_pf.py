@@ -143,6 +143,9 @@ class FusionPFParams(ColorPFParams):
         "background). 0 (off): a cue vetoes only when it is history_z spreads below its history and its ratio "
         "says background. Chosen on the tune split (docs/fusion-pf.md): vanish AUC 0.561 against 0.529, every "
         "other group within 0.001; 2 and 3 cost the exit scenes or lost recall."))
+    reacquire_llr: float = param(0.0, ge=0, le=30, doc=(
+        "See ColorModelParams.reacquire_llr: off for fusion-pf, whose fused loss test bounds each cue by "
+        "acquire_z instead (it would act only with fused_loss=false)."))
     acquire_margin: float | None = param(2.0, doc=(
         "LLR a candidate must exceed to end a loss with the fused loss test; None: reacquire_margin (which also "
         "gates the model update). The refined search (search_refine) tests the top of the best peak, clutter's "
