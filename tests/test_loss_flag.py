@@ -271,21 +271,24 @@ def test_acquire_adds_the_position_log_prior():
     assert det.acquire(s)
 
 
+def _trained(**kw) -> LossDetector:
+    """A detector that has learned a target at 0.92 against a background at 0.3 (spread 0.05)."""
+    det = LossDetector(lost_frames=3, **kw)
+    det.reset(1.0)
+    det.set_background(np.random.default_rng(1).normal(0.3, 0.05, 200))
+    for _ in range(30):
+        det.step(0.92)
+    return det
+
+
 def test_acquire_z_widens_the_acquisition_bound_only():
     """``acquire_z`` (color-pf's ``reacquire_z``): a candidate far above the background but between 2 and 3 spreads
     below the history re-acquires with the bound 3, not with the learning bound 2; learning keeps 2."""
-    def trained(**kw):
-        det = LossDetector(lost_frames=3, **kw)
-        det.reset(1.0)
-        det.set_background(np.random.default_rng(1).normal(0.3, 0.05, 200))
-        for _ in range(30):
-            det.step(0.92)
-        return det
-    det = trained()
+    det = _trained()
     s = det.mu_t - 2.5 * det.sd_t
     assert det.evaluate(s) > det.reacquire_margin
     assert not det.would_acquire(s)[0] and not det.acquire(s)
-    wide = trained(acquire_z=3.0)
+    wide = _trained(acquire_z=3.0)
     assert wide.would_acquire(s)[0] and wide.acquire(s)
     assert not wide.confident(s)  # the update gate and the learning still use learn_z
     assert not wide.acquire(wide.mu_t - 3.5 * wide.sd_t)
@@ -294,19 +297,12 @@ def test_acquire_z_widens_the_acquisition_bound_only():
 def test_acquire_llr_waives_the_history_bound_for_a_strong_ratio_only():
     """``acquire_llr`` (color-pf's ``reacquire_llr``): a candidate whose ratio reaches it re-acquires however far
     below the history it lies; a weaker one is still held to the bound, and learning is unchanged."""
-    def trained(**kw):
-        det = LossDetector(lost_frames=3, **kw)
-        det.reset(1.0)
-        det.set_background(np.random.default_rng(1).normal(0.3, 0.05, 200))
-        for _ in range(30):
-            det.step(0.92)
-        return det
-    det = trained()
+    det = _trained()
     far = det.mu_t - 5.0 * det.sd_t  # well above the background: a strong ratio
     llr = det.evaluate(far)
     assert llr > 5.0 and not det.would_acquire(far)[0]
-    assert trained(acquire_llr=llr + 1.0).would_acquire(far)[0] is False
-    strong = trained(acquire_llr=llr - 1.0)
+    assert _trained(acquire_llr=llr + 1.0).would_acquire(far)[0] is False
+    strong = _trained(acquire_llr=llr - 1.0)
     assert strong.would_acquire(far)[0] and not strong.confident(far, llr=llr)
     assert strong.acquire(far) and not strong.lost
 
