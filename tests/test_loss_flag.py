@@ -422,6 +422,19 @@ def test_exit_band_is_the_strip_along_the_edge_left_through():
     np.testing.assert_allclose(t._exit_band(), [[0.0, 0.0, 320.0, 3 * hy]])
 
 
+@pytest.mark.parametrize("grow, width", [(0.0, 0.0), (0.5, 30.0), (1.0, 60.0)])
+def test_the_exit_strip_widens_at_reenter_grow_times_the_exit_speed(grow, width):
+    t = pftrack.create_tracker("color-pf", seed=0, reenter_grow=grow)
+    frame = np.zeros((240, 320, 3), np.uint8)
+    frame[100:140, 100:120] = (0, 0, 200)
+    t.init(frame, (100, 100, 20, 40))
+    hx = t.size[0]
+    t.frame_index, t._search_since = 30, 20  # ten frames into the search, the target left at 6 px a frame
+    t._lost_at = (16, np.array([310.0, 120.0]), np.zeros(2))
+    t._exit_velocity = (6.0, 0.0)
+    np.testing.assert_allclose(t._exit_band()[0, 2], 3 * hx + width)
+
+
 def _flow_scene(seed: int) -> SceneSpec:
     """The target walks out through the right edge; its twin (same colours) follows at the same speed, 170 px
     behind, and leaves too."""

@@ -249,6 +249,10 @@ class ColorModelParams(Params):
         "the speed it left with, until the target is re-acquired. Without "
         "it, a person of similar colours elsewhere in the view is acquired the moment the target has gone. "
         "0: off. Not applied with entry regions (init_auto's regions say where targets enter)."))
+    reenter_grow: float = param(1.0, ge=0, le=100, doc=(
+        "With reenter_border: the strip widens at this many times the speed the target left with, from the start "
+        "of the search (0: a fixed strip, which a target coming back must cross). An option: 0 gained on fusion-pf's "
+        "synthetic tune scenes but lost a real report sequence whose pedestrian comes back (docs/robustness.md)."))
     reenter_outward: float = param(0.0, ge=0, le=100, doc=(
         "With reenter_border: a target coming back through the edge it left by moves into the view, not out. A "
         "candidate of the exit strip whose own motion since the previous frame (its patch found again in the "

@@ -208,7 +208,8 @@ class SearchMixin:
             return None
         # the edge it left through: the one its predicted centre is furthest beyond (in target sizes)
         edge = int(np.argmin([cx / hx, (fw - cx) / hx, cy / hy, (fh - cy) / hy]))
-        grow = math.hypot(*self._exit_velocity) * max(self.frame_index - self._search_since, 0)
+        speed = self.params.reenter_grow * math.hypot(*self._exit_velocity)
+        grow = speed * max(self.frame_index - self._search_since, 0)
         half, extent = (hx, fw) if edge < 2 else (hy, fh)
         return edge, min(half * (1.0 + 2.0 * b) + grow, float(extent))
 
