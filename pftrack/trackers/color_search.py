@@ -382,8 +382,7 @@ class SearchMixin:
         rank = np.where(tot > 0, rank, -np.inf)
         if exclude is not None:
             ex, ey, ehx, ehy = (float(v) for v in exclude)
-            rank = np.where((np.abs(states[:, X] - ex) < 2 * ehx) & (np.abs(states[:, Y] - ey) < 2 * ehy), -np.inf,
-                            rank)
+            rank = np.where(near_mask(states, (ex, ey), (ehx, ehy)), -np.inf, rank)
         else:
             # look-alikes met earlier in this loss are followed and not chosen (distractor_frames)
             known = self._distractors.follow(states[:, X:Y + 1], rank, self.frame_index, self._lost_at, self.size,

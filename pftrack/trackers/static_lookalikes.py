@@ -48,6 +48,7 @@ import numpy as np
 
 from ..cues.lk import gray_of
 from ..geometry import ellipse_to_box, intersection_area
+from .vetoes import near_mask
 
 #: A reference is taken on every this many confident frames: its cost, a grey conversion of the frame (about
 #: 70 us at 854 x 480, 3-4 % of color-pf's time per frame when taken every 10th frame), spread over them.
@@ -296,7 +297,7 @@ class SceneTestMixin:
                     or not self._scene.is_scene(view, ellipse_to_box(ell[best]))):
                 return best, s
             x, y, hx, hy = ell[best]
-            rank[(np.abs(ell[:, 0] - x) < 2 * hx) & (np.abs(ell[:, 1] - y) < 2 * hy)] = -np.inf
+            rank[near_mask(ell, (x, y), (hx, hy))] = -np.inf
             if not np.isfinite(rank).any():
                 return best, s
             best = int(np.argmax(rank))

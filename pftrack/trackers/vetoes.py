@@ -52,7 +52,8 @@ class Acquisition(NamedTuple):
 
 
 def near_mask(states: np.ndarray, centre_xy, size: tuple[float, float]) -> np.ndarray:
-    """The samples within two half-axes (each way) of ``centre_xy``: those belonging to one candidate."""
+    """The samples within two half-axes (each way) of ``centre_xy``: those belonging to one candidate. ``states``:
+    states or ellipses, the centre in their first two columns."""
     hx, hy = size
     return (np.abs(states[:, X] - centre_xy[0]) < 2 * hx) & (np.abs(states[:, Y] - centre_xy[1]) < 2 * hy)
 
