@@ -67,3 +67,60 @@ def test_lattice_coordinates_match_numpy(rng):
                            rng.uniform(1, 60, 50)])
     (ea, xa, ya), (eb, xb, yb) = both_paths(lambda: feats.to_lattice(ell))
     assert np.array_equal(ea, eb) and (xa, ya) == (xb, yb) == (0, 0)
+
+
+def test_grey_block_means_are_opencvs_area_resize(rng):
+    import cv2
+
+    from pftrack.cues.illumination import block_means_gray
+
+    for trial in range(40):
+        h, w = (int(v) for v in rng.integers(16, 400, 2))
+        k = int(rng.integers(2, 40))
+        if w < k or h < k:
+            continue
+        g = rng.integers(0, 256, (h, w)).astype(np.uint8)
+        if trial % 2:  # few levels: many sums exactly half-way between two means
+            g = (g // 64 * 64 + 8).astype(np.uint8)
+        sw, sh = w // k, h // k
+        ref = cv2.resize(g[:sh * k, :sw * k], (sw, sh), interpolation=cv2.INTER_AREA).astype(np.float32)
+        compiled, numpy_path = both_paths(lambda: block_means_gray(g, k))
+        assert compiled.dtype == np.float32 and np.array_equal(compiled, ref), (h, w, k)
+        assert np.array_equal(numpy_path, ref)
+
+
+def test_quotient_levels_are_opencvs_saturating_multiply(rng):
+    import cv2
+
+    from pftrack.cues.illumination import _scale_levels
+
+    for trial in range(10):
+        g = rng.integers(0, 256, (37, 53)).astype(np.uint8)
+        gain = rng.uniform(0.0, 4.0, g.shape).astype(np.float32)
+        if trial % 2:  # products exactly half-way between two levels, both ways of the tie, and saturation
+            gain = np.where(g % 2 == 1, np.float32(0.5), np.float32(1.5)).astype(np.float32)
+            gain[0] = 300.0
+        ref = np.empty_like(g)
+        cv2.multiply(g, gain, dst=ref, dtype=cv2.CV_8U)
+        assert np.array_equal(_scale_levels(g, gain, np.empty_like(g)), ref)
+
+
+def test_quotient_image_is_the_same_with_and_without_the_compiled_kernels(rng):
+    from pftrack.cues.illumination import QuotientImage
+
+    for shape in [(240, 320), (97, 131), (20, 17)]:
+        g = rng.integers(0, 256, shape).astype(np.uint8)
+        compiled, numpy_path = both_paths(lambda: QuotientImage(0.1, bgr=False)(g).copy())
+        assert np.array_equal(compiled, numpy_path), shape
+
+
+def test_equalisation_table_counts_as_numpy_does(rng):
+    from pftrack.cues.intensity import equalization_lut
+
+    for shape in [(240, 320, 3), (61, 83), (5, 7, 3)]:
+        f = rng.integers(0, 256, shape).astype(np.uint8)
+        sub = f[::4, ::4] if f.ndim == 2 else __import__("cv2").cvtColor(np.ascontiguousarray(f[::4, ::4]), 6)
+        hist = np.bincount(sub.ravel(), minlength=256).astype(np.float64)
+        cdf = np.cumsum(hist)
+        expected = np.clip(np.round((cdf - 0.5 * hist) / cdf[-1] * 255.0), 0, 255).astype(np.uint8)
+        assert np.array_equal(equalization_lut(f), expected), shape

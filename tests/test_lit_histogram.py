@@ -100,11 +100,30 @@ def test_color_pf_picks_the_quotient_model_from_the_input(gray, params, has_lit)
     assert (t._lit is not None) is has_lit
     st = t.update(frame)
     assert frame_ious(np.array([st.box]), np.array([box]))[0] > 0.7 and not st.lost
+    if has_lit:  # one quotient image per frame for the histogram and the fused structural check
+        assert t._lit.quotient == t._structure_check.cue._qf
     t = pftrack.create_tracker("fusion-pf", seed=0, **{"grey_histogram": "both", **params})
     t.init(frame, box)
     assert (t._lit is not None) is has_lit
     if has_lit:  # one quotient image per frame for both grey cues
         assert t._lit.quotient == t.structure._qf
+
+
+@pytest.mark.parametrize("params", [{}, {"illumination_sigma": 0.2}])
+def test_color_pf_computes_one_quotient_image_per_grey_frame(params, monkeypatch):
+    from pftrack.cues import illumination
+
+    calls = []
+    inner = illumination.QuotientImage.__call__
+    monkeypatch.setattr(illumination.QuotientImage, "__call__", lambda self, f: calls.append(1) or inner(self, f))
+    frame = _bgr(_scene(2))
+    t = pftrack.create_tracker("color-pf", seed=0, **params)
+    t.init(frame, (120.0, 80.0, 80.0, 80.0))
+    assert t._lit is not None and t._structure_check is not None and t._structure_check.fused
+    calls.clear()
+    for _ in range(3):
+        st = t.update(frame.copy())
+    assert not st.lost and len(calls) == 3
     assert pftrack.create_tracker("fusion-pf").params.grey_histogram == "both"
 
 

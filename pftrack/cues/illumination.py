@@ -27,7 +27,8 @@ more than it did (docs/robustness.md measures both sides).
 Speed: the smoothing is taken on a block-averaged copy (``block`` x ``block`` pixels per
 cell, then a Gaussian of ``sigma / block`` cells), and the reciprocal is brought back to
 full resolution by one bilinear resize and one saturating multiply into kept buffers
-(:class:`QuotientImage`): about 0.2 ms for a 480 x 360 frame on one core.
+(:class:`QuotientImage`; the block means and the multiply compiled, with OpenCV's numbers): about 0.17 ms for an
+854 x 480 frame on one core.
 """
 
 from __future__ import annotations
@@ -35,9 +36,62 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from .._numba import njit, numba_enabled
 from .intensity import to_gray
 
-__all__ = ["QuotientImage", "illumination_quotient"]
+__all__ = ["QuotientImage", "block_means_gray", "illumination_quotient"]
+
+
+@njit(cache=True)
+def _block_means_gray(gray, k, sw, sh, out):
+    """``out[j, i]``: the mean of the ``k x k`` block of the 2-D ``uint8`` image ``gray`` whose top-left pixel is
+    ``(i k, j k)``, as OpenCV's integer-factor area resize gives it (the float32 sum times the float32 ``1/k^2``,
+    rounded to nearest, ties to even), as float32.  Each band of ``k`` rows is summed column by column first (a
+    vectorised pass), then its columns by blocks: 3-4x faster than ``cv2.resize(..., INTER_AREA)`` at ``k = 16``."""
+    inv = np.float32(1.0) / np.float32(k * k)
+    n = sw * k
+    acc = np.empty(n, np.int32)
+    for j in range(sh):
+        row = gray[j * k]
+        for c in range(n):
+            acc[c] = row[c]
+        for r in range(j * k + 1, j * k + k):
+            row = gray[r]
+            for c in range(n):
+                acc[c] += row[c]
+        for i in range(sw):
+            s = 0
+            for c in range(i * k, i * k + k):
+                s += acc[c]
+            out[j, i] = np.rint(np.float32(s) * inv)
+    return out
+
+
+@njit(cache=True)
+def _scale_levels(gray, gain, out):
+    """``out = saturate(round(float32(gray) * gain))`` (to nearest, ties to even): ``cv2.multiply(gray, gain,
+    dst=out, dtype=cv2.CV_8U)`` for a 2-D ``uint8`` image and a float32 gain, the same numbers, about 3x faster."""
+    h, w = gray.shape
+    lo = np.float32(0.0)
+    hi = np.float32(255.0)
+    for y in range(h):
+        g = gray[y]
+        a = gain[y]
+        o = out[y]
+        for x in range(w):
+            o[x] = np.uint8(min(max(np.rint(np.float32(g[x]) * a[x]), lo), hi))
+    return out
+
+
+def block_means_gray(gray: np.ndarray, k: int) -> np.ndarray:
+    """The ``k x k`` block means of the largest whole-block part of a 2-D ``uint8`` image, float32: the numbers of
+    ``cv2.resize(gray[:sh k, :sw k], (sw, sh), interpolation=cv2.INTER_AREA).astype(np.float32)`` (compiled for
+    ``k > 2`` when Numba is on; tested equal for k = 3 ... 39)."""
+    h, w = gray.shape
+    sw, sh = w // k, h // k
+    if numba_enabled() and gray.dtype == np.uint8 and k > 2:  # OpenCV's 2 x 2 path rounds in integers
+        return _block_means_gray(np.ascontiguousarray(gray), int(k), sw, sh, np.empty((sh, sw), np.float32))
+    return cv2.resize(gray[:sh * k, :sw * k], (sw, sh), interpolation=cv2.INTER_AREA).astype(np.float32)
 
 
 class QuotientImage:
@@ -58,7 +112,7 @@ class QuotientImage:
         sw, sh = w // k, h // k
         # exact k x k block means of the largest whole-block part (OpenCV's fast integer-factor path); the
         # strip of fewer than k pixels left over at the right and bottom is covered by the bilinear resize
-        small = cv2.resize(gray[:sh * k, :sw * k], (sw, sh), interpolation=cv2.INTER_AREA).astype(np.float32)
+        small = block_means_gray(gray, k)
         s = self.sigma * max(h, w) / k
         if s > 0:
             small = cv2.GaussianBlur(small, (0, 0), s, borderType=cv2.BORDER_REFLECT)
@@ -75,7 +129,10 @@ class QuotientImage:
             self._gain[:H, W:] = self._gain[:H, W - 1:W]
         if H < h:
             self._gain[H:] = self._gain[H - 1:H]
-        cv2.multiply(gray, self._gain, dst=self._q, dtype=cv2.CV_8U)
+        if numba_enabled() and gray.dtype == np.uint8:
+            _scale_levels(gray, self._gain, self._q)
+        else:
+            cv2.multiply(gray, self._gain, dst=self._q, dtype=cv2.CV_8U)
         return cv2.cvtColor(self._q, cv2.COLOR_GRAY2BGR) if self.bgr else self._q
 
 

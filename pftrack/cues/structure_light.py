@@ -56,6 +56,11 @@ class LitStructure:
     def shape(self) -> tuple[int, int]:
         return self.quotient.shape
 
+    @property
+    def sigma(self) -> float:
+        """The scale of the self-quotient image (a fraction of the frame's larger side)."""
+        return self._q.sigma
+
     def _qf(self, frame: np.ndarray) -> np.ndarray:
         if self._frame is not frame:
             self._frame, self._qframe = frame, self._q(frame)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, X, Y
 from ..filtering.particles import ParticleSet
 from ..filtering.seir import seir
@@ -45,9 +46,15 @@ class ColorHooks:
         np.clip(states[:, HX:HY + 1], self.params.min_half_axis, None, out=states[:, HX:HY + 1])
 
     def _shared_quotient(self):
-        """A cached self-quotient image ``frame -> image`` of another cue, for the second grey histogram to share
-        (default: none, it computes its own)."""
-        return None
+        """A cached self-quotient image ``frame -> image`` of another cue, for the second grey histogram to share:
+        that of the structural check of ``grey_check="fused"`` when it sees the same frames at the same scale
+        (``illumination_sigma``), else none (it computes its own)."""
+        check = self._fused_check
+        cue = check.cue if check is not None else None
+        if (not isinstance(cue, LitStructure) or self._quotient is not None
+                or cue.sigma != self.params.illumination_sigma):
+            return None
+        return cue._qf
 
     def _extra_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray,
                        roi: tuple[int, int, int, int], feats) -> np.ndarray:

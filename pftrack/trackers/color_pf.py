@@ -273,11 +273,6 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self.cue.new_frame(frame)
         ell = box_to_ellipse(box)
         p = self.params
-        if p.grey_histogram == "both" and self.cue.color_space == "gray" and self._quotient is None:
-            self._lit = LitHistogram(sigma=p.illumination_sigma, gray_bins=p.gray_bins, kernel=p.kernel,
-                                     max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold,
-                                     quotient=self._shared_quotient())
-            self._lit.init(frame, ell)
         if self._raw_check is not None:
             self._raw_check.init(self._raw, ell)
         self._drop_structure_check()
@@ -286,6 +281,12 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
             self._structure_check.init(self._structure_frame(frame), ell)
             if self._structure_check.fused:
                 self._plain_loss, self.loss = self.loss, fused_loss(p)
+        if p.grey_histogram == "both" and self.cue.color_space == "gray" and self._quotient is None:
+            # after the structural check: its self-quotient image of the same frames may be shared
+            self._lit = LitHistogram(sigma=p.illumination_sigma, gray_bins=p.gray_bins, kernel=p.kernel,
+                                     max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold,
+                                     quotient=self._shared_quotient())
+            self._lit.init(frame, ell)
         self.loss.reset(1.0)
         self._set_model(self.cue.histogram(frame, ell))
         self.size = (float(ell[2]), float(ell[3]))
