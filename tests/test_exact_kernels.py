@@ -124,3 +124,42 @@ def test_equalisation_table_counts_as_numpy_does(rng):
         cdf = np.cumsum(hist)
         expected = np.clip(np.round((cdf - 0.5 * hist) / cdf[-1] * 255.0), 0, 255).astype(np.uint8)
         assert np.array_equal(equalization_lut(f), expected), shape
+
+
+def test_compiled_grey_features_are_the_opencv_paths_numbers(rng):
+    """quantize_gray: the compiled lattice levels and gradients (pitch >= 3) and the compiled binning give the bins of
+    the OpenCV and NumPy path, over frames of three layouts, regions reaching past the frame, pitches and thresholds."""
+    from pftrack.cues.gray_kernels import exact_gray_available
+    from pftrack.cues.intensity import equalization_lut, quantize_gray
+
+    if not exact_gray_available():
+        pytest.skip("this OpenCV's grey conversion differs from the fixed-point formula: its own path is used")
+    for trial in range(300):
+        h, w = (int(v) for v in rng.integers(5, 160, 2))
+        shape = [(h, w, 3), (h, w), (h, w, 1)][trial % 3]
+        frame = rng.integers(0, 256, shape).astype(np.uint8)
+        if trial % 4 == 0:  # a grey frame with JPEG-like channel differences
+            base = rng.integers(0, 256, (h, w, 1))
+            frame = np.clip(base + rng.integers(-2, 3, (h, w, 3)), 0, 255).astype(np.uint8)
+        pitch = int(rng.integers(1, 12))
+        x0, y0 = int(rng.integers(0, w)) // pitch * pitch, int(rng.integers(0, h)) // pitch * pitch
+        roi = (x0, y0, int(rng.integers(x0 + 1, w + 10)), int(rng.integers(y0 + 1, h + 10)))
+        lut = equalization_lut(frame) if trial % 2 else np.arange(256, dtype=np.uint8)
+        kw = dict(n_intensity=int(rng.choice([8, 16])), n_orientation=int(rng.choice([4, 8])),
+                  gradient_threshold=float(rng.choice([40.0, 10.3, 0.0])))
+        compiled, reference = both_paths(lambda: quantize_gray(frame, roi, pitch, lut, **kw).copy())
+        assert np.array_equal(compiled, reference), (shape, roi, pitch, kw)
+
+
+def test_the_grey_conversion_formula_is_opencvs_for_every_colour():
+    import cv2
+
+    from pftrack.cues import gray_kernels as gk
+
+    if not gk.exact_gray_available():
+        pytest.skip("this OpenCV's grey conversion differs from the fixed-point formula: its own path is used")
+    v = np.arange(1 << 24, dtype=np.uint32)
+    img = np.stack([(v >> 16) & 255, (v >> 8) & 255, v & 255], -1).astype(np.uint8).reshape(4096, 4096, 3)
+    b, g, r = (img[..., c].astype(np.int32) for c in range(3))
+    mine = (gk._CB * b + gk._CG * g + gk._CR * r + (1 << (gk._SHIFT - 1))) >> gk._SHIFT
+    assert np.array_equal(mine, cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))

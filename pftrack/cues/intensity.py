@@ -28,6 +28,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
+from .gray_kernels import exact_gray_available, gray_bins, lattice_levels_gradients
 
 
 def is_gray(frame: np.ndarray, *, tolerance: int = 2, stride: int = 4) -> bool:
@@ -156,7 +157,13 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
     """
     x0, y0, x1, y1 = roi
     fh, fw = frame.shape[:2]
-    if pitch >= _NEIGHBOURHOOD_PITCH or (pitch >= 4 and (min(x1, fw) - x0) * (min(y1, fh) - y0) >= _LARGE_REGION):
+    if (pitch >= 3 and frame.dtype == np.uint8 and frame.flags.c_contiguous
+            and (frame.ndim == 2 or frame.shape[2] in (1, 3)) and exact_gray_available()):
+        # compiled, the same numbers: each lattice point converts and filters its own 3x3 neighbourhood
+        # (pftrack.cues.gray_kernels; 1.5-2x faster than the OpenCV steps below at pitch 8)
+        g, dx, dy = lattice_levels_gradients(frame, np.arange(y0, min(y1, fh), pitch),
+                                             np.arange(x0, min(x1, fw), pitch), lut)
+    elif pitch >= _NEIGHBOURHOOD_PITCH or (pitch >= 4 and (min(x1, fw) - x0) * (min(y1, fh) - y0) >= _LARGE_REGION):
         g, dx, dy = _lattice_gradients(frame, roi, pitch, lut)
     else:
         gx0, gy0, gx1, gy1 = max(x0 - 1, 0), max(y0 - 1, 0), min(x1 + 1, fw), min(y1 + 1, fh)
@@ -164,14 +171,16 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
         dx, dy = _sobel3(g)
         sl = (slice(y0 - gy0, y1 - gy0, pitch), slice(x0 - gx0, x1 - gx0, pitch))
         g, dx, dy = g[sl], dx[sl], dy[sl]
-    mag, ang = cv2.cartToPolar(dx.astype(np.float32), dy.astype(np.float32))
+    mag, ang = cv2.cartToPolar(dx.astype(np.float32, copy=False), dy.astype(np.float32, copy=False))
+    h, w = g.shape
+    if out is None:
+        out = np.empty((h, w), dtype=np.uint16)
+    if numba_enabled():
+        return gray_bins(g, mag, ang, n_intensity, n_orientation, gradient_threshold, out)
     ob = (ang * np.float32(n_orientation / (2.0 * math.pi))).astype(np.int32)
     ob[ob >= n_orientation] = 0  # the angle 2 pi wraps to 0
     ob[mag < gradient_threshold] = n_orientation  # the "flat" bin
     ib = (g.astype(np.int32) * n_intensity) >> 8
-    h, w = g.shape
-    if out is None:
-        out = np.empty((h, w), dtype=np.uint16)
     np.add(ib * (n_orientation + 1), ob, out=out, casting="unsafe")
     return out
 
