@@ -163,3 +163,19 @@ def test_the_grey_conversion_formula_is_opencvs_for_every_colour():
     b, g, r = (img[..., c].astype(np.int32) for c in range(3))
     mine = (gk._CB * b + gk._CG * g + gk._CR * r + (1 << (gk._SHIFT - 1))) >> gk._SHIFT
     assert np.array_equal(mine, cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
+
+
+def test_mean_shift_sums_are_the_numpy_steps(rng):
+    """The compiled mean-shift step visits ellipse_pixels' pixels and sums them as NumPy does (to the last bit)."""
+    from pftrack.cues.meanshift_step import shift_sums
+
+    for trial in range(200):
+        h, w = (int(v) for v in rng.integers(1, 120, 2))
+        bins = rng.integers(0, 64, (h, w)).astype(np.uint16)
+        ratio = rng.random(64) * 3.0 * (rng.random(64) < 0.8)
+        x0, y0 = (int(v) for v in rng.integers(0, 50, 2))
+        ell = (x0 + rng.uniform(-20, w + 20), y0 + rng.uniform(-20, h + 20), rng.uniform(0.3, 70), rng.uniform(0.3, 70))
+        compiled, reference = both_paths(lambda: shift_sums(bins, x0, y0, ell, ratio))
+        assert compiled == reference, (trial, compiled, reference)
+        if compiled[0] > 200:
+            assert compiled[1] > 0

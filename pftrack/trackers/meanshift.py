@@ -27,8 +27,9 @@ from typing import Literal
 
 import numpy as np
 
-from ..cues.color import ellipse_pixels, warmup
+from ..cues.color import warmup
 from ..cues.histogram_cue import ColorCue
+from ..cues.meanshift_step import shift_sums
 from ..filtering.kalman import KalmanFilter
 from ..geometry import Box, box_to_ellipse, ellipse_to_box
 from ..params import Params, param
@@ -86,18 +87,14 @@ class MeanShift(Tracker):
         ell = ell.copy()
         rho0, p0 = self._rho(feats, ell)
         for _ in range(p.max_iterations):
-            xs, ys, b = ellipse_pixels(feats.bins, feats.x0, feats.y0, ell)
-            if xs.size == 0:
-                break
             with np.errstate(divide="ignore", invalid="ignore"):
                 ratio = np.where(p0 > 0, np.sqrt(self.q / np.where(p0 > 0, p0, 1.0)), 0.0)
-            w = ratio[b]
-            sw = w.sum()
-            if sw <= 0:
+            n, sw, sx, sy = shift_sums(feats.bins, feats.x0, feats.y0, ell, ratio)
+            if n == 0 or sw <= 0:
                 break
             new = ell.copy()
-            new[0] = float(np.sum(xs * w) / sw)
-            new[1] = float(np.sum(ys * w) / sw)
+            new[0] = sx / sw
+            new[1] = sy / sw
             rho1, p1 = self._rho(feats, new)
             halvings = 0
             while rho1 < rho0 and halvings < 5 and np.hypot(*(new[:2] - ell[:2])) > p.epsilon:
