@@ -115,7 +115,8 @@ def test_color_pf_computes_one_quotient_image_per_grey_frame(params, monkeypatch
 
     calls = []
     inner = illumination.QuotientImage.__call__
-    monkeypatch.setattr(illumination.QuotientImage, "__call__", lambda self, f: calls.append(1) or inner(self, f))
+    monkeypatch.setattr(illumination.QuotientImage, "__call__",
+                        lambda self, f, **kw: calls.append(1) or inner(self, f, **kw))
     frame = _bgr(_scene(2))
     t = pftrack.create_tracker("color-pf", seed=0, **params)
     t.init(frame, (120.0, 80.0, 80.0, 80.0))
@@ -153,3 +154,37 @@ def test_default_color_pf_holds_a_grey_face_under_a_lamp_and_a_shadow(seed):
     iou, lost = face_proxy_run("color-pf", seed)
     assert iou >= 0.6, iou
     assert not any(lost)  # the face is in view in every frame
+
+
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
+def test_grey_frames_are_converted_once_for_the_quotient_image_and_the_equalisation(name, monkeypatch):
+    """On grey input the self-quotient image and the equalisation table start from one grey conversion of each frame
+    (the tracker's ``_frame_gray``), with the numbers of converting separately."""
+    from pftrack.cues.illumination import QuotientImage
+    from pftrack.cues.intensity import equalization_lut
+
+    frame = _bgr(_scene(3))
+    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    assert np.array_equal(equalization_lut(frame, gray=gray), equalization_lut(frame))
+    assert np.array_equal(QuotientImage(0.1, bgr=False)(frame, gray=gray), QuotientImage(0.1, bgr=False)(frame))
+    t = pftrack.create_tracker(name, seed=0)
+    t.init(frame, (120.0, 80.0, 80.0, 80.0))
+    assert t._grey_shared()
+    whole = []
+    inner = cv2.cvtColor
+
+    def counting(src, code, *a, **k):
+        if code == cv2.COLOR_BGR2GRAY and src.shape[:2] == frame.shape[:2]:
+            whole.append(1)
+        return inner(src, code, *a, **k)
+
+    monkeypatch.setattr(cv2, "cvtColor", counting)
+    for _ in range(3):
+        st = t.update(frame.copy())
+    assert not st.lost and len(whole) == 3
+    # colour input: no quotient image, nothing shared
+    g = _scene(3).astype(np.uint8)
+    colour = cv2.merge([g, 255 - g, g])
+    t = pftrack.create_tracker(name, seed=0)
+    t.init(colour, (120.0, 80.0, 80.0, 80.0))
+    assert not t._grey_shared()

@@ -316,8 +316,8 @@ def test_the_reference_before_catches_an_estimate_left_where_the_target_last_sto
     on = lost_flag_run(spec, "fusion-pf")
     refresh = SceneReference.refresh
 
-    def newest_only(self, *args):
-        refresh(self, *args)
+    def newest_only(self, *args, **kwargs):
+        refresh(self, *args, **kwargs)
         self._previous = None
 
     monkeypatch.setattr(SceneReference, "refresh", newest_only)

@@ -60,7 +60,7 @@ def test_the_quotient_image_is_computed_once_per_frame():
     lit.init(g, TARGET)
     calls = []
     inner = lit._q
-    lit._q = lambda f: calls.append(1) or inner(f)
+    lit._q = lambda f, **kw: calls.append(1) or inner(f, **kw)
     f2 = g.copy()
     lit.new_frame()
     lit.scores(f2, None, TARGET.reshape(1, 4))

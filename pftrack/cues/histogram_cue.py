@@ -148,11 +148,11 @@ class ColorCue:
             self._ref_levels = channel_levels(frame)
         return self.color_space
 
-    def new_frame(self, frame: np.ndarray) -> None:
+    def new_frame(self, frame: np.ndarray, *, gray: np.ndarray | None = None) -> None:
         """Per-frame preparation (cheap, from a subsampled frame): the equalisation table of the grey
-        features, or the lighting normalisation of the RGB bins."""
+        features, or the lighting normalisation of the RGB bins (``gray``: the frame's grey image, if at hand)."""
         if self.color_space == "gray":
-            self._eq_lut = equalization_lut(frame)
+            self._eq_lut = equalization_lut(frame, gray=gray)
         elif self.color_space == "rgb" and self.normalize != "none" and frame.ndim == 3:
             if self.normalize in ("gain", "adaptive"):
                 self._levels = channel_levels(frame)

@@ -105,8 +105,9 @@ class QuotientImage:
         self._gain: np.ndarray | None = None
         self._q: np.ndarray | None = None
 
-    def __call__(self, frame: np.ndarray) -> np.ndarray:
-        gray = to_gray(frame)
+    def __call__(self, frame: np.ndarray, *, gray: np.ndarray | None = None) -> np.ndarray:
+        """The self-quotient image of ``frame`` (``gray``: its grey image, when the caller has it already)."""
+        gray = to_gray(frame) if gray is None else gray
         h, w = gray.shape
         k = max(1, min(self.block, w, h))  # a frame smaller than a block is one cell per pixel row or column
         sw, sh = w // k, h // k

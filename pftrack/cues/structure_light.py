@@ -22,6 +22,8 @@ frame for every cue).
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from .illumination import QuotientImage
@@ -38,13 +40,14 @@ class LitStructure:
     """
 
     def __init__(self, template_pixels: int = 256, *, weighting: str = "kernel", sigma: float = 0.1,
-                 mode: str = "both"):
+                 mode: str = "both", gray_of: Callable[[np.ndarray], np.ndarray] | None = None):
         if mode not in ("both", "quotient"):
             raise ValueError(f"mode must be 'both' or 'quotient', got {mode!r}")
         self.quotient = StructureCue(template_pixels, weighting=weighting)
         self.levels = StructureCue(template_pixels, weighting=weighting) if mode == "both" else None
         # one grey channel: the structural cue reads the same numbers as from three equal ones, a third of the bytes
         self._q = QuotientImage(sigma, bgr=False)
+        self._gray_of = gray_of  # the tracker's grey image of a frame, converted once per frame (None: convert here)
         self._frame: np.ndarray | None = None  # the frame whose quotient image is cached
         self._qframe: np.ndarray | None = None
 
@@ -57,13 +60,19 @@ class LitStructure:
         return self.quotient.shape
 
     @property
+    def shares_gray(self) -> bool:
+        """Does the quotient image start from the caller's grey image of each frame (``gray_of``)?"""
+        return self._gray_of is not None
+
+    @property
     def sigma(self) -> float:
         """The scale of the self-quotient image (a fraction of the frame's larger side)."""
         return self._q.sigma
 
     def _qf(self, frame: np.ndarray) -> np.ndarray:
         if self._frame is not frame:
-            self._frame, self._qframe = frame, self._q(frame)
+            gray = self._gray_of(frame) if self._gray_of is not None else None
+            self._frame, self._qframe = frame, self._q(frame, gray=gray)
         return self._qframe
 
     def new_frame(self) -> None:

@@ -156,6 +156,13 @@ class ColorHooks:
             self._raw_check.new_frame()
         return self._quotient(frame)
 
+    def _grey_shared(self) -> bool:
+        """Grey input whose self-quotient image starts from the tracker's grey conversion of each frame
+        (``_frame_gray``): the equalisation table then starts from it too."""
+        check = self._fused_check
+        return (self.cue.color_space == "gray" and check is not None and isinstance(check.cue, LitStructure)
+                and check.cue.shares_gray)
+
     def _wants_grey_check(self) -> bool:
         """Does this input get the structural check at re-acquisition (``grey_check`` on grey input)?"""
         p = self.params

@@ -143,7 +143,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self._search_since = 0  # frame index at which the current search began
         self._last_search: TrackState | None = None  # its latest result (re-reported between searches)
         self._search_gray: tuple[int, np.ndarray] | None = None  # (frame index, grey frame) while searching
-        self._gray_now: tuple[int, np.ndarray] | None = None  # this frame's grey image, once converted
+        self._gray_now: tuple | None = None  # (frame index, grey image, frame): this frame's grey image, once converted
         self._vetoed: list = []  # (frame index, centre, shift) of the candidates reenter_outward refused lately
         self._ell = np.empty((0, 4))
         self._lit: LitHistogram | None = None  # grey_histogram="both" on grey input (decided by _init)
@@ -277,7 +277,9 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
             self._raw_check.init(self._raw, ell)
         self._drop_structure_check()
         if self._wants_grey_check():
-            self._structure_check = StructureCheck.for_params(p)
+            # its quotient image starts from the frame's grey image, converted once (the frames it sees are these)
+            self._structure_check = StructureCheck.for_params(
+                p, gray_of=self._frame_gray if self._structure_frame(frame) is frame else None)
             self._structure_check.init(self._structure_frame(frame), ell)
             if self._structure_check.fused:
                 self._plain_loss, self.loss = self.loss, fused_loss(p)
@@ -300,7 +302,8 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
 
     # ------------------------------------------------------------------ update
     def _update(self, frame: np.ndarray) -> TrackState:
-        self.cue.new_frame(frame)
+        # on grey input with a self-quotient image each frame, both start from one grey conversion of the frame
+        self.cue.new_frame(frame, gray=self._frame_gray(frame) if self._grey_shared() else None)
         if self._lit is not None:
             self._lit.new_frame(frame)
         if self._structure_check is not None:

@@ -239,11 +239,11 @@ class SearchMixin:
         return gate if out is None else out + gate
 
     def _frame_gray(self, frame: np.ndarray) -> np.ndarray:
-        """This frame's grey image, converted once (``_leaving`` needs it, and the search keeps it for the next
-        frame)."""
+        """This frame's grey image, converted once (``_leaving`` needs it, the search keeps it for the next frame,
+        and on grey input the equalisation table and the self-quotient image start from it)."""
         cached = self._gray_now
-        if cached is None or cached[0] != self.frame_index:
-            cached = self._gray_now = (self.frame_index, gray_of(frame))
+        if cached is None or cached[0] != self.frame_index or cached[2] is not frame:
+            cached = self._gray_now = (self.frame_index, gray_of(frame), frame)
         return cached[1]
 
     def _motion_log_prior(self, states: np.ndarray) -> np.ndarray | None:

@@ -254,8 +254,12 @@ class FusionPF(ColorPF):
         p = self.params
         if frame is not None and p.grey_structure != "levels" and p.illumination == "none" and is_gray(frame):
             return LitStructure(p.structure_pixels, weighting=p.structure_weighting, sigma=p.illumination_sigma,
-                                mode=p.grey_structure)
+                                mode=p.grey_structure, gray_of=self._frame_gray)
         return StructureCue(p.structure_pixels, weighting=p.structure_weighting)
+
+    def _grey_shared(self) -> bool:
+        return (self.cue.color_space == "gray" and isinstance(self.structure, LitStructure)
+                and self.structure.shares_gray) or super()._grey_shared()
 
     def _shared_quotient(self):
         """The grey structural cue's self-quotient image (same frames, same ``illumination_sigma``), when it has one."""

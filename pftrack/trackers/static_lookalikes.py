@@ -181,9 +181,10 @@ class SceneReference:
         self._noise: float | None = None
         self._previous: tuple | None = None  # the reference before: (grey frame, target's box)
 
-    def refresh(self, frame: np.ndarray, box, frame_index: int) -> None:
+    def refresh(self, frame: np.ndarray, box, frame_index: int, *, grey=None) -> None:
         """A confident frame: keep it (grey) with the target's ``box`` when ``REFRESH`` frames have passed; on the
-        confident frame right after, estimate the noise (:func:`noise_sd`)."""
+        confident frame right after, estimate the noise (:func:`noise_sd`).  ``grey``: the caller's cached
+        ``frame -> grey image`` (not modified later), instead of converting here."""
         if self.threshold <= 0:
             return
         if frame_index - self.frame_index >= REFRESH:
@@ -192,7 +193,7 @@ class SceneReference:
             stayed = prev is not None and overlaps(box, self.box) and not overlaps(box, prev[1])
             if self.gray is not None and not stayed:
                 self._previous = (self.gray, self.box)
-            g = gray_of(frame)
+            g = (grey or gray_of)(frame)
             self.gray = g.copy() if g is frame or g.base is not None else g
             self.box = tuple(float(v) for v in box)
             self.frame_index = frame_index
@@ -259,7 +260,8 @@ class SceneTestMixin:
 
     def _keep_scene(self, frame: np.ndarray, box) -> None:
         """A confident frame with the target at ``box``."""
-        self._scene.refresh(self._structure_frame(frame), box, self.frame_index)
+        sf = self._structure_frame(frame)
+        self._scene.refresh(sf, box, self.frame_index, grey=self._frame_gray if sf is frame else None)
 
     def _on_scene(self, frame: np.ndarray, box, keep: bool = False) -> bool:
         """While tracking: is the estimate's ``box`` a piece of the scene, unchanged since the reference, where the

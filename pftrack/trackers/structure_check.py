@@ -91,12 +91,12 @@ class StructureCheck:
     references are refreshed on every confident frame."""
 
     def __init__(self, detector: LossDetector, *, fused: bool = False, template_pixels: int = TEMPLATE_PIXELS,
-                 rate: float = RATE, anchor_gate: float = ANCHOR_GATE, sigma: float = 0.1):
+                 rate: float = RATE, anchor_gate: float = ANCHOR_GATE, sigma: float = 0.1, gray_of=None):
         # fused: the patches of the grey levels and of their self-quotient image (scale sigma), the better of the
         # two (fusion-pf's grey_structure="both"): a lamp or a shadow across a face lowered the grey levels' NCC
         # alone until the fused test declared the face lost (docs/robustness.md)
-        self.cue = (LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both") if fused
-                    else StructureCue(template_pixels, anchor=True, weighting="uniform"))
+        self.cue = (LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both", gray_of=gray_of)
+                    if fused else StructureCue(template_pixels, anchor=True, weighting="uniform"))
         self.detector = detector
         self.fused = bool(fused)
         self.update_every = 1 if self.fused else UPDATE_EVERY
@@ -105,11 +105,12 @@ class StructureCheck:
         self._learned = 0  # confident frames learned since init (the reference is refreshed on every UPDATE_EVERY-th)
 
     @classmethod
-    def for_params(cls, p) -> "StructureCheck":
-        """The check a colour PF's parameters ``p`` ask for (``grey_check``), its test with their history settings."""
+    def for_params(cls, p, *, gray_of=None) -> "StructureCheck":
+        """The check a colour PF's parameters ``p`` ask for (``grey_check``), its test with their history settings
+        (``gray_of``: the tracker's cached grey image of the frames the check sees, for the quotient image)."""
         return cls(LossDetector(history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                 sd_floor_background=p.score_sd_floor, learn_z=p.history_z),
-                   fused=p.grey_check == "fused", sigma=p.illumination_sigma)
+                   fused=p.grey_check == "fused", sigma=p.illumination_sigma, gray_of=gray_of)
 
     def init(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
         self.cue.init(frame, np.asarray(ellipse, dtype=np.float64).reshape(1, 4))
