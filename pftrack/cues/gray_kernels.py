@@ -42,6 +42,14 @@ def exact_gray_available() -> bool:
     return _EXACT
 
 
+@njit(cache=True, inline="always")
+def _store(n, i, j, g, dx, dy):
+    """The centre of a 3x3 neighbourhood ``n`` (row-major, 9 levels) and its Sobel derivatives, at ``(i, j)``."""
+    g[i, j] = n[4]
+    dx[i, j] = (n[2] + 2 * n[5] + n[8]) - (n[0] + 2 * n[3] + n[6])
+    dy[i, j] = (n[6] + 2 * n[7] + n[8]) - (n[0] + 2 * n[1] + n[2])
+
+
 @njit(cache=True)
 def _sparse3(rows, fh, fw, ys, xs, lut, g, dx, dy):
     """Per lattice point of a BGR frame (rows of ``W * 3`` bytes): its 3x3 neighbourhood's equalised grey levels
@@ -59,14 +67,13 @@ def _sparse3(rows, fh, fw, ys, xs, lut, g, dx, dy):
                     n[k] = lut[(_CB * np.int32(r[c]) + _CG * np.int32(r[c + 1]) + _CR * np.int32(r[c + 2])
                                 + (1 << (_SHIFT - 1))) >> _SHIFT]
                     k += 1
-            g[i, j] = n[4]
-            dx[i, j] = (n[2] + 2 * n[5] + n[8]) - (n[0] + 2 * n[3] + n[6])
-            dy[i, j] = (n[6] + 2 * n[7] + n[8]) - (n[0] + 2 * n[1] + n[2])
+            _store(n, i, j, g, dx, dy)
 
 
 @njit(cache=True)
 def _sparse1(rows, fh, fw, ys, xs, lut, g, dx, dy):
-    """:func:`_sparse3` of a one-channel frame."""
+    """:func:`_sparse3` of a one-channel frame (the self-quotient image). A single kernel branching on the channel
+    count inside the loop ran 20 % slower here (43 against 36 µs on an 854 x 480 image at pitch 8)."""
     n = np.empty(9, np.int32)
     for i in range(ys.shape[0]):
         y = ys[i]
@@ -79,9 +86,7 @@ def _sparse1(rows, fh, fw, ys, xs, lut, g, dx, dy):
                 for c in (c0, c1, c2):
                     n[k] = lut[r[c]]
                     k += 1
-            g[i, j] = n[4]
-            dx[i, j] = (n[2] + 2 * n[5] + n[8]) - (n[0] + 2 * n[3] + n[6])
-            dy[i, j] = (n[6] + 2 * n[7] + n[8]) - (n[0] + 2 * n[1] + n[2])
+            _store(n, i, j, g, dx, dy)
 
 
 def lattice_levels_gradients(frame: np.ndarray, ys: np.ndarray, xs: np.ndarray, lut: np.ndarray
