@@ -40,6 +40,7 @@ DEFAULT_BINS = {"rgb": (8, 8, 8), "hsv": (8, 8, 4)}
 
 # --------------------------------------------------------------------------- histograms
 
+@njit
 def _pixel_span(c, h, n_pixels):
     """First and last pixel index whose centre can lie within ``c ± h`` (clipped)."""
     lo = max(0, int(math.ceil(c - h - 0.5)))

@@ -9,12 +9,10 @@ step is the same to the last bit as the NumPy reference below.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .._numba import njit, np_sum, numba_enabled
-from .color import ellipse_pixels
+from .color import _pixel_span, ellipse_pixels
 
 __all__ = ["shift_sums"]
 
@@ -23,10 +21,8 @@ __all__ = ["shift_sums"]
 def _shift_sums(bins, x0, y0, cx, cy, hx, hy, ratio):
     hgt, wid = bins.shape
     lcx, lcy = cx - x0, cy - y0
-    i_lo = max(0, int(math.ceil(lcx - hx - 0.5)))
-    i_hi = min(wid - 1, int(math.floor(lcx + hx - 0.5)))
-    j_lo = max(0, int(math.ceil(lcy - hy - 0.5)))
-    j_hi = min(hgt - 1, int(math.floor(lcy + hy - 0.5)))
+    i_lo, i_hi = _pixel_span(lcx, hx, wid)
+    j_lo, j_hi = _pixel_span(lcy, hy, hgt)
     if i_hi < i_lo or j_hi < j_lo or hx <= 0 or hy <= 0:
         return 0, 0.0, 0.0, 0.0
     ax = 1.0 / (hx * hx)
