@@ -156,6 +156,19 @@ def test_registry_and_box_init():
     assert st.info["mask"].shape == masks[0].shape
 
 
+
+def test_box_init_covering_the_whole_frame():
+    """GrabCut has no background to learn outside such a box (OpenCV asserts): the box is the first mask."""
+    import pftrack
+
+    frames, _ = _blob_video(n=3)
+    h, w = frames[0].shape[:2]
+    tr = pftrack.create_tracker("graphcut")
+    st = tr.init(frames[0], (0, 0, w, h))
+    assert st.info["mask"].all()
+    st = tr.update(frames[1])
+    assert st.info["mask"].shape == (h, w)
+
 def test_segment_cli(tmp_path, capsys):
     frames, masks = _blob_video(n=6)
     d = tmp_path / "frames"

@@ -76,14 +76,16 @@ def largest_component(mask: np.ndarray) -> np.ndarray:
 
 
 def grabcut_init(frame: np.ndarray, box) -> np.ndarray:
-    """The first mask: GrabCut in the box (5 iterations), as ch09.md §1.4 proposes."""
+    """The first mask: GrabCut in the box (5 iterations), as ch09.md §1.4 proposes; the box itself where GrabCut
+    finds less than 4 foreground pixels or has no background to learn from (a box covering the whole frame)."""
     h, w = frame.shape[:2]
     x, y, bw, bh = (round(v) for v in box)
     x, y = max(x, 0), max(y, 0)
     bw, bh = max(min(bw, w - x), 2), max(min(bh, h - y), 2)
     mask = np.zeros((h, w), np.uint8)
     bgd, fgd = np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64)
-    cv2.grabCut(frame, mask, (x, y, bw, bh), bgd, fgd, 5, cv2.GC_INIT_WITH_RECT)
+    if bw * bh < w * h:  # GrabCut learns its background model outside the box: none when the box is the frame
+        cv2.grabCut(frame, mask, (x, y, bw, bh), bgd, fgd, 5, cv2.GC_INIT_WITH_RECT)
     m = (mask == cv2.GC_FGD) | (mask == cv2.GC_PR_FGD)
     if m.sum() < 4:
         m = np.zeros((h, w), bool)
