@@ -133,6 +133,29 @@ def test_otb_reader(tmp_path):
     assert src.init_box == (1, 2, 3, 4) and len(src) == 5
 
 
+
+@pytest.mark.parametrize("folder", ["David", "otb_david"])
+def test_otb_known_partial_sequences_are_cut_to_their_annotated_stretch(tmp_path, folder):
+    """OTB-100's David has 770 images and 471 boxes, for frames 300-770 (the benchmark's configuration): the boxes
+    must not be paired with frames 1-471.  A folder already cut, or of another name, is left as it is."""
+    def make(name, n_img, n_rows):
+        seq = tmp_path / name
+        (seq / "img").mkdir(parents=True)
+        for i in range(1, n_img + 1):
+            (seq / "img" / f"{i:04d}.jpg").touch()  # the reader lists frames; it does not decode them
+        (seq / "groundtruth_rect.txt").write_text("".join(f"{i},1,20,30\n" for i in range(n_rows)))
+        return read_sequence(seq)
+
+    s = make(folder, 770, 471)
+    assert len(s) == 471 and s.frames[0].name == "0300.jpg" and s.frames[-1].name == "0770.jpg"
+    assert s.groundtruth[0].tolist() == [0, 1, 20, 30] and s.groundtruth[-1].tolist() == [470, 1, 20, 30]
+    assert len(make(folder + "_cut", 471, 471)) == 471  # not a known name: as it is
+    assert make("Freeman4", 283, 283).frames[-1].name == "0283.jpg"  # already the stretch
+    s = make("Diving", 231, 215)
+    assert len(s) == 215 and s.frames[-1].name == "0215.jpg"
+    s = make("Football1", 74 + 10, 50)  # other rows than the stretch's: not the benchmark's sequence
+    assert len(s) == 84
+
 def test_otb_malformed_groundtruth(tmp_path):
     seq = tmp_path / "Seq"
     write_frames(seq / "img", 2)

@@ -9,7 +9,11 @@ Layouts
 -------
 * **OTB**: ``img/`` + ``groundtruth_rect.txt`` (``x,y,w,h`` per row; commas, tabs or
   spaces; ``NaN`` rows = target not visible; may have fewer rows than images),
-  optional ``cfg.json`` (``startFrame``/``endFrame``/``imgFormat``) and ``attrs.txt``.
+  optional ``cfg.json`` (``startFrame``/``endFrame``/``imgFormat``) and ``attrs.txt``.  Without
+  ``cfg.json``, the five OTB-100 sequences whose annotated stretch is not their whole image folder (David from
+  frame 300; Football1, Freeman3, Freeman4 and Diving up to a frame) are cut to that stretch, as the benchmark's
+  own configuration and its common loaders do (:data:`OTB_FRAME_RANGES`), when the ground truth has exactly
+  that stretch's rows.
 * **VOT**: frames (in the folder itself or in ``color/``) + ``groundtruth.txt`` with
   4-value boxes or 8-value polygons (converted to their axis-aligned boxes).
 * **MOTChallenge**: ``img1/``, ``seqinfo.ini`` and, when present, ``gt/gt.txt``
@@ -193,6 +197,27 @@ def discover_sequences(path: str | Path) -> list[Sequence]:
 
 # ------------------------------------------------------------------------------ OTB
 
+#: The OTB-100 sequences whose ground truth covers only part of ``img/``: first and last frame numbers (from 1) of
+#: the annotated stretch, from the benchmark's sequence configuration (the tracker benchmark's ``configSeqs``; the
+#: same cuts as got10k's OTB loader).  Keys are lower-case folder names (an ``otb_`` or ``otb-`` prefix is ignored).
+OTB_FRAME_RANGES: dict[str, tuple[int, int]] = {
+    "david": (300, 770), "football1": (1, 74), "freeman3": (1, 460), "freeman4": (1, 283), "diving": (1, 215)}
+
+
+def _otb_range(name: str, n_files: int, n_rows: int) -> tuple[int, int] | None:
+    """The annotated stretch of a known OTB sequence folder, when its images extend past it and its ground truth
+    has exactly the stretch's rows (a folder already cut to the stretch, or another sequence of that name, is left
+    as it is)."""
+    key = re.sub(r"^otb[_-]", "", name.lower())
+    rng = OTB_FRAME_RANGES.get(key)
+    if rng is None:
+        return None
+    start, end = rng
+    if n_rows == end - start + 1 and n_files >= end and n_files != n_rows:
+        return rng
+    return None
+
+
 def read_otb(path: str | Path) -> Sequence:
     path = Path(path)
     img_dir = path / "img"
@@ -224,6 +249,8 @@ def read_otb(path: str | Path) -> Sequence:
         attrs = cfg.get("attributes")
         if isinstance(attrs, list):
             attributes = [str(a) for a in attrs]
+    elif (rng := _otb_range(path.name, len(files), boxes.shape[0])) is not None:
+        files = files[rng[0] - 1:rng[1]]
     attrs_txt = path / "attrs.txt"
     if not attributes and attrs_txt.is_file():
         attributes = [a.strip() for a in attrs_txt.read_text(encoding="utf-8", errors="replace").split(",") if a.strip()]
