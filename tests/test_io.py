@@ -156,6 +156,30 @@ def test_otb_known_partial_sequences_are_cut_to_their_annotated_stretch(tmp_path
     s = make("Football1", 74 + 10, 50)  # other rows than the stretch's: not the benchmark's sequence
     assert len(s) == 84
 
+
+def test_otb_folder_with_two_targets_gives_two_sequences(tmp_path):
+    """OTB-100's Jogging annotates two people (groundtruth_rect.1.txt, .2.txt): a sequence each, named as the
+    benchmark names them, and an evaluation job re-reads the right one."""
+    from pftrack.eval.runner import build_jobs, parse_tracker_list, run_job
+
+    data = tmp_path / "otb"
+    seq = data / "Jogging"
+    write_frames(seq / "img", 4, size=(64, 48))
+    (seq / "groundtruth_rect.1.txt").write_text("2,3,10,12\n" * 4)
+    (seq / "groundtruth_rect.2.txt").write_text("30,20,12,14\n" * 4)
+    write_frames(data / "Other" / "img", 4, size=(64, 48))
+    (data / "Other" / "groundtruth_rect.txt").write_text("5,5,10,10\n" * 4)
+    seqs = discover_sequences(data)
+    assert [s.name for s in seqs] == ["Jogging.1", "Jogging.2", "Other"]
+    assert [s.target for s in seqs] == [1, 2, None]
+    assert seqs[0].init_box == (2, 3, 10, 12) and seqs[1].init_box == (30, 20, 12, 14)
+    assert [s.name for s in discover_sequences(seq)] == ["Jogging.1", "Jogging.2"]
+    assert read_sequence(seq).init_box == (2, 3, 10, 12)  # one folder read alone: its first target
+    jobs = build_jobs(seqs[:2], parse_tracker_list("template"), seeds=1, protocol="ope")
+    recs = [run_job(j) for j in jobs]
+    assert [r["sequence"] for r in recs] == ["Jogging.1", "Jogging.2"]
+    assert recs[1]["boxes"][:4] == [30.0, 20.0, 12.0, 14.0]  # flattened rows; the first is the init box
+
 def test_otb_malformed_groundtruth(tmp_path):
     seq = tmp_path / "Seq"
     write_frames(seq / "img", 2)

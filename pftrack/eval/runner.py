@@ -173,6 +173,7 @@ class Job:
     protocol: str  # "ope" | "sre" | "vot" | "mot"
     threads: int = 1
     extra: tuple[tuple[str, Any], ...] = ()
+    target: int | None = None  # which annotated target of an OTB folder with several (``Sequence.target``)
 
     @property
     def key(self) -> str:
@@ -213,7 +214,7 @@ def build_jobs(sequences: Iterable, trackers: list[TrackerConfig], *, seeds: int
                 stochastic = True if protocol == "mot" else get_spec(cfg.name).cls.stochastic
                 runs = seeds if stochastic else 1
             for seed in range(runs):
-                jobs.append(Job(cfg, str(seq.path), seq.name, seed, protocol, threads))
+                jobs.append(Job(cfg, str(seq.path), seq.name, seed, protocol, threads, target=seq.target))
     return jobs
 
 
@@ -238,13 +239,13 @@ def _finite_list(a) -> list:
 
 def run_job(job: Job) -> dict:
     """Run one job and return its result record (no side effects on disk)."""
-    from ..io.datasets import read_sequence
+    from ..io.datasets import read_otb, read_sequence
     from ..io.sources import read_image
     from ..trackers.registry import create_tracker
     from .vot import run_vot
 
     _pin_threads(job.threads)
-    seq = read_sequence(job.sequence)
+    seq = read_sequence(job.sequence) if job.target is None else read_otb(job.sequence, target=job.target)
     if job.protocol == "mot":
         return _run_mot_job(job, seq)
     if seq.groundtruth is None:

@@ -57,6 +57,9 @@ class Sequence:
     #: in the file, or the ``hidden`` frames of a ``meta.json`` beside it); None when unknown
     absent: np.ndarray | None = None
     meta: dict = field(default_factory=dict)  # the parsed meta.json, when present
+    #: OTB folders with several annotated targets (``groundtruth_rect.1.txt``, ``.2.txt``: Jogging, Skating2): which
+    #: one this sequence is (its name is then ``FOLDER.N``); None for a folder's only or first target
+    target: int | None = None
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -187,12 +190,20 @@ def discover_sequences(path: str | Path) -> list[Sequence]:
     if not path.is_dir():
         raise SourceError(f"{path}: not a folder")
     if detect_layout(path) in ("otb", "vot", "mot"):
-        return [read_sequence(path)]
+        return _targets_of(path)
     subs = sorted((p for p in path.iterdir() if p.is_dir()), key=_natural_key)
-    seqs = [read_sequence(p) for p in subs if detect_layout(p) in ("otb", "vot", "mot")]
+    seqs = [s for p in subs if detect_layout(p) in ("otb", "vot", "mot") for s in _targets_of(p)]
     if not seqs:
         raise SourceError(f"{path}: no OTB, VOT or MOTChallenge sequences found")
     return seqs
+
+
+def _targets_of(path: Path) -> list[Sequence]:
+    """The sequences of one folder: one per annotated target of an OTB folder with several, else the one."""
+    targets = otb_targets(path) if detect_layout(path) == "otb" else []
+    if len(targets) > 1:
+        return [read_otb(path, target=t) for t in targets]
+    return [read_sequence(path)]
 
 
 # ------------------------------------------------------------------------------ OTB
@@ -218,13 +229,30 @@ def _otb_range(name: str, n_files: int, n_rows: int) -> tuple[int, int] | None:
     return None
 
 
-def read_otb(path: str | Path) -> Sequence:
+_TARGET_FILE = re.compile(r"groundtruth_rect\.(\d+)\.txt$")
+
+
+def otb_targets(path: str | Path) -> list[int]:
+    """The numbers ``N`` of an OTB folder's ``groundtruth_rect.N.txt`` files, ascending (OTB-100's Jogging and
+    Skating2 annotate two people; empty for a folder with one ``groundtruth_rect.txt``)."""
+    found = (_TARGET_FILE.match(p.name) for p in Path(path).glob("groundtruth_rect.*.txt"))
+    return sorted(int(m.group(1)) for m in found if m)
+
+
+def read_otb(path: str | Path, *, target: int | None = None) -> Sequence:
+    """An OTB folder; ``target``: the ``N`` of its ``groundtruth_rect.N.txt`` (the sequence is then named
+    ``FOLDER.N``, as the benchmark names Jogging's two people); without it, its first ground-truth file."""
     path = Path(path)
     img_dir = path / "img"
     files = list_images(img_dir) if img_dir.is_dir() else []
     if not files:
         raise SourceError(f"{img_dir}: no images")
-    gt_files = sorted(path.glob("groundtruth_rect*.txt"))
+    if target is not None:
+        gt_files = [path / f"groundtruth_rect.{int(target)}.txt"]
+        if not gt_files[0].is_file():
+            raise FormatError(f"{path}: missing {gt_files[0].name}")
+    else:
+        gt_files = sorted(path.glob("groundtruth_rect*.txt"))
     if not gt_files:
         raise FormatError(f"{path}: missing groundtruth_rect.txt")
     rows = read_number_rows(gt_files[0], widths=(4,))
@@ -264,8 +292,9 @@ def read_otb(path: str | Path) -> Sequence:
         for number in _frame_numbers(meta, key, path):
             if 1 <= number <= len(files):
                 absent[number - 1] = value
-    return Sequence(path.name, "otb", path, files, groundtruth=_pad_gt(boxes, len(files)), attributes=attributes,
-                    absent=absent, meta=meta)
+    name = path.name if target is None else f"{path.name}.{int(target)}"
+    return Sequence(name, "otb", path, files, groundtruth=_pad_gt(boxes, len(files)), attributes=attributes,
+                    absent=absent, meta=meta, target=None if target is None else int(target))
 
 
 def _frame_numbers(meta: dict, key: str, path: Path) -> list[int]:
