@@ -180,6 +180,28 @@ def test_otb_folder_with_two_targets_gives_two_sequences(tmp_path):
     assert [r["sequence"] for r in recs] == ["Jogging.1", "Jogging.2"]
     assert recs[1]["boxes"][:4] == [30.0, 20.0, 12.0, 14.0]  # flattened rows; the first is the init box
 
+
+def test_lasot_and_got10k_folders(tmp_path):
+    """LaSOT: frames in img/, groundtruth.txt, and full_occlusion.txt / out_of_view.txt (one line of 0/1 flags);
+    GOT-10k: frames beside groundtruth.txt and absence.label (a flag a line).  The flags give the absent frames."""
+    las = tmp_path / "airplane-1"
+    write_frames(las / "img", 6, start=1, ext=".jpg")
+    (las / "groundtruth.txt").write_text("1,2,10,12\n" * 6)
+    (las / "full_occlusion.txt").write_text("0,0,1,1,0,0")
+    (las / "out_of_view.txt").write_text("0,0,0,0,0,1")
+    s = read_sequence(las)
+    assert len(s) == 6 and s.init_box == (1, 2, 10, 12)
+    assert s.absent.tolist() == [False, False, True, True, False, True]
+    got = tmp_path / "GOT-10k_Val_000001"
+    write_frames(got, 4, start=1, ext=".jpg")
+    (got / "groundtruth.txt").write_text("3,4,10,12\n" * 4)
+    (got / "absence.label").write_text("0\n1\n0\n0\n")
+    s = read_sequence(got)
+    assert len(s) == 4 and s.absent.tolist() == [False, True, False, False]
+    (got / "absence.label").write_text("0\nx\n")
+    with pytest.raises(FormatError, match="absence.label"):
+        read_sequence(got)
+
 def test_otb_malformed_groundtruth(tmp_path):
     seq = tmp_path / "Seq"
     write_frames(seq / "img", 2)

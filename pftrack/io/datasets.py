@@ -15,7 +15,9 @@ Layouts
   own configuration and its common loaders do (:data:`OTB_FRAME_RANGES`), when the ground truth has exactly
   that stretch's rows.
 * **VOT**: frames (in the folder itself or in ``color/``) + ``groundtruth.txt`` with
-  4-value boxes or 8-value polygons (converted to their axis-aligned boxes).
+  4-value boxes or 8-value polygons (converted to their axis-aligned boxes).  The same reader takes LaSOT
+  (frames in ``img/``; ``full_occlusion.txt`` and ``out_of_view.txt`` mark absent frames) and GOT-10k
+  (``absence.label``).
 * **MOTChallenge**: ``img1/``, ``seqinfo.ini`` and, when present, ``gt/gt.txt``
   (``frame,id,x,y,w,h,conf,class,visibility``).
 * **frames**: any folder of images, sorted by name.
@@ -321,9 +323,37 @@ def read_meta(path: Path) -> dict:
 
 # ------------------------------------------------------------------------------ VOT
 
+def _flag_file(path: Path) -> np.ndarray:
+    """0/1 flags per frame, separated by commas or white space (LaSOT writes one line, GOT-10k one per line)."""
+    text = path.read_text(encoding="utf-8", errors="replace")
+    tokens = [t for t in re.split(r"[,\s]+", text) if t]
+    if not all(t in ("0", "1") for t in tokens):
+        raise FormatError(f"{path}: expected 0/1 flags, one per frame")
+    return np.array([t == "1" for t in tokens], dtype=bool)
+
+
+def _absent_flags(path: Path, n: int) -> np.ndarray | None:
+    """Frames where the target is absent, from LaSOT's ``full_occlusion.txt`` and ``out_of_view.txt`` or GOT-10k's
+    ``absence.label`` beside the ground truth (None without them)."""
+    names = [f for f in ("full_occlusion.txt", "out_of_view.txt", "absence.label") if (path / f).is_file()]
+    if not names:
+        return None
+    absent = np.zeros(n, dtype=bool)
+    for f in names:
+        flags = _flag_file(path / f)[:n]
+        absent[: flags.size] |= flags
+    return absent
+
+
 def read_vot(path: str | Path) -> Sequence:
+    """A VOT folder (frames in it or in ``color/``), and the same layout with frames in ``img/`` (LaSOT) or beside
+    GOT-10k's ``absence.label``."""
     path = Path(path)
-    folder = path / "color" if (path / "color").is_dir() else path
+    folder = path
+    for sub in ("color", "img"):
+        if (path / sub).is_dir() and list_images(path / sub):
+            folder = path / sub
+            break
     files = list_images(folder)
     if not files:
         raise SourceError(f"{folder}: no images")
@@ -340,7 +370,8 @@ def read_vot(path: str | Path) -> Sequence:
         if polys is not None:
             polys[i, : len(r)] = r
         boxes[i] = polygon_to_box(np.asarray(r, dtype=np.float64))
-    return Sequence(path.name, "vot", path, files, groundtruth=_pad_gt(boxes, len(files)), polygons=polys)
+    return Sequence(path.name, "vot", path, files, groundtruth=_pad_gt(boxes, len(files)), polygons=polys,
+                    absent=_absent_flags(path, len(files)))
 
 
 # ------------------------------------------------------------------------------ MOTChallenge
