@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.cues.scale_search import best_ratio, scale_candidates, search_scale, vertex_ratio
+from pftrack.cues.scale_search import aspect_factor, best_ratio, scale_candidates, search_scale, vertex_ratio
 from pftrack.cues.structure import StructureCue
 
 
@@ -132,6 +132,40 @@ def test_size_scores_equal_the_batch_scores(lit):
     want = cue.scores(frame, None, scale_candidates(ell, np.array(ratios), np.zeros((1, 2))))
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
 
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_aspect_factor_moves_the_shape_toward_the_target(seed):
+    """A target stretched 5 % wider and 5 % shorter (the same texture, about the same area) moves the width up and
+    the height down; the reverse moves them the other way; the unchanged target leaves the shape (almost) alone."""
+    rng = np.random.default_rng(seed)
+    ell = (160.0, 120.0, 24.0, 36.0)
+    cue = StructureCue(template_pixels=256, anchor=True)
+    cue.init(_textured_frame(rng, 1.0), ell)
+    got = {}
+    for name, (fx, fy) in {"wider": (1.05, 1 / 1.05), "taller": (1 / 1.05, 1.05), "same": (1.0, 1.0)}.items():
+        cue.new_frame()
+        frame = _textured_frame(rng, 1.0, half=(24.0 * fx, 36.0 * fy))
+        got[name] = aspect_factor(cue, frame, ell, 0.05, 1.0)
+    assert got["wider"] > 1.02 and got["taller"] < 1 / 1.02, got
+    assert abs(np.log(got["same"])) < 0.25 * np.log(1.05), got
+    cue.new_frame()  # a box reaching past the frame's edge at the widest shape: no change
+    assert aspect_factor(cue, _textured_frame(rng, 1.0), (12.0, 120.0, 24.0, 36.0), 0.05, 1.0) == 1.0
+
+
+def test_size_scores_of_shapes_equal_the_batch_scores():
+    """A ratio given per half-axis ``(rx, ry)`` scores the box of those half-axes, as the batch does."""
+    rng = np.random.default_rng(4)
+    ell = (160.0, 120.0, 24.0, 36.0)
+    cue = StructureCue(template_pixels=256, anchor=True)
+    cue.init(_textured_frame(rng, 1.0), ell)
+    frame = _textured_frame(rng, 1.0, half=(25.0, 34.0))
+    pairs = ((1 / 1.05, 1.05), (1.0, 1.0), (1.05, 1 / 1.05))
+    cue.new_frame()
+    got = cue.size_scores(frame, ell, pairs)
+    cue.new_frame()
+    want = cue.scores(frame, None, np.array([[160.0, 120.0, 24.0 * rx, 36.0 * ry] for rx, ry in pairs]))
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
 
 def test_particle_columns_and_mean_scale_together():
     from pftrack.filtering.particles import ParticleSet

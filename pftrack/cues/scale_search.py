@@ -104,3 +104,22 @@ def size_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> fl
     if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
         return 1.0
     return math.exp(vertex_offset(lo, mid, hi) * math.log1p(step) * rate)
+
+
+def aspect_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> float:
+    """Like :func:`size_factor` for the box's shape at a constant area: the NCC of the boxes whose half-axes are
+    ``(hx / (1+step), hy (1+step))``, ``(hx, hy)`` and ``(hx (1+step), hy / (1+step))``, the vertex of the parabola
+    through them, ``rate`` of the way.  Returns ``f``: the width's factor (the height's is ``1 / f``).
+
+    A target that turns, bends or is seen from another side changes its width and height apart, and a size search
+    at a fixed aspect cannot follow it.  1 when the widest or the tallest box is not inside the frame."""
+    cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
+    fh, fw = frame.shape[:2]
+    ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
+    if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:
+        return 1.0
+    k = 1.0 + step
+    tall, mid, wide = cue.size_scores(frame, (cx, cy, hx, hy), ((1.0 / k, k), (1.0, 1.0), (k, 1.0 / k)))
+    if not (math.isfinite(tall) and math.isfinite(mid) and math.isfinite(wide)):
+        return 1.0
+    return math.exp(vertex_offset(tall, mid, wide) * math.log1p(step) * rate)

@@ -387,21 +387,23 @@ class StructureCue:
     def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
         """NCC of the box of ``ellipse`` ``(cx, cy, hx, hy)`` at each of the half-axis ``ratios`` (same centre) with
         the reference, as :meth:`scores` gives them: one compiled call per size on this frame's region (a size
-        search after the estimate, three sizes a frame, where building a batch cost more than scoring it)."""
+        search after the estimate, three sizes a frame, where building a batch cost more than scoring it).  A ratio
+        may be a pair ``(rx, ry)``, one per half-axis (a search of the box's shape)."""
         cx, cy, hx, hy = (float(x) for x in ellipse)
+        pairs = [(float(r[0]), float(r[1])) if np.ndim(r) else (float(r), float(r)) for r in ratios]
         if not numba_enabled():
-            e = np.array([[cx, cy, hx * r, hy * r] for r in ratios])
+            e = np.array([[cx, cy, hx * rx, hy * ry] for rx, ry in pairs])
             return self.scores(frame, None, e).tolist()
-        top = max(ratios)
-        red = self._region(frame, None, np.array([[cx, cy, hx * top, hy * top]]))
+        top_x, top_y = max(rx for rx, _ in pairs), max(ry for _, ry in pairs)
+        red = self._region(frame, None, np.array([[cx, cy, hx * top_x, hy * top_y]]))
         tw, w = self._prepared
         u, v = _grid(self.shape)
         gray = red.levels_for(u.size * v.size)
         dots = np.empty(tw.shape[0])
         e = np.empty(4)
         out = []
-        for r in ratios:
-            e[0], e[1], e[2], e[3] = cx, cy, hx * r, hy * r
+        for rx, ry in pairs:
+            e[0], e[1], e[2], e[3] = cx, cy, hx * rx, hy * ry
             out.append(float(_ncc_one(gray, e, float(red.x0), float(red.y0), float(red.k), u, v, tw, w, 1.0, dots)))
         return out
 

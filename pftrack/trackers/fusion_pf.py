@@ -37,7 +37,7 @@ from ..cues.contrast import (
 )
 from ..cues.intensity import channel_levels, gain_maps, is_gray
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
-from ..cues.scale_search import size_factor
+from ..cues.scale_search import aspect_factor, size_factor
 from ..cues.structure import StructureCue
 from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, VX, VY
@@ -90,6 +90,16 @@ class FusionPFParams(ColorPFParams):
     scale_search_rate: float = param(0.25, ge=0, le=1, doc=(
         "Fraction (in log scale) of the scale search's vertex applied per frame: at most (1+s)^rate, 0.75 % with "
         "s = 0.03 and this default, so noise in the three scores moves the size little."))
+    aspect_search: float = param(0.0, ge=0, le=0.5, doc=(
+        "a > 0: after the size search, the estimate's box at the shapes (hx/(1+a), hy(1+a)), (hx, hy) and "
+        "(hx(1+a), hy/(1+a)) (the same area) is compared with the structural cue's references by NCC, and the "
+        "estimate and every particle move their width and height apart toward the vertex of the parabola through "
+        "the three scores, by aspect_search_rate of it (cues.scale_search.aspect_factor): a target that turns or "
+        "bends changes its aspect, which the particles' scale keeps. Only after a frame the loss test was "
+        "confident on, and skipped while the widest or tallest box is not inside the frame. 0: the first frame's "
+        "aspect is kept."))
+    aspect_search_rate: float = param(0.25, ge=0, le=1, doc=(
+        "Fraction (in log scale) of the aspect search's vertex applied per frame."))
     max_pixels: int = param(1000, ge=0, le=10_000_000, doc=(
         "Larger ellipses are sampled on a lattice with about this many pixels (color-pf: 4000). With "
         "N = 100 particles, more particles beat more pixels per particle at the same cost."))
@@ -409,6 +419,13 @@ class FusionPF(ColorPF):
         p = self.params
         self._scale_size(estimate, size_factor(self.structure, frame, estimate[_ELL_COLS], p.scale_search,
                                                p.scale_search_rate))
+        if p.aspect_search > 0 and p.aspect_search_rate > 0 and self.loss.llr > self.loss.reacquire_margin:
+            f = aspect_factor(self.structure, frame, estimate[_ELL_COLS], p.aspect_search, p.aspect_search_rate)
+            if f != 1.0:
+                estimate[HX] *= f
+                estimate[HY] /= f
+                self.ps.scale_columns(HX, HX + 1, f)
+                self.ps.scale_columns(HY, HY + 1, 1.0 / f)
 
     def _update_models(self, frame, estimate, feats, rho_e):
         p = self.params
