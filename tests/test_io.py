@@ -202,6 +202,23 @@ def test_lasot_and_got10k_folders(tmp_path):
     with pytest.raises(FormatError, match="absence.label"):
         read_sequence(got)
 
+
+def test_temple_color_128_folder(tmp_path):
+    """Temple Color 128: img/ + FOLDER_gt.txt, and FOLDER_frames.txt naming the annotated stretch of the images."""
+    seq = tmp_path / "Airport_ce"
+    write_frames(seq / "img", 6, start=1, ext=".jpg")
+    (seq / "Airport_ce_gt.txt").write_text("".join(f"{i},2,10,12\n" for i in range(4)))
+    (seq / "Airport_ce_frames.txt").write_text("2,5\n")
+    s = read_sequence(seq)
+    assert s.kind == "otb" and s.name == "Airport_ce"
+    assert [f.name for f in s.frames] == ["0002.jpg", "0003.jpg", "0004.jpg", "0005.jpg"]
+    assert s.init_box == (0, 2, 10, 12) and s.groundtruth[3].tolist() == [3, 2, 10, 12]
+    (seq / "Airport_ce_frames.txt").unlink()  # no stretch given: every image
+    assert len(read_sequence(seq)) == 6
+    (seq / "Airport_ce_frames.txt").write_text("5\n")
+    with pytest.raises(FormatError, match="frames.txt"):
+        read_sequence(seq)
+
 def test_otb_malformed_groundtruth(tmp_path):
     seq = tmp_path / "Seq"
     write_frames(seq / "img", 2)

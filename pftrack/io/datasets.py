@@ -9,7 +9,8 @@ Layouts
 -------
 * **OTB**: ``img/`` + ``groundtruth_rect.txt`` (``x,y,w,h`` per row; commas, tabs or
   spaces; ``NaN`` rows = target not visible; may have fewer rows than images),
-  optional ``cfg.json`` (``startFrame``/``endFrame``/``imgFormat``) and ``attrs.txt``.  Without
+  optional ``cfg.json`` (``startFrame``/``endFrame``/``imgFormat``) and ``attrs.txt``.  Temple Color 128's
+  folders are read the same way: ``img/`` + ``FOLDER_gt.txt``, the stretch in ``FOLDER_frames.txt``.  Without
   ``cfg.json``, the five OTB-100 sequences whose annotated stretch is not their whole image folder (David from
   frame 300; Football1, Freeman3, Freeman4 and Diving up to a frame) are cut to that stretch, as the benchmark's
   own configuration and its common loaders do (:data:`OTB_FRAME_RANGES`), when the ground truth has exactly
@@ -155,7 +156,7 @@ def detect_layout(path: Path) -> str | None:
         return None
     if (path / "img1").is_dir() and ((path / "seqinfo.ini").is_file() or (path / "gt").is_dir()):
         return "mot"
-    if (path / "img").is_dir() and any(path.glob("groundtruth_rect*.txt")):
+    if (path / "img").is_dir() and (any(path.glob("groundtruth_rect*.txt")) or _tc128_gt(path) is not None):
         return "otb"
     if (path / "groundtruth.txt").is_file():
         return "vot"
@@ -231,6 +232,26 @@ def _otb_range(name: str, n_files: int, n_rows: int) -> tuple[int, int] | None:
     return None
 
 
+def _tc128_gt(path: Path) -> Path | None:
+    """Temple Color 128's ground truth, ``FOLDER_gt.txt`` beside ``img/`` (None when absent)."""
+    gt = path / f"{path.name}_gt.txt"
+    return gt if gt.is_file() else None
+
+
+def _tc128_frames(path: Path, files: list[Path]) -> list[Path]:
+    """The images of the stretch ``FOLDER_frames.txt`` names (``start,end``, frame numbers of the images' names),
+    as Temple Color 128 gives it; all the images without that file, or when it names images that are not there."""
+    spec = path / f"{path.name}_frames.txt"
+    if not spec.is_file():
+        return files
+    nums = [int(t) for t in re.findall(r"\d+", spec.read_text(encoding="utf-8", errors="replace"))[:2]]
+    if len(nums) < 2 or nums[1] < nums[0]:
+        raise FormatError(f"{spec}: expected the first and last frame numbers, 'start,end'")
+    by_number = {int(m.group()): f for f in files if (m := re.search(r"\d+", f.stem))}
+    chosen = [by_number.get(i) for i in range(nums[0], nums[1] + 1)]
+    return files if any(c is None for c in chosen) else chosen
+
+
 _TARGET_FILE = re.compile(r"groundtruth_rect\.(\d+)\.txt$")
 
 
@@ -255,6 +276,9 @@ def read_otb(path: str | Path, *, target: int | None = None) -> Sequence:
             raise FormatError(f"{path}: missing {gt_files[0].name}")
     else:
         gt_files = sorted(path.glob("groundtruth_rect*.txt"))
+        if not gt_files and _tc128_gt(path) is not None:  # Temple Color 128: FOLDER_gt.txt, FOLDER_frames.txt
+            gt_files = [_tc128_gt(path)]
+            files = _tc128_frames(path, files)
     if not gt_files:
         raise FormatError(f"{path}: missing groundtruth_rect.txt")
     rows = read_number_rows(gt_files[0], widths=(4,))
