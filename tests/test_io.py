@@ -123,13 +123,15 @@ def test_otb_reader(tmp_path):
     seq = tmp_path / "Seq"
     write_frames(seq / "img", 5)
     (seq / "groundtruth_rect.txt").write_text("1,2,3,4\n5\t6\t7\t8\nNaN,NaN,NaN,NaN\n")
-    s = read_sequence(seq)
+    with pytest.warns(UserWarning, match="3 ground-truth rows for 5 images"):  # a misaligned folder is announced
+        s = read_sequence(seq)
     assert s.kind == "otb" and len(s) == 5
     assert s.groundtruth.shape == (5, 4)
     assert s.groundtruth[1].tolist() == [5, 6, 7, 8]
     assert np.isnan(s.groundtruth[2:]).all()  # NaN row and missing rows
     assert s.init_box == (1, 2, 3, 4)
-    src = open_source(seq)
+    with pytest.warns(UserWarning, match="rows"):
+        src = open_source(seq)
     assert src.init_box == (1, 2, 3, 4) and len(src) == 5
 
 
@@ -153,7 +155,8 @@ def test_otb_known_partial_sequences_are_cut_to_their_annotated_stretch(tmp_path
     assert make("Freeman4", 283, 283).frames[-1].name == "0283.jpg"  # already the stretch
     s = make("Diving", 231, 215)
     assert len(s) == 215 and s.frames[-1].name == "0215.jpg"
-    s = make("Football1", 74 + 10, 50)  # other rows than the stretch's: not the benchmark's sequence
+    with pytest.warns(UserWarning, match="50 ground-truth rows for 84 images"):
+        s = make("Football1", 74 + 10, 50)  # other rows than the stretch's: not the benchmark's sequence
     assert len(s) == 84
 
 
@@ -214,7 +217,8 @@ def test_temple_color_128_folder(tmp_path):
     assert [f.name for f in s.frames] == ["0002.jpg", "0003.jpg", "0004.jpg", "0005.jpg"]
     assert s.init_box == (0, 2, 10, 12) and s.groundtruth[3].tolist() == [3, 2, 10, 12]
     (seq / "Airport_ce_frames.txt").unlink()  # no stretch given: every image
-    assert len(read_sequence(seq)) == 6
+    with pytest.warns(UserWarning, match="4 ground-truth rows for 6 images"):
+        assert len(read_sequence(seq)) == 6
     (seq / "Airport_ce_frames.txt").write_text("5\n")
     with pytest.raises(FormatError, match="frames.txt"):
         read_sequence(seq)

@@ -30,6 +30,7 @@ import configparser
 import json
 import math
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -305,6 +306,10 @@ def read_otb(path: str | Path, *, target: int | None = None) -> Sequence:
             attributes = [str(a) for a in attrs]
     elif (rng := _otb_range(path.name, len(files), boxes.shape[0])) is not None:
         files = files[rng[0] - 1:rng[1]]
+    if boxes.shape[0] != len(files):  # a misaligned folder scores near zero; say so
+        rest = "the images past the rows are not scored" if boxes.shape[0] < len(files) else "the extra rows are ignored"
+        warnings.warn(f"{path.name}: {boxes.shape[0]} ground-truth rows for {len(files)} images; row i is taken for "
+                      f"image i ({rest})", stacklevel=2)
     attrs_txt = path / "attrs.txt"
     if not attributes and attrs_txt.is_file():
         attributes = [a.strip() for a in attrs_txt.read_text(encoding="utf-8", errors="replace").split(",") if a.strip()]
