@@ -182,6 +182,11 @@ def test_otb_folder_with_two_targets_gives_two_sequences(tmp_path):
     recs = [run_job(j) for j in jobs]
     assert [r["sequence"] for r in recs] == ["Jogging.1", "Jogging.2"]
     assert recs[1]["boxes"][:4] == [30.0, 20.0, 12.0, 14.0]  # flattened rows; the first is the init box
+    from pftrack.cli import main
+
+    assert main(["eval", str(data), "--trackers", "template", "--quiet", "--report", str(tmp_path / "rep")]) == 0
+    rows = (tmp_path / "rep" / "results.csv").read_text().splitlines()
+    assert sum(r.split(",")[1] in ("Jogging.1", "Jogging.2", "Other") for r in rows[1:]) == 3
 
 
 def test_lasot_and_got10k_folders(tmp_path):

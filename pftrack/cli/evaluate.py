@@ -77,7 +77,7 @@ def cmd_eval(args) -> int:
     md = summary_markdown(records, command=command, title=args.title)
     print(md)
     if report_dir is not None:
-        write_report(records, report_dir, sequences={s.name: str(s.path) for s in seqs}, command=command,
+        write_report(records, report_dir, sequences={s.name: s for s in seqs}, command=command,
                      title=args.title)
         print(f"report: {report_dir / 'index.html'} ({runner.ran} runs computed, {runner.reused} reused)",
               file=sys.stderr)

@@ -305,10 +305,10 @@ def _plots(records: list[dict], out: Path) -> list[str]:
     return made
 
 
-def _frames(records: list[dict], sequences: dict[str, str], out: Path, per_sequence: int = 3) -> dict[str, list[str]]:
+def _frames(records: list[dict], sequences: dict, out: Path, per_sequence: int = 3) -> dict[str, list[str]]:
     import cv2
 
-    from ..io.datasets import read_sequence
+    from ..io.datasets import Sequence, read_sequence
     from ..io.sources import read_image
     from ..viz.draw import color_for, draw_box
 
@@ -316,7 +316,7 @@ def _frames(records: list[dict], sequences: dict[str, str], out: Path, per_seque
     trackers = list(dict.fromkeys(r["tracker"] for r in records))
     made: dict[str, list[str]] = {}
     for name, path in sequences.items():
-        seq = read_sequence(path)
+        seq = path if isinstance(path, Sequence) else read_sequence(path)  # one target of a folder: its Sequence
         if seq.groundtruth is None:
             continue
         n = len(seq.frames)
@@ -349,9 +349,10 @@ def _frames(records: list[dict], sequences: dict[str, str], out: Path, per_seque
     return made
 
 
-def write_report(records: list[dict], report_dir: str | Path, *, sequences: dict[str, str] | None = None,
+def write_report(records: list[dict], report_dir: str | Path, *, sequences: dict | None = None,
                  command: str | None = None, title: str = "pftrack evaluation") -> dict[str, Path]:
-    """Write the full report into ``report_dir``; returns the paths written."""
+    """Write the full report into ``report_dir``; returns the paths written.  ``sequences``: name -> the sequence
+    (a :class:`~pftrack.io.datasets.Sequence`, or its folder) for the frames with the boxes drawn."""
     out = Path(report_dir)
     out.mkdir(parents=True, exist_ok=True)
     for name in ("results.csv", "summary.md", "index.html"):

@@ -25,6 +25,7 @@ import math
 import os
 import re
 import time
+import warnings
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -245,7 +246,9 @@ def run_job(job: Job) -> dict:
     from .vot import run_vot
 
     _pin_threads(job.threads)
-    seq = read_sequence(job.sequence) if job.target is None else read_otb(job.sequence, target=job.target)
+    with warnings.catch_warnings():  # the folder's own warnings were given once, when the sequences were found
+        warnings.simplefilter("ignore")
+        seq = read_sequence(job.sequence) if job.target is None else read_otb(job.sequence, target=job.target)
     if job.protocol == "mot":
         return _run_mot_job(job, seq)
     if seq.groundtruth is None:
