@@ -210,3 +210,22 @@ def channel_equalization_maps(frame: np.ndarray, *, stride: int = 4) -> np.ndarr
     """``(3, 256)`` uint8 maps: global histogram equalisation of each channel (ranks, see :func:`equalization_lut`)."""
     return np.stack([equalization_lut(np.ascontiguousarray(frame[::stride, ::stride, c]), stride=1)
                      for c in range(3)])
+
+
+def shifted_rho(hist: np.ndarray, sqrt_q: np.ndarray, n_intensity: int, n_orientation: int, k: int) -> np.ndarray:
+    """Bhattacharyya coefficients of grey-feature histograms ``hist`` ``(N, B)`` (each normalised; ``B = n_intensity
+    (n_orientation + 1)``, the joint bins of :func:`quantize_gray`) with a model ``sqrt(q)``, the best over the
+    model's intensity bins shifted by ``-k .. k`` (orientation kept; the bins shifted past an end are dropped).
+
+    A target whose own light changed while it was unseen, as a grey target walking out of a shadow does, keeps the
+    layout of its grey levels and gradients but moves them up or down the intensity axis; the frame's equalisation
+    does not undo a gain on the target alone.  ``k = 0`` gives the plain coefficients."""
+    h = np.sqrt(np.clip(np.asarray(hist, dtype=np.float64), 0.0, None)).reshape(len(hist), n_intensity, -1)
+    q = np.asarray(sqrt_q, dtype=np.float64).reshape(n_intensity, -1)
+    best = np.einsum("nij,ij->n", h, q)
+    for s in range(1, int(k) + 1):
+        if s >= n_intensity:
+            break
+        best = np.maximum(best, np.einsum("nij,ij->n", h[:, s:], q[:-s]))  # the target got brighter by s bins
+        best = np.maximum(best, np.einsum("nij,ij->n", h[:, :-s], q[s:]))  # darker
+    return np.minimum(best, 1.0)

@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..cues.color import reachable_roi
-from ..cues.intensity import channel_levels, gain_maps
+from ..cues.intensity import channel_levels, gain_maps, shifted_rho
 from ..cues.lk import gray_of
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, X, Y, lost_prediction, reappearance_log_prior
@@ -281,7 +281,12 @@ class SearchMixin:
                     raw, _, feats = self._rho(frame, ell)
                     return np.maximum(rho, raw), tot, feats
                 return rho, tot, relit
-        return self._rho(frame, ell)
+        rho, tot, feats = self._rho(frame, ell)
+        k = self.params.grey_relit_shift
+        if k > 0 and self.cue.color_space == "gray" and len(ell):  # a target relit on its own (intensity.shifted_rho)
+            hist, _ = self.cue.histograms(feats, ell, reuse=False)
+            rho = np.where(tot > 0, np.maximum(rho, shifted_rho(hist, self._sqrt_q, *self.cue.gray_bins, k)), rho)
+        return rho, tot, feats
 
     def _search_refine(self) -> float:
         """The refined layer's share: ``grey_search_refine`` on grey input when set, else ``search_refine``."""
@@ -310,7 +315,8 @@ class SearchMixin:
         e_ell = self._ellipses(extra)
         fh, fw = self._shape
         x0, y0, x1, y1 = reachable_roi(e_ell, fw, fh)
-        if p.relit_search == "off" and roi[0] <= x0 and roi[1] <= y0 and x1 <= roi[2] and y1 <= roi[3]:
+        if (p.relit_search == "off" and not (p.grey_relit_shift > 0 and self.cue.color_space == "gray")
+                and roi[0] <= x0 and roi[1] <= y0 and x1 <= roi[2] and y1 <= roi[3]):
             # inside the first layer's quantised region (the usual case): scored on the same features
             e_rho, e_tot = self._cue_rho(feats, e_ell)
             e_feats = feats
