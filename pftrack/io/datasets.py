@@ -307,7 +307,8 @@ def read_otb(path: str | Path, *, target: int | None = None) -> Sequence:
     elif (rng := _otb_range(path.name, len(files), boxes.shape[0])) is not None:
         files = files[rng[0] - 1:rng[1]]
     if boxes.shape[0] != len(files):  # a misaligned folder scores near zero; say so
-        rest = "the images past the rows are not scored" if boxes.shape[0] < len(files) else "the extra rows are ignored"
+        rest = ("the images past the rows are not scored" if boxes.shape[0] < len(files)
+                else "the extra rows are ignored")
         warnings.warn(f"{path.name}: {boxes.shape[0]} ground-truth rows for {len(files)} images; row i is taken for "
                       f"image i ({rest})", stacklevel=2)
     attrs_txt = path / "attrs.txt"
