@@ -277,8 +277,8 @@ def read_otb(path: str | Path, *, target: int | None = None) -> Sequence:
             raise FormatError(f"{path}: missing {gt_files[0].name}")
     else:
         gt_files = sorted(path.glob("groundtruth_rect*.txt"))
-        if not gt_files and _tc128_gt(path) is not None:  # Temple Color 128: FOLDER_gt.txt, FOLDER_frames.txt
-            gt_files = [_tc128_gt(path)]
+        if not gt_files and (tc := _tc128_gt(path)) is not None:  # Temple Color 128: FOLDER_gt.txt, FOLDER_frames.txt
+            gt_files = [tc]
             files = _tc128_frames(path, files)
     if not gt_files:
         raise FormatError(f"{path}: missing groundtruth_rect.txt")
