@@ -4,6 +4,7 @@
     python scripts/ch10_experiments.py --walkers     # synthetic upright walkers (reports/ch10_walkers.json)
     python scripts/ch10_experiments.py --angles      # PETS crossings found, by the walkers' angle to the line
     python scripts/ch10_experiments.py --grey        # PETS in grey (reports/ch10_grey.json)
+    python scripts/ch10_experiments.py --h264 28     # PETS through an H.264 encoder at CRF 28 (needs PyAV)
     python scripts/ch10_experiments.py --lines "X1,Y1;X2,Y2" ...   # PETS, stride 1, other lines (default: five
                                                      # lines used for no choice, docs/tripwire.md)
 
@@ -32,6 +33,7 @@ import numpy as np
 from pftrack.events.eval import match_events, track_crossings
 from pftrack.events.geometry import parse_polyline
 from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams, estimate_radius
+from pftrack.io.codec import h264_round_trip
 from pftrack.io.datasets import read_sequence
 from pftrack.multi import create_multi_tracker
 from pftrack.synth.traffic import traffic_scene
@@ -80,9 +82,11 @@ def summarise(acc: dict) -> dict:
                 "f1": 2 * t / (g + d) if g + d else None} for k, (g, d, t) in acc.items()}
 
 
-def pets(data: Path, grey: bool = False) -> dict:
+def pets(data: Path, grey: bool = False, crf: int | None = None) -> dict:
     seq = read_sequence(data / "pets09_s2l1_dev")
     frames = [cv2.imread(str(p)) for p in seq.frames]
+    if crf is not None:  # the frames through an H.264 encoder
+        frames = h264_round_trip(frames, crf, fps=7.0)
     if grey:  # grey video, three equal channels
         frames = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
     res: dict = {}
@@ -239,6 +243,8 @@ def main() -> None:
     ap.add_argument("--angles", action="store_true",
                     help="only PETS crossings found by the angle of the walker's motion to the line's normal")
     ap.add_argument("--grey", action="store_true", help="only PETS, its frames in grey (reports/ch10_grey.json)")
+    ap.add_argument("--h264", type=int, metavar="CRF",
+                    help="only PETS, its frames encoded as H.264 at this CRF and decoded (reports/ch10_h264_CRF.json)")
     ap.add_argument("--lines", nargs="*", metavar="LINE",
                     help="only PETS at 7 fps on these lines (none given: five lines used for no choice)")
     args = ap.parse_args()
@@ -250,6 +256,12 @@ def main() -> None:
         out = pets(data, grey=True)
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).with_name("ch10_grey.json").write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
+        return
+    if args.h264 is not None:
+        out = pets(data, crf=args.h264)
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).with_name(f"ch10_h264_{args.h264}.json").write_text(json.dumps(out, indent=1) + "\n",
+                                                                           encoding="utf-8")
         return
     if args.lines is not None:
         for k, v in pets_lines(data, args.lines or FRESH_LINES).items():

@@ -9,6 +9,10 @@ For each sequence two folders are written next to each other in ``--out``:
   falls from 1.0 to 0.4 and back over the sequence, times a bright spot that drifts across the
   frame (a lamp), seeded by the sequence name.
 
+With ``--h264 CRF`` a third folder, ``NAME-h264``, holds the colour frames encoded as H.264 at that constant rate
+factor (libx264, in memory) and decoded again, saved as PNG: a recorder's file instead of clean frames (needs
+PyAV, the ``mv`` extra).
+
 Ground truth (``groundtruth_rect.txt``) is copied unchanged.
 """
 
@@ -22,6 +26,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pftrack.io.codec import h264_round_trip
 from pftrack.io.datasets import read_sequence
 
 
@@ -36,16 +41,40 @@ def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
     return (gain * (0.55 + 0.9 * np.exp(-r2))).astype(np.float32)
 
 
+def copy_truth(seq, dest: Path) -> None:
+    """The ground truth (and attribution) of ``seq`` into the OTB folder ``dest``."""
+    gt = seq.groundtruth
+    lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.2f}" for v in b) for b in gt]
+    (dest / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    for extra in ("ATTRIBUTION.md", "provenance.json"):
+        if (seq.path / extra).is_file():
+            shutil.copy(seq.path / extra, dest / extra)
+
+
+def write_h264(seq, dest: Path, crf: int) -> None:
+    """``seq``'s colour frames through an H.264 encoder at ``crf``, as PNG frames of an OTB folder."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    frames = h264_round_trip([cv2.imread(str(p), cv2.IMREAD_COLOR) for p in seq.frames], crf, fps=seq.fps or 25.0)
+    for i, f in enumerate(frames):
+        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.png"), f)
+    copy_truth(seq, dest)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("sequences", nargs="+")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--h264", type=int, metavar="CRF", help="only the H.264 copies (NAME-h264), at this CRF")
     args = ap.parse_args()
     out = Path(args.out)
     for spec in args.sequences:
         seq = read_sequence(spec)
         n = len(seq.frames)
         seed = zlib.crc32(seq.name.encode())
+        if args.h264 is not None:
+            write_h264(seq, out / f"{seq.name}-h264", args.h264)
+            print(f"{seq.name}: {n} frames -> {out}/{seq.name}-h264 (crf {args.h264})")
+            continue
         for variant in ("gray", "gray-light"):
             dest = out / f"{seq.name}-{variant}"
             (dest / "img").mkdir(parents=True, exist_ok=True)
@@ -55,12 +84,7 @@ def main() -> None:
                     f = light_field(i / max(n - 1, 1), img.shape[0], img.shape[1], seed)
                     img = np.clip(img.astype(np.float32) * f, 0, 255).astype(np.uint8)
                 cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
-            gt = seq.groundtruth
-            lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.2f}" for v in b) for b in gt]
-            (dest / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
-            for extra in ("ATTRIBUTION.md", "provenance.json"):
-                if (seq.path / extra).is_file():
-                    shutil.copy(seq.path / extra, dest / extra)
+            copy_truth(seq, dest)
         print(f"{seq.name}: {n} frames -> {out}/{seq.name}-gray, -gray-light")
 
 

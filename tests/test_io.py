@@ -312,3 +312,24 @@ def test_unwritable_outputs(tmp_path):
         prepare_output(blocker / "sub" / "out.csv")
     with pytest.raises(OutputError, match="outside"):
         prepare_output(tmp_path / ".." / "escape.csv", within=tmp_path)
+
+
+def test_h264_round_trip_keeps_count_and_size_and_is_close():
+    pytest.importorskip("av")
+    from pftrack.errors import ParameterError
+    from pftrack.io.codec import h264_round_trip
+
+    yy, xx = np.mgrid[0:21, 0:33]
+    frames = [np.stack([(xx * 7 + k * 3) % 256, (yy * 11) % 256, np.full_like(xx, 128)], axis=2).astype(np.uint8)
+              for k in range(5)]
+    out = h264_round_trip(frames, 18, fps=7)
+    assert len(out) == 5
+    assert all(f.shape == (21, 33, 3) and f.dtype == np.uint8 for f in out)  # odd sizes padded and cropped back
+    err = np.mean([np.abs(a.astype(int) - b.astype(int)).mean() for a, b in zip(out, frames)])
+    assert 0.0 < err < 8.0  # lossy, but close at a high quality
+    worse = h264_round_trip(frames, 45, fps=7)
+    assert np.mean([np.abs(a.astype(int) - b.astype(int)).mean() for a, b in zip(worse, frames)]) > err
+    grey = h264_round_trip([f[:, :, 0] for f in frames[:2]], 18)
+    assert grey[0].shape == (21, 33, 3)
+    with pytest.raises(ParameterError):
+        h264_round_trip(frames, 60)
