@@ -18,9 +18,10 @@ $(STAMP): pyproject.toml
 demo: setup
 	$(BIN)/pftrack demo --out demo_out
 
-# The default test suite (fast, deterministic). pytest's exit code 5 (no tests collected) is a failure.
+# The default test suite (fast, deterministic), on two processes (pytest-xdist; a test file stays on one).
+# pytest's exit code 5 (no tests collected) is a failure.
 test: setup
-	@$(BIN)/python -m pytest -q; rc=$$?; \
+	@$(BIN)/python -m pytest -q -n 2 --dist loadfile; rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; fi; \
 	exit $$rc
 
