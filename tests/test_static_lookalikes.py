@@ -313,7 +313,9 @@ def test_the_reference_before_catches_an_estimate_left_where_the_target_last_sto
     from .conftest import lost_flag_run
 
     spec = {"teleport": teleport_scene, "leave": leave_scene}[make](seed)
-    on = lost_flag_run(spec, "fusion-pf")
+    # edge_share off, as when these scenes were found: with it, the estimate's sliver at the edge raises the flag on
+    # its own in the leave scene, and both runs re-acquire
+    on = lost_flag_run(spec, "fusion-pf", edge_share=0.0)
     refresh = SceneReference.refresh
 
     def newest_only(self, *args, **kwargs):
@@ -321,7 +323,7 @@ def test_the_reference_before_catches_an_estimate_left_where_the_target_last_sto
         self._previous = None
 
     monkeypatch.setattr(SceneReference, "refresh", newest_only)
-    off = lost_flag_run(spec, "fusion-pf")
+    off = lost_flag_run(spec, "fusion-pf", edge_share=0.0)
     assert off.reappearances == on.reappearances == 1
     assert off.reacquired == 0 and on.reacquired == 1
     assert on.recall > off.recall

@@ -445,3 +445,19 @@ class FusedLoss:
         finally:
             for m in self.members:
                 m.unseen -= 1
+
+
+def toward_background(loss, s, w: float):
+    """The estimate's score(s) ``s`` with a share ``1 - w`` of each replaced by the mean score the loss test expects
+    when the target is absent (``mu_b``, per cue for a :class:`FusedLoss`): the part of a box outside the frame
+    shows nothing of the target, and a sliver inside that matches is weak evidence (``edge_share``)."""
+    if w >= 1.0:
+        return s
+    w = max(float(w), 0.0)
+    members = getattr(loss, "members", None)
+    if members is None:
+        return w * float(s) + (1.0 - w) * loss.mu_b
+    v = np.asarray(s, dtype=np.float64).ravel()
+    if v.size == 1:
+        v = np.repeat(v, len(members))
+    return np.array([w * x + (1.0 - w) * m.mu_b for x, m in zip(v.tolist(), members)])

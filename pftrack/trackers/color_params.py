@@ -134,6 +134,12 @@ class ColorModelParams(Params):
         "its false-lost rate 0.026 -> 0.044 / 0.052 / 0.063, because the synthetic ground truth counts a target "
         "10 % visible as present; for color-pf the false alarms grew more than the recall, so it stays off. "
         "Datasets that mark a target absent once it is mostly out of the frame (TLD) favour about 0.4."))
+    edge_share: float = param(0.0, ge=0, le=1, doc=(
+        "With loss_test='likelihood': while less than this fraction of the estimate's box lies inside the frame, "
+        "the loss test scores it as the in-frame fraction / edge_share of its score plus the rest of the mean score "
+        "of the absent hypothesis (per cue): a box sliding out of the view keeps matching on its last sliver, which "
+        "is weak evidence; the flag then rises, the search starts at the edge the target left by, and nothing is "
+        "learned from the sliver. 0: off (default)."))
     loss_test: Literal["likelihood", "appearance"] = param("likelihood", doc=(
         "'likelihood': the estimate's rho is tested against two distributions, the background's (Eqs. 13-14, "
         "spread floored) and the target's own score history, LLR = log N(rho; mu_t, s_t) - log N(rho; mu_b, "
@@ -322,6 +328,14 @@ class ColorPFParams(ColorModelParams):
         "See ColorModelParams.relit_search (off there). 'max' for color-pf, chosen on the tune split "
         "(docs/robustness.md): re-acquired 0.51 of the reappearances against 0.38 off, vanish AUC 0.494 against "
         "0.431, real sequences 0.503 against 0.501; 'replace' 0.51 with real 0.494. fusion-pf keeps it off."))
+    edge_share: float = param(0.5, ge=0, le=1, doc=(
+        "See ColorModelParams.edge_share (off there). 0.5 for color-pf and fusion-pf, chosen on the tune split and on "
+        "real exits, PETS walkers of frames 1-200 seen through four narrower views (scripts/make_pets_views.py; "
+        "docs/robustness.md): the highest lost recall whose tune-split mean AUC is within 0.002 of off and whose "
+        "false-lost rate stays within 0.05. fusion-pf: views' lost recall (pooled) 0.318 against 0.137 off, split "
+        "0.918 against 0.901, false-lost 0.027 against 0.025, mean AUC 0.6923 against 0.6927 (0.3: 0.188, 0.913; "
+        "0.7: 0.6906). color-pf: 0.194 against 0.130, 0.917 against 0.910, 0.037 against 0.034, 0.5753 against "
+        "0.5766 (0.3: 0.163, 0.917, 0.5774)."))
     reenter_border: float = param(1.0, ge=0, le=100, doc=(
         "After the target left the view, re-acquire it only within this many target sizes of the edge it left "
         "through, a strip widening at the speed it left with; 0: off (ColorModelParams' default). 1 for color-pf "

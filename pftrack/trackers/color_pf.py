@@ -52,7 +52,7 @@ from ..cues.lit_histogram import LitHistogram
 from ..cues.intensity import channel_levels
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
-from ..filtering.loss import LossDetector
+from ..filtering.loss import LossDetector, toward_background
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..geometry import Box, box_to_ellipse, displacement_rate, in_frame_fraction
@@ -371,6 +371,8 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         if p.loss_test == "likelihood":
             # two-class test on the estimate's score with hysteresis (pftrack.filtering.loss)
             s_e = self._loss_scores(frame, e_ell, np.array([rho_e]), roi)[0]
+            if p.edge_share > 0:  # the box's part outside the frame counts as background
+                s_e = toward_background(self.loss, s_e, in_frame_fraction(box, fw, fh) / p.edge_share)
             lost_now, score = self.loss.step(s_e if ok and tot_e[0] > 0 else float("nan"))
             self.miss = self.loss.miss
             confident = self.loss.confident(s_e)
