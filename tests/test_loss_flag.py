@@ -502,9 +502,9 @@ def test_toward_background_blends_each_cue_with_its_absent_mean():
 @pytest.mark.parametrize("tracker", ["fusion-pf", "color-pf"])
 def test_edge_share_raises_the_flag_as_the_target_slides_out_not_on_its_last_sliver(tracker):
     """The target walks out through the right edge: 63 % of its box is inside at frame 20, 29 % at 22, none from 24.
-    With edge_share (the default, 0.5) the estimate's sliver at the edge counts for little, and the flag is up within
-    a frame of the target being gone (measured: frames 24-25 for fusion-pf, 22 for color-pf); without it, one to three
-    frames later (25-26), on the sliver alone."""
+    With edge_share = 0.5 (fusion-pf's default) the estimate's sliver at the edge counts for little, and the flag is
+    up within a frame of the target being gone (measured: frames 24-25 for fusion-pf, 22 for color-pf); without it,
+    one to three frames later (25-26), on the sliver alone."""
     for seed in range(3):
         scene = Scene(_exit_scene(seed))
         frames = scene.frames()

@@ -328,14 +328,6 @@ class ColorPFParams(ColorModelParams):
         "See ColorModelParams.relit_search (off there). 'max' for color-pf, chosen on the tune split "
         "(docs/robustness.md): re-acquired 0.51 of the reappearances against 0.38 off, vanish AUC 0.494 against "
         "0.431, real sequences 0.503 against 0.501; 'replace' 0.51 with real 0.494. fusion-pf keeps it off."))
-    edge_share: float = param(0.5, ge=0, le=1, doc=(
-        "See ColorModelParams.edge_share (off there). 0.5 for color-pf and fusion-pf, chosen on the tune split and on "
-        "real exits, PETS walkers of frames 1-200 seen through four narrower views (scripts/make_pets_views.py; "
-        "docs/robustness.md): the highest lost recall whose tune-split mean AUC is within 0.002 of off and whose "
-        "false-lost rate stays within 0.05. fusion-pf: views' lost recall (pooled) 0.318 against 0.137 off, split "
-        "0.918 against 0.901, false-lost 0.027 against 0.025, mean AUC 0.6923 against 0.6927 (0.3: 0.188, 0.913; "
-        "0.7: 0.6906). color-pf: 0.194 against 0.130, 0.917 against 0.910, 0.037 against 0.034, 0.5753 against "
-        "0.5766 (0.3: 0.163, 0.917, 0.5774)."))
     reenter_border: float = param(1.0, ge=0, le=100, doc=(
         "After the target left the view, re-acquire it only within this many target sizes of the edge it left "
         "through, a strip widening at the speed it left with; 0: off (ColorModelParams' default). 1 for color-pf "

@@ -59,6 +59,15 @@ class FusionPFParams(ColorPFParams):
         "0.767; grey tune set 0.633 against 0.592 mean AUC, dim tune face proxies 0.872 against 0.727. (An earlier "
         "round had kept 'levels' after seeing the grey report set: the report's real grey copies fell, grey 0.473 "
         "against 0.502.) About 14 % slower on grey input."))
+    edge_share: float = param(0.5, ge=0, le=1, doc=(
+        "See ColorModelParams.edge_share (off there and for color-pf). 0.5 for fusion-pf, chosen on the tune split "
+        "and on real exits, PETS walkers of frames 1-200 seen through four narrower views "
+        "(scripts/make_pets_views.py; docs/robustness.md): the highest lost recall whose tune-split mean AUC is "
+        "within 0.002 of off and whose false-lost rate stays within 0.05. Views' lost recall (pooled) 0.318 against "
+        "0.137 off, split 0.918 against 0.901, false-lost 0.027 against 0.025, mean AUC 0.6923 against 0.6927 (0.3: "
+        "0.188 and 0.913; 0.7: mean AUC 0.6906). Report split, run once: lost recall on its five real sequences with "
+        "absences 0.804 against 0.681 (mean over the five), real AUC 0.578 against 0.566, re-acquired 74 against 77 "
+        "of 96. color-pf's tune gain was smaller and its report run lost (0.632 against 0.750): off there."))
     grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
         "See ColorModelParams.grey_scale_search (color-pf's, with grey_check='fused'): off for fusion-pf, whose "
         "own option is scale_search."))
