@@ -138,8 +138,8 @@ class ColorModelParams(Params):
         "With loss_test='likelihood': while less than this fraction of the estimate's box lies inside the frame, "
         "the loss test scores it as the in-frame fraction / edge_share of its score plus the rest of the mean score "
         "of the absent hypothesis (per cue): a box sliding out of the view keeps matching on its last sliver, which "
-        "is weak evidence; the flag then rises, the search starts at the edge the target left by, and nothing is "
-        "learned from the sliver. 0: off (default)."))
+        "is weak evidence; the flag then rises, the search starts (at the edge the target left by, with "
+        "reenter_border), and nothing is learned from the sliver. 0: off (default; 0.5 for fusion-pf)."))
     loss_test: Literal["likelihood", "appearance"] = param("likelihood", doc=(
         "'likelihood': the estimate's rho is tested against two distributions, the background's (Eqs. 13-14, "
         "spread floored) and the target's own score history, LLR = log N(rho; mu_t, s_t) - log N(rho; mu_b, "
