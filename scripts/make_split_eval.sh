@@ -3,10 +3,12 @@
 #
 #   tune:   otb_crossing, otb_couple, vot_bag, otb_dragonbaby, davis16_dog, their grey and grey+light variants,
 #           the people of PETS 2009 S2.L1 frames 1-200 (one sequence each, scripts/make_mot_sot.py),
-#           synthetic vanish/leave/exit/varied/camouflage/teleport scenes, seeds 0-7   (defaults were chosen here)
+#           synthetic vanish/leave/exit/varied/camouflage/teleport scenes, seeds 0-7   (defaults were chosen here);
+#           and, in a run of their own, the PETS walkers of frames 1-200 seen through four narrower windows
+#           (scripts/make_pets_views.py: real exits)
 #   report: otb_motorrolling, tld_pedestrian2, davis16_blackswan, davis16_car-shadow, their grey and grey+light
 #           variants, the people of PETS frames 201-400, freshly seeded synthetic scenes, seeds 100-107
-#           (never tuned on)
+#           (never tuned on); and the PETS windows of frames 201-400
 #
 # Usage: bash scripts/make_split_eval.sh [DATA_DIR] [WORK_DIR]   (defaults ../shared/data, reports/split)
 # Writes WORK_DIR/{tune,report}/ (results.csv, summary.md, index.html) and prints both summaries.
@@ -26,6 +28,9 @@ for s in otb_motorrolling tld_pedestrian2 davis16_blackswan davis16_car-shadow; 
 [ -d "$WORK/report_variants" ] || "$PY" scripts/make_variants.py "$WORK"/report_real/* --out "$WORK/report_variants"
 [ -d "$WORK/tune_pets" ] || "$PY" scripts/make_mot_sot.py "$DATA/pets09_s2l1_dev" --frames 1-200 --out "$WORK/tune_pets"
 [ -d "$WORK/report_pets" ] || "$PY" scripts/make_mot_sot.py "$DATA/pets09_s2l1_dev" --frames 201-400 --out "$WORK/report_pets"
+[ -d "$WORK/tune_views" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 1-200 --out "$WORK/tune_views"
+[ -d "$WORK/report_views" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 201-400 \
+  --out "$WORK/report_views"
 for kind in vanish leave exit varied camouflage teleport; do
   [ -d "$WORK/tune_synth/$kind" ] || "$PFTRACK" synth "$kind" --seeds 0-7 --out "$WORK/tune_synth/$kind"
   [ -d "$WORK/report_synth/$kind" ] || "$PFTRACK" synth "$kind" --seeds 100-107 --out "$WORK/report_synth/$kind"
@@ -36,4 +41,7 @@ for split in tune report; do
     --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet --report "$WORK/$split" \
     --title "pftrack: $split split" > "$WORK/$split.md"
   "$PY" scripts/split_summary.py "$WORK/$split/results.csv" --scenes "$WORK/${split}_synth"
+  # real exits: PETS walkers through narrower windows (docs/robustness.md), a run of their own
+  "$PFTRACK" eval "$WORK/${split}_views" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
+    --report "$WORK/${split}_views_eval" --title "pftrack: $split split, PETS views" > "$WORK/${split}_views.md"
 done
