@@ -87,6 +87,22 @@ def search_scale(cue: StructureCue, frame: np.ndarray, ellipse, *, step: float =
     return best_ratio(scores, ratios, len(shifts), margin)
 
 
+def _vertex_factor(cue, frame: np.ndarray, ellipse, ratios, step: float, rate: float) -> float:
+    """``exp(rate log(1+step) v)``, ``v`` the vertex (:func:`vertex_offset`) of the NCC of the boxes of ``ellipse`` at
+    the three half-axis ``ratios`` (scalars, or ``(rx, ry)`` pairs); 1 when a box ``1+step`` times as large on both
+    axes is not inside the frame (the part of a box beyond the border has no pixels to correlate, and comparing
+    boxes there favours the one that fits, docs/robustness.md), or a score is not finite."""
+    cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
+    fh, fw = frame.shape[:2]
+    ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
+    if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:
+        return 1.0
+    lo, mid, hi = cue.size_scores(frame, (cx, cy, hx, hy), ratios)
+    if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
+        return 1.0
+    return math.exp(vertex_offset(lo, mid, hi) * math.log1p(step) * rate)
+
+
 def size_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> float:
     """The factor by which the half-axes of ``ellipse`` ``(cx, cy, hx, hy)`` move toward the size whose patch best
     matches ``cue``'s references (anything with ``size_scores(frame, ellipse, ratios)``, as
@@ -95,15 +111,7 @@ def size_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> fl
 
     1 when the largest of the three boxes is not inside the frame: the part of a box beyond the border has no
     pixels to correlate, and comparing sizes there favours the box that fits (docs/robustness.md)."""
-    cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
-    fh, fw = frame.shape[:2]
-    ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
-    if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:
-        return 1.0
-    lo, mid, hi = cue.size_scores(frame, (cx, cy, hx, hy), (1.0 / (1.0 + step), 1.0, 1.0 + step))
-    if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
-        return 1.0
-    return math.exp(vertex_offset(lo, mid, hi) * math.log1p(step) * rate)
+    return _vertex_factor(cue, frame, ellipse, (1.0 / (1.0 + step), 1.0, 1.0 + step), step, rate)
 
 
 def aspect_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> float:
@@ -113,13 +121,5 @@ def aspect_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> 
 
     A target that turns, bends or is seen from another side changes its width and height apart, and a size search
     at a fixed aspect cannot follow it.  1 when the widest or the tallest box is not inside the frame."""
-    cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
-    fh, fw = frame.shape[:2]
-    ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
-    if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:
-        return 1.0
     k = 1.0 + step
-    tall, mid, wide = cue.size_scores(frame, (cx, cy, hx, hy), ((1.0 / k, k), (1.0, 1.0), (k, 1.0 / k)))
-    if not (math.isfinite(tall) and math.isfinite(mid) and math.isfinite(wide)):
-        return 1.0
-    return math.exp(vertex_offset(tall, mid, wide) * math.log1p(step) * rate)
+    return _vertex_factor(cue, frame, ellipse, ((1.0 / k, k), (1.0, 1.0), (k, 1.0 / k)), step, rate)

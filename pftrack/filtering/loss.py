@@ -210,6 +210,10 @@ class LossDetector:
         self.lost = self.miss >= self.lost_frames
         return self.lost, confidence(llr)
 
+    def toward_absent(self, s: float, w: float) -> float:
+        """``s`` with a share ``1 - w`` replaced by the absent hypothesis's mean score (:func:`toward_background`)."""
+        return w * float(s) + (1.0 - w) * self.mu_b
+
     def learn(self, s: float, ok: bool) -> None:
         """Blend ``s`` into the target history when ``ok`` (exponential mean and variance); otherwise one
         more frame unseen.  Nothing changes while ``frozen`` (a candidate on probation)."""
@@ -373,6 +377,10 @@ class FusedLoss:
             return v * len(self.members)
         raise ValueError(f"expected {len(self.members)} scores, got {len(v)}")
 
+    def toward_absent(self, s, w: float) -> np.ndarray:
+        """Each cue's score with a share ``1 - w`` replaced by that cue's absent mean (:func:`toward_background`)."""
+        return np.array([w * v + (1.0 - w) * m.mu_b for v, m in zip(self._vector(s), self.members)])
+
     def evaluate(self, s) -> float:
         """Fused ratio of a score vector; a NaN cue (not available) gives no evidence; all NaN is absence."""
         s = self._vector(s)
@@ -450,14 +458,8 @@ class FusedLoss:
 def toward_background(loss, s, w: float):
     """The estimate's score(s) ``s`` with a share ``1 - w`` of each replaced by the mean score the loss test expects
     when the target is absent (``mu_b``, per cue for a :class:`FusedLoss`): the part of a box outside the frame
-    shows nothing of the target, and a sliver inside that matches is weak evidence (``edge_share``)."""
+    shows nothing of the target, and a sliver inside that matches is weak evidence (``edge_share``).  ``w`` is
+    clipped to ``[0, 1]``; ``s`` is returned as it is for ``w >= 1``."""
     if w >= 1.0:
         return s
-    w = max(float(w), 0.0)
-    members = getattr(loss, "members", None)
-    if members is None:
-        return w * float(s) + (1.0 - w) * loss.mu_b
-    v = np.asarray(s, dtype=np.float64).ravel()
-    if v.size == 1:
-        v = np.repeat(v, len(members))
-    return np.array([w * x + (1.0 - w) * m.mu_b for x, m in zip(v.tolist(), members)])
+    return loss.toward_absent(s, max(float(w), 0.0))

@@ -363,7 +363,8 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         if self._probation_left:
             info["probation"] = True  # following a weak acquisition without learning from it (.probation)
         # a target leaving the view still matches on its last visible sliver: out of view, it is reported absent
-        out = p.min_in_frame > 0 and in_frame_fraction(box, fw, fh) < p.min_in_frame
+        inside = in_frame_fraction(box, fw, fh) if p.min_in_frame > 0 or p.edge_share > 0 else 1.0
+        out = inside < p.min_in_frame
         if out:
             info["out_of_view"] = True
         if seir_info is not None:
@@ -372,7 +373,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
             # two-class test on the estimate's score with hysteresis (pftrack.filtering.loss)
             s_e = self._loss_scores(frame, e_ell, np.array([rho_e]), roi)[0]
             if p.edge_share > 0:  # the box's part outside the frame counts as background
-                s_e = toward_background(self.loss, s_e, in_frame_fraction(box, fw, fh) / p.edge_share)
+                s_e = toward_background(self.loss, s_e, inside / p.edge_share)
             lost_now, score = self.loss.step(s_e if ok and tot_e[0] > 0 else float("nan"))
             self.miss = self.loss.miss
             confident = self.loss.confident(s_e)
