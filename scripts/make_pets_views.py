@@ -14,8 +14,8 @@ and often come back into it, among other walkers in similar clothes, on real vid
 * the ground truth is the box clipped to the window while at least 10 % of it is inside (the synthetic scenes'
   threshold for a present target), ``NaN`` (absent) when less is;
 * frames on which PETS has no box for the person but the box before or after, moved on at its velocity, would still
-  be 10 % inside the window are ``unannotated`` in ``meta.json`` (neither absent nor scored), as in
-  ``scripts/make_mot_sot.py``;
+  be 10 % inside the window are ``unannotated`` in ``meta.json`` (neither absent nor scored), written by the same
+  :func:`pftrack.io.person_sequences.write_otb` as ``scripts/make_mot_sot.py``;
 * a person needs at least ``--min-frames`` (30) frames inside the window from that start on.
 
 Each window's frames are written once (JPEG, quality 95) beside ``--out``, in ``OUT_frames/``; the sequences
@@ -25,16 +25,14 @@ link to them.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from pftrack.geometry import in_frame_fraction
-from pftrack.io.datasets import read_sequence
-from pftrack.io.person_sequences import IN_VIEW_FRACTION, in_view_frames
+from pftrack.io.datasets import Sequence, read_sequence
+from pftrack.io.person_sequences import IN_VIEW_FRACTION, PersonSequence, in_view_frames, write_otb
 
 CREDIT = ("PETS 2009 benchmark data, University of Reading; ground truth: Anton Milan's annotations "
           "(milanton.de), converted to MOTChallenge format.")
@@ -109,26 +107,15 @@ def main() -> None:
             if not dst.exists():
                 img = cv2.imread(str(seq.frames[n - 1]))
                 cv2.imwrite(str(dst), img[y0:y0 + wh, x0:x0 + ww], [cv2.IMWRITE_JPEG_QUALITY, 95])
+        # the window's frames, indexed by source frame number as write_otb reads them (those before lo unused)
+        crop = Sequence(name=seq.name, kind="frames", path=frames_dir,
+                        frames=[frames_dir / f"{n:06d}.jpg" for n in range(1, hi + 1)])
+        where = f"window x={x0}..{x0 + ww}, y={y0}..{y0 + wh}"
         for pid, numbers, boxes, unannotated in person_views(seq.mot_gt, lo, hi, win, args.min_frames):
-            dest = out / f"{stem}_{name}_f{lo}-{hi}_id{pid}"
-            (dest / "img").mkdir(parents=True, exist_ok=True)
-            for k, n in enumerate(numbers):
-                link = dest / "img" / f"{k + 1:04d}.jpg"
-                if link.is_symlink() or link.exists():
-                    link.unlink()
-                os.symlink(os.path.relpath(frames_dir / f"{n:06d}.jpg", link.parent), link)
-            lines = ["NaN,NaN,NaN,NaN" if not np.isfinite(b).all() else ",".join(f"{v:.2f}" for v in b)
-                     for b in boxes]
-            (dest / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
-            meta = {"kind": "mot-person-view", "window": list(win)}
-            if unannotated.any():
-                meta["unannotated"] = [int(k) + 1 for k in np.flatnonzero(unannotated)]
-            (dest / "meta.json").write_text(json.dumps(meta) + "\n", encoding="utf-8")
-            (dest / "ATTRIBUTION.md").write_text(
-                f"Identity {pid} of {seq.name} in the window x={x0}..{x0 + ww}, y={y0}..{y0 + wh}, source frames "
-                f"{int(numbers[0])}-{int(numbers[-1])}. {CREDIT}\n", encoding="utf-8")
-            absent = int(np.count_nonzero(~np.isfinite(boxes).all(axis=1) & ~unannotated))
-            made.append(f"{dest.name} ({len(numbers)} frames, {absent} absent)")
+            person = PersonSequence(pid, numbers, boxes, unannotated)
+            dest = write_otb(crop, person, out / f"{stem}_{name}_f{lo}-{hi}_id{pid}",
+                             credit=f"In the {where}. {CREDIT}")
+            made.append(f"{dest.name} ({len(numbers)} frames, {person.absent} absent)")
     print(f"{len(made)} sequences -> {out}:\n  " + "\n  ".join(made))
 
 
