@@ -518,3 +518,34 @@ def test_edge_share_raises_the_flag_as_the_target_slides_out_not_on_its_last_sli
         assert 21 <= first[0.5] <= 25, first
         assert first[0.5] < first[0.0], first
 
+
+
+def _return_scene(seed: int) -> SceneSpec:
+    """The target walks out through the right edge (gone from frame 27), waits outside, and walks back in from
+    frame 40 on: 27 % of its box is inside at frame 51, 73 % at 54."""
+    target = Target(path=((0, 230.0, 120.0), (25, 370.0, 120.0), (40, 370.0, 120.0), (70, 250.0, 120.0)),
+                    size=(26.0, 52.0))
+    return SceneSpec(n_frames=75, seed=seed, targets=(target,), background="flat", kind="exit")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_acquire_in_frame_waits_until_half_of_the_candidate_is_in(seed):
+    """acquire_in_frame = 0.5 (the default): the returning target is not acquired on its first sliver at the edge
+    (frame 51 without the rule, the box a quarter inside) but once about half of it is in (frames 52-54 measured),
+    still within a few frames of its return; nothing is acquired while it is away."""
+    from pftrack.geometry import in_frame_fraction
+
+    scene = Scene(_return_scene(seed))
+    frames = scene.frames()
+    gt = scene.groundtruth()
+    h, w = frames[0].shape[:2]
+    first = {}
+    for g in (0.0, 0.5):
+        t = pftrack.create_tracker("fusion-pf", seed=seed, acquire_in_frame=g)
+        t.init(frames[0], tuple(gt[0]))
+        states = [t.update(f) for f in frames[1:]]
+        assert all(s.lost for s in states[29:45])  # frames 30-45: the target is out of view
+        k = next(k for k, s in enumerate(states, start=1) if k > 30 and s.info.get("mode") == "acquired")
+        first[g] = (k, in_frame_fraction(states[k - 1].box, w, h))
+    assert first[0.0][1] < 0.4 and first[0.5][1] >= 0.45, first
+    assert first[0.0][0] < first[0.5][0] <= 56, first

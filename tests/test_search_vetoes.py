@@ -37,9 +37,10 @@ class _Loss:
 class _Host(VetoMixin):
     """Three candidates 100 px apart; the ones at ``refused`` x positions are vetoed."""
 
-    def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3)):
+    def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3), *, width=320, acquire_in_frame=0.0):
         self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
-                                      n_particles=30)
+                                      n_particles=30, acquire_in_frame=acquire_in_frame)
+        self._shape = (120, width)
         self.loss = _Loss()
         self.size = (10.0, 10.0)
         self.refused = set(refused)
@@ -111,6 +112,17 @@ def test_retries_are_bounded():
     host = _Host(2, refused=(50.0, 150.0), scores=(0.9, 0.8, 0.7))
     a = _choose(host)
     assert a.found and host.states[a.best, 0] == 250.0
+
+
+@pytest.mark.parametrize("width, found", [(255, True), (248, False)])
+def test_a_best_candidate_mostly_outside_the_frame_ends_the_choice(width, found):
+    """acquire_in_frame = 0.5: the best candidate's box (x 240-260) is 75 % inside a frame 255 px wide and is
+    taken; 40 % inside one 248 px wide, nothing is acquired on this frame and the next best is not asked."""
+    host = _Host(2, refused=(), scores=(0.3, 0.8, 0.9), width=width, acquire_in_frame=0.5)
+    a = _choose(host)
+    assert a.found == found and host.states[a.best, 0] == 250.0
+    assert host.asked == ([250.0] if found else [])
+    assert host.loss.unseen == 1 and host.loss.lost != found  # the loss test moved one frame either way
 
 
 @pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])

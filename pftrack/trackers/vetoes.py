@@ -32,7 +32,7 @@ import numpy as np
 
 from ..cues.template import patch_shift
 from ..filtering.dynamics import X, Y
-from ..geometry import ellipse_to_box
+from ..geometry import ellipse_to_box, in_frame_fraction
 
 __all__ = ["Acquisition", "VetoMixin", "near_mask"]
 
@@ -105,7 +105,8 @@ class VetoMixin:
 
         ``supporters``: the samples whose appearance passes (and that have pixels). A candidate is tested by
         the loss test (:meth:`loss.would_acquire`) when enough supporters lie near it, then by the vetoes; a
-        refused candidate gives way to the next best, ``search_retries`` times. The loss test is then run once
+        refused candidate gives way to the next best, ``search_retries`` times; one with less than
+        ``acquire_in_frame`` of its box inside the frame ends the choice for this frame. The loss test is then run once
         (:meth:`loss.acquire`) on the candidate chosen, or on the first when none would end the loss, so the
         loss's state moves exactly one frame."""
         p = self.params
@@ -118,6 +119,9 @@ class VetoMixin:
         for attempt in range(retries + 1):
             cluster = near & supporters
             if cluster.sum() < need or not self.loss.would_acquire(s_best, lp)[0]:
+                break
+            g = p.acquire_in_frame
+            if g > 0 and in_frame_fraction(tuple(ellipse_to_box(c.ell[best])), self._shape[1], self._shape[0]) < g:
                 break
             if self._vetoed_by(frame, c.ell[best]) is None:
                 self.loss.acquire(s_best, lp)
