@@ -519,7 +519,6 @@ def test_edge_share_raises_the_flag_as_the_target_slides_out_not_on_its_last_sli
         assert first[0.5] < first[0.0], first
 
 
-
 def _return_scene(seed: int) -> SceneSpec:
     """The target walks out through the right edge (gone from frame 27), waits outside, and walks back in from
     frame 40 on: 27 % of its box is inside at frame 51, 73 % at 54."""

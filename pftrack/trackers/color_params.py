@@ -143,8 +143,8 @@ class ColorModelParams(Params):
     acquire_in_frame: float = param(0.0, ge=0, le=1, doc=(
         "With loss_test='likelihood', while lost: the search's best candidate is not acquired while less than this "
         "fraction of its box lies inside the frame; the search waits (no other candidate is taken on that frame). "
-        "At the view's edge a sliver matches weakly-shaped evidence: the legs or shadow of someone walking along "
-        "the edge, ground the model was learned with; a target coming back is taken once half of it is in. "
+        "At the view's edge a sliver of a box can match the legs or shadow of someone walking along the edge, or "
+        "ground the model was learned with; a target coming back is taken once half of it is in. "
         "0: off (default here; 0.5 for color-pf and fusion-pf)."))
     loss_test: Literal["likelihood", "appearance"] = param("likelihood", doc=(
         "'likelihood': the estimate's rho is tested against two distributions, the background's (Eqs. 13-14, "
@@ -331,7 +331,8 @@ class ColorPFParams(ColorModelParams):
         "Views' pooled lost recall over 6 seeds: fusion-pf 0.371 against 0.305 off (0.6: 0.410, 0.7: 0.439), "
         "color-pf 0.202 against 0.133; tune split re-acquisitions unchanged (74 and 80 of 90), false-lost 0.032 "
         "against 0.027 (color-pf 0.037 against 0.034), mean AUC 0.6900 against 0.6923 (0.5741 against 0.5766). "
-        "0.6 and 0.7 re-acquired fewer (0.78 and 0.77 against 0.82)."))
+        "0.6 and 0.7 re-acquired fewer (0.78 and 0.77 against 0.82). Report data, run once after the choice: views "
+        "0.418 against 0.413 (color-pf 0.579 against 0.582), re-acquired 73 against 74 of 96 (76 both)."))
     lost_frames: int = param(2, ge=1, le=1000, doc=(
         "'A couple of frames' (§6) of absence evidence before the target is declared lost. 2 for color-pf, "
         "chosen on the tune split (docs/robustness.md): against 3, lost recall 0.828 against 0.791, false-lost "
