@@ -355,7 +355,7 @@ def test_bench_cli_writes_table_and_plot(tmp_path):
 
 
 def test_summary_gives_speed_ratios_to_the_opencv_peer_in_the_run():
-    from pftrack.eval.report import speed_peer, strict_speed_ratios, summary_markdown
+    from pftrack.eval.report import aggregate, sequence_speed_ratios, speed_peer, strict_speed_ratios, summary_markdown
 
     records = []
     for s, (fast, peer) in enumerate([(1000.0, 10.0), (1200.0, 40.0), (900.0, 60.0)]):
@@ -375,6 +375,10 @@ def test_summary_gives_speed_ratios_to_the_opencv_peer_in_the_run():
     # the median over sequences of the per-sequence medians: 1100 against 40
     assert row.endswith("| 1100 | 27.5 |")
     assert "`fusion-pf` 27.5×" in md
+    # sequence by sequence: 1100 / 10, 1300 / 40, 1000 / 60 (the medians over seeds)
+    lo, med, hi = sequence_speed_ratios(aggregate(records), "opencv-csrt")["fusion-pf"]
+    assert (lo, med, hi) == pytest.approx((1000.0 / 60.0, 1300.0 / 40.0, 1100.0 / 10.0))
+    assert "`fusion-pf` 16.7×, 32.5×, 110.0×" in md
 
 
 def test_speed_ratios_without_a_peer_rate_are_undefined_not_an_error():

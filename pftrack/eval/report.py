@@ -159,6 +159,20 @@ def strict_speed_ratios(records: list[dict], peer: str) -> dict[str, float]:
     return {t: _ratio(_upper_median(v), ref) for t, v in rates.items()}
 
 
+def sequence_speed_ratios(agg: dict, peer: str) -> dict[str, tuple[float, float, float]]:
+    """Each tracker's ratio to the peer sequence by sequence (the median fps over seeds of each, on the sequences both
+    ran): ``(lowest, median, highest)``, NaN where no sequence has both rates.  The peer's cost may depend on the
+    target (CSRT's on its size) while the tracker's does not, and then the ratio of the two medians hides a spread
+    that this reading shows."""
+    out = {}
+    for t in agg["trackers"]:
+        r = [_ratio(agg["cell"][(t, s)]["fps"], agg["cell"][(peer, s)]["fps"]) for s in agg["sequences"]
+             if (t, s) in agg["cell"] and (peer, s) in agg["cell"]]
+        r = [x for x in r if math.isfinite(x)]
+        out[t] = (min(r), float(np.median(r)), max(r)) if r else (float("nan"),) * 3
+    return out
+
+
 def _ratio(a: float, b: float) -> float:
     return a / b if math.isfinite(b) and b > 0 else float("nan")
 
@@ -222,7 +236,11 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         strict = strict_speed_ratios(records, peer)
         lines += [f"× {peer}: the ratio of the median fps in this run. The strictest reading, the upper median of "
                   "all (sequence, seed) update rates of each tracker against the same of the peer's: "
-                  + ", ".join(f"`{t}` {strict[t]:.1f}×" for t in order if t != peer) + ".", ""]
+                  + ", ".join(f"`{t}` {strict[t]:.1f}×" for t in order if t != peer) + "."]
+        per = sequence_speed_ratios(agg, peer)
+        lines += ["Sequence by sequence (each tracker's median fps over the peer's on the same sequence), lowest, "
+                  "median and highest: " + ", ".join(f"`{t}` {per[t][0]:.1f}×, {per[t][1]:.1f}×, {per[t][2]:.1f}×"
+                                                      for t in order if t != peer) + ".", ""]
     metric = "auc" if ope else "failures"
     label = "AUC" if ope else "failures"
     lines += [f"## {label} per sequence (mean over seeds)", ""]
