@@ -2,6 +2,10 @@
 
     python scripts/make_pets_views.py ../shared/data/pets09_s2l1_dev --frames 1-200 --out reports/views_tune
     python scripts/make_pets_views.py ../shared/data/pets09_s2l1_dev --frames 201-400 --out reports/views_report
+    python scripts/make_pets_views.py reports/split/tune_real/otb_crossing --out reports/exits_tune
+
+A single-target folder (OTB, VOT) works the same way, its target as identity 1 (``--frames`` defaults to all):
+exits of one target from a less crowded scene.
 
 The PETS view is wide, and few of its walkers leave it within a half (one in frames 1-200). Issue #14 asks for the
 lost flag on a pedestrian who leaves the view, and for the re-acquisition of one who comes back. This script cuts
@@ -87,20 +91,26 @@ def person_views(gt: np.ndarray, first: int, last: int, window: tuple[int, int, 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("mot", help="a MOTChallenge sequence folder (img1/, gt/gt.txt)")
-    ap.add_argument("--frames", required=True, help="frame range, 1-based and inclusive, e.g. 1-200")
+    ap.add_argument("--frames", help="frame range, 1-based and inclusive, e.g. 1-200 (default: all)")
     ap.add_argument("--min-frames", type=int, default=30)
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
     seq = read_sequence(args.mot)
-    lo, hi = (int(v) for v in args.frames.split("-"))
+    lo, hi = (int(v) for v in args.frames.split("-")) if args.frames else (1, len(seq.frames))
     hi = min(hi, len(seq.frames))
     first = cv2.imread(str(seq.frames[0]))
     out = Path(args.out)
-    stem = Path(args.mot).name.split("_")[0]
+    gt, stem = seq.mot_gt, Path(args.mot).name.split("_")[0]
+    if gt is None:  # one target: its ground truth as identity 1, named after its folder
+        if seq.groundtruth is None:
+            raise SystemExit(f"{args.mot}: no ground truth")
+        ok = np.flatnonzero(np.isfinite(seq.groundtruth).all(axis=1))
+        gt = np.column_stack([ok + 1.0, np.ones(ok.size), seq.groundtruth[ok]])
+        stem = Path(args.mot).name
     made = []
     for name, win in windows(first.shape[1], first.shape[0]).items():
         x0, y0, ww, wh = win
-        frames_dir = out.with_name(out.name + "_frames") / f"{name}_f{lo}-{hi}"
+        frames_dir = out.with_name(out.name + "_frames") / f"{stem}_{name}_f{lo}-{hi}"
         frames_dir.mkdir(parents=True, exist_ok=True)
         for n in range(lo, hi + 1):
             dst = frames_dir / f"{n:06d}.jpg"
@@ -111,10 +121,11 @@ def main() -> None:
         crop = Sequence(name=seq.name, kind="frames", path=frames_dir,
                         frames=[frames_dir / f"{n:06d}.jpg" for n in range(1, hi + 1)])
         where = f"window x={x0}..{x0 + ww}, y={y0}..{y0 + wh}"
-        for pid, numbers, boxes, unannotated in person_views(seq.mot_gt, lo, hi, win, args.min_frames):
+        for pid, numbers, boxes, unannotated in person_views(gt, lo, hi, win, args.min_frames):
             person = PersonSequence(pid, numbers, boxes, unannotated)
+            credit = CREDIT if seq.mot_gt is not None else f"Source: {Path(args.mot).name}, under its own licence."
             dest = write_otb(crop, person, out / f"{stem}_{name}_f{lo}-{hi}_id{pid}",
-                             credit=f"In the {where}. {CREDIT}")
+                             credit=f"In the {where}. {credit}")
             made.append(f"{dest.name} ({len(numbers)} frames, {person.absent} absent)")
     print(f"{len(made)} sequences -> {out}:\n  " + "\n  ".join(made))
 

@@ -5,10 +5,11 @@
 #           the people of PETS 2009 S2.L1 frames 1-200 (one sequence each, scripts/make_mot_sot.py),
 #           synthetic vanish/leave/exit/varied/camouflage/teleport scenes, seeds 0-7   (defaults were chosen here);
 #           and, in a run of their own, the PETS walkers of frames 1-200 seen through four narrower windows
-#           (scripts/make_pets_views.py: real exits)
+#           (scripts/make_pets_views.py: real exits among look-alikes), and the five real targets seen through the
+#           same windows (exits of one target)
 #   report: otb_motorrolling, tld_pedestrian2, davis16_blackswan, davis16_car-shadow, their grey and grey+light
 #           variants, the people of PETS frames 201-400, freshly seeded synthetic scenes, seeds 100-107
-#           (never tuned on); and the PETS windows of frames 201-400
+#           (never tuned on); and the PETS windows of frames 201-400, and the four real targets' windows
 #
 # Usage: bash scripts/make_split_eval.sh [DATA_DIR] [WORK_DIR]   (defaults ../shared/data, reports/split)
 # Writes WORK_DIR/{tune,report}/ (results.csv, summary.md, index.html) and prints both summaries.
@@ -31,6 +32,11 @@ for s in otb_motorrolling tld_pedestrian2 davis16_blackswan davis16_car-shadow; 
 [ -d "$WORK/tune_views" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 1-200 --out "$WORK/tune_views"
 [ -d "$WORK/report_views" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 201-400 \
   --out "$WORK/report_views"
+for split in tune report; do
+  if [ ! -d "$WORK/${split}_exits" ]; then
+    for s in "$WORK/${split}_real"/*; do "$PY" scripts/make_pets_views.py "$s" --out "$WORK/${split}_exits"; done
+  fi
+done
 for kind in vanish leave exit varied camouflage teleport; do
   [ -d "$WORK/tune_synth/$kind" ] || "$PFTRACK" synth "$kind" --seeds 0-7 --out "$WORK/tune_synth/$kind"
   [ -d "$WORK/report_synth/$kind" ] || "$PFTRACK" synth "$kind" --seeds 100-107 --out "$WORK/report_synth/$kind"
@@ -44,4 +50,8 @@ for split in tune report; do
   # real exits: PETS walkers through narrower windows (docs/robustness.md), a run of their own
   "$PFTRACK" eval "$WORK/${split}_views" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
     --report "$WORK/${split}_views_eval" --title "pftrack: $split split, PETS views" > "$WORK/${split}_views.md"
+  # exits of one target: the real sequences of the split through the same windows
+  "$PFTRACK" eval "$WORK/${split}_exits" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
+    --report "$WORK/${split}_exits_eval" --title "pftrack: $split split, windows of the real sequences" \
+    > "$WORK/${split}_exits.md"
 done
