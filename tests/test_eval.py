@@ -381,6 +381,19 @@ def test_summary_gives_speed_ratios_to_the_opencv_peer_in_the_run():
     assert "`fusion-pf` 16.7×, 32.5×, 110.0×" in md
 
 
+def test_the_html_report_gives_the_speed_ratios_too(tmp_path):
+    from pftrack.eval.report import write_report
+
+    records = []
+    for s, (fast, peer) in enumerate([(1000.0, 10.0), (1200.0, 40.0), (900.0, 60.0)]):
+        records.append(dict(tracker="fusion-pf", sequence=f"s{s}", seed=0, protocol="ope", auc=0.5, fps=fast))
+        records.append(dict(tracker="opencv-csrt", sequence=f"s{s}", seed=0, protocol="ope", auc=0.4, fps=peer))
+    page = write_report(records, tmp_path / "r")["index"].read_text(encoding="utf-8")
+    assert "<th>× CSRT</th>" in page
+    assert "<td>1000</td><td>25.0</td>" in page  # median 1000 against 40
+    assert "<code>fusion-pf</code> 15.0×, 30.0×, 100.0×" in page  # 900 / 60, 1200 / 40, 1000 / 10
+
+
 def test_speed_ratios_without_a_peer_rate_are_undefined_not_an_error():
     from pftrack.eval.report import strict_speed_ratios, summary_markdown
 

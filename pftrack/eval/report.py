@@ -173,6 +173,20 @@ def sequence_speed_ratios(agg: dict, peer: str) -> dict[str, tuple[float, float,
     return out
 
 
+def speed_notes(records: list[dict], agg: dict, peer: str, order: list[str]) -> list[str]:
+    """The two sentences under a table with a ``× peer`` column: the strict reading and the ratio sequence by
+    sequence, for the trackers of ``order`` other than the peer (summary.md and index.html alike)."""
+    strict = strict_speed_ratios(records, peer)
+    per = sequence_speed_ratios(agg, peer)
+    others = [t for t in order if t != peer]
+    return [f"× {peer}: the ratio of the median fps in this run. The strictest reading, the upper median of all "
+            "(sequence, seed) update rates of each tracker against the same of the peer's: "
+            + ", ".join(f"`{t}` {strict[t]:.1f}×" for t in others) + ".",
+            "Sequence by sequence (each tracker's median fps over the peer's on the same sequence), lowest, median "
+            "and highest: " + ", ".join(f"`{t}` {per[t][0]:.1f}×, {per[t][1]:.1f}×, {per[t][2]:.1f}×"
+                                        for t in others) + "."]
+
+
 def _ratio(a: float, b: float) -> float:
     return a / b if math.isfinite(b) and b > 0 else float("nan")
 
@@ -233,14 +247,7 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         lines.append("| " + " | ".join(row) + " |")
     lines.append("")
     if peer is not None:
-        strict = strict_speed_ratios(records, peer)
-        lines += [f"× {peer}: the ratio of the median fps in this run. The strictest reading, the upper median of "
-                  "all (sequence, seed) update rates of each tracker against the same of the peer's: "
-                  + ", ".join(f"`{t}` {strict[t]:.1f}×" for t in order if t != peer) + "."]
-        per = sequence_speed_ratios(agg, peer)
-        lines += ["Sequence by sequence (each tracker's median fps over the peer's on the same sequence), lowest, "
-                  "median and highest: " + ", ".join(f"`{t}` {per[t][0]:.1f}×, {per[t][1]:.1f}×, {per[t][2]:.1f}×"
-                                                      for t in order if t != peer) + ".", ""]
+        lines += speed_notes(records, agg, peer, order) + [""]
     metric = "auc" if ope else "failures"
     label = "AUC" if ope else "failures"
     lines += [f"## {label} per sequence (mean over seeds)", ""]
@@ -391,6 +398,7 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
     e = html.escape
     protocols = sorted({r["protocol"] for r in records})
     ope = _one_pass(protocols)
+    peer = speed_peer(agg["trackers"]) if "mot" not in protocols else None
     rows = []
     for t in agg["trackers"]:
         o = agg["overall"][t]
@@ -401,6 +409,8 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
         if "vot" in protocols:
             cells += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
         cells += [_fmt(o["fps"], 0)]
+        if peer is not None:
+            cells += [_fmt(_ratio(o["fps"], agg["overall"][peer]["fps"]), 1)]
         rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
     if "mot" in protocols:
         rows = []
@@ -413,7 +423,7 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
                           else []) + \
         (["failures", "accuracy"] if "vot" in protocols else []) + \
         (["MOTA", "MOTP", "IDF1", "ID switches", "fragmentations", "fps", "fps end to end"] if "mot" in protocols
-         else ["median fps"])
+         else ["median fps"]) + ([f"× {peer.removeprefix('opencv-').upper()}"] if peer is not None else [])
     legend = " ".join(
         f'<span style="color:rgb({c[2]},{c[1]},{c[0]})">&#9632; {e(t)}</span>'
         for t, c in ((t, color_for(k + 1)) for k, t in enumerate(agg["trackers"])))
@@ -431,6 +441,9 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
         "<a href='summary.md'>summary.md</a>.</p>",
         "<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in head) + "</tr>" + "".join(rows) + "</table>",
     ]
+    if peer is not None:
+        parts += ["<p>" + re.sub(r"`([^`]+)`", r"<code>\1</code>", e(line)) + "</p>"
+                  for line in speed_notes(records, agg, peer, agg["trackers"])]
     for p in plots:
         parts.append(f"<div><a href='{e(p)}'><img src='{e(p)}' alt='{e(p)}'></a></div>")
     if frames:
