@@ -5,7 +5,8 @@
     python scripts/make_pets_views.py reports/split/tune_real/otb_crossing --out reports/exits_tune
 
 A single-target folder (OTB, VOT) works the same way, its target as identity 1 (``--frames`` defaults to all):
-exits of one target from a less crowded scene.
+exits of one target from a less crowded scene. Its frames without a box are treated as PETS's (below): unscored
+where the box before or after, moved on, would still be in the window.
 
 The PETS view is wide, and few of its walkers leave it within a half (one in frames 1-200). Issue #14 asks for the
 lost flag on a pedestrian who leaves the view, and for the re-acquisition of one who comes back. This script cuts
@@ -90,7 +91,7 @@ def person_views(gt: np.ndarray, first: int, last: int, window: tuple[int, int, 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("mot", help="a MOTChallenge sequence folder (img1/, gt/gt.txt)")
+    ap.add_argument("mot", help="a MOTChallenge sequence folder (img1/, gt/gt.txt), or a single-target one")
     ap.add_argument("--frames", help="frame range, 1-based and inclusive, e.g. 1-200 (default: all)")
     ap.add_argument("--min-frames", type=int, default=30)
     ap.add_argument("--out", required=True)
@@ -103,7 +104,7 @@ def main() -> None:
     gt, stem = seq.mot_gt, Path(args.mot).name.split("_")[0]
     if gt is None:  # one target: its ground truth as identity 1, named after its folder
         if seq.groundtruth is None:
-            raise SystemExit(f"{args.mot}: no ground truth")
+            ap.error(f"{args.mot}: no ground truth")
         ok = np.flatnonzero(np.isfinite(seq.groundtruth).all(axis=1))
         gt = np.column_stack([ok + 1.0, np.ones(ok.size), seq.groundtruth[ok]])
         stem = Path(args.mot).name
