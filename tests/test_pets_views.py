@@ -1,4 +1,5 @@
-"""scripts/make_pets_views.py: single-person sequences of a MOT recording seen through narrower views."""
+"""scripts/make_pets_views.py: single-person sequences of a MOT recording (or a single-target sequence) seen through
+narrower views."""
 
 import importlib.util
 from pathlib import Path
