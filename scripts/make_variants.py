@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 
 from pftrack.io.codec import h264_round_trip
-from pftrack.io.datasets import read_sequence
+from pftrack.io.datasets import read_sequence, write_groundtruth
 
 
 def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
@@ -43,9 +43,7 @@ def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
 
 def copy_truth(seq, dest: Path) -> None:
     """The ground truth (and attribution) of ``seq`` into the OTB folder ``dest``."""
-    gt = seq.groundtruth
-    lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.2f}" for v in b) for b in gt]
-    (dest / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_groundtruth(dest / "groundtruth_rect.txt", seq.groundtruth)
     for extra in ("ATTRIBUTION.md", "provenance.json"):
         if (seq.path / extra).is_file():
             shutil.copy(seq.path / extra, dest / extra)

@@ -142,6 +142,16 @@ def read_number_rows(path: Path, *, widths: tuple[int, ...], allow_nan: bool = T
     return rows
 
 
+def write_groundtruth(path: str | Path, boxes, *, decimals: int = 2) -> Path:
+    """An OTB ``groundtruth_rect.txt``: one ``x,y,w,h`` row per frame, ``NaN,NaN,NaN,NaN`` where a box is missing
+    (read back by :func:`read_otb`)."""
+    lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.{decimals}f}" for v in b)
+             for b in np.asarray(boxes, dtype=np.float64).reshape(-1, 4)]
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
 def _pad_gt(boxes: np.ndarray, n: int) -> np.ndarray:
     out = np.full((n, 4), np.nan)
     m = min(n, boxes.shape[0])

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..geometry import in_frame_fraction
-from .datasets import Sequence
+from .datasets import Sequence, write_groundtruth
 
 IN_VIEW_FRACTION = 0.1  # the synthetic scenes' HIDDEN_BELOW: a target with less of its area in view is absent
 VELOCITY_FRAMES = 5  # the velocity of an extrapolated box: mean displacement over this many annotated frames
@@ -116,8 +116,7 @@ def write_otb(seq: Sequence, person: PersonSequence, dest: str | Path, *, credit
         if link.is_symlink() or link.exists():
             link.unlink()
         os.symlink(os.path.relpath(src, link.parent), link)
-    lines = ["NaN,NaN,NaN,NaN" if not np.isfinite(b).all() else ",".join(f"{v:.2f}" for v in b) for b in person.boxes]
-    (dest / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_groundtruth(dest / "groundtruth_rect.txt", person.boxes)
     meta = dest / "meta.json"
     if person.in_view is not None and person.in_view.any():
         unannotated = [int(k) + 1 for k in np.flatnonzero(person.in_view)]

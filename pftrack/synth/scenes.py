@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ..io.datasets import write_groundtruth
+
 Color = tuple[int, int, int]
 
 # Background hues are kept away from the target palette so that a correct tracker
@@ -424,8 +426,7 @@ def export_otb(spec: SceneSpec, folder, *, target: int = 0, ext: str = ".png") -
     (folder / "meta.json").write_text(json.dumps(meta, default=_jsonable) + "\n", encoding="utf-8")
     gt = scene.groundtruth(target)
     gt[np.asarray(visible) <= 0.0] = np.nan  # out of the frame (hidden behind an occluder keeps its box)
-    lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.3f}" for v in b) for b in gt]
-    (folder / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_groundtruth(folder / "groundtruth_rect.txt", gt, decimals=3)
     (folder / "attrs.txt").write_text(f"synthetic, seed {spec.seed}\n", encoding="utf-8")
 
 

@@ -116,11 +116,11 @@ class VetoMixin:
         rank = c.rank
         retries = int(p.search_retries)
         vetoed = False
+        g = p.acquire_in_frame
         for attempt in range(retries + 1):
             cluster = near & supporters
             if cluster.sum() < need or not self.loss.would_acquire(s_best, lp)[0]:
                 break
-            g = p.acquire_in_frame
             if g > 0 and in_frame_fraction(tuple(ellipse_to_box(c.ell[best])), self._shape[1], self._shape[0]) < g:
                 break
             if self._vetoed_by(frame, c.ell[best]) is None:
