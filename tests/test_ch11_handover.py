@@ -141,6 +141,26 @@ def test_new_person_threshold_from_tracks_seen_at_the_same_time_in_both_cameras(
     assert [(x, y) for x, y, _ in links] == [(1, 7)]
 
 
+def test_new_person_threshold_from_the_training_pairs():
+    """The former rule (``--new-threshold pairs``): the threshold with the fewest errors between the training
+    pairs (genuine) and training tracks of different people (impostors), ties to the lowest."""
+    from pftrack.multicam.handover import new_threshold
+
+    a = {1: _app(1, 1, 10, (200, 10, 10)), 2: _app(2, 1, 10, (10, 200, 10)), 3: _app(3, 1, 10, (10, 10, 200))}
+    b = {11: _app(11, 20, 30, (200, 10, 10)), 12: _app(12, 20, 30, (10, 200, 10)),
+         13: _app(13, 20, 30, (10, 10, 200))}
+    pairs = [(1, 11), (2, 12), (3, 13)]
+    # genuine pairs are identical (1); impostors share one channel of three (1/3): every threshold in (1/3, 1]
+    # separates them, and the lowest candidate that does is a similarity seen, 1
+    assert new_threshold(a, b, pairs, "none") == pytest.approx(1.0)
+    # a genuine pair that is less alike (two channels of three) moves it down to that pair's similarity
+    b[13] = _app(13, 20, 30, (10, 200, 200))
+    assert new_threshold(a, b, pairs, "none") == pytest.approx(2 / 3)
+    # one pair gives no impostor: 0.9 of the genuine similarity; no pair, no threshold
+    assert new_threshold(a, b, [(1, 11)], "none") == pytest.approx(0.9)
+    assert new_threshold(a, b, [], "cbtf") == 0.0
+
+
 def test_transit_time_breaks_a_tie_between_look_alikes():
     from pftrack.multicam.handover import fit_transit
 

@@ -258,3 +258,38 @@ def test_surface_cli(tmp_path, capsys):
     assert main(["surface", str(d), "--box", box, "--mesh", "1x1", "--out", str(out)]) == 2
     assert main(["surface", str(tmp_path / "missing"), "--box", box, "--out", str(out)]) == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_analysis_by_synthesis_reproduces_a_translated_frame_and_retextures_inside_the_mesh():
+    """``frame_rmse`` (the chapter's Fig. 5 metric) is zero when the mesh is moved exactly as the frame (an
+    integer shift), and grows when it is not; the shading grid scales the synthesis; ``retexture`` paints the
+    deformed mesh's pixels only; a folded mesh has no synthesis."""
+    from pftrack.surfaces.render import frame_rmse, frame_to_model, retexture
+
+    I0 = _texture(3) * 255.0  # grey levels
+    box = (100.0, 60.0, 96.0, 80.0)
+    grid = Grid.for_box(box, 4, 5)
+    V0, tris = grid.vertices(), grid.triangles()
+    dx, dy = 7, -4
+    In = np.roll(I0, (dy, dx), axis=(0, 1))
+    assert frame_rmse(I0, In, V0, V0 + (dx, dy), tris) < 1e-3
+    assert frame_rmse(I0, In, V0, V0, tris) > 10.0
+    pgrid = Grid.for_box(box, 2, 2)
+    half = frame_rmse(I0, 0.5 * In, V0, V0 + (dx, dy), tris, rho=np.full(4, 0.5), pgrid=pgrid)
+    assert half < 1e-3  # a uniform shading of 0.5 explains a frame at half the light
+
+    frame = np.zeros((240, 320, 3), np.uint8)
+    tex = np.full((10, 10, 3), 200, np.uint8)
+    out = retexture(frame, tex, box, V0, V0 + (dx, dy), tris)
+    painted = np.argwhere(out[..., 0] == 200)
+    (y0, x0), (y1, x1) = painted.min(0), painted.max(0)
+    assert abs(x0 - (box[0] + dx)) <= 1 and abs(x1 - (box[0] + box[2] + dx)) <= 1
+    assert abs(y0 - (box[1] + dy)) <= 1 and abs(y1 - (box[1] + box[3] + dy)) <= 1
+    assert len(painted) == pytest.approx((box[2] + 1) * (box[3] + 1), rel=0.05)
+    assert frame.max() == 0  # the input frame is left as it was
+
+    folded = V0.copy()
+    folded[6] = folded[12] + (30.0, 20.0)  # an inner vertex pushed across its neighbours
+    assert frame_to_model(V0, folded, tris, I0.shape) is None
+    assert np.isnan(frame_rmse(I0, In, V0, folded, tris))
+    assert frame_to_model(V0, np.full_like(V0, 150.0), tris, I0.shape) is None  # collapsed to a point

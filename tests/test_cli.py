@@ -100,6 +100,20 @@ def test_corrupt_frame_keeps_earlier_rows(tmp_path, capsys):
     assert read_track_csv(out)[:, 0].tolist() == [1, 2, 3, 4]
     assert main(["track", str(d), "--box", box, "--out", str(out), "--quiet", "--skip-bad-frames"]) == 0
     assert read_track_csv(out)[:, 0].tolist() == [1, 2, 3, 4, 6]
+    assert "(1 unreadable frame skipped)" in capsys.readouterr().err
+
+
+def test_track_a_single_image_reports_no_speed(tmp_path, capsys):
+    """One image is an initialisation and no update: the summary says so instead of printing 'nan fps'."""
+    scene = Scene(simple_scene(1, n_frames=1))
+    img = tmp_path / "one.png"
+    cv2.imwrite(str(img), scene.frames()[0])
+    box = ",".join(str(v) for v in scene.groundtruth(0)[0])
+    out = tmp_path / "t.csv"
+    assert main(["track", str(img), "--box", box, "--out", str(out), "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "1 frame tracked" in err and "no update to time" in err and "nan" not in err
+    assert read_track_csv(out)[:, 0].tolist() == [1]
 
 
 def test_usage_errors_exit_2(capsys):

@@ -105,10 +105,14 @@ def cmd_track(args) -> int:
     res = run_track(args.source, box=args.box, tracker_name=args.tracker, out=args.out, video_out=args.video_out,
                     json_out=args.json_out, seed=args.seed, params=parse_param_assignments(args.param),
                     skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, show_map=args.show_map)
-    msg = (f"{res['frames']} frames tracked with {args.tracker}: {res['update_fps']:.0f} update fps, "
-           f"{res['end_to_end_fps']:.0f} fps end to end, lost in {res['lost_frames']} frames -> {args.out}")
+    n = res["frames"]
+    speed = (f"{res['update_fps']:.0f} update fps, {res['end_to_end_fps']:.0f} fps end to end" if n > 1
+             else "no update to time")  # one frame is the initialisation only
+    msg = (f"{n} frame{'s' if n != 1 else ''} tracked with {args.tracker}: {speed}, lost in {res['lost_frames']} "
+           f"frames -> {args.out}")
     if res["skipped"]:
-        msg += f" ({len(res['skipped'])} unreadable frames skipped)"
+        k = len(res["skipped"])
+        msg += f" ({k} unreadable frame{'s' if k != 1 else ''} skipped)"
     print(msg, file=sys.stderr)
     return 0
 
