@@ -123,7 +123,8 @@ def cmd_tripwire(args) -> int:
             if number >= 10 * fps:
                 break
         source.close()
-        extra["radius"] = estimate_radius(calib, line)
+        tau = TripwireParams.from_mapping({k: v for k, v in extra.items() if k != "radius"}).bgs_grey_shadow_threshold
+        extra["radius"] = estimate_radius(calib, line, grey_shadow_threshold=tau)
         del calib
         source = open_source(args.source)
     params = TripwireParams.from_mapping(extra)

@@ -45,11 +45,11 @@ class _Forward:
     """Frames of a source by increasing number (each frame read once), with an optional MOG2 mask."""
 
     def __init__(self, source, foreground: bool):
-        import cv2
+        from ..cues.foreground import Foreground
 
         self._it = source.numbered()
         self._n, self._frame, self._fg = 0, None, None
-        self._bgs = cv2.createBackgroundSubtractorMOG2(500, 16, True) if foreground else None
+        self._bgs = Foreground(500, 16.0) if foreground else None  # shadows are background (pftrack.cues.foreground)
         self._kernel = np.ones((3, 3), np.uint8)
 
     def _advance(self, n: int) -> None:
@@ -62,8 +62,7 @@ class _Forward:
                 self._n, self._frame = 10 ** 12, None
                 return
             if self._bgs is not None:
-                m = (self._bgs.apply(self._frame) == 255).astype(np.uint8)
-                self._fg = cv2.morphologyEx(m, cv2.MORPH_OPEN, self._kernel)
+                self._fg = cv2.morphologyEx(self._bgs.apply(self._frame), cv2.MORPH_OPEN, self._kernel)
 
     def frame(self, n: int):
         self._advance(n)

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground
 from .geometry import _segments, polyline_project
 
 __all__ = ["FootCrossings", "FootEvent", "estimate_radius", "label_stats"]
@@ -273,15 +274,16 @@ def label_stats(labels: np.ndarray) -> np.ndarray:
 
 
 def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_area: int = 60,
-                    default: float = 12.0) -> float:
+                    default: float = 12.0, grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD) -> float:
     """``--radius auto`` (ch10.md §1.2, proposed): half the median short side of the foreground blobs whose
-    centroids lie within ``near`` px of the wire, over the given frames (e.g. the first 10 s)."""
+    centroids lie within ``near`` px of the wire, over the given frames (e.g. the first 10 s); the foreground is
+    the tripwire's (MOG2, ``grey_shadow_threshold`` as its ``bgs_grey_shadow_threshold``)."""
     pts = np.asarray(polyline, dtype=np.float64)
-    bgs = cv2.createBackgroundSubtractorMOG2(history=500, varThreshold=16, detectShadows=True)
+    bgs = Foreground(500, 16.0, grey_shadow_threshold=grey_shadow_threshold)
     kernel = np.ones((3, 3), np.uint8)
     sides = []
     for frame in frames:
-        fg = cv2.morphologyEx((bgs.apply(frame) == 255).astype(np.uint8), cv2.MORPH_OPEN, kernel)
+        fg = cv2.morphologyEx(bgs.apply(frame), cv2.MORPH_OPEN, kernel)
         n, _, stats, cent = cv2.connectedComponentsWithStats(fg)
         if n <= 1:
             continue

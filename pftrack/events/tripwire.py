@@ -3,7 +3,7 @@
 Ground patches of radius ``r`` lie on both sides of a polyline (:func:`~.geometry.build_patches`).
 Per frame (ch10.md §1.3–1.4):
 
-1. a background subtractor (MOG2 with shadows as background, 3×3 opening; or three-frame
+1. a background subtractor (MOG2 with shadows as background on colour frames, 3×3 opening; or three-frame
    differencing) runs on the wire's neighbourhood only;
 2. a patch whose disc is at least ``fg_ratio`` foreground takes a colour histogram of its
    foreground pixels; it is appended to the patch's history when it differs from the last
@@ -35,6 +35,7 @@ from typing import Literal
 import cv2
 import numpy as np
 
+from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground
 from ..params import Params, param
 from .blobs import FootCrossings, estimate_radius
 from .geometry import PatchLayout, build_patches
@@ -54,6 +55,11 @@ class TripwireParams(Params):
     bgs: Literal["mog2", "diff"] = param("mog2", doc="foreground: MOG2 (shadows as background) or 3-frame difference")
     bgs_history: int = param(500, ge=2, doc="MOG2 history in frames")
     bgs_threshold: float = param(16.0, gt=0, doc="MOG2 varThreshold")
+    bgs_grey_shadow_threshold: float = param(GREY_SHADOW_THRESHOLD, ge=0, le=1, doc=(
+        "MOG2's shadow threshold on grey frames, where its shadow test cannot tell a shadow from an object up to "
+        "twice as dark as the ground: a darker pixel is a shadow only above this fraction of the background's "
+        "brightness (1: none; 0.5: OpenCV's, as on colour frames; 0.85 chosen on the grey tune data, "
+        "docs/tripwire.md; pftrack.cues.foreground)"))
     diff_threshold: int = param(25, ge=1, le=255, doc="grey-level threshold of the frame difference")
     fg_ratio: float = param(0.3, gt=0, le=1, doc="foreground fraction of a disc that makes the patch foreground")
     contact: Literal["any", "bottom"] = param("any", doc=(
@@ -251,8 +257,7 @@ class TrackerlessTripwire:
         self._prior = 0.0 if p.faithful else p.motion_prior / self.stride ** 2
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
         if p.bgs == "mog2":
-            self._bgs = cv2.createBackgroundSubtractorMOG2(history=p.bgs_history, varThreshold=p.bgs_threshold,
-                                                           detectShadows=True)
+            self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold)
         self._prev_gray: np.ndarray | None = None
         self._prev2_gray: np.ndarray | None = None
         self._kernel = np.ones((3, 3), np.uint8)
@@ -272,8 +277,7 @@ class TrackerlessTripwire:
     def foreground(self, roi: np.ndarray, gray: np.ndarray) -> np.ndarray:
         p = self.params
         if p.bgs == "mog2":
-            m = self._bgs.apply(roi)
-            fg = (m == 255).astype(np.uint8)
+            fg = self._bgs.apply(roi)
         else:
             if self._prev_gray is None or self._prev2_gray is None:
                 fg = np.zeros(gray.shape, np.uint8)

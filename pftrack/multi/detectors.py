@@ -8,8 +8,9 @@
   and ``k-2``, which isolates the object at its position in frame ``k`` the same way
   (the background uncovered since ``k-1`` equals frame ``k-2`` there and drops out).
 * ``mog2`` — OpenCV's Gaussian-mixture background subtraction (``createBackgroundSubtractorMOG2``)
-  with shadow detection: shadow pixels (127) are discarded, then opening/closing,
-  connected components and a minimum area.
+  with shadow detection: shadow pixels (127) are discarded (on grey frames, where MOG2 cannot tell a shadow from
+  a dark object, with their own threshold: ``grey_shadow_threshold``), then opening/closing, connected
+  components and a minimum area.
 * ``hog`` — OpenCV's built-in HOG + linear SVM people detector (Dalal & Triggs), no downloads.
 * any callable with the same signature, wrapped by :func:`as_detector`.
 
@@ -27,6 +28,7 @@ from typing import Callable
 import cv2
 import numpy as np
 
+from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
 from ..params import Params, param
@@ -138,6 +140,11 @@ class MOG2DetectorParams(Params):
     learning_rate: float = param(-1.0, ge=-1, le=1, doc="MOG2 learning rate (-1: automatic, 1/history).")
     split_aspect: float = param(0.0, ge=0, le=10, doc=(
         "Expected width/height of one object (0.4 for people); wider blobs are split (0: never)."))
+    grey_shadow_threshold: float = param(GREY_SHADOW_THRESHOLD, ge=0, le=1, doc=(
+        "MOG2's shadow threshold on grey frames, where its shadow test cannot tell a cast shadow from an object up "
+        "to twice as dark as the ground (it has no colour to compare): a darker pixel is a shadow only when its "
+        "brightness is at least this fraction of the background's. 1: no shadows on grey frames; 0.5: OpenCV's "
+        "threshold, as on colour frames; 0.85 chosen on the tune data (pftrack.cues.foreground)."))
 
 
 class MOG2Detector:
@@ -149,8 +156,7 @@ class MOG2Detector:
         self.foreground = None
         self.params = params or MOG2DetectorParams()
         p = self.params
-        self._sub = cv2.createBackgroundSubtractorMOG2(history=p.history, varThreshold=p.var_threshold,
-                                                       detectShadows=True)
+        self._sub = Foreground(p.history, p.var_threshold, grey_shadow_threshold=p.grey_shadow_threshold)
         self._open = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (p.opening, p.opening))
         self._close = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (p.closing, p.closing))
 
@@ -159,8 +165,7 @@ class MOG2Detector:
         f = as_bgr_uint8(frame)
         if p.downscale > 1:
             f = cv2.resize(f, (f.shape[1] // p.downscale, f.shape[0] // p.downscale), interpolation=cv2.INTER_AREA)
-        fg = self._sub.apply(f, learningRate=p.learning_rate)
-        mask = (fg > 200).astype(np.uint8) * 255  # 127 marks shadows
+        mask = self._sub.apply(f, p.learning_rate) * np.uint8(255)  # MOG2's shadows are background on colour frames
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._open)
         mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._close)
         self.foreground = (mask, float(p.downscale))

@@ -98,6 +98,7 @@ class MultiPF:
             self.detector = as_detector(detector_fn)
         else:
             extra = {"split_aspect": p.object_aspect} if p.detector in ("mog2", "motion") else {}
+            extra |= {"grey_shadow_threshold": p.grey_shadow_threshold} if p.detector == "mog2" else {}
             self.detector = create_detector(p.detector, **extra)
         self._group_merges = p.group_merges == "on" or (
             p.group_merges == "auto" and (detector_fn is not None or p.detector != "motion"))
