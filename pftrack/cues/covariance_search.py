@@ -181,13 +181,16 @@ def search(frame: np.ndarray, model: SPDModel, size: tuple[float, float], *, kin
            refine_pitch: int = 1, region: tuple[int, int, int, int] | None = None,
            weights: np.ndarray | None = None, scale_factors: tuple[float, ...] = (1 / 1.1, 1.0, 1.1),
            coarse_side: int = 8, coarse_stride: int = 2, refine_top: int = 6, eps: float = EPS,
-           refine_level: Level | None = None) -> SearchResult:
+           refine_level: Level | None = None, seeds=()) -> SearchResult:
     """Coarse-to-fine covariance search for the window nearest to ``model``.
 
     ``region`` (frame integers ``x0, y0, x1, y1``; default the whole frame) bounds the search;
     ``weights`` (frame-sized, optional) is a foreground weight or mask multiplying every pixel.
     The refinement runs at ``refine_pitch`` (the pitch the model was built at; a prebuilt
-    ``refine_level`` of that pitch may be passed).  Boxes are returned in frame pixels.
+    ``refine_level`` of that pitch may be passed) around the best coarse windows and around every frame box
+    ``(x, y, w, h)`` of ``seeds`` (the last box, say: the coarse level's covariances are not the model's, and on
+    grey input, with one intensity channel, their ranking can miss the target altogether).  Boxes are returned in
+    frame pixels.
     """
     fh, fw = frame.shape[:2]
     rx0, ry0, rx1, ry1 = region if region is not None else (0, 0, fw, fh)
@@ -225,6 +228,7 @@ def search(frame: np.ndarray, model: SPDModel, size: tuple[float, float], *, kin
         centres = np.column_stack([b[:, 0] + b[:, 2] / 2, b[:, 1] + b[:, 3] / 2])
         for i in _suppress(centres, d, per_scale, 0.25 * min(w, h)):
             kept.append(b[i])
+    kept.extend(np.asarray(sd, dtype=np.float64) for sd in seeds)
     if not kept:
         return SearchResult(none.box, math.inf, n_windows, none.candidates)
     # --- refinement at the model's pitch around each kept window

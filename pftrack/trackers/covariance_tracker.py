@@ -49,6 +49,9 @@ class CovarianceParams(Params):
     search_region: float = param(0.0, ge=0, le=20, doc=(
         "0: the whole frame (the chapter's exhaustive search). > 0: a region of this many box sizes around the last "
         "box."))
+    refine_last: bool = param(True, doc=(
+        "Also refine around the last box, besides the best coarse windows (proposed): the coarse level's "
+        "covariances differ from the model's, and on grey input their ranking can miss the target."))
     threshold_sigma: float = param(3.0, gt=0, doc="Lost when the best distance exceeds mu + this x sigma.")
     threshold_floor: float = param(0.05, ge=0, doc="Floor on sigma of the confident distances.")
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive frames above the threshold before lost is raised.")
@@ -99,7 +102,8 @@ class CovarianceTracker(Tracker):
         lv = cs.Level.build(frame, self.pitch, kind=p.features, gray=self.gray)
         res = cs.search(frame, self.model, (w, h), kind=p.features, gray=self.gray, refine_pitch=self.pitch,
                         refine_level=lv, region=self._region(fw, fh), scale_factors=tuple(p.scales),
-                        coarse_side=p.coarse_side, coarse_stride=p.coarse_stride, refine_top=p.refine_top)
+                        coarse_side=p.coarse_side, coarse_stride=p.coarse_stride, refine_top=p.refine_top,
+                        seeds=[self.box] if p.refine_last else ())
         bad = self.thresh.exceeds(res.distance)
         self.miss = self.miss + 1 if bad else 0
         self.lost = self.miss >= p.lost_frames

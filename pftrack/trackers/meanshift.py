@@ -38,7 +38,9 @@ from .base import Tracker, TrackState
 
 @dataclass(frozen=True, kw_only=True)
 class MeanShiftParams(Params):
-    color_space: Literal["rgb", "hsv"] = param("rgb", doc="Colour space, as color-pf (004 §3).")
+    color_space: Literal["rgb", "hsv", "auto"] = param("auto", doc=(
+        "Colour space, as color-pf (004 §3); 'auto': RGB on colour input, and on grey input (the first frame's "
+        "channels equal) equalised intensity x gradient orientation, as color-pf (pftrack.cues.histogram_cue)."))
     bins: tuple[int, ...] = param((), ge=1, le=256, doc="Bins per channel; empty for the colour space default.")
     kernel: Literal["nummiaro", "epanechnikov"] = param("nummiaro", doc="Kernel, as color-pf (Eq. 2).")
     max_iterations: int = param(20, ge=1, le=1000, doc="Mean-shift iterations per scale.")
@@ -70,6 +72,8 @@ class MeanShift(Tracker):
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         self.ell = box_to_ellipse(box)
+        self.cue.adapt_to(frame)
+        self.cue.new_frame(frame)
         self.q = self.cue.histogram(frame, self.ell)
         self._sqrt_q = np.sqrt(self.q)
         self.rho = 1.0
@@ -109,6 +113,7 @@ class MeanShift(Tracker):
 
     def _search(self, frame: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, float]:
         p = self.params
+        self.cue.new_frame(frame)  # the grey features' equalisation (nothing for RGB)
         feats = self.cue.prepare_frame(frame)
         best, best_rho = None, -1.0
         for f in (1.0, 1.0 - p.scale_step, 1.0 + p.scale_step) if p.scale_step > 0 else (1.0,):
