@@ -164,3 +164,29 @@ def test_subspace_update_is_gated_by_distance():
         tr.update(changed)
         sizes[ud] = len(tr.subspace) - n0
     assert sizes == {0.3: 0, 1e9: 1}
+
+
+def test_on_grey_input_the_colour_distance_is_the_value_channels():
+    """Hue and saturation are 0 in every box of a grey frame: their zero distances flattened the likelihood
+    threefold (``grey_value_only``, default on, keeps V's alone); colour frames are unchanged."""
+    import cv2
+
+    from pftrack.eval.metrics import ope_scores
+    from pftrack.synth import Scene
+
+    auc = {True: [], False: []}
+    for seed in (1, 2):
+        sc = Scene(simple_scene(seed, n_frames=40))
+        frames, gt = sc.frames(), sc.groundtruth(0)
+        grey = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
+        for v_only in (True, False):
+            t = pftrack.create_tracker("flow-pf", seed=0, grey_value_only=v_only)
+            t.init(grey[0], tuple(gt[0]))
+            auc[v_only].append(ope_scores(np.array([gt[0]] + [t.update(f).box for f in grey[1:]]), gt).auc)
+        colour = []
+        for v_only in (True, False):  # colour frames: the same boxes either way
+            t = pftrack.create_tracker("flow-pf", seed=0, grey_value_only=v_only)
+            t.init(frames[0], tuple(gt[0]))
+            colour.append([t.update(f).box for f in frames[1:10]])
+        assert colour[0] == colour[1]
+    assert np.mean(auc[True]) > np.mean(auc[False]) + 0.1, auc

@@ -54,6 +54,7 @@ import numpy as np
 
 from ..cues.emd import emd_circular, emd_linear
 from ..cues.hsv import HSVHistogramCue
+from ..cues.intensity import is_gray
 from ..cues.motion import to_gray
 from ..errors import ParameterError
 from ..filtering.particles import ParticleSet
@@ -99,6 +100,9 @@ class FlowPFParams(Params):
     distance: Literal["emd", "bhattacharyya"] = param("emd", doc=(
         "Colour distance D: the Earth Mover's Distance (§4.3), or the Bhattacharyya distance sqrt(1 - rho) "
         "(the ablation)."))
+    grey_value_only: bool = param(True, doc=(
+        "On grey input (the first frame's channels equal) the colour distance is V's alone: hue and saturation "
+        "are 0 everywhere there (proposed; the paper's sequences are in colour)."))
     motion: bool = param(True, doc="Add the motion energies E_m and E_d (§4.4); False for the ablation.")
     motion_weight: float = param(0.5, ge=0, doc=(
         "alpha of E_m = alpha ||x - y~|| per window size: a particle one window away from the flow-predicted "
@@ -147,6 +151,7 @@ class FlowPF(Tracker):
         super().__init__(params, rng=rng, seed=seed)
         p = self.params
         self.cue = HSVHistogramCue(p.bins)
+        self._grey = False  # set from the first frame
         self.resampler = get_resampler("systematic")
         if isinstance(detector, str):
             if detector != "haar-face":
@@ -158,17 +163,23 @@ class FlowPF(Tracker):
 
     # ------------------------------------------------------------------ colour distances
     def _distance(self, hist: np.ndarray, template: np.ndarray) -> np.ndarray:
-        """Mean over H, S, V of the per-channel distance (hist: (N, 3, n), template: (3, n)).
+        """Mean over H, S, V of the per-channel distance (hist: (N, 3, n), template: (3, n)); on grey input
+        (``grey_value_only``) the distance of V alone, since hue and saturation are 0 in every box there and
+        their zero distances would only flatten the likelihood threefold.
 
         EMD is in units of bins (the L1 ground distance between bin indices, Eq. 9);
         the Bhattacharyya distance lies in [0, 1]."""
+        v_only = self._grey and self.params.grey_value_only
         if self.params.distance == "emd":
+            dv = emd_linear(hist[:, 2], template[2])
+            if v_only:
+                return dv
             dh = emd_circular(hist[:, 0], template[0])
             ds = emd_linear(hist[:, 1], template[1])
-            dv = emd_linear(hist[:, 2], template[2])
             return (dh + ds + dv) / 3.0
         rho = np.sqrt(np.clip(hist, 0, None) * np.clip(template, 0, None)[None]).sum(axis=-1)
-        return np.sqrt(np.clip(1.0 - rho, 0.0, 1.0)).mean(axis=-1)
+        d = np.sqrt(np.clip(1.0 - rho, 0.0, 1.0))
+        return d[:, 2] if v_only else d.mean(axis=-1)
 
     def _histograms(self, feats, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Colour models of boxes: with ``kernel_levels`` L > 1, the mean of the normalised histograms of L
@@ -217,6 +228,7 @@ class FlowPF(Tracker):
         st = np.array([x + w / 2, y + h / 2, 0.0, 0.0])
         self.ps = ParticleSet(np.tile(st, (p.n_particles, 1)))
         self.estimate = st.copy()
+        self._grey = is_gray(frame)
         self.first = self._model(frame, box)
         self.subspace: deque = deque(maxlen=max(p.templates - (1 if p.anchor else 0), 1))
         self.subspace.append(self.first)
