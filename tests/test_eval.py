@@ -146,6 +146,21 @@ def _synthetic_clip(seed=0, n=30):
     return frames, scene.groundtruth(0)
 
 
+def test_opencv_mil_refuses_a_box_it_would_hang_on():
+    """OpenCV's MIL never returns on a 4 x 4 box: the adapter refuses it with a BoxError (exit 2 from the CLI)
+    instead of hanging, and takes a 5 x 5 one."""
+    from pftrack.errors import BoxError
+
+    frame = np.random.default_rng(0).integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    with pytest.raises(BoxError, match="too small"):
+        pftrack.create_tracker("opencv-mil").init(frame, (50, 50, 4, 4))
+    with pytest.raises(BoxError):
+        pftrack.create_tracker("opencv-mil").init(frame, (50, 50, 2, 10))
+    t = pftrack.create_tracker("opencv-mil")
+    t.init(frame, (50, 50, 5, 5))
+    assert np.all(np.isfinite(t.update(frame).box))
+
+
 @pytest.mark.parametrize("name", ["opencv-csrt", "opencv-kcf", "opencv-mil", "opencv-mosse", "opencv-medianflow",
                                   "opencv-tld", "camshift", "meanshift", "kalman-meanshift"])
 def test_peers_and_baselines_follow_the_protocol(name):
