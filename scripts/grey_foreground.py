@@ -35,7 +35,7 @@ from pftrack.cli import main as cli_main  # noqa: E402
 from pftrack.events.eval import track_crossings  # noqa: E402
 from pftrack.events.geometry import parse_polyline  # noqa: E402
 from pftrack.events.tripwire import estimate_radius  # noqa: E402
-from pftrack.io.datasets import read_sequence  # noqa: E402
+from pftrack.io.datasets import read_sequence, write_mot_groundtruth, write_seqinfo  # noqa: E402
 from pftrack.synth.traffic import traffic_scene  # noqa: E402
 
 HALVES = {"tune": (1, 200), "report": (201, 400)}
@@ -58,10 +58,8 @@ def write_mot_halves(pets: Path, out: Path) -> dict[str, Path]:
             cv2.imwrite(str(d / "img1" / f"{n - lo + 1:06d}.png"), cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
         rows = gt[(gt[:, 0] >= lo) & (gt[:, 0] <= hi)].copy()
         rows[:, 0] -= lo - 1
-        np.savetxt(d / "gt" / "gt.txt", rows, delimiter=",",
-                   fmt=["%d", "%d", "%.2f", "%.2f", "%.2f", "%.2f", "%d", "%d", "%d", "%d"])
-        (d / "seqinfo.ini").write_text(f"[Sequence]\nname={d.name}\nimDir=img1\nframeRate=7\nseqLength={hi - lo + 1}\n"
-                                       f"imWidth=768\nimHeight=576\nimExt=.png\n", encoding="utf-8")
+        write_mot_groundtruth(d / "gt" / "gt.txt", rows)
+        write_seqinfo(d, name=d.name, fps=7, length=hi - lo + 1, width=768, height=576, ext=".png")
         folders[half] = d.parent
     return folders
 

@@ -152,6 +152,25 @@ def write_groundtruth(path: str | Path, boxes, *, decimals: int = 2) -> Path:
     return path
 
 
+def write_mot_groundtruth(path: str | Path, rows) -> Path:
+    """A MOTChallenge ``gt.txt``: rows ``frame,id,x,y,w,h,...``, the box with 2 decimals and every other column an
+    integer (read back by :func:`read_mot_txt`)."""
+    lines = [",".join(f"{v:.2f}" if i in (2, 3, 4, 5) else f"{int(v)}" for i, v in enumerate(r))
+             for r in np.asarray(rows, dtype=np.float64)]
+    path = Path(path)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def write_seqinfo(folder: str | Path, *, name: str, fps: float, length: int, width: int, height: int,
+                  ext: str = ".jpg") -> Path:
+    """A MOTChallenge ``seqinfo.ini`` for the frames in ``folder/img1``."""
+    path = Path(folder) / "seqinfo.ini"
+    path.write_text(f"[Sequence]\nname={name}\nimDir=img1\nframeRate={fps:g}\nseqLength={length}\n"
+                    f"imWidth={width}\nimHeight={height}\nimExt={ext}\n", encoding="utf-8")
+    return path
+
+
 def _pad_gt(boxes: np.ndarray, n: int) -> np.ndarray:
     out = np.full((n, 4), np.nan)
     m = min(n, boxes.shape[0])

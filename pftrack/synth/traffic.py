@@ -20,6 +20,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ..io.datasets import write_mot_groundtruth, write_seqinfo
 from .occluder import paste_sprite
 
 __all__ = ["TrafficScene", "export_traffic", "traffic_scene"]
@@ -166,11 +167,8 @@ def export_traffic(scene: TrafficScene, folder) -> None:
     (folder / "gt").mkdir(parents=True, exist_ok=True)
     for t, fr in enumerate(scene.frames):
         cv2.imwrite(str(folder / "img1" / f"{t + 1:06d}.jpg"), fr, [cv2.IMWRITE_JPEG_QUALITY, 95])
-    lines = [",".join(f"{v:.2f}" if i in (2, 3, 4, 5) else f"{int(v)}" for i, v in enumerate(r)) for r in scene.tracks]
-    (folder / "gt" / "gt.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_mot_groundtruth(folder / "gt" / "gt.txt", scene.tracks)
     h, w = scene.frames[0].shape[:2]
-    (folder / "seqinfo.ini").write_text(
-        f"[Sequence]\nname={folder.name}\nimDir=img1\nframeRate={scene.fps:g}\nseqLength={len(scene.frames)}\n"
-        f"imWidth={w}\nimHeight={h}\nimExt=.jpg\n", encoding="utf-8")
+    write_seqinfo(folder, name=folder.name, fps=scene.fps, length=len(scene.frames), width=w, height=h)
     (folder / "wire.txt").write_text(";".join(f"{x:g},{y:g}" for x, y in scene.wire) + "\n", encoding="utf-8")
     (folder / "meta.json").write_text(json.dumps(scene.meta) + "\n", encoding="utf-8")

@@ -18,6 +18,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ..io.datasets import write_mot_groundtruth, write_seqinfo
+
 __all__ = ["TwoCamScene", "export_twocam", "twocam_scene"]
 
 
@@ -139,10 +141,7 @@ def export_twocam(scene: TwoCamScene, folder) -> None:
             cv2.imwrite(str(d / "img1" / f"{n - off:06d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 95])
         shifted = rows.copy()
         shifted[:, 0] -= off
-        lines = [",".join(f"{v:.2f}" if i in (2, 3, 4, 5) else f"{int(v)}" for i, v in enumerate(r)) for r in shifted]
-        (d / "gt" / "gt.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
-        (d / "seqinfo.ini").write_text(
-            f"[Sequence]\nname=cam_{cam}\nimDir=img1\nframeRate=7\nseqLength={scene.numbers[1] - off}\n"
-            f"imWidth={size[1]}\nimHeight={size[0]}\nimExt=.jpg\n", encoding="utf-8")
+        write_mot_groundtruth(d / "gt" / "gt.txt", shifted)
+        write_seqinfo(d, name=f"cam_{cam}", fps=7, length=scene.numbers[1] - off, width=size[1], height=size[0])
     rows = ["camera,track,person"] + [f"{c},{t},{p}" for (c, t), p in sorted(scene.identity.items())]
     (folder / "identity.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
