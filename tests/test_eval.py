@@ -1,5 +1,6 @@
 """Evaluation: metrics, protocols, MOT parity, peers, baselines, runner and report."""
 
+import csv
 import re
 from pathlib import Path
 
@@ -416,3 +417,83 @@ def test_speed_ratios_without_a_peer_rate_are_undefined_not_an_error():
                dict(tracker="opencv-csrt", sequence="s", seed=0, protocol="ope", auc=0.4, fps=0.0)]
     assert np.isnan(strict_speed_ratios(records, "opencv-csrt")["fusion-pf"])
     assert "| `fusion-pf` |" in summary_markdown(records)
+
+
+def _failing_meanshift(monkeypatch, at: int):
+    """`meanshift` raises on its ``at``-th update (counted per tracker)."""
+    from pftrack.trackers.meanshift import MeanShift
+
+    real = MeanShift._update
+
+    def _update(self, frame):
+        self._calls = getattr(self, "_calls", 0) + 1
+        if self._calls == at:
+            raise RuntimeError("kernel exploded\nsecond line")
+        return real(self, frame)
+
+    monkeypatch.setattr(MeanShift, "_update", _update)
+
+
+def test_a_tracker_that_raises_fails_its_run_and_the_evaluation_goes_on(dataset, tmp_path, capsys, monkeypatch):
+    """One tracker raising on one frame does not stop `pftrack eval`: its runs are recorded as failed (scored
+    with no box from the failure on, kept apart from the cache), the other trackers' runs are complete, the
+    report names the failures and the command exits with 1."""
+    from pftrack.cli import main
+    from pftrack.io import discover_sequences
+
+    seq = discover_sequences(dataset / "seqA")[0]
+    cfg = parse_tracker_list("meanshift")[0]
+    good = run_job(Job(cfg, str(seq.path), seq.name, 0, "ope"))
+    _failing_meanshift(monkeypatch, at=10)
+    rec = run_job(Job(cfg, str(seq.path), seq.name, 0, "ope"))
+    assert rec["error"] == "RuntimeError: kernel exploded second line" and rec["error_frame"] == 11
+    assert "kernel exploded" in rec["traceback"] and rec["updates"] == 9
+    boxes, gt = np.array(rec["boxes"], float).reshape(-1, 4), seq.groundtruth
+    assert np.allclose(boxes[:10], np.array(good["boxes"], float).reshape(-1, 4)[:10])
+    assert np.isnan(boxes[10:]).all()
+    assert rec["auc"] == pytest.approx(ope_scores(boxes, gt).auc) and rec["auc"] < good["auc"]
+    assert len(rec["lost"]) == len(boxes)
+    vot = run_job(Job(cfg, str(seq.path), seq.name, 0, "vot"))
+    assert vot["error"].startswith("RuntimeError") and vot["failures"] is None and vot["accuracy"] is None
+
+    rdir = tmp_path / "r"
+    argv = ["eval", str(dataset), "--trackers", "color-pf[n_particles=30],meanshift", "--seeds", "1",
+            "--workers", "1", "--quiet", "--report", str(rdir)]
+    assert main(argv) == 1
+    cap = capsys.readouterr()
+    assert "pftrack: error: 2 of 4 runs failed, first meanshift on seqA (seed 0, frame 11): RuntimeError" in cap.err
+    assert "**2 of 4 runs failed**" in cap.out and "| `meanshift` | seqA | 0 | 11 | RuntimeError" in cap.out
+    runs = sorted(p.name for p in (rdir / "runs").iterdir())
+    assert len(runs) == 2 and all("color-pf" in n for n in runs)
+    assert len(list((rdir / "failed").iterdir())) == 2
+    with open(rdir / "results.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert sorted(r["error"] != "" for r in rows) == [False, False, True, True]
+    assert "Failed runs: 2 of 4" in (rdir / "index.html").read_text()
+    # mended: the failed runs are run again, the finished ones reused, and the failures are forgotten
+    monkeypatch.undo()
+    assert main(argv) == 0
+    cap = capsys.readouterr()
+    assert "2 runs computed, 2 reused" in cap.err and "failed" not in cap.out
+    assert not list((rdir / "failed").iterdir())
+
+
+def test_a_multi_target_tracker_that_raises_is_scored_on_the_frames_before(tmp_path, monkeypatch):
+    from pftrack.eval.runner import Job, TrackerConfig, run_job
+    from pftrack.multi.tracker import MultiPF
+    from pftrack.synth.traffic import export_traffic, traffic_scene
+
+    path = tmp_path / "t"
+    export_traffic(traffic_scene(0, n_vehicles=2), path)
+    real = MultiPF.update
+    calls = []
+
+    def update(self, frame):
+        calls.append(1)
+        if len(calls) == 20:
+            raise ValueError("bad")
+        return real(self, frame)
+
+    monkeypatch.setattr(MultiPF, "update", update)
+    rec = run_job(Job(TrackerConfig("multi-pf", "multi-pf"), str(path), "t", 0, "mot"))
+    assert rec["error"] == "ValueError: bad" and rec["error_frame"] == 20 and rec["mota"] is not None

@@ -10,7 +10,8 @@ One module per command group: :mod:`.track` (track, demo), :mod:`.mot`,
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr, never a
 traceback), 130 interrupted by Ctrl-C or SIGTERM (everything computed so far is
-written and the video finalised).
+written and the video finalised), 1 when ``pftrack eval`` finished but some of its
+runs failed (a tracker raised; the report names them).
 """
 
 from __future__ import annotations

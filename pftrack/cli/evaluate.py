@@ -37,7 +37,7 @@ def add_eval(sub) -> None:
 def cmd_eval(args) -> int:
     from ..errors import ParameterError, SourceError
     from ..eval.report import summary_markdown, write_report
-    from ..eval.runner import Runner, build_jobs, parse_tracker_list
+    from ..eval.runner import Runner, build_jobs, failed, parse_tracker_list
     from ..io.datasets import discover_sequences
     from ..io.sinks import prepare_output
 
@@ -83,6 +83,13 @@ def cmd_eval(args) -> int:
               file=sys.stderr)
     if args.doc:
         Path(args.doc).write_text(md, encoding="utf-8")
+    bad = [r for r in records if failed(r)]
+    if bad:
+        r = bad[0]
+        where = f"; tracebacks in {report_dir / 'failed'}" if report_dir else ""
+        print(f"pftrack: error: {len(bad)} of {len(records)} runs failed, first {r['tracker']} on {r['sequence']} "
+              f"(seed {r['seed']}, frame {r.get('error_frame')}): {r['error']}{where}", file=sys.stderr)
+        return 1
     return 0
 
 

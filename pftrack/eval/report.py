@@ -26,12 +26,12 @@ from typing import Iterable
 import numpy as np
 
 from ..io.sinks import prepare_output
-from .runner import ONE_PASS
+from .jobs import ONE_PASS, failed
 
 CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "mean_iou", "failures", "accuracy",
                "fps", "frames", "lost_frames", "lost_recall", "false_lost", "absent_frames", "reappearances",
                "reacquired", "mota", "motp", "idf1", "id_rate", "num_switches", "num_fragmentations",
-               "mostly_tracked", "mostly_lost", "num_false_positives", "num_misses", "e2e_fps"]
+               "mostly_tracked", "mostly_lost", "num_false_positives", "num_misses", "e2e_fps", "error"]
 MOT_FIELDS = ["mota", "motp", "idf1", "id_rate", "num_switches", "num_fragmentations", "mostly_tracked", "mostly_lost",
               "num_false_positives", "num_misses", "e2e_fps"]
 
@@ -196,12 +196,28 @@ def _one_pass(protocols) -> bool:
     return any(p in ONE_PASS for p in protocols)
 
 
+def failure_lines(records: list[dict]) -> list[str]:
+    """Markdown lines naming the failed runs (none when every run finished)."""
+    bad = [r for r in records if failed(r)]
+    if not bad:
+        return []
+    lines = [f"**{len(bad)} of {len(records)} runs failed**: the tracker raised. A failed one-pass run is scored "
+             "with no box from the failed frame on, a failed MOT run with no track; a failed VOT run has no scores. "
+             "The tracebacks are in the report folder's `failed/`.", "",
+             "| tracker | sequence | seed | frame | error |", "|---|---|---|---|---|"]
+    for r in bad:
+        msg = str(r["error"]).replace("|", "\\|")
+        lines.append(f"| `{r['tracker']}` | {r['sequence']} | {r['seed']} | {_fmt(r.get('error_frame'))} | {msg} |")
+    return lines + [""]
+
+
 def summary_markdown(records: list[dict], *, command: str | None = None, title: str = "Evaluation") -> str:
     agg = aggregate(records)
     protocols = sorted({r["protocol"] for r in records})
     lines = [f"# {title}", ""]
     if command:
         lines += ["Reproduce with:", "", "```", command, "```", ""]
+    lines += failure_lines(records)
     seeds = sorted({r["seed"] for r in records})
     if protocols == ["mot"]:
         seqs = ", ".join(agg["sequences"])
@@ -444,6 +460,14 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
     if peer is not None:
         parts += ["<p>" + re.sub(r"`([^`]+)`", r"<code>\1</code>", e(line)) + "</p>"
                   for line in speed_notes(records, agg, peer, agg["trackers"])]
+    bad = [r for r in records if failed(r)]
+    if bad:
+        parts.append(f"<h2>Failed runs: {len(bad)} of {len(records)}</h2><p>The tracker raised; tracebacks in "
+                     "<code>failed/</code>.</p><table><tr><th>tracker</th><th>sequence</th><th>seed</th>"
+                     "<th>frame</th><th>error</th></tr>" +
+                     "".join(f"<tr><td>{e(r['tracker'])}</td><td>{e(r['sequence'])}</td><td>{r['seed']}</td>"
+                             f"<td>{_fmt(r.get('error_frame'))}</td><td>{e(str(r['error']))}</td></tr>"
+                             for r in bad) + "</table>")
     for p in plots:
         parts.append(f"<div><a href='{e(p)}'><img src='{e(p)}' alt='{e(p)}'></a></div>")
     if frames:
