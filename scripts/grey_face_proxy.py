@@ -33,7 +33,7 @@ import numpy as np
 import pftrack
 from pftrack.eval.metrics import frame_ious, ope_scores
 from pftrack.eval.runner import _split_top, parse_tracker_list
-from pftrack.synth.face import export_face, face_scene
+from pftrack.synth.face import export_face, face_scene, portrait
 
 
 def run(spec: str, frames, gt, seed: int) -> dict:
@@ -63,6 +63,9 @@ def main() -> None:
     ap.add_argument("--save", help="write the first seed's frames as an OTB folder here")
     ap.add_argument("--dark", type=float, default=1.0, help="a further gain on every frame (a dim camera)")
     ap.add_argument("--noise", type=float, default=0.0, help="std of added Gaussian noise, grey levels")
+    ap.add_argument("--portrait", choices=["astronaut", "camera"], default="astronaut",
+                    help="the portrait (pftrack.synth.face.portrait): astronaut, the one the defaults were checked "
+                         "on, or camera, a second face")
     ap.add_argument("--turn", type=float, default=0.0,
                     help="the face turns back and forth up to this angle, degrees (face_scene's turn; 0: it does not)")
     a = ap.parse_args()
@@ -70,8 +73,9 @@ def main() -> None:
     seeds = list(range(int(lo), int(hi or lo) + 1))
     names = _split_top(a.trackers)
     res = {n: [] for n in names}
+    image, face = portrait(a.portrait)
     for sd in seeds:
-        frames, gt = face_scene(sd, a.frames, turn=a.turn)
+        frames, gt = face_scene(sd, a.frames, image=image, face=face, turn=a.turn)
         if a.dark != 1.0 or a.noise > 0:
             rng = np.random.default_rng(sd)
             frames = [np.clip(f.astype(np.float32) * a.dark + rng.normal(0.0, a.noise, f.shape), 0, 255)

@@ -127,6 +127,9 @@ def add_synth(sub) -> None:
     p.add_argument("--turn", type=float, default=0.0, metavar="DEGREES",
                    help="face: the face turns back and forth up to this angle (a rough stand-in; default 0: it "
                         "does not turn)")
+    p.add_argument("--portrait", choices=["astronaut", "camera"], default="astronaut",
+                   help="face: scikit-image's portrait to build the scene from (default astronaut; camera: the "
+                        "cameraman, a face in profile beside a dark coat)")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.add_argument("--gray", type=float, default=None, metavar="P",
@@ -178,10 +181,10 @@ def cmd_synth(args) -> int:
             raise ParameterError("xray scenes need --source IMAGE (the grey frame to warp)")
         image = image_file(args.source)
     if args.kind == "face":
-        from ..synth.face import astronaut_grey
+        from ..synth.face import portrait
 
         try:
-            portrait = astronaut_grey()  # loaded once for every seed
+            face_image, face_box = portrait(args.portrait)  # loaded once for every seed
         except ImportError as e:
             raise ParameterError(str(e)) from None
     prepare_output(out / "README.txt")
@@ -213,7 +216,7 @@ def cmd_synth(args) -> int:
         elif args.kind == "face":
             from ..synth.face import export_face, face_scene
 
-            export_face(*face_scene(sd, image=portrait, turn=args.turn), out / f"face-{sd:03d}")
+            export_face(*face_scene(sd, image=face_image, face=face_box, turn=args.turn), out / f"face-{sd:03d}")
         elif args.kind == "stereo-rail":
             from ..synth.occluder import export_stereo_scene, stereo_rail_scene
 

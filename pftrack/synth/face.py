@@ -27,17 +27,34 @@ import numpy as np
 
 #: x, y, w, h of the face and hair in the 512 x 512 ``astronaut`` portrait
 ASTRONAUT_FACE = (170.0, 40.0, 112.0, 140.0)
+#: x, y, w, h of the head (hair, face in profile, collar) in scikit-image's 512 x 512 ``camera`` photograph: a man
+#: in a dark coat behind a video camera, outdoors (the head beside a dark coat, a bright sky and the camera)
+CAMERA_FACE = (152.0, 62.0, 112.0, 136.0)
 OUT_W, OUT_H = 320, 240
+
+
+def _skimage_data():
+    try:
+        from skimage import data
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError("the face scenes use scikit-image's portraits: pip install scikit-image "
+                          "(or the 'dev' extra)") from e
+    return data
 
 
 def astronaut_grey() -> np.ndarray:
     """scikit-image's ``astronaut`` portrait in grey (needs scikit-image)."""
-    try:
-        from skimage import data
-    except ImportError as e:  # pragma: no cover - depends on the environment
-        raise ImportError("the face scenes use scikit-image's portrait: pip install scikit-image "
-                          "(or the 'dev' extra)") from e
-    return cv2.cvtColor(data.astronaut()[:, :, ::-1].copy(), cv2.COLOR_BGR2GRAY)
+    return cv2.cvtColor(_skimage_data().astronaut()[:, :, ::-1].copy(), cv2.COLOR_BGR2GRAY)
+
+
+def portrait(name: str = "astronaut") -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    """A grey portrait and its face box: ``astronaut`` (NASA, public domain; the default) or ``camera`` (the
+    cameraman photograph of scikit-image's data, a second face for checking figures chosen on the first)."""
+    if name == "astronaut":
+        return astronaut_grey(), ASTRONAUT_FACE
+    if name == "camera":
+        return np.ascontiguousarray(_skimage_data().camera()), CAMERA_FACE
+    raise ValueError(f"unknown portrait {name!r}: astronaut or camera")
 
 
 def turned_face(base: np.ndarray, face: tuple[float, float, float, float], yaw: float) -> np.ndarray:
