@@ -497,3 +497,76 @@ def test_a_multi_target_tracker_that_raises_is_scored_on_the_frames_before(tmp_p
     monkeypatch.setattr(MultiPF, "update", update)
     rec = run_job(Job(TrackerConfig("multi-pf", "multi-pf"), str(path), "t", 0, "mot"))
     assert rec["error"] == "ValueError: bad" and rec["error_frame"] == 20 and rec["mota"] is not None
+
+
+@pytest.mark.skipif("fork" not in __import__("multiprocessing").get_all_start_methods(),
+                    reason="the test's stand-in trackers reach the runs' processes by fork")
+def test_timeout_kills_a_hanging_run_and_notes_a_crashed_one(dataset, tmp_path, capsys, monkeypatch):
+    """``--timeout``: every run has a process of its own; a run that hangs is killed at the limit and one whose
+    process dies (a native fault) is recorded as failed; the other runs finish, and bad input still stops the
+    evaluation with exit code 2."""
+    import os
+    import signal
+    import time as _time
+
+    from pftrack.cli import main
+    from pftrack.trackers.meanshift import KalmanMeanShift, MeanShift
+
+    real = MeanShift._update
+
+    def hang(self, frame):
+        self._calls = getattr(self, "_calls", 0) + 1
+        if self._calls == 5:
+            _time.sleep(60)
+        return real(self, frame)
+
+    def crash(self, frame):  # a native fault (pytest's own fault handler off, as in a user's process)
+        __import__("faulthandler").disable()
+        os.kill(os.getpid(), signal.SIGSEGV)
+
+    monkeypatch.setattr(MeanShift, "_update", hang)
+    monkeypatch.setattr(KalmanMeanShift, "_update", crash)
+    rdir = tmp_path / "r"
+    t0 = _time.perf_counter()
+    rc = main(["eval", str(dataset / "seqA"), "--trackers", "meanshift,kalman-meanshift,color-pf[n_particles=30]",
+               "--workers", "2", "--timeout", "3", "--quiet", "--report", str(rdir)])
+    assert rc == 1 and _time.perf_counter() - t0 < 40
+    out = capsys.readouterr().out
+    assert "| `meanshift` | seqA | 0 | – | timed out after 3 s |" in out
+    assert "| `kalman-meanshift` | seqA | 0 | – | the run's process was killed by signal SIGSEGV |" in out
+    with open(rdir / "results.csv", newline="") as fh:
+        rows = {r["tracker"]: r for r in csv.DictReader(fh)}
+    assert rows["color-pf[n_particles=30]"]["error"] == "" and float(rows["color-pf[n_particles=30]"]["auc"]) > 0.3
+    assert [p.name.split("__")[2] for p in (rdir / "runs").iterdir()] == ["color-pf_n_particles=30"]
+    # bad input found inside a run stops the evaluation, as without a time limit
+    bad = tmp_path / "bad"
+    write_otb(bad, 3, n=6)
+    (bad / "img" / "0003.png").write_bytes(b"not an image")
+    assert main(["eval", str(bad), "--trackers", "color-pf[n_particles=30]", "--timeout", "30", "--quiet"]) == 2
+    assert "cannot be decoded" in capsys.readouterr().err
+    assert main(["eval", str(bad), "--trackers", "color-pf", "--timeout", "0", "--quiet"]) == 2
+
+
+def test_worker_processes_start_after_opencv_ran_in_parallel(dataset):
+    """A process that has used OpenCV's thread pool can still run evaluations in worker processes (a forked child
+    used to wait forever on the pool's threads it does not have).  Run in a fresh interpreter, with a time limit."""
+    import subprocess
+    import sys
+
+    code = f"""
+import cv2, numpy as np
+cv2.setNumThreads(2)
+big = np.random.default_rng(0).integers(0, 255, (2000, 2000, 3), dtype=np.uint8)
+for _ in range(3):
+    cv2.GaussianBlur(cv2.resize(big, (1500, 1500)), (31, 31), 5)
+from pftrack.eval.runner import Runner, build_jobs, parse_tracker_list
+from pftrack.io import discover_sequences
+jobs = build_jobs(discover_sequences({str(dataset)!r}), parse_tracker_list("color-pf[n_particles=30]"), seeds=2,
+                  protocol="ope")
+recs = Runner(workers=2, progress=False).run(jobs)
+assert len(recs) == 4 and all(r["auc"] > 0.3 for r in recs)
+assert cv2.getNumThreads() == 2
+print("done")
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and out.stdout.strip() == "done", out.stderr[-2000:]

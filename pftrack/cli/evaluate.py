@@ -26,6 +26,10 @@ def add_eval(sub) -> None:
     g.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local worker processes")
     g.add_argument("--scheduler", help="Dask distributed scheduler address (e.g. tcp://host:8786)")
     p.add_argument("--threads", type=int, default=1, help="OpenCV threads per run (default 1: per-core speed)")
+    p.add_argument("--timeout", type=float, metavar="SECONDS",
+                   help="time limit of one run: every run then has a process of its own, and a run that takes "
+                        "longer (a tracker hanging in native code) or whose process crashes is recorded as failed "
+                        "while the evaluation goes on (not with --scheduler)")
     p.add_argument("--report", help="report folder: results.csv, summary.md, plots, index.html; runs are cached "
                                     "there so an interrupted evaluation resumes")
     p.add_argument("--doc", help="also write the Markdown summary (with the command) to this file")
@@ -45,6 +49,10 @@ def cmd_eval(args) -> int:
         raise ParameterError("--seeds must be >= 1")
     if args.workers is not None and args.workers < 1:
         raise ParameterError("--workers must be >= 1")
+    if args.timeout is not None and not args.timeout > 0:
+        raise ParameterError("--timeout must be a positive number of seconds")
+    if args.timeout is not None and args.scheduler:
+        raise ParameterError("--timeout does not apply to a Dask scheduler's runs (use Dask's own limits)")
     trackers = parse_tracker_list(args.trackers, protocol=args.protocol)
     seqs = []
     mot = args.protocol == "mot"
@@ -67,7 +75,7 @@ def cmd_eval(args) -> int:
         prepare_output(report_dir / "results.csv")
     jobs = build_jobs(seqs, trackers, seeds=args.seeds, protocol=args.protocol, threads=args.threads)
     runner = Runner(report_dir=report_dir, workers=args.workers or 1, scheduler=args.scheduler,
-                    progress=not args.quiet)
+                    progress=not args.quiet, timeout=args.timeout)
     try:
         records = runner.run(jobs)
     except KeyboardInterrupt:

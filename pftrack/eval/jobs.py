@@ -311,6 +311,15 @@ def _failure_fields(fail: TrackerFailure) -> dict:
     return {"error": msg[:300], "error_frame": fail.frame, "traceback": tb[-4000:]}
 
 
+def failure_record(job: Job, message: str, *, trace: str = "") -> dict:
+    """The record of a run that gave no result (killed after its time limit, or its process died): no scores."""
+    return {"version": RESULT_VERSION, "tracker": job.tracker.label, "name": job.tracker.name,
+            "params": dict(job.tracker.params), "sequence": job.sequence_name, "seed": job.seed,
+            "protocol": job.protocol, "frames": None, "auc": None, "precision": None, "mean_iou": None,
+            "failures": None, "accuracy": None, "lost_frames": None, "fps": None,
+            "error": " ".join(message.split())[:300], "error_frame": None, "traceback": trace[-4000:]}
+
+
 def failed(rec: dict) -> bool:
     """Whether a run's record is that of a failed run (its tracker raised)."""
     return bool(rec.get("error"))

@@ -173,6 +173,9 @@ class Runner:
     scheduler: Any = None  # address string or a dask.distributed.Client
     progress: bool = True
     on_result: Callable[[dict], None] | None = None
+    #: seconds a run may take; set, every run has a process of its own and one that takes longer, or whose process
+    #: dies, is recorded as failed (:mod:`.isolate`); None: runs share the worker processes, without a limit
+    timeout: float | None = None
     ran: int = field(default=0, init=False)
     reused: int = field(default=0, init=False)
 
@@ -219,11 +222,17 @@ class Runner:
         try:
             if self.scheduler is not None:
                 self._run_dask(jobs, todo, done)
+            elif self.timeout is not None:
+                from .isolate import run_isolated
+
+                run_isolated(jobs, todo, done, workers=self.workers, timeout=self.timeout)
             elif self.workers <= 1 or len(todo) <= 1:
                 for i in todo:
                     done(i, run_job(jobs[i]))
             else:
-                with ProcessPoolExecutor(max_workers=self.workers) as ex:
+                from .isolate import fork_safe, process_context
+
+                with fork_safe(), ProcessPoolExecutor(max_workers=self.workers, mp_context=process_context()) as ex:
                     futs = {ex.submit(run_job, jobs[i]): i for i in todo}
                     try:
                         for fut in as_completed(futs):
