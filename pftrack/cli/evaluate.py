@@ -115,7 +115,8 @@ def cmd_list(args) -> int:
     specs = [get_spec(args.name)] if args.name else list_trackers()
     for spec in specs:
         avail = "" if spec.available() else "  (not available here)"
-        print(f"{spec.name:20s} {spec.summary}{avail}")
+        plugin = f"  (plugin: {spec.cls.__module__})" if spec.family == "plugin" else ""
+        print(f"{spec.name:20s} {spec.summary}{avail}{plugin}")
         if args.name:
             for name, typ, default, doc in spec.params_cls.describe():
                 print(f"  {name} ({typ}, default {default!r})")

@@ -107,7 +107,37 @@ def _ensure_loaded() -> None:
     for module in APPLICATION_TRACKERS:
         for name, cls, summary, options in importlib.import_module(module).REGISTRY_ENTRIES:
             register(name, cls, summary, **options)
+    _load_plugins()
 
 
 #: Modules of the application packages that contribute trackers to the registry.
 APPLICATION_TRACKERS: tuple[str, ...] = ("pftrack.surfaces.tracker", "pftrack.segmentation.tracker")
+
+#: The entry-point group through which installed packages add trackers (:func:`_load_plugins`).
+PLUGIN_GROUP = "pftrack.trackers"
+
+
+def _load_plugins() -> None:
+    """Trackers of other installed packages: every entry point of the ``pftrack.trackers`` group names a module
+    (or any object) with a ``REGISTRY_ENTRIES`` list of ``(name, class, summary, options)``, or a callable that
+    returns such a list. The family defaults to ``"plugin"``. A plugin that fails to load, or whose names are
+    taken, is skipped with a warning: it never breaks the built-in trackers."""
+    import warnings
+    from importlib.metadata import entry_points
+
+    for ep in entry_points(group=PLUGIN_GROUP):
+        try:
+            obj = ep.load()
+            entries = obj.REGISTRY_ENTRIES if hasattr(obj, "REGISTRY_ENTRIES") else obj()
+            entries = list(entries)
+            for name, cls, summary, options in entries:  # checked before any is registered
+                if name in _REGISTRY:
+                    raise ValueError(f"tracker {name!r} is already registered")
+                if not (isinstance(cls, type) and issubclass(cls, Tracker)):
+                    raise TypeError(f"{name!r}: {cls!r} is not a pftrack Tracker subclass")
+        except Exception as exc:  # noqa: BLE001 - a third party's failure is reported, not raised
+            warnings.warn(f"tracker plugin {ep.name!r} ({ep.value}) not loaded: {type(exc).__name__}: {exc}",
+                          stacklevel=2)
+            continue
+        for name, cls, summary, options in entries:
+            register(name, cls, summary, **{"family": "plugin", **dict(options)})
