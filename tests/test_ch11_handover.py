@@ -291,3 +291,39 @@ def test_cbtf_weights_people_alike_or_by_pixels():
     assert err_people < 0.8 * err_pixels, (err_people, err_pixels)
     with pytest.raises(ValueError):
         cbtf(src, dst, weight="area")
+
+
+def test_synth_twocam_scales_its_strip_to_any_source_and_takes_frames_and_strip(tmp_path):
+    """``pftrack synth twocam`` on a MOTChallenge folder that is not PETS: the blind strip sits at the same fractions
+    of the width by default (340 and 430 of PETS's 768 pixels), ``--frames`` and ``--strip`` choose the frames and
+    the strip, and the cameras keep the source's frame rate."""
+    import configparser
+
+    import cv2
+
+    from pftrack.synth.traffic import export_traffic, traffic_scene
+    from pftrack.synth.twocam import default_split
+
+    assert default_split(768) == (340, 430) and default_split(320) == (142, 180)
+    src = tmp_path / "src"
+    export_traffic(traffic_scene(0, n_vehicles=3), src)
+    n = len(list((src / "img1").iterdir()))
+
+    def info(folder):
+        cp = configparser.ConfigParser()
+        cp.read(folder / "seqinfo.ini")
+        return cp["Sequence"]
+
+    assert main(["synth", "twocam", "--source", str(src), "--seeds", "0", "--out", str(tmp_path / "d")]) == 0
+    a, b = tmp_path / "d" / "twocam-000" / "cam_a", tmp_path / "d" / "twocam-000" / "cam_b"
+    assert cv2.imread(str(a / "img1" / "000001.jpg")).shape[1] == 142
+    assert cv2.imread(str(b / "img1" / "000001.jpg")).shape[1] == 320 - 180
+    assert info(a)["seqLength"] == str(n) and info(a)["frameRate"] == "30"
+    assert main(["synth", "twocam", "--source", str(src), "--seeds", "0", "--frames", "2-10", "--strip", "100,50",
+                 "--out", str(tmp_path / "e")]) == 0
+    a, b = tmp_path / "e" / "twocam-000" / "cam_a", tmp_path / "e" / "twocam-000" / "cam_b"
+    assert cv2.imread(str(a / "img1" / "000001.jpg")).shape[1] == 100
+    assert cv2.imread(str(b / "img1" / "000001.jpg")).shape[1] == 170
+    assert info(b)["seqLength"] == "9" and len(list((b / "img1").iterdir())) == 9
+    for bad in (["--strip", "300,50"], ["--strip", "x"], ["--frames", "0-5"], ["--frames", f"1-{n + 1}"]):
+        assert main(["synth", "twocam", "--source", str(src), "--seeds", "0", *bad, "--out", str(tmp_path / "f")]) == 2

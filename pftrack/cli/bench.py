@@ -124,6 +124,11 @@ def add_synth(sub) -> None:
                                     "sequence folder")
     p.add_argument("--response", choices=["mild", "strong"], default="mild",
                    help="twocam: camera B's colour response ('strong': wider gamma, gain and offset; a stress test)")
+    p.add_argument("--frames", metavar="FIRST-LAST",
+                   help="twocam: the source's frames to use (default all; docs/handover.md uses 1-200 and 201-400)")
+    p.add_argument("--strip", metavar="X[,WIDTH]",
+                   help="twocam: the blind strip between the cameras starts at pixel X and is WIDTH pixels wide "
+                        "(default: at 44 %% of the frame's width, 12 %% wide: 340,90 on PETS 2009)")
     p.add_argument("--turn", type=float, default=0.0, metavar="DEGREES",
                    help="face: the face turns back and forth up to this angle (a rough stand-in; default 0: it "
                         "does not turn)")
@@ -137,6 +142,45 @@ def add_synth(sub) -> None:
                         f"{', '.join(DRAWN_NUISANCE_SCENES)}; default their own, 0.3). The other nuisances of a seed "
                         "stay the same, so --gray 1 gives each seed's scene in grey")
     p.set_defaults(func=cmd_synth)
+
+
+def _twocam_ranges(args) -> tuple[tuple[int, int] | None, tuple[int, int] | None]:
+    """``--frames FIRST-LAST`` and ``--strip X[,WIDTH]`` of ``pftrack synth twocam`` (None: the defaults)."""
+    from ..errors import ParameterError
+    from ..io.datasets import read_sequence
+    from ..synth.twocam import default_split
+
+    if args.kind != "twocam":
+        if args.frames or args.strip:
+            raise ParameterError("--frames and --strip apply to twocam scenes")
+        return None, None
+    numbers = split = None
+    seq = read_sequence(args.source)
+    if args.frames:
+        try:
+            a, b = (int(v) for v in args.frames.split("-"))
+        except ValueError:
+            raise ParameterError(f"--frames must look like 1-200, got {args.frames!r}") from None
+        if not 1 <= a < b <= len(seq.frames):
+            raise ParameterError(f"--frames {a}-{b} outside the sequence's frames 1-{len(seq.frames)}")
+        numbers = (a, b)
+    if args.strip:
+        try:
+            vals = [float(v) for v in args.strip.split(",")]
+            if len(vals) > 2:
+                raise ValueError
+        except ValueError:
+            raise ParameterError(f"--strip must look like 340 or 340,90, got {args.strip!r}") from None
+        width = seq.size[0] if seq.size else None
+        if width is None:
+            import cv2
+
+            width = cv2.imread(str(seq.frames[0])).shape[1]
+        try:
+            split = default_split(width, vals[0], vals[1] if len(vals) > 1 else None)
+        except ValueError as e:
+            raise ParameterError(f"--strip: {e}") from None
+    return numbers, split
 
 
 def cmd_synth(args) -> int:
@@ -174,6 +218,7 @@ def cmd_synth(args) -> int:
             raise ParameterError("twocam scenes need --source SEQUENCE (a MOTChallenge folder with ground truth)")
         if detect_layout(Path(args.source)) != "mot":
             raise SourceError(f"{args.source}: not a MOTChallenge folder")
+    numbers, split = _twocam_ranges(args)
     if args.kind == "xray":
         from .common import image_file
 
@@ -200,7 +245,8 @@ def cmd_synth(args) -> int:
         elif args.kind == "twocam":
             from ..synth.twocam import export_twocam, twocam_scene
 
-            export_twocam(twocam_scene(args.source, sd, response=args.response), out / f"twocam-{sd:03d}")
+            export_twocam(twocam_scene(args.source, sd, response=args.response, numbers=numbers, split=split),
+                          out / f"twocam-{sd:03d}")
         elif args.kind == "walkers":
             from ..synth.walkers import export_walkers, walkers_scene
 

@@ -104,16 +104,39 @@ def _tracks(gt: np.ndarray, inside, shift: float, cam: str, min_len: int, identi
     return np.asarray(rows, dtype=np.float64).reshape(-1, 10)
 
 
-def twocam_scene(sequence_dir, seed: int = 0, *, numbers: tuple[int, int] = (1, 400),
-                 split: tuple[int, int] = (340, 430), min_len: int = 5, response: str = "mild") -> TwoCamScene:
-    """Cut a MOTChallenge sequence (frames and ground truth) into two disjoint cameras."""
+#: The blind strip's edges as fractions of the frame's width when none is given: 340 and 430 of PETS 2009's 768
+#: pixels, the scenes of docs/handover.md.
+STRIP = (340 / 768, 430 / 768)
+
+
+def default_split(width: int, left: float | None = None, strip: float | None = None) -> tuple[int, int]:
+    """Camera A's right edge and camera B's left edge in a frame ``width`` pixels wide: the blind strip starts at
+    ``left`` pixels and is ``strip`` pixels wide (by default at the fractions :data:`STRIP` of the width)."""
+    x0 = round(STRIP[0] * width) if left is None else int(round(left))
+    x1 = x0 + (round((STRIP[1] - STRIP[0]) * width) if strip is None else int(round(strip)))
+    if not 0 < x0 < x1 < width:
+        raise ValueError(f"the blind strip {x0}..{x1} must lie inside the frame's width {width}")
+    return x0, x1
+
+
+def twocam_scene(sequence_dir, seed: int = 0, *, numbers: tuple[int, int] | None = None,
+                 split: tuple[int, int] | None = None, min_len: int = 5, response: str = "mild") -> TwoCamScene:
+    """Cut a MOTChallenge sequence (frames and ground truth) into two disjoint cameras.  ``numbers``: the first and
+    last frame used (default: all); ``split``: camera A's right edge and camera B's left edge (default
+    :func:`default_split`)."""
     from ..io.datasets import read_sequence
 
     seq = read_sequence(sequence_dir)
     if seq.mot_gt is None:
         raise ValueError(f"{sequence_dir}: needs MOTChallenge ground truth")
+    if numbers is None:
+        numbers = (1, len(seq.frames))
+    if not 1 <= numbers[0] < numbers[1] <= len(seq.frames):
+        raise ValueError(f"frames {numbers[0]}-{numbers[1]} outside the sequence's 1-{len(seq.frames)}")
     gt = seq.mot_gt[(seq.mot_gt[:, 0] >= numbers[0]) & (seq.mot_gt[:, 0] <= numbers[1])]
     w = seq.size[0] if seq.size else cv2.imread(str(seq.frames[0])).shape[1]
+    if split is None:
+        split = default_split(w)
     rng = np.random.default_rng(seed)
     identity: dict = {}
     ta = _tracks(gt, lambda b: b[0] >= 2 and b[0] + b[2] <= split[0] - 2, 0.0, "a", min_len, identity)
@@ -121,8 +144,8 @@ def twocam_scene(sequence_dir, seed: int = 0, *, numbers: tuple[int, int] = (1, 
                  identity)
     resp = colour_response(rng, response)
     meta = {"seed": seed, "frames": list(numbers), "split": list(split), "source": str(sequence_dir),
-            "response": response}
-    return TwoCamScene(list(seq.frames), split, resp, ta, tb, identity, numbers, meta)
+            "response": response, "fps": seq.fps or 7.0}
+    return TwoCamScene(list(seq.frames), tuple(split), resp, ta, tb, identity, tuple(numbers), meta)
 
 
 def export_twocam(scene: TwoCamScene, folder) -> None:
@@ -142,6 +165,7 @@ def export_twocam(scene: TwoCamScene, folder) -> None:
         shifted = rows.copy()
         shifted[:, 0] -= off
         write_mot_groundtruth(d / "gt" / "gt.txt", shifted)
-        write_seqinfo(d, name=f"cam_{cam}", fps=7, length=scene.numbers[1] - off, width=size[1], height=size[0])
+        write_seqinfo(d, name=f"cam_{cam}", fps=scene.meta.get("fps", 7.0), length=scene.numbers[1] - off,
+                      width=size[1], height=size[0])
     rows = ["camera,track,person"] + [f"{c},{t},{p}" for (c, t), p in sorted(scene.identity.items())]
     (folder / "identity.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
