@@ -570,3 +570,19 @@ print("done")
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0 and out.stdout.strip() == "done", out.stderr[-2000:]
+
+
+def test_a_tracker_that_fails_from_the_first_frame_is_a_failed_run(dataset, monkeypatch):
+    """Raising in ``init`` (and so in the warm-up too): a failed run scored 0, not an aborted evaluation."""
+    from pftrack.io import discover_sequences
+    from pftrack.trackers.meanshift import MeanShift
+
+    def refuse(self, frame, box):
+        raise ValueError("cannot start")
+
+    monkeypatch.setattr(MeanShift, "_init", refuse)
+    monkeypatch.setattr("pftrack.trackers.warmup._WARMED", set())  # warmed again, and failing there
+    seq = discover_sequences(dataset / "seqB")[0]
+    rec = run_job(Job(parse_tracker_list("meanshift")[0], str(seq.path), seq.name, 0, "ope"))
+    assert rec["error"] == "ValueError: cannot start" and rec["error_frame"] == 1
+    assert rec["auc"] == 0.0 and rec["updates"] == 0 and rec["fps"] is None

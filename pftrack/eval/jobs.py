@@ -147,7 +147,12 @@ def run_job(job: Job) -> dict:
         raise FormatError(f"{job.sequence}: no single-object ground truth for protocol {job.protocol}")
     from ..trackers.warmup import warm_up
 
-    warm_up(job.tracker.name, job.tracker.param_dict)  # no compilation inside the timed updates
+    try:
+        warm_up(job.tracker.name, job.tracker.param_dict)  # no compilation inside the timed updates
+    except ParameterError:
+        raise
+    except Exception:  # noqa: BLE001 - a tracker that fails on the warm-up clips is judged on the sequence itself
+        pass
     tracker = create_tracker(job.tracker.name, seed=job.seed, params=job.tracker.param_dict)
 
     def frames():
