@@ -385,3 +385,26 @@ def test_follow_restarts_both_trackers_from_the_best_rejected_region():
     assert t.v1 == t.v2 == v_true and t.A.v == v_true
     chosen, v, _ = t._follow({"failed": True}, v_off, qp, v_true, t._select_rho(v_true, qp))
     assert chosen == "held" and v == v_true  # B's region scores lower than the held output
+
+
+@pytest.mark.parametrize("seed", [1, 3])
+def test_tracker_b_on_grey_input_climbs_intensity_histograms(seed):
+    """On grey input the chapter's trackers histogram 64 bins of equalised intensity (``gray_bins``, docs/keypoints.md):
+    mean shift on intensity x gradient orientation climbs weights that change from pixel to pixel.  Grey varied
+    scenes (tune seeds), mean IoU measured: seed 1 0.532 against 0.111 with (16, 8); seed 3 0.423 against 0.031."""
+    from pftrack.eval.metrics import frame_ious
+    from pftrack.synth.varied import varied_scene
+
+    from .conftest import render_scene
+
+    scene, frames, _ = render_scene(varied_scene(seed, gray=1.0))
+    gt = scene.groundtruth(0)
+
+    def mean_iou(**params):
+        t = pftrack.create_tracker("anisotropic-meanshift", **params)
+        t.init(frames[0], tuple(gt[0]))
+        return float(frame_ious(np.array([t.update(f).box for f in frames[1:]]), gt[1:]).mean())
+
+    assert pftrack.create_tracker("anisotropic-meanshift").params.gray_bins == (64, 1)
+    new, old = mean_iou(), mean_iou(gray_bins=(16, 8))
+    assert new >= 0.35 and new >= old + 0.2, (new, old)

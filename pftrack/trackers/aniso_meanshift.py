@@ -25,7 +25,7 @@ from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
 from .working_resolution import WORKING_RESOLUTION_DOC, ReducedFrames
-from .sift_ransac import ColorModel, RBox, ReinitGate, colour_roi, corner_distance, hull
+from .sift_ransac import ColorModel, RBox, ReinitGate, check_gray_bins, colour_roi, corner_distance, hull
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -71,9 +71,13 @@ class AnisoMeanShiftParams(Params):
     t4_rho: float = param(0.975, ge=0, le=1, doc="T(2)_4: re-init when rho falls below this (Table 2 median).")
     auto_frames: int = param(10, ge=3, le=100, doc="'auto': frames whose rho and dist set the thresholds.")
     color_space: Literal["auto", "rgb", "gray"] = param("auto", doc="Histogram features, as sift-ransac.")
+    gray_bins: tuple[int, ...] = param((64, 1), ge=1, le=256, doc="Grey features on grey input, as sift-ransac.")
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive re-initialisations before lost is raised.")
     max_pixels: int = param(2000, ge=0, le=10_000_000, doc=WORKING_RESOLUTION_DOC + (
         " The pixel thresholds of thresholds='paper' are divided by k. Chosen on the tune split (docs/keypoints.md)."))
+
+    def validate(self) -> None:
+        check_gray_bins(self.gray_bins)
 
 
 class AnisoCore:
@@ -135,7 +139,7 @@ class AnisoMeanShift(ReducedFrames, Tracker):
         self.v = an.axis_box_to_rotated(box)
         # the pixel thresholds in working pixels
         self.core = AnisoCore(dataclasses.replace(p, t3_dist=p.t3_dist / self._k), self.v)
-        self.color = ColorModel(p.color_space)
+        self.color = ColorModel(p.color_space, p.gray_bins)
         self.color.adapt(frame)
         self.color.prepare(frame, colour_roi(self.v))
         self.q = self.color.hist(self.v)

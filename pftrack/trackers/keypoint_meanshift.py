@@ -112,10 +112,10 @@ class KeypointAMS(ReducedFrames, Tracker):
         bp = AnisoMeanShiftParams(gamma=p.gamma, K=p.K, k_mode=p.k_mode, max_iterations=p.ms_iterations,
                                   safeguard=p.safeguard, max_scale_step=p.max_scale_step,
                                   thresholds=p.thresholds, t3_dist=p.t3_dist, t4_rho=p.t4_rho,
-                                  auto_frames=p.auto_frames, color_space=p.color_space,
+                                  auto_frames=p.auto_frames, color_space=p.color_space, gray_bins=p.gray_bins,
                                   background=p.background, background_bins=p.background_bins)
         self.B = AnisoCore(bp, v)
-        self.color = ColorModel(p.color_space)
+        self.color = ColorModel(p.color_space, p.gray_bins)
         self.color.adapt(frame)
         self.color.prepare(frame, colour_roi(v))
         q0 = self.color.hist(v)
