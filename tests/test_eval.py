@@ -531,7 +531,9 @@ def test_timeout_kills_a_hanging_run_and_notes_a_crashed_one(dataset, tmp_path, 
     rc = main(["eval", str(dataset / "seqA"), "--trackers", "meanshift,kalman-meanshift,color-pf[n_particles=30]",
                "--workers", "2", "--timeout", "3", "--quiet", "--report", str(rdir)])
     assert rc == 1 and _time.perf_counter() - t0 < 40
-    out = capsys.readouterr().out
+    cap = capsys.readouterr()
+    out = cap.out
+    assert "pftrack: error: 2 of 3 runs failed, first meanshift on seqA (seed 0): timed out after 3 s" in cap.err
     assert "| `meanshift` | seqA | 0 | – | timed out after 3 s |" in out
     assert "| `kalman-meanshift` | seqA | 0 | – | the run's process was killed by signal SIGSEGV |" in out
     with open(rdir / "results.csv", newline="") as fh:

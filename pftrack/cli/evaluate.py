@@ -95,8 +95,9 @@ def cmd_eval(args) -> int:
     if bad:
         r = bad[0]
         where = f"; tracebacks in {report_dir / 'failed'}" if report_dir else ""
+        frame = f", frame {r['error_frame']}" if r.get("error_frame") is not None else ""
         print(f"pftrack: error: {len(bad)} of {len(records)} runs failed, first {r['tracker']} on {r['sequence']} "
-              f"(seed {r['seed']}, frame {r.get('error_frame')}): {r['error']}{where}", file=sys.stderr)
+              f"(seed {r['seed']}{frame}): {r['error']}{where}", file=sys.stderr)
         return 1
     return 0
 
