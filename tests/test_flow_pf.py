@@ -190,3 +190,31 @@ def test_on_grey_input_the_colour_distance_is_the_value_channels():
             colour.append([t.update(f).box for f in frames[1:10]])
         assert colour[0] == colour[1]
     assert np.mean(auc[True]) > np.mean(auc[False]) + 0.1, auc
+
+
+def test_grey_input_compares_finer_value_histograms():
+    """``grey_bins``: on grey input V alone is compared, in 20 bins (docs/flow-pf.md); colour input keeps ``bins``
+    and its boxes.  On a grey vanish scene (tune seed 8) the estimate covers the target on 33 frames against 6 with
+    the former 10 bins (measured)."""
+    from pftrack.synth.varied import vanish_scene
+
+    from .conftest import lost_flag_run
+
+    scene, frames, _ = render_scene(simple_scene(3, n_frames=30))
+    gt = scene.groundtruth(0)
+    boxes = {}
+    for gb in (20, 0):
+        t = pftrack.create_tracker("flow-pf", seed=0, grey_bins=gb)
+        t.init(frames[0], tuple(gt[0]))
+        assert t.cue.n_bins == 10
+        boxes[gb] = [t.update(f).box for f in frames[1:]]
+    assert boxes[20] == boxes[0]
+    grey = [np.repeat(f.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2) for f in frames]
+    t = pftrack.create_tracker("flow-pf", seed=0)
+    t.init(grey[0], tuple(gt[0]))
+    assert t.cue.n_bins == 20
+    t.init(frames[0], tuple(gt[0]))  # re-initialised on colour: the colour bins again
+    assert t.cue.n_bins == 10
+    new = lost_flag_run(vanish_scene(8, gray=1.0), "flow-pf")
+    old = lost_flag_run(vanish_scene(8, gray=1.0), "flow-pf", grey_bins=0)
+    assert new.covered_frames >= old.covered_frames + 15, (new, old)
