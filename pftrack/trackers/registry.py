@@ -130,6 +130,9 @@ def _load_plugins() -> None:
             obj = ep.load()
             entries = obj.REGISTRY_ENTRIES if hasattr(obj, "REGISTRY_ENTRIES") else obj()
             entries = list(entries)
+            names = [e[0] for e in entries]
+            if len(set(names)) != len(names):
+                raise ValueError(f"a name is listed twice in {names}")
             for name, cls, summary, options in entries:  # checked before any is registered
                 if name in _REGISTRY:
                     raise ValueError(f"tracker {name!r} is already registered")
