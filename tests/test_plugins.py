@@ -46,13 +46,15 @@ REGISTRY_ENTRIES = [("still", Still, "the first box on every frame", {})]
 
 @pytest.fixture
 def installed_plugin(tmp_path, monkeypatch):
-    """A package ``stillplug`` installed on ``sys.path`` with four entry points: one good, one whose module is
-    missing, one whose name is taken by a built-in tracker, one that lists a name twice."""
+    """A package ``stillplug`` installed on ``sys.path`` with five entry points: one good, one whose module is
+    missing, one whose name is taken by a built-in tracker, one that lists a name twice, one with an unknown option."""
     (tmp_path / "stillplug.py").write_text(PLUGIN)
     (tmp_path / "clash.py").write_text("from stillplug import Still\n"
                                        "REGISTRY_ENTRIES = [('color-pf', Still, 'x', {})]\n")
     (tmp_path / "twice.py").write_text("from stillplug import Still\n"
                                        "REGISTRY_ENTRIES = [('again', Still, 'x', {}), ('again', Still, 'y', {})]\n")
+    (tmp_path / "oddopt.py").write_text("from stillplug import Still\n"
+                                        "REGISTRY_ENTRIES = [('odd', Still, 'x', {'colour': 'blue'})]\n")
     info = tmp_path / "stillplug-0.1.dist-info"
     info.mkdir()
     (info / "METADATA").write_text("Metadata-Version: 2.1\nName: stillplug\nVersion: 0.1\n")
@@ -62,12 +64,13 @@ def installed_plugin(tmp_path, monkeypatch):
         gone = no_such_module_here
         clash = clash
         twice = twice
+        oddopt = oddopt
         """))
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.setattr(registry, "_REGISTRY", {})
     monkeypatch.setattr(registry, "_loaded", False)
     yield
-    for m in ("stillplug", "clash", "twice"):
+    for m in ("stillplug", "clash", "twice", "oddopt"):
         sys.modules.pop(m, None)
 
 
@@ -78,6 +81,7 @@ def test_an_installed_plugin_adds_its_tracker_and_a_broken_one_is_skipped(instal
     assert "'gone'" in msgs and "ModuleNotFoundError" in msgs
     assert "'clash'" in msgs and "already registered" in msgs
     assert "'twice'" in msgs and "listed twice" in msgs and "again" not in names
+    assert "'oddopt'" in msgs and "unknown options" in msgs and "odd" not in names
     assert "still" in names and "color-pf" in names and registry.get_spec("color-pf").family == "pftrack"
     assert registry.get_spec("still").family == "plugin"
     t = pftrack.create_tracker("still", shift=2)

@@ -138,6 +138,9 @@ def _load_plugins() -> None:
                     raise ValueError(f"tracker {name!r} is already registered")
                 if not (isinstance(cls, type) and issubclass(cls, Tracker)):
                     raise TypeError(f"{name!r}: {cls!r} is not a pftrack Tracker subclass")
+                unknown = set(dict(options)) - {"family", "extra_kwargs", "available"}
+                if unknown:
+                    raise TypeError(f"{name!r}: unknown options {sorted(unknown)}")
         except Exception as exc:  # noqa: BLE001 - a third party's failure is reported, not raised
             warnings.warn(f"tracker plugin {ep.name!r} ({ep.value}) not loaded: {type(exc).__name__}: {exc}",
                           stacklevel=2)
