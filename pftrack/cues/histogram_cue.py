@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
+from ..errors import ParameterError
 from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, reachable_roi
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
@@ -29,6 +30,12 @@ from .quantize import make_lut, quantize, quantize_region, shift_form
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Default grey features: intensity bins, orientation bins (plus one "flat" bin).
 DEFAULT_GRAY_BINS = (16, 8)
+
+
+def check_gray_bins(bins: tuple[int, ...]) -> None:
+    """A tracker parameter ``gray_bins`` must be (intensity bins, orientation bins <= 64)."""
+    if len(bins) != 2 or bins[1] > 64:
+        raise ParameterError(f"parameter 'gray_bins' must be (intensity, orientation <= 64), got {bins}")
 
 
 _HALF_XY = np.array([0.5, 0.5, 0.0, 0.0])

@@ -25,7 +25,8 @@ from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
 from .working_resolution import WORKING_RESOLUTION_DOC, ReducedFrames
-from .sift_ransac import ColorModel, RBox, ReinitGate, check_gray_bins, colour_roi, corner_distance, hull
+from ..cues.histogram_cue import check_gray_bins
+from .sift_ransac import ColorModel, RBox, ReinitGate, colour_roi, corner_distance, hull
 
 
 @dataclass(frozen=True, kw_only=True)

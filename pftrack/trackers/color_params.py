@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from ..cues.histogram_cue import check_gray_bins
 from ..errors import ParameterError
 from ..params import Params, param
 
@@ -317,8 +318,7 @@ class ColorModelParams(Params):
     def validate(self) -> None:
         if self.bins and len(self.bins) != 3:
             raise ParameterError(f"parameter 'bins' must have 3 values (one per channel), got {self.bins}")
-        if len(self.gray_bins) != 2 or self.gray_bins[1] > 64:
-            raise ParameterError(f"parameter 'gray_bins' must be (intensity, orientation <= 64), got {self.gray_bins}")
+        check_gray_bins(self.gray_bins)
 
 
 @dataclass(frozen=True, kw_only=True)

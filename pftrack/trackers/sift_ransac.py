@@ -32,9 +32,8 @@ import numpy as np
 
 from ..cues import anisotropic as an
 from ..cues import keypoints as kp
-from ..cues.histogram_cue import ColorCue
+from ..cues.histogram_cue import ColorCue, check_gray_bins
 from ..filtering.loss import LossDetector, RunningThreshold
-from ..errors import ParameterError
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
@@ -148,12 +147,6 @@ def colour_roi(v: RBox) -> tuple[int, int, int, int]:
     x, y, w, h = hull(v)
     m = 0.75 * max(w, h)
     return int(x - m), int(y - m), int(x + w + m), int(y + h + m)
-
-
-def check_gray_bins(bins: tuple[int, ...]) -> None:
-    """``gray_bins`` must be (intensity bins, orientation bins <= 64)."""
-    if len(bins) != 2 or bins[1] > 64:
-        raise ParameterError(f"parameter 'gray_bins' must be (intensity, orientation <= 64), got {bins}")
 
 
 class ColorModel:
