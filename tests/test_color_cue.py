@@ -253,3 +253,22 @@ def test_fused_rho_with_a_bin_count_not_a_multiple_of_eight(rng, n, shape):
     rho, tot2 = ellipse_rho(bins, 0, 0, ell, np.sqrt(q), backend="numba")
     assert np.allclose(rho, expected, rtol=0, atol=1e-12)
     assert np.allclose(tot2, tot, rtol=1e-12, atol=1e-12)
+
+
+def test_channel_levels_are_the_medians_of_the_lattice():
+    """The 8-bit path (each channel's histogram) gives np.median's numbers, for odd and even counts, colour and
+    grey frames."""
+    from pftrack.cues.intensity import channel_levels
+
+    rng = np.random.default_rng(3)
+    for t in range(60):
+        h, w = (int(v) for v in rng.integers(1, 90, 2))
+        img = (rng.integers(0, 256, (h, w, 3), dtype=np.uint8) if t % 2
+               else np.minimum(rng.poisson(rng.uniform(0, 60), (h, w, 3)), 255).astype(np.uint8))
+        stride = int(rng.integers(1, 12))
+        ref = np.maximum(np.median(img[::stride, ::stride].reshape(-1, 3), axis=0), 1.0)
+        assert np.array_equal(channel_levels(img, stride=stride), ref)
+    grey = rng.integers(0, 256, (40, 50), dtype=np.uint8)
+    assert np.array_equal(channel_levels(grey, stride=3), np.maximum(np.median(grey[::3, ::3].reshape(-1, 1), axis=0),
+                                                                     1.0))
+

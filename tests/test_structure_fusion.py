@@ -95,6 +95,33 @@ def test_ncc_reads_8_bit_and_float_levels_alike():
     assert np.array_equal(small, np.array(one))
 
 
+@pytest.mark.skipif(not numba_enabled(), reason="a property of the compiled NCC")
+@pytest.mark.parametrize("n_templates", [1, 2, 3])
+@pytest.mark.parametrize("kind", ["kernel", "uniform"])
+def test_ncc_of_boxes_two_at_a_time_equals_one_at_a_time(n_templates, kind):
+    """A batch is scored two boxes at a time: bit for bit the numbers of one box after the other, for an odd and
+    an even count, with and without weights, also where boxes reach past the region's border."""
+    from pftrack.cues.ncc_kernels import _ncc_boxes, _ncc_one
+    from pftrack.cues.structure import _grid, weighted_templates
+
+    rng = np.random.default_rng(11)
+    img = rng.integers(0, 255, (90, 130, 3), dtype=np.uint8)
+    red = reduce_region(img, (0, 0, 130, 90), 3)
+    gray = red.gray.astype(np.float64)
+    w = kernel_weights((12, 10), kind)
+    tw, wts = weighted_templates(standardize(rng.uniform(0, 255, (n_templates, 120)).astype(np.float32), weights=w),
+                                 None if kind == "uniform" else w)
+    u, v = _grid((12, 10))
+    for n in (1, 6, 7):
+        ell = np.column_stack([rng.uniform(-15, 145, n), rng.uniform(-15, 105, n), rng.uniform(2, 40, n),
+                               rng.uniform(2, 40, n)])
+        out = np.empty(n)
+        _ncc_boxes(gray, ell, float(red.x0), float(red.y0), float(red.k), u, v, tw, wts, 1.0, out)
+        one = [_ncc_one(gray, e, float(red.x0), float(red.y0), float(red.k), u, v, tw, wts, 1.0, np.empty(n_templates))
+               for e in ell]
+        assert np.array_equal(out, np.array(one))
+
+
 def test_sampled_box_equals_the_area_resized_crop():
     img = _texture()
     box = (40, 30, 64, 48)  # x, y, w, h: a 4x reduction to a 16x12 patch

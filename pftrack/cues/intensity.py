@@ -189,9 +189,19 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
 # ------------------------------------------------------------------------------ colour frames under changing light
 
 def channel_levels(frame: np.ndarray, *, stride: int = 4) -> np.ndarray:
-    """Robust per-channel level of a BGR frame: the median of a ``stride`` lattice, ``(3,)`` float."""
+    """Robust per-channel level of a BGR frame: the median of a ``stride`` lattice, ``(3,)`` float (for 8-bit
+    frames from each channel's histogram: the same numbers as ``np.median``, several times faster)."""
     sub = frame[::stride, ::stride].reshape(-1, frame.shape[2] if frame.ndim == 3 else 1)
-    return np.maximum(np.median(sub, axis=0).astype(np.float64), 1.0)
+    n = sub.shape[0]
+    if sub.dtype != np.uint8 or n == 0:
+        return np.maximum(np.median(sub, axis=0).astype(np.float64), 1.0)
+    out = np.empty(sub.shape[1])
+    for c in range(sub.shape[1]):
+        cum = np.cumsum(np.bincount(sub[:, c], minlength=256))
+        # the sorted values at positions (n - 1) // 2 and n // 2: the smallest levels with more pixels at or below
+        lo, hi = np.searchsorted(cum, ((n - 1) // 2, n // 2), side="right")
+        out[c] = (float(lo) + float(hi)) / 2.0
+    return np.maximum(out, 1.0)
 
 
 def gain_maps(reference: np.ndarray, current: np.ndarray) -> np.ndarray:

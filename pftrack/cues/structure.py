@@ -35,7 +35,8 @@ import math
 import cv2
 import numpy as np
 
-from .._numba import njit, numba_enabled
+from .._numba import numba_enabled
+from .ncc_kernels import _ncc_boxes, _ncc_one
 from .reduced_region import Reduced, _box_roi, box_bounds, gray_region, reduce_region, reduction_factor
 from .structure_search import propose_centres
 
@@ -148,117 +149,6 @@ def ncc_scores(patches: np.ndarray, templates: np.ndarray, floor: float = 1.0,
     z = standardize(patches, floor, weights)
     t = np.atleast_2d(np.asarray(templates, dtype=np.float32))
     return np.max(z @ t.T, axis=1).astype(np.float64)
-
-
-@njit(cache=True)
-def _sample_row(y, h):
-    """Row indices and weight of a bilinear sample at row ``y`` (border replicated)."""
-    y = min(max(y, 0.0), h - 1.0)
-    y0 = min(int(y), max(h - 2, 0))
-    fy = y - y0 if h > 1 else 0.0
-    y1 = y0 + 1 if h > 1 else y0
-    return y0, y1, fy
-
-
-@njit(cache=True)
-def _columns(cx, sx, u, w, xi, xf):
-    """Column indices and weights of a box's bilinear samples (border replicated by clamping)."""
-    for b in range(u.shape[0]):
-        x = min(max(cx + u[b] * sx, 0.0), w - 1.0)
-        x0 = min(int(x), max(w - 2, 0))
-        xi[b] = x0
-        xf[b] = x - x0 if w > 1 else 0.0
-
-
-@njit(cache=True)
-def _box_ncc(gray, cx, cy, sx, sy, u, v, tmpl, wts, floor2, xi, xf, yi, yf, dots):
-    """One box of :func:`_ncc_boxes` (centre ``cx, cy`` and half-sizes ``sx, sy`` in reduced pixels): its NCC
-    with every template in ``dots`` (``(K,)``); returns the best.  ``xi, xf, yi, yf``: scratch for the
-    samples' column and row indices and weights."""
-    h, w = gray.shape
-    ph, pw = v.shape[0], u.shape[0]
-    kt = tmpl.shape[0]
-    npix = ph * pw
-    uniform = wts.shape[0] == 0
-    dx = 1 if w > 1 else 0
-    dy = 1 if h > 1 else 0
-    t0 = tmpl[0]
-    t1 = tmpl[kt - 1]
-    _columns(cx, sx, u, w, xi, xf)
-    for a in range(ph):
-        y0, _, fy = _sample_row(cy + v[a] * sy, h)
-        yi[a] = y0
-        yf[a] = fy
-    s1 = 0.0
-    s2 = 0.0
-    d0 = 0.0
-    d1 = 0.0
-    for q in range(kt):
-        dots[q] = 0.0
-    k = 0
-    for a in range(ph):
-        y0 = yi[a]
-        y1 = y0 + dy
-        fy = yf[a]
-        for b in range(pw):
-            x0 = xi[b]
-            fx = xf[b]
-            g00 = float(gray[y0, x0])
-            g10 = float(gray[y1, x0])
-            top = g00 + fx * (float(gray[y0, x0 + dx]) - g00)
-            bot = g10 + fx * (float(gray[y1, x0 + dx]) - g10)
-            val = top + fy * (bot - top)
-            wv = val if uniform else wts[k] * val
-            s1 += wv
-            s2 += wv * val
-            if kt <= 2:
-                d0 += val * t0[k]
-                d1 += val * t1[k]
-            else:
-                for q in range(kt):
-                    dots[q] += val * tmpl[q, k]
-            k += 1
-    if kt <= 2:
-        dots[0] = d0
-        dots[kt - 1] = d1
-    var = s2 - s1 * s1 / npix
-    if var < 0.0:
-        var = 0.0
-    norm = math.sqrt(var + floor2 * npix)
-    best = -math.inf
-    for q in range(kt):
-        dots[q] = dots[q] / norm
-        if dots[q] > best:
-            best = dots[q]
-    return best
-
-
-@njit(cache=True)
-def _ncc_boxes(gray, ell, x0, y0, k, u, v, tmpl, wts, floor2, out):
-    """Bilinear sampling (border replicated) of every box's patch and its best weighted NCC, in one pass:
-    ``r = sum p T / sqrt(sum w (p - mean_w p)^2 + floor2 P)`` with ``T = sqrt(w) t~`` (``sum sqrt(w) t~ = 0``
-    for a standardised template ``t~``, so the patch's mean drops out of the numerator).  ``wts`` of length 0
-    means uniform weights; one or two templates (the usual running reference and anchor) keep their dot
-    products in registers.  ``gray`` may hold any numeric type (float64 is read fastest)."""
-    dots = np.empty(tmpl.shape[0])
-    xi = np.empty(u.shape[0], np.int64)
-    xf = np.empty(u.shape[0])
-    yi = np.empty(v.shape[0], np.int64)
-    yf = np.empty(v.shape[0])
-    for i in range(ell.shape[0]):
-        out[i] = _box_ncc(gray, (ell[i, 0] - x0) / k - 0.5, (ell[i, 1] - y0) / k - 0.5, ell[i, 2] / k,
-                          ell[i, 3] / k, u, v, tmpl, wts, floor2, xi, xf, yi, yf, dots)
-
-
-@njit(cache=True)
-def _ncc_one(gray, e, x0, y0, k, u, v, tmpl, wts, floor2, dots):
-    """:func:`_ncc_boxes` of one ellipse ``e`` ``(4,)``, keeping its NCC with each template (``dots``)."""
-    xi = np.empty(u.shape[0], np.int64)
-    xf = np.empty(u.shape[0])
-    yi = np.empty(v.shape[0], np.int64)
-    yf = np.empty(v.shape[0])
-    return _box_ncc(gray, (e[0] - x0) / k - 0.5, (e[1] - y0) / k - 0.5, e[2] / k, e[3] / k, u, v, tmpl, wts,
-                    floor2, xi, xf, yi, yf, dots)
 
 
 _GRIDS: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
@@ -386,8 +276,8 @@ class StructureCue:
 
     def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
         """NCC of the box of ``ellipse`` ``(cx, cy, hx, hy)`` at each of the half-axis ``ratios`` (same centre) with
-        the reference, as :meth:`scores` gives them: one compiled call per size on this frame's region (a size
-        search after the estimate, three sizes a frame, where building a batch cost more than scoring it).  A ratio
+        the reference, as :meth:`scores` gives them: one compiled call for all sizes on this frame's region (a size
+        search after the estimate, three sizes a frame).  A ratio
         may be a pair ``(rx, ry)``, one per half-axis (a search of the box's shape)."""
         cx, cy, hx, hy = (float(x) for x in ellipse)
         pairs = [(float(r[0]), float(r[1])) if np.ndim(r) else (float(r), float(r)) for r in ratios]
@@ -398,14 +288,12 @@ class StructureCue:
         red = self._region(frame, None, np.array([[cx, cy, hx * top_x, hy * top_y]]))
         tw, w = self._prepared
         u, v = _grid(self.shape)
-        gray = red.levels_for(u.size * v.size)
-        dots = np.empty(tw.shape[0])
-        e = np.empty(4)
-        out = []
-        for rx, ry in pairs:
-            e[0], e[1], e[2], e[3] = cx, cy, hx * rx, hy * ry
-            out.append(float(_ncc_one(gray, e, float(red.x0), float(red.y0), float(red.k), u, v, tw, w, 1.0, dots)))
-        return out
+        e = np.array([(cx, cy, hx * rx, hy * ry) for rx, ry in pairs])
+        out = np.empty(len(pairs))
+        # one compiled call for all sizes: each box's NCC is the one it has alone (ncc_kernels)
+        _ncc_boxes(red.levels_for(u.size * v.size), e, float(red.x0), float(red.y0), float(red.k), u, v, tw, w, 1.0,
+                   out)
+        return out.tolist()
 
     def _one(self, red: Reduced, ell: np.ndarray) -> tuple[float, np.ndarray]:
         """``(best NCC, NCC per reference)`` of one ellipse ``(1, 4)``, computed once per frame and reference

@@ -215,8 +215,11 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         ny = max(1, min(int(h / max(hy, 1.0)), int(math.ceil(cap / nx))))
         xs = (np.arange(nx) + 0.5) * (w / nx)
         ys = (np.arange(ny) + 0.5) * (h / ny)
-        gx, gy = np.meshgrid(xs, ys)
-        ell = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, hx), np.full(gx.size, hy)])
+        ell = np.empty((nx * ny, 4))  # the grid row by row (np.meshgrid's order)
+        ell[:, 0] = np.tile(xs, ny)
+        ell[:, 1] = np.repeat(ys, nx)
+        ell[:, 2] = hx
+        ell[:, 3] = hy
         if exclude is not None:
             ex = exclude
             far = (np.abs(ell[:, 0] - ex[0]) >= hx + ex[2]) | (np.abs(ell[:, 1] - ex[1]) >= hy + ex[3])
