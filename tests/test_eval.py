@@ -162,6 +162,21 @@ def test_opencv_mil_refuses_a_box_it_would_hang_on():
     assert np.all(np.isfinite(t.update(frame).box))
 
 
+def test_opencv_tracker_that_refuses_its_box_gives_a_box_error(tmp_path):
+    """OpenCV's MIL cannot place its samples around a box that fills the frame: an OpenCV assertion becomes a
+    BoxError, and the command prints one line and exits with code 2."""
+    from pftrack.cli import main
+    from pftrack.errors import BoxError
+
+    frame = np.random.default_rng(0).integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    with pytest.raises(BoxError, match="cannot start on box"):
+        pftrack.create_tracker("opencv-mil").init(frame, (0, 0, 160, 120))
+    for i in range(3):
+        cv2.imwrite(str(tmp_path / f"{i:04d}.png"), frame)
+    assert main(["track", str(tmp_path), "--tracker", "opencv-mil", "--box", "0,0,160,120", "--out",
+                 str(tmp_path / "o.csv")]) == 2
+
+
 @pytest.mark.parametrize("name", ["opencv-csrt", "opencv-kcf", "opencv-mil", "opencv-mosse", "opencv-medianflow",
                                   "opencv-tld", "camshift", "meanshift", "kalman-meanshift"])
 def test_peers_and_baselines_follow_the_protocol(name):

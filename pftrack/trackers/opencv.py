@@ -69,7 +69,13 @@ class OpenCVTracker(Tracker):
             if self.kind == "mil" and (min(rect[2:]) < _MIL_MIN_SIDE or rect[2] * rect[3] < _MIL_MIN_AREA):
                 raise BoxError(f"{self.name}: box {rect[2]}x{rect[3]} is too small for OpenCV's MIL tracker, which "
                                f"hangs on boxes under about 5x5 pixels; give a box of at least 5x5")
-        res = self._cv.init(frame, rect)
+        try:
+            res = self._cv.init(frame, rect)
+        except cv2.error as exc:  # e.g. MIL on a box that fills the frame: no room for its samples
+            text = " ".join(str(exc).split())
+            reason = text.split("error: ", 1)[-1].split(") ", 1)[-1] or "cv2.error"  # the failed check, no path
+            raise BoxError(f"{self.name}: OpenCV's tracker cannot start on box {rect} in a {w}x{h} frame "
+                           f"({reason})") from None
         if res is False:  # legacy API returns a bool
             raise RuntimeError(f"{self.name}: OpenCV refused to initialise on box {box}")
         self._last = tuple(float(v) for v in box)
