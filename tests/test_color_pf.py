@@ -241,3 +241,21 @@ def test_compiled_and_reference_paths_track_identically():
     a, b = boxes(res[True]), boxes(res[False])
     assert np.allclose(a, b, rtol=0, atol=1e-6)
     assert np.allclose([s.score for s in res[True]], [s.score for s in res[False]], atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
+def test_grey_scale_rate_noise_applies_on_grey_input_only(name):
+    """``grey_scale_rate_noise`` replaces ``scale_rate_noise`` when the cue works on grey input; colour input keeps
+    ``scale_rate_noise``, and the default (None) keeps it on both."""
+    rng = np.random.default_rng(0)
+    colour = rng.integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    grey = np.repeat(colour[..., :1], 3, axis=2)
+    box = (60, 40, 30, 30)
+    for frame, expect_grey in ((colour, False), (grey, True)):
+        t = pftrack.create_tracker(name, seed=0, grey_scale_rate_noise=0.0)
+        t.init(frame, box)
+        rate = t._noise_std(15.0, 15.0)[-1]
+        assert rate == (0.0 if expect_grey else t.params.scale_rate_noise)
+        d = pftrack.create_tracker(name, seed=0)
+        d.init(frame, box)
+        assert d._noise_std(15.0, 15.0)[-1] == d.params.scale_rate_noise > 0

@@ -434,6 +434,9 @@ class ColorPFParams(ColorModelParams):
         "changes the size only through adot, which keeps the aspect ratio."))
     scale_rate_noise: float = param(0.005, ge=0, le=1, doc=(
         "Std of the noise on the scale-change rate adot (1/frame): about 0.5 % size change per frame."))
+    grey_scale_rate_noise: float | None = param(None, ge=0, le=1, doc=(
+        "scale_rate_noise on grey input (the cue's colour space 'gray'), where the histogram observes the size "
+        "more weakly still; None (default): scale_rate_noise."))
     scale_damping: float = param(0.0, ge=0, le=1, doc=(
         "Factor kappa on the scale-change rate (adot_t = kappa adot_{t-1} + w). 1 is the paper's literal "
         "constant scale change; colour histograms observe scale weakly, so a persistent rate drifts the "

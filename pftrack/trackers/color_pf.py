@@ -486,7 +486,10 @@ class ColorPF(ColorParticleFilter):
         hbar = 0.5 * (hx + hy)
         pos = max(p.position_noise * hbar, p.min_noise_px)
         vel = p.velocity_noise * hbar
-        return np.array([pos, pos, vel, vel, p.size_noise * hx, p.size_noise * hy, p.scale_rate_noise])
+        rate = p.scale_rate_noise
+        if p.grey_scale_rate_noise is not None and self.cue.color_space == "gray":
+            rate = p.grey_scale_rate_noise
+        return np.array([pos, pos, vel, vel, p.size_noise * hx, p.size_noise * hy, rate])
 
     def _step_std(self, est: np.ndarray) -> np.ndarray:
         std = np.zeros(self.dim)

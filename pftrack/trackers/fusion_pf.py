@@ -87,6 +87,12 @@ class FusionPFParams(ColorPFParams):
     scale_rate_noise: float = param(0.01, ge=0, le=1, doc=(
         "Std of the noise on the scale rate (color-pf: 0.005). The contrast cue observes the extent, so "
         "the size may explore more."))
+    grey_scale_rate_noise: float | None = param(None, ge=0, le=1, doc=(
+        "scale_rate_noise on grey input (ColorPFParams.grey_scale_rate_noise); None (default): scale_rate_noise. "
+        "0 (the size moved by the structural size search alone) gained on the grey tune set (64 sequences, 6 "
+        "seeds: mean AUC 0.680 against 0.668, grey + light copies 0.523 against 0.487, re-acquired 189 against 184 "
+        "of 246) but not on the grey report set, run once (62 sequences, 3 seeds: 0.672 against 0.676, "
+        "re-acquired 85 against 90 of 129; docs/robustness.md), so it is an option."))
     scale_search: float = param(0.03, ge=0, le=0.5, doc=(
         "s > 0: after each tracked frame's estimate, its box at the sizes 1/(1+s), 1 and 1+s is compared with the "
         "structural cue's references by NCC (DSST-style, cues.scale_search), and the estimate and every particle "
