@@ -276,8 +276,8 @@ class StructureCue:
 
     def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
         """NCC of the box of ``ellipse`` ``(cx, cy, hx, hy)`` at each of the half-axis ``ratios`` (same centre) with
-        the reference, as :meth:`scores` gives them: one compiled call for all sizes on this frame's region (a size
-        search after the estimate, three sizes a frame).  A ratio
+        the reference, as :meth:`scores` gives them: one compiled call per size on this frame's region (a size
+        search after the estimate, three sizes a frame, where building a batch cost more than scoring it).  A ratio
         may be a pair ``(rx, ry)``, one per half-axis (a search of the box's shape)."""
         cx, cy, hx, hy = (float(x) for x in ellipse)
         pairs = [(float(r[0]), float(r[1])) if np.ndim(r) else (float(r), float(r)) for r in ratios]
@@ -288,12 +288,14 @@ class StructureCue:
         red = self._region(frame, None, np.array([[cx, cy, hx * top_x, hy * top_y]]))
         tw, w = self._prepared
         u, v = _grid(self.shape)
-        e = np.array([(cx, cy, hx * rx, hy * ry) for rx, ry in pairs])
-        out = np.empty(len(pairs))
-        # one compiled call for all sizes: each box's NCC is the one it has alone (ncc_kernels)
-        _ncc_boxes(red.levels_for(u.size * v.size), e, float(red.x0), float(red.y0), float(red.k), u, v, tw, w, 1.0,
-                   out)
-        return out.tolist()
+        gray = red.levels_for(u.size * v.size)
+        dots = np.empty(tw.shape[0])
+        e = np.empty(4)
+        out = []
+        for rx, ry in pairs:
+            e[0], e[1], e[2], e[3] = cx, cy, hx * rx, hy * ry
+            out.append(float(_ncc_one(gray, e, float(red.x0), float(red.y0), float(red.k), u, v, tw, w, 1.0, dots)))
+        return out
 
     def _one(self, red: Reduced, ell: np.ndarray) -> tuple[float, np.ndarray]:
         """``(best NCC, NCC per reference)`` of one ellipse ``(1, 4)``, computed once per frame and reference
