@@ -98,9 +98,9 @@ def test_ncc_reads_8_bit_and_float_levels_alike():
 @pytest.mark.skipif(not numba_enabled(), reason="a property of the compiled NCC")
 @pytest.mark.parametrize("n_templates", [1, 2, 3])
 @pytest.mark.parametrize("kind", ["kernel", "uniform"])
-def test_ncc_of_boxes_two_at_a_time_equals_one_at_a_time(n_templates, kind):
-    """A batch is scored two boxes at a time: bit for bit the numbers of one box after the other, for an odd and
-    an even count, with and without weights, also where boxes reach past the region's border."""
+def test_ncc_of_a_batch_equals_one_box_at_a_time(n_templates, kind):
+    """A batch of boxes scores bit for bit as each box alone, for one to three templates, with and without
+    weights, also where boxes reach past the region's border."""
     from pftrack.cues.ncc_kernels import _ncc_boxes, _ncc_one
     from pftrack.cues.structure import _grid, weighted_templates
 

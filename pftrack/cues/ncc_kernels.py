@@ -1,11 +1,8 @@
 """Compiled kernels of the structural cue (:mod:`pftrack.cues.structure`): bilinear sampling of a box's patch
 from a block-averaged grey region and its normalised cross-correlation with one or more templates, in one pass.
 
-Every box's sums run over its samples in the same order whichever path computes them, so the results do
-not depend on how boxes are batched (no fastmath: the order of the sums is part of the result).  A batch
-scores its boxes two at a time when there are at most two templates (the usual running reference and
-anchor): the two boxes' sums are independent chains the processor overlaps, about 15 % faster than one box
-after the other, with the same numbers bit for bit (test).
+Every box's sums run over its samples in one fixed order, so a box scores the same alone or in a batch (no
+fastmath: the order of the sums is part of the result).
 """
 
 from __future__ import annotations
@@ -47,6 +44,16 @@ def _rows(cy, sy, v, h, yi, yf):
 
 
 @njit(cache=True)
+def _bilinear(gray, y0, y1, x0, x1, fx, fy):
+    """The bilinear sample between rows ``y0, y1`` and columns ``x0, x1`` at fractions ``fx, fy``."""
+    g00 = float(gray[y0, x0])
+    g10 = float(gray[y1, x0])
+    top = g00 + fx * (float(gray[y0, x1]) - g00)
+    bot = g10 + fx * (float(gray[y1, x1]) - g10)
+    return top + fy * (bot - top)
+
+
+@njit(cache=True)
 def _best_of(s1, s2, npix, floor2, dots):
     """The NCC with each template (``dots`` holds the dot products on entry, the correlations on exit) from the
     patch's weighted sum ``s1`` and sum of squares ``s2``; returns the best."""
@@ -70,12 +77,9 @@ def _box_ncc(gray, cx, cy, sx, sy, u, v, tmpl, wts, floor2, xi, xf, yi, yf, dots
     h, w = gray.shape
     ph, pw = v.shape[0], u.shape[0]
     kt = tmpl.shape[0]
-    npix = ph * pw
     uniform = wts.shape[0] == 0
-    dx = 1 if w > 1 else 0
-    dy = 1 if h > 1 else 0
-    t0 = tmpl[0]
-    t1 = tmpl[kt - 1]
+    dx, dy = (1 if w > 1 else 0), (1 if h > 1 else 0)  # to the second column and row of a sample
+    t0, t1 = tmpl[0], tmpl[kt - 1]
     _columns(cx, sx, u, w, xi, xf)
     _rows(cy, sy, v, h, yi, yf)
     s1 = 0.0
@@ -91,12 +95,7 @@ def _box_ncc(gray, cx, cy, sx, sy, u, v, tmpl, wts, floor2, xi, xf, yi, yf, dots
         fy = yf[a]
         for b in range(pw):
             x0 = xi[b]
-            fx = xf[b]
-            g00 = float(gray[y0, x0])
-            g10 = float(gray[y1, x0])
-            top = g00 + fx * (float(gray[y0, x0 + dx]) - g00)
-            bot = g10 + fx * (float(gray[y1, x0 + dx]) - g10)
-            val = top + fy * (bot - top)
+            val = _bilinear(gray, y0, y1, x0, x0 + dx, xf[b], fy)
             wv = val if uniform else wts[k] * val
             s1 += wv
             s2 += wv * val
@@ -110,74 +109,7 @@ def _box_ncc(gray, cx, cy, sx, sy, u, v, tmpl, wts, floor2, xi, xf, yi, yf, dots
     if kt <= 2:
         dots[0] = d0
         dots[kt - 1] = d1
-    return _best_of(s1, s2, npix, floor2, dots)
-
-
-@njit(cache=True)
-def _box_pair_ncc(gray, ea, eb, x0, y0, k, u, v, tmpl, wts, floor2, xi, xf, yi, yf, xj, xg, yj, yg, dots, out, i):
-    """``out[i]`` and ``out[i + 1]``: :func:`_box_ncc` of the ellipses ``ea`` and ``eb`` ``(4,)`` with one or two
-    templates, their samples interleaved (each box's sums in its own order, so the same numbers)."""
-    h, w = gray.shape
-    ph, pw = v.shape[0], u.shape[0]
-    kt = tmpl.shape[0]
-    npix = ph * pw
-    uniform = wts.shape[0] == 0
-    dx = 1 if w > 1 else 0
-    dy = 1 if h > 1 else 0
-    t0 = tmpl[0]
-    t1 = tmpl[kt - 1]
-    _columns((ea[0] - x0) / k - 0.5, ea[2] / k, u, w, xi, xf)
-    _rows((ea[1] - y0) / k - 0.5, ea[3] / k, v, h, yi, yf)
-    _columns((eb[0] - x0) / k - 0.5, eb[2] / k, u, w, xj, xg)
-    _rows((eb[1] - y0) / k - 0.5, eb[3] / k, v, h, yj, yg)
-    s1 = 0.0
-    s2 = 0.0
-    d0 = 0.0
-    d1 = 0.0
-    r1 = 0.0
-    r2 = 0.0
-    e0 = 0.0
-    e1 = 0.0
-    m = 0
-    for a in range(ph):
-        ya = yi[a]
-        fya = yf[a]
-        yb = yj[a]
-        fyb = yg[a]
-        for b in range(pw):
-            xa = xi[b]
-            fxa = xf[b]
-            g00 = float(gray[ya, xa])
-            g10 = float(gray[ya + dy, xa])
-            top = g00 + fxa * (float(gray[ya, xa + dx]) - g00)
-            bot = g10 + fxa * (float(gray[ya + dy, xa + dx]) - g10)
-            va = top + fya * (bot - top)
-            xb = xj[b]
-            fxb = xg[b]
-            h00 = float(gray[yb, xb])
-            h10 = float(gray[yb + dy, xb])
-            top = h00 + fxb * (float(gray[yb, xb + dx]) - h00)
-            bot = h10 + fxb * (float(gray[yb + dy, xb + dx]) - h10)
-            vb = top + fyb * (bot - top)
-            wa = va if uniform else wts[m] * va
-            wb = vb if uniform else wts[m] * vb
-            s1 += wa
-            s2 += wa * va
-            r1 += wb
-            r2 += wb * vb
-            ta = t0[m]
-            tb = t1[m]
-            d0 += va * ta
-            d1 += va * tb
-            e0 += vb * ta
-            e1 += vb * tb
-            m += 1
-    dots[0] = d0
-    dots[kt - 1] = d1
-    out[i] = _best_of(s1, s2, npix, floor2, dots)
-    dots[0] = e0
-    dots[kt - 1] = e1
-    out[i + 1] = _best_of(r1, r2, npix, floor2, dots)
+    return _best_of(s1, s2, ph * pw, floor2, dots)
 
 
 @njit(cache=True)
@@ -186,28 +118,15 @@ def _ncc_boxes(gray, ell, x0, y0, k, u, v, tmpl, wts, floor2, out):
     ``r = sum p T / sqrt(sum w (p - mean_w p)^2 + floor2 P)`` with ``T = sqrt(w) t~`` (``sum sqrt(w) t~ = 0``
     for a standardised template ``t~``, so the patch's mean drops out of the numerator).  ``wts`` of length 0
     means uniform weights; one or two templates (the usual running reference and anchor) keep their dot
-    products in registers, and the boxes are then scored two at a time.  ``gray`` may hold any numeric type
-    (float64 is read fastest)."""
+    products in registers.  ``gray`` may hold any numeric type (float64 is read fastest)."""
     dots = np.empty(tmpl.shape[0])
-    pw, ph = u.shape[0], v.shape[0]
-    xi = np.empty(pw, np.int64)
-    xf = np.empty(pw)
-    yi = np.empty(ph, np.int64)
-    yf = np.empty(ph)
-    n = ell.shape[0]
-    i = 0
-    if tmpl.shape[0] <= 2:
-        xj = np.empty(pw, np.int64)
-        xg = np.empty(pw)
-        yj = np.empty(ph, np.int64)
-        yg = np.empty(ph)
-        while i + 1 < n:
-            _box_pair_ncc(gray, ell[i], ell[i + 1], x0, y0, k, u, v, tmpl, wts, floor2, xi, xf, yi, yf, xj, xg, yj,
-                          yg, dots, out, i)
-            i += 2
-    for j in range(i, n):
-        out[j] = _box_ncc(gray, (ell[j, 0] - x0) / k - 0.5, (ell[j, 1] - y0) / k - 0.5, ell[j, 2] / k,
-                          ell[j, 3] / k, u, v, tmpl, wts, floor2, xi, xf, yi, yf, dots)
+    xi = np.empty(u.shape[0], np.int64)
+    xf = np.empty(u.shape[0])
+    yi = np.empty(v.shape[0], np.int64)
+    yf = np.empty(v.shape[0])
+    for i in range(ell.shape[0]):
+        out[i] = _box_ncc(gray, (ell[i, 0] - x0) / k - 0.5, (ell[i, 1] - y0) / k - 0.5, ell[i, 2] / k,
+                          ell[i, 3] / k, u, v, tmpl, wts, floor2, xi, xf, yi, yf, dots)
 
 
 @njit(cache=True)
