@@ -148,7 +148,7 @@ def _twocam_ranges(args) -> tuple[tuple[int, int] | None, tuple[int, int] | None
     """``--frames FIRST-LAST`` and ``--strip X[,WIDTH]`` of ``pftrack synth twocam`` (None: the defaults)."""
     from ..errors import ParameterError
     from ..io.datasets import read_sequence
-    from ..synth.twocam import default_split
+    from ..synth.twocam import check_frames, default_split
 
     if args.kind != "twocam":
         if args.frames or args.strip:
@@ -161,9 +161,11 @@ def _twocam_ranges(args) -> tuple[tuple[int, int] | None, tuple[int, int] | None
             a, b = (int(v) for v in args.frames.split("-"))
         except ValueError:
             raise ParameterError(f"--frames must look like 1-200, got {args.frames!r}") from None
-        if not 1 <= a < b <= len(seq.frames):
-            raise ParameterError(f"--frames {a}-{b} outside the sequence's frames 1-{len(seq.frames)}")
         numbers = (a, b)
+        try:
+            check_frames(numbers, len(seq.frames))
+        except ValueError as e:
+            raise ParameterError(f"--{e}") from None
     if args.strip:
         try:
             vals = [float(v) for v in args.strip.split(",")]

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..io.datasets import write_mot_groundtruth, write_seqinfo
 
-__all__ = ["TwoCamScene", "export_twocam", "twocam_scene"]
+__all__ = ["TwoCamScene", "check_frames", "default_split", "export_twocam", "twocam_scene"]
 
 
 @dataclass
@@ -119,6 +119,12 @@ def default_split(width: int, left: float | None = None, strip: float | None = N
     return x0, x1
 
 
+def check_frames(numbers: tuple[int, int], n_frames: int) -> None:
+    """``numbers`` (first and last frame, 1-based) must be an ordered range within a sequence of ``n_frames``."""
+    if not 1 <= numbers[0] < numbers[1] <= n_frames:
+        raise ValueError(f"frames {numbers[0]}-{numbers[1]} outside the sequence's frames 1-{n_frames}")
+
+
 def twocam_scene(sequence_dir, seed: int = 0, *, numbers: tuple[int, int] | None = None,
                  split: tuple[int, int] | None = None, min_len: int = 5, response: str = "mild") -> TwoCamScene:
     """Cut a MOTChallenge sequence (frames and ground truth) into two disjoint cameras.  ``numbers``: the first and
@@ -131,8 +137,7 @@ def twocam_scene(sequence_dir, seed: int = 0, *, numbers: tuple[int, int] | None
         raise ValueError(f"{sequence_dir}: needs MOTChallenge ground truth")
     if numbers is None:
         numbers = (1, len(seq.frames))
-    if not 1 <= numbers[0] < numbers[1] <= len(seq.frames):
-        raise ValueError(f"frames {numbers[0]}-{numbers[1]} outside the sequence's 1-{len(seq.frames)}")
+    check_frames(numbers, len(seq.frames))
     gt = seq.mot_gt[(seq.mot_gt[:, 0] >= numbers[0]) & (seq.mot_gt[:, 0] <= numbers[1])]
     w = seq.size[0] if seq.size else cv2.imread(str(seq.frames[0])).shape[1]
     if split is None:

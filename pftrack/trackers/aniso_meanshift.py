@@ -21,11 +21,11 @@ from typing import Literal
 import numpy as np
 
 from ..cues import anisotropic as an
+from ..cues.histogram_cue import check_gray_bins
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState
 from .working_resolution import WORKING_RESOLUTION_DOC, ReducedFrames
-from ..cues.histogram_cue import check_gray_bins
 from .sift_ransac import ColorModel, RBox, ReinitGate, colour_roi, corner_distance, hull
 
 
