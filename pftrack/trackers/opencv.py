@@ -33,7 +33,8 @@ _FACTORIES = {
 }
 _LEGACY = {"mosse", "medianflow", "tld"}
 # OpenCV's MIL never returns from init/update on boxes of 4 x 4, 2 x 10 or 1 x 30 pixels (measured with OpenCV 4.x);
-# 4 x 5, 3 x 8 and 5 x 5 work. Smaller boxes are refused with a clear error rather than a hang.
+# 4 x 5, 3 x 8 and 5 x 5 work. Boxes under 25 pixels or 3 pixels a side are refused with a clear error rather than
+# a hang (3 x 8 among them: the rule is kept simple).
 _MIL_MIN_SIDE, _MIL_MIN_AREA = 3, 25
 
 
