@@ -409,7 +409,7 @@ class SearchMixin:
         p = self.params
         self._end_probation()  # lost while on probation
         c = self._search_candidates(frame)
-        states, ell, rho, tot, loglik, roi = c.states, c.ell, c.rho, c.tot, c.loglik, c.roi
+        states, ell, rho, tot, loglik = c.states, c.ell, c.rho, c.tot, c.loglik
         best, lp, near, s_best, n_keep = c.best, c.lp, c.near, c.s_best, c.n_keep
         thr = self._threshold()
         conf = None
