@@ -272,3 +272,58 @@ def test_channel_levels_are_the_medians_of_the_lattice():
     assert np.array_equal(channel_levels(grey, stride=3), np.maximum(np.median(grey[::3, ::3].reshape(-1, 1), axis=0),
                                                                      1.0))
 
+
+
+def reference_two_part(frame_bins, ellipse, n_bins, kernel="nummiaro"):
+    """The two-part histogram from Eqs. 2-4 by loops: rows above the centre (dy <= 0) in bins 0..n-1, rows below in
+    n..2n-1, normalised together."""
+    cx, cy, hx, hy = ellipse
+    a2 = hx * hx + hy * hy
+    h = np.zeros(2 * n_bins)
+    H, W = frame_bins.shape
+    for j in range(H):
+        for i in range(W):
+            dx, dy = i + 0.5 - cx, j + 0.5 - cy
+            if (dx / hx) ** 2 + (dy / hy) ** 2 <= 1.0:
+                k = 1 - (dx * dx + dy * dy) / a2 if kernel == "nummiaro" else 1 - ((dx / hx) ** 2 + (dy / hy) ** 2)
+                if k > 0:
+                    h[frame_bins[j, i] + (n_bins if dy > 0 else 0)] += k
+    return h / h.sum()
+
+
+@pytest.mark.parametrize("kernel", ["nummiaro", "epanechnikov"])
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_two_part_histograms_follow_the_rows_of_each_ellipse(image, kernel, backend, rng):
+    """parts=2: each ellipse's rows above its own centre fill the first half of the bins, the rows below the
+    second; as the loops of the reference, on both paths, and the fused rho (dense and sparse bin scans) is the
+    Bhattacharyya coefficient of those histograms."""
+    if backend == "numba" and not NUMBA_INSTALLED:
+        pytest.skip("numba not installed")
+    bins = quantize(image, make_lut("rgb", (8, 8, 8)))
+    ell = np.column_stack([rng.uniform(0, 80, 25), rng.uniform(0, 60, 25), rng.uniform(2, 20, 25),
+                           rng.uniform(2, 20, 25)])
+    ell[0] = (40.5, 30.5, 6.0, 6.0)  # a centre on a pixel centre: its row (dy = 0) is in the upper part
+    hist, tot = ellipse_histograms(bins, 0, 0, ell, 1024, kernel=kernel, backend=backend, parts=2)
+    for n in range(len(ell)):
+        assert hist[n] == pytest.approx(reference_two_part(bins, ell[n], 512, kernel), abs=1e-12)
+    inside = (ell[:, 0] - ell[:, 2] >= 0) & (ell[:, 0] + ell[:, 2] <= 80) & (ell[:, 1] - ell[:, 3] >= 0) & (
+        ell[:, 1] + ell[:, 3] <= 60)
+    upper = hist[inside, :512].sum(axis=1)
+    assert inside.sum() >= 3 and np.all((upper > 0.3) & (upper < 0.7))  # the symmetric kernel: about half each
+    q = rng.random(1024) ** 4
+    q /= q.sum()
+    expected = np.where(tot > 0, bhattacharyya_coefficient(hist, q), 0.0)
+    for few in (False, True):  # all the ellipses (the region's bins scanned) or one (the touched groups)
+        sel = ell[:1] if few else ell
+        rho, _ = ellipse_rho(bins, 0, 0, sel, np.sqrt(q), kernel=kernel, backend=backend, parts=2)
+        assert np.allclose(rho, expected[:len(sel)], rtol=0, atol=1e-12)
+    one, _ = ellipse_histograms(bins, 0, 0, ell, 512, kernel=kernel, backend=backend)
+    assert np.allclose(hist[:, :512] + hist[:, 512:], one, rtol=0, atol=1e-12)  # the parts add up to the whole
+
+
+def test_two_parts_need_an_even_number_of_bins(image):
+    bins = quantize(image, make_lut("rgb", (8, 8, 8)))
+    with pytest.raises(ValueError, match="parts"):
+        ellipse_histograms(bins, 0, 0, np.array([[40.0, 30.0, 5.0, 5.0]]), 511, parts=2)
+    with pytest.raises(ValueError, match="parts"):
+        ellipse_rho(bins, 0, 0, np.array([[40.0, 30.0, 5.0, 5.0]]), np.ones(1024), parts=3)

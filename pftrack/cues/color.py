@@ -49,10 +49,11 @@ def _pixel_span(c, h, n_pixels):
 
 
 @njit
-def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans):
+def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans, half):
     """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)); with ``mark`` not
     empty, also set ``mark[u >> 3]`` for every bin ``u`` touched (groups of 8 bins, for a scan to skip the rest).
-    ``spans``: (3, bins.shape[0]) int64 scratch for the rows' pixel spans.
+    ``spans``: (3, bins.shape[0]) int64 scratch for the rows' pixel spans.  ``half`` > 0 (two-part histograms):
+    the pixels of the rows below the centre (``dy > 0``) go to bin ``u + half`` instead of ``u``.
 
     Even and odd pixels of a row go to two separate histograms so that runs of the
     same bin do not serialise on one memory location, and the weight, a quadratic
@@ -83,6 +84,9 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans):
         dy = j + 0.5 - cy
         dy2 = dy * dy
         row = bins[j]
+        off = half if (half > 0 and dy > 0.0) else 0
+        a0 = acc0[off:]  # the lower part's bins start at ``half``
+        a1 = acc1[off:]
         base = 1.0 - dy2 * ia2 if kernel == 0 else 1.0 - dy2 * ihy2
         dx = a + 0.5 - cx
         w0 = base - dx * dx * scale  # weight of pixel i
@@ -90,27 +94,27 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans):
         i = a
         if marking:
             for t in range(a, b + 1):
-                mark[row[t] >> 3] = 1
+                mark[(row[t] + off) >> 3] = 1
         while i < b:
-            acc0[row[i]] += w0
+            a0[row[i]] += w0
             w1 = w0 + d0
-            acc1[row[i + 1]] += w1
+            a1[row[i + 1]] += w1
             w0 = w1 + d0 + dd
             d0 += 2.0 * dd
             i += 2
         if i == b:
-            acc0[row[i]] += w0
+            a0[row[i]] += w0
 
 
 @njit
-def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc):
+def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc, half):
     n_part = ell.shape[0]
     n_bins = out.shape[1]
     no_mark = np.empty(0, np.uint8)
     spans = np.empty((3, bins.shape[0]), np.int64)
     for n in range(n_part):
         _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc[0], acc[1], no_mark,
-                            spans)
+                            spans, half)
         total = 0.0
         for u in range(n_bins):
             h = acc[0, u] + acc[1, u]
@@ -128,7 +132,7 @@ def _ellipse_hist_numba(bins, x0, y0, ell, kernel, out, totals, acc):
     return out
 
 
-def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals):
+def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals, half=0):
     """Reference path: one ``bincount`` over (particle, bin) pairs, no Python loop over particles."""
     n_part = ell.shape[0]
     hgt, wid = bins.shape
@@ -178,6 +182,8 @@ def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals):
     sel = inside.ravel()
     flat_w = wgt.ravel()[sel]
     pidx = np.broadcast_to(np.arange(n_part)[:, None, None], inside.shape).ravel()[sel]
+    if half > 0:  # two-part histograms: the rows below the centre count in the bins from ``half`` on
+        b = b + np.where(dy > 0.0, half, 0)[:, :, None]
     flat = pidx * n_bins + b.ravel()[sel]
     hist = np.bincount(flat, weights=flat_w, minlength=n_part * n_bins).reshape(n_part, n_bins)
     tot = np.bincount(pidx, weights=flat_w, minlength=n_part)
@@ -188,14 +194,19 @@ def _ellipse_hist_numpy(bins, x0, y0, ell, kernel, out, totals):
 
 
 @njit
-def _present_bins(bins, n_bins, out):
-    """The bin indices that occur in ``bins``, ascending, in ``out[:m]``; returns ``m``."""
+def _present_bins(bins, n_bins, half, out):
+    """The bin indices that occur in ``bins``, ascending, in ``out[:m]`` (with ``half`` > 0, each also
+    ``half`` higher: two-part histograms); returns ``m``."""
     seen = np.zeros(n_bins, np.uint8)
     h, w = bins.shape
     for j in range(h):
         row = bins[j]
         for i in range(w):
             seen[row[i]] = 1
+    if half > 0:
+        for u in range(half):
+            if seen[u]:
+                seen[u + half] = 1
     m = 0
     for u in range(n_bins):
         if seen[u]:
@@ -221,7 +232,7 @@ def _rho_from_acc(acc0, acc1, sqrt_q, u):
 
 
 @njit
-def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc):
+def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc, half):
     """Fused kernel: the Bhattacharyya coefficient of every ellipse's histogram with q.
 
     ``acc`` (2, n_bins) must be zero on entry and is zero on exit.  Normalisation is
@@ -244,12 +255,12 @@ def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc):
         covered += 4.0 * max(ell[n, 2], 0.0) * max(ell[n, 3], 0.0)
     by_region = bins.shape[0] * bins.shape[1] <= covered
     present = np.empty(n_bins if by_region else 0, np.int64)
-    m = _present_bins(bins, n_bins, present) if by_region else 0
+    m = _present_bins(bins, n_bins, half, present) if by_region else 0
     mark = np.zeros(0 if by_region else (n_bins + 7) >> 3, np.uint8)
     spans = np.empty((3, bins.shape[0]), np.int64)
     for n in range(ell.shape[0]):
         _accumulate_ellipse(bins, ell[n, 0] - x0, ell[n, 1] - y0, ell[n, 2], ell[n, 3], kernel, acc0, acc1, mark,
-                            spans)
+                            spans, half)
         total = 0.0
         s = 0.0
         if by_region:
@@ -275,11 +286,21 @@ def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc):
     return rho
 
 
+def _half(n_bins: int, parts: int) -> int:
+    """The first bin of the lower part (0: one part)."""
+    if parts == 1:
+        return 0
+    if parts != 2 or n_bins % 2:
+        raise ValueError(f"parts must be 1, or 2 with an even number of bins; got {parts} parts of {n_bins} bins")
+    return n_bins // 2
+
+
 def ellipse_rho(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, sqrt_q: np.ndarray, *,
                 kernel: KernelName = "nummiaro", out: np.ndarray | None = None, totals: np.ndarray | None = None,
-                backend: str | None = None, _scratch: np.ndarray | None = None
+                backend: str | None = None, _scratch: np.ndarray | None = None, parts: int = 1
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Bhattacharyya coefficients ``rho[p_n, q]`` of ``N`` ellipses without storing their histograms.
+    """Bhattacharyya coefficients ``rho[p_n, q]`` of ``N`` ellipses without storing their histograms
+    (``parts``: see :func:`ellipse_histograms`).
 
     Same result as ``bhattacharyya_coefficient(ellipse_histograms(...)[0], q)``
     (to floating-point rounding, < 1e-12): the compiled path fuses accumulation and
@@ -293,13 +314,14 @@ def ellipse_rho(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, sqrt_q
     if totals is None:
         totals = np.empty(n)
     sq = np.ascontiguousarray(sqrt_q, dtype=np.float64)
+    half = _half(sq.size, parts)
     use_numba = numba_enabled() if backend is None else backend == "numba"
     if use_numba:
         acc = _scratch if _scratch is not None else np.zeros((2, sq.size))
-        _ellipse_rho_numba(bins, int(x0), int(y0), ell, KERNELS[kernel], sq, out, totals, acc)
+        _ellipse_rho_numba(bins, int(x0), int(y0), ell, KERNELS[kernel], sq, out, totals, acc, half)
     else:
         h = np.empty((n, sq.size))
-        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, KERNELS[kernel], h, totals)
+        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, KERNELS[kernel], h, totals, half)
         np.sqrt(h, out=h)
         np.clip((h * sq).sum(axis=1), 0.0, 1.0, out=out)
     return out, totals
@@ -307,7 +329,7 @@ def ellipse_rho(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, sqrt_q
 
 def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, n_bins: int, *,
                        kernel: KernelName = "nummiaro", out: np.ndarray | None = None,
-                       totals: np.ndarray | None = None, backend: str | None = None
+                       totals: np.ndarray | None = None, backend: str | None = None, parts: int = 1
                        ) -> tuple[np.ndarray, np.ndarray]:
     """Normalised kernel-weighted histograms of ``N`` ellipses over quantised pixels.
 
@@ -318,6 +340,11 @@ def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray,
     kernel : ``"nummiaro"`` — ``k(||d|| / a)``, ``a = sqrt(Hx^2 + Hy^2)`` (Eq. 2–3), or
         ``"epanechnikov"`` — ``1 - r^2`` with ``r`` the ellipse-normalised radius.
     backend : ``"numba"``, ``"numpy"`` or None (Numba when enabled).
+    parts : 1, or 2 for a two-part histogram (Pérez et al., ECCV 2002; Okuma et al., ECCV 2004): the pixels of
+        the rows above the ellipse's centre (``dy <= 0``) count in bins ``0 .. n_bins/2 - 1``, those below in
+        ``n_bins/2 ..``, so that the layout of the colours (a walker's jacket over their trousers) is kept.  The
+        kernel is symmetric about the centre, so each part holds about half of the mass, and the
+        Bhattacharyya coefficient of two such histograms is about the mean of the two parts' coefficients.
 
     Returns
     -------
@@ -332,11 +359,12 @@ def ellipse_histograms(bins: np.ndarray, x0: int, y0: int, ellipses: np.ndarray,
     if totals is None:
         totals = np.empty(n, dtype=np.float64)
     k = KERNELS[kernel]
+    half = _half(n_bins, parts)
     use_numba = numba_enabled() if backend is None else backend == "numba"
     if use_numba:
-        _ellipse_hist_numba(bins, int(x0), int(y0), ell, k, out, totals, np.zeros((2, n_bins)))
+        _ellipse_hist_numba(bins, int(x0), int(y0), ell, k, out, totals, np.zeros((2, n_bins)), half)
     else:
-        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, k, out, totals)
+        _ellipse_hist_numpy(bins, int(x0), int(y0), ell, k, out, totals, half)
     return out, totals
 
 
