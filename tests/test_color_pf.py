@@ -259,3 +259,38 @@ def test_grey_scale_rate_noise_applies_on_grey_input_only(name):
         d = pftrack.create_tracker(name, seed=0)
         d.init(frame, box)
         assert d._noise_std(15.0, 15.0)[-1] == d.params.scale_rate_noise > 0
+
+
+def _two_tone(frame, x, y, top, bottom, w=24, h=48):
+    frame[y:y + h // 2, x:x + w] = top
+    frame[y + h // 2:y + h, x:x + w] = bottom
+
+
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
+def test_two_part_histograms_tell_a_reversed_layout_apart(name):
+    """``histogram_parts=2``: a look-alike with the target's colours in the reverse order (red over blue against
+    blue over red) scores as the target in one histogram, and far below it in two parts; the models and the cue
+    have twice the bins, on colour and on grey input."""
+    rng = np.random.default_rng(0)
+    frame = rng.integers(90, 130, (120, 200, 3), dtype=np.uint8)
+    _two_tone(frame, 40, 40, (0, 0, 220), (220, 0, 0))  # the target: red (BGR) over blue
+    _two_tone(frame, 130, 40, (220, 0, 0), (0, 0, 220))  # the look-alike: blue over red
+    target, other = np.array([[52.0, 64.0, 12.0, 24.0]]), np.array([[142.0, 64.0, 12.0, 24.0]])
+    scores = {}
+    for parts in (1, 2):
+        t = pftrack.create_tracker(name, seed=0, histogram_parts=parts)
+        t.init(frame, (40, 40, 24, 48))
+        assert t.cue.n_bins == 512 * parts and t.q.size == 512 * parts
+        scores[parts] = [float(t._rho(frame, e)[0][0]) for e in (target, other)]
+    assert scores[1][0] > 0.99 and scores[1][1] > 0.99  # one histogram: the same colours, the same score
+    assert scores[2][0] > 0.99 and scores[2][1] < 0.1  # two parts: the layout differs
+    grey = np.repeat(frame[..., 1:2], 3, axis=2)
+    t = pftrack.create_tracker(name, seed=0, histogram_parts=2)
+    t.init(grey, (40, 40, 24, 48))
+    assert t.cue.color_space == "gray" and t.cue.n_bins == 2 * t.cue.feature_bins == t.q.size
+    assert t.update(grey).box is not None
+
+
+def test_two_part_histograms_refuse_the_grey_bin_shift():
+    with pytest.raises(ParameterError, match="histogram_parts"):
+        pftrack.create_tracker("color-pf", histogram_parts=2, grey_relit_shift=1)

@@ -109,6 +109,8 @@ class ColorCue:
     gradient_threshold : Sobel magnitude (on the equalised image, levels 0-255) below
         which a pixel falls in the "flat" orientation bin.
     fallback : the colour space ``"auto"`` uses on colour input.
+    parts : 1, or 2 for two-part histograms (:func:`~pftrack.cues.color.ellipse_histograms`): the features of the
+        rows above and below each ellipse's centre in separate halves of ``n_bins`` (``feature_bins`` each).
     normalize : RGB features under changing light: ``"none"``; ``"gain"`` divides each channel
         by its gain relative to the initialisation frame (per-channel medians, von Kries);
         ``"adaptive"`` is ``"gain"`` with a reference that follows the frames the tracker is
@@ -120,7 +122,10 @@ class ColorCue:
     def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
                  kernel: KernelName = "nummiaro", max_pixels: int = 0, *,
                  gray_bins: tuple[int, int] = DEFAULT_GRAY_BINS, gradient_threshold: float = 40.0,
-                 fallback: ColorSpace = "rgb", normalize: str = "none"):
+                 fallback: ColorSpace = "rgb", normalize: str = "none", parts: int = 1):
+        if parts not in (1, 2):
+            raise ValueError(f"parts must be 1 or 2, got {parts!r}")
+        self.parts = int(parts)
         if normalize not in ("none", "gain", "adaptive", "equalize"):
             raise ValueError(f"unknown colour normalisation {normalize!r}")
         self.normalize = normalize
@@ -196,7 +201,8 @@ class ColorCue:
             self.lut = make_lut(space, self.bins)
         self._base_lut = self.lut
         self._shifts = shift_form(self.lut) if space == "rgb" else None
-        self.n_bins = int(np.prod(self.bins))
+        self.feature_bins = int(np.prod(self.bins))  # the bins a pixel's features take
+        self.n_bins = self.feature_bins * self.parts  # a histogram's bins (parts of feature_bins each)
         self._qbuf = np.empty(0, dtype=np.uint16)
         self._hbuf = np.empty((0, self.n_bins))
         self._tbuf = np.empty(0)
@@ -277,7 +283,8 @@ class ColorCue:
         else:
             out, tot = np.empty((n, self.n_bins)), np.empty(n)
         e, ox, oy = features.to_lattice(e)
-        return ellipse_histograms(features.bins, ox, oy, e, self.n_bins, kernel=self.kernel, out=out, totals=tot)
+        return ellipse_histograms(features.bins, ox, oy, e, self.n_bins, kernel=self.kernel, out=out, totals=tot,
+                                  parts=self.parts)
 
     def rho(self, features: ColorFeatures, ellipses: np.ndarray, sqrt_q: np.ndarray, *, reuse: bool = True
             ) -> tuple[np.ndarray, np.ndarray]:
@@ -293,7 +300,7 @@ class ColorCue:
             out, tot = np.empty(n), np.empty(n)
         e, ox, oy = features.to_lattice(e)
         return ellipse_rho(features.bins, ox, oy, e, sqrt_q, kernel=self.kernel, out=out, totals=tot,
-                           _scratch=self._scratch)
+                           _scratch=self._scratch, parts=self.parts)
 
     def histogram(self, frame: np.ndarray, ellipse) -> np.ndarray:
         """Histogram of one ellipse in a frame (a new array)."""

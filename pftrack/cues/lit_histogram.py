@@ -34,9 +34,9 @@ class LitHistogram:
     """The grey histogram model of the self-quotient image (see the module docstring)."""
 
     def __init__(self, *, sigma: float, gray_bins, kernel: str, max_pixels: int, gradient_threshold: float,
-                 quotient: Callable[[np.ndarray], np.ndarray] | None = None):
+                 quotient: Callable[[np.ndarray], np.ndarray] | None = None, parts: int = 1):
         self.cue = ColorCue("gray", None, kernel, max_pixels, gray_bins=tuple(gray_bins),
-                            gradient_threshold=gradient_threshold)
+                            gradient_threshold=gradient_threshold, parts=parts)
         # ``quotient``: another cue's cached self-quotient image of the same frames and scale (fusion-pf's
         # LitStructure), so that it is computed once per frame for both
         self.quotient = quotient if quotient is not None else QuotientImage(sigma, bgr=False)

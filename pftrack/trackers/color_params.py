@@ -31,6 +31,15 @@ class ColorModelParams(Params):
     gray_bins: tuple[int, ...] = param((16, 8), ge=1, le=256, doc=(
         "Grey features: (intensity bins after global equalisation, gradient-orientation bins); one more bin "
         "holds flat pixels. More intensity bins: more discriminative, less tolerant to local lighting."))
+    histogram_parts: int = param(1, ge=1, le=2, doc=(
+        "2: two-part histograms (Pérez et al., ECCV 2002; Okuma et al., ECCV 2004): the features of the rows "
+        "above and below the ellipse's centre count in separate halves of every histogram (the model, the "
+        "particles', the loss test's and the search's), so the model keeps the colours' layout (a walker's jacket "
+        "over their trousers); Eq. 6's coefficient is then about the mean of the two parts'. 1: one histogram "
+        "over the ellipse (the paper; default). An option: on fusion-pf's tune data it tracked a little better "
+        "(mean AUC 0.698 against 0.690) but raised the flag on far fewer of the frames after real exits among "
+        "look-alike walkers (0.16 against 0.40); on the report data, run once, it was as good or better on both "
+        "(docs/robustness.md)."))
     color_normalize: Literal["none", "gain", "adaptive", "equalize"] = param("none", doc=(
         "RGB features under changing light: 'gain' divides each channel by its gain relative to the "
         "initialisation frame (per-channel medians of the frame, von Kries adaptation); 'adaptive' relative to "
@@ -319,6 +328,8 @@ class ColorModelParams(Params):
         if self.bins and len(self.bins) != 3:
             raise ParameterError(f"parameter 'bins' must have 3 values (one per channel), got {self.bins}")
         check_gray_bins(self.gray_bins)
+        if self.histogram_parts > 1 and self.grey_relit_shift > 0:
+            raise ParameterError("grey_relit_shift shifts the bins of one-part histograms: use histogram_parts=1")
 
 
 @dataclass(frozen=True, kw_only=True)

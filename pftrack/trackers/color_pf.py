@@ -94,7 +94,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self.dim = len(self.state_names)
         self.cue = ColorCue(p.color_space, tuple(p.bins) or None, p.kernel, p.max_pixels,
                             gray_bins=tuple(p.gray_bins), gradient_threshold=p.gradient_threshold,
-                            normalize=p.color_normalize)
+                            normalize=p.color_normalize, parts=p.histogram_parts)
         self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
                                  history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                  sd_floor_background=p.score_sd_floor, learn_z=p.history_z,
@@ -290,7 +290,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
             # after the structural check: its self-quotient image of the same frames may be shared
             self._lit = LitHistogram(sigma=p.illumination_sigma, gray_bins=p.gray_bins, kernel=p.kernel,
                                      max_pixels=p.max_pixels, gradient_threshold=p.gradient_threshold,
-                                     quotient=self._shared_quotient())
+                                     quotient=self._shared_quotient(), parts=p.histogram_parts)
             self._lit.init(frame, ell)
         self.loss.reset(1.0)
         self._set_model(self.cue.histogram(frame, ell))

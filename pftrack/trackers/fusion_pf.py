@@ -305,7 +305,7 @@ class FusionPF(ColorPF):
         if p.contrast:
             pitch = self.cue.step_for(box_to_ellipse(box).reshape(1, 4))
             feats = self.cue.prepare_frame(frame, pitch)
-            self._obj, self._sur = box_counts(feats.bins, feats.x0, feats.y0, box, self.cue.n_bins, ring=p.ring,
+            self._obj, self._sur = box_counts(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins, ring=p.ring,
                                               pitch=pitch)
             self._lut = foreground_lut(self._obj, self._sur).astype(np.float64)  # exact: the integral's type
         self.v_ref = None
@@ -449,7 +449,8 @@ class FusionPF(ColorPF):
         if not p.contrast or p.contrast_alpha <= 0:
             return
         box = ellipse_to_box(estimate[_ELL_COLS])
-        obj, sur = box_counts(feats.bins, feats.x0, feats.y0, box, self.cue.n_bins, ring=p.ring, pitch=feats.pitch)
+        obj, sur = box_counts(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins, ring=p.ring,
+                              pitch=feats.pitch)
         # counts are compared as distributions scaled to the reference areas
         blended = blend_counts(self._obj, obj, self._sur, sur, p.contrast_alpha)
         if blended is not None:
