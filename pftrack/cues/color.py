@@ -49,33 +49,13 @@ def _pixel_span(c, h, n_pixels):
 
 
 @njit
-def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans, half):
-    """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)); with ``mark`` not
-    empty, also set ``mark[u >> 3]`` for every bin ``u`` touched (groups of 8 bins, for a scan to skip the rest).
-    ``spans``: (3, bins.shape[0]) int64 scratch for the rows' pixel spans.  ``half`` > 0 (two-part histograms):
-    the pixels of the rows below the centre (``dy > 0``) go to bin ``u + half`` instead of ``u``.
-
-    Even and odd pixels of a row go to two separate histograms so that runs of the
-    same bin do not serialise on one memory location, and the weight, a quadratic
-    in the pixel index, is advanced by finite differences along the row.
-    """
-    hgt, wid = bins.shape
-    if not (hx > 0.0 and hy > 0.0):
-        return
+def _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0, acc1, mark, j_lo, r0, r1, span_a, span_b, off):
+    """The rows ``r0 <= r < r1`` (``j_lo + r`` in ``bins``) of :func:`_accumulate_ellipse`, marking bin ``u + off``
+    for a pixel of bin ``u``."""
     marking = mark.shape[0] > 0
-    ihy2 = 1.0 / (hy * hy)
-    ia2 = 1.0 / (hx * hx + hy * hy)
     scale = ia2 if kernel == 0 else 1.0 / (hx * hx)
     dd = -2.0 * scale
-    j_lo = max(0, int(math.ceil(cy - hy - 0.5)))
-    j_hi = min(hgt - 1, int(math.floor(cy + hy - 0.5)))
-    n_rows = j_hi - j_lo + 1
-    if n_rows <= 0:
-        return
-    span_a = spans[0]
-    span_b = spans[1]
-    _row_spans(cx, cy, hx, hy, j_lo, n_rows, wid, span_a, span_b, spans[2])
-    for r in range(n_rows):
+    for r in range(r0, r1):
         a = span_a[r]
         b = span_b[r]
         if a > b:
@@ -84,9 +64,6 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans, h
         dy = j + 0.5 - cy
         dy2 = dy * dy
         row = bins[j]
-        off = half if (half > 0 and dy > 0.0) else 0
-        a0 = acc0[off:]  # the lower part's bins start at ``half``
-        a1 = acc1[off:]
         base = 1.0 - dy2 * ia2 if kernel == 0 else 1.0 - dy2 * ihy2
         dx = a + 0.5 - cx
         w0 = base - dx * dx * scale  # weight of pixel i
@@ -96,14 +73,53 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans, h
             for t in range(a, b + 1):
                 mark[(row[t] + off) >> 3] = 1
         while i < b:
-            a0[row[i]] += w0
+            acc0[row[i]] += w0
             w1 = w0 + d0
-            a1[row[i + 1]] += w1
+            acc1[row[i + 1]] += w1
             w0 = w1 + d0 + dd
             d0 += 2.0 * dd
             i += 2
         if i == b:
-            a0[row[i]] += w0
+            acc0[row[i]] += w0
+
+
+@njit
+def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans, half):
+    """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)); with ``mark`` not
+    empty, also set ``mark[u >> 3]`` for every bin ``u`` touched (groups of 8 bins, for a scan to skip the rest).
+    ``spans``: (3, bins.shape[0]) int64 scratch for the rows' pixel spans.  ``half`` > 0 (two-part histograms):
+    the pixels of the rows below the centre (``dy > 0``) go to bin ``u + half`` instead of ``u`` (a second pass
+    over those rows with the accumulators' upper halves, so that one part keeps the loop as it was).
+
+    Even and odd pixels of a row go to two separate histograms so that runs of the
+    same bin do not serialise on one memory location, and the weight, a quadratic
+    in the pixel index, is advanced by finite differences along the row.
+    """
+    hgt, wid = bins.shape
+    if not (hx > 0.0 and hy > 0.0):
+        return
+    ihy2 = 1.0 / (hy * hy)
+    ia2 = 1.0 / (hx * hx + hy * hy)
+    j_lo = max(0, int(math.ceil(cy - hy - 0.5)))
+    j_hi = min(hgt - 1, int(math.floor(cy + hy - 0.5)))
+    n_rows = j_hi - j_lo + 1
+    if n_rows <= 0:
+        return
+    span_a = spans[0]
+    span_b = spans[1]
+    _row_spans(cx, cy, hx, hy, j_lo, n_rows, wid, span_a, span_b, spans[2])
+    if half == 0:
+        _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0, acc1, mark, j_lo, 0, n_rows, span_a, span_b, 0)
+        return
+    # the first row below the centre: the smallest j with j + 0.5 - cy > 0
+    split = min(max(int(math.floor(cy - 0.5)) + 1 - j_lo, 0), n_rows)
+    if split < n_rows and j_lo + split + 0.5 - cy <= 0.0:
+        split += 1
+    while split > 0 and j_lo + split - 1 + 0.5 - cy > 0.0:
+        split -= 1
+    _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0, acc1, mark, j_lo, 0, split, span_a, span_b, 0)
+    _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0[half:], acc1[half:], mark, j_lo, split, n_rows,
+                     span_a, span_b, half)
 
 
 @njit
