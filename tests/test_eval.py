@@ -603,3 +603,46 @@ def test_a_tracker_that_fails_from_the_first_frame_is_a_failed_run(dataset, monk
     rec = run_job(Job(parse_tracker_list("meanshift")[0], str(seq.path), seq.name, 0, "ope"))
     assert rec["error"] == "ValueError: cannot start" and rec["error_frame"] == 1
     assert rec["auc"] == 0.0 and rec["updates"] == 0 and rec["fps"] is None
+
+
+def test_paired_auc_differences_against_the_peer():
+    """Per sequence the mean over seeds, then the paired differences: their mean, standard error, wins and losses
+    and the signed-rank test; the summary and the HTML report give them against the speed peer."""
+    from scipy.stats import wilcoxon
+
+    from pftrack.eval.paired import paired_auc, paired_reference
+    from pftrack.eval.report import aggregate, summary_markdown
+
+    gains = [0.10, 0.05, 0.20, -0.02, 0.08, 0.12, 0.03, 0.07]
+    records = []
+    for s, g in enumerate(gains):
+        for seed, jitter in enumerate((-0.01, 0.01)):  # seeds average out to 0.5 + g
+            records.append(dict(tracker="fusion-pf", sequence=f"s{s}", seed=seed, protocol="ope", auc=0.5 + g + jitter,
+                                fps=1000.0))
+        records.append(dict(tracker="opencv-csrt", sequence=f"s{s}", seed=0, protocol="ope", auc=0.5, fps=40.0))
+    records.append(dict(tracker="opencv-csrt", sequence="only-csrt", seed=0, protocol="ope", auc=0.9, fps=40.0))
+    agg = aggregate(records)
+    r = paired_auc(agg, "opencv-csrt", "fusion-pf")
+    d = np.array(gains)
+    assert r.n == 8 and r.better == 7 and r.worse == 1  # the sequence only one tracker ran is left out
+    assert r.mean == pytest.approx(d.mean()) and r.se == pytest.approx(d.std(ddof=1) / np.sqrt(8))
+    assert r.p == pytest.approx(wilcoxon(d).pvalue) and r.p < 0.05
+    assert paired_reference(["fusion-pf", "opencv-csrt"], "opencv-csrt") == "opencv-csrt"
+    assert paired_reference(["color-pf", "fusion-pf"], None) == "color-pf"
+    assert paired_reference(["color-pf"], None) is None
+    md = summary_markdown(records)
+    assert "## Paired AUC differences against `opencv-csrt`" in md
+    assert f"| `fusion-pf` | 8 | +{d.mean():.3f} | {d.std(ddof=1) / np.sqrt(8):.3f} | 7 / 1 |" in md
+    few = paired_auc(aggregate([x for x in records if x["sequence"] in ("s0", "s1", "s2")]), "opencv-csrt",
+                     "fusion-pf")
+    assert few.n == 3 and np.isnan(few.p)  # too few sequences for the test
+
+
+def test_the_html_report_gives_the_paired_differences(tmp_path):
+    from pftrack.eval.report import write_report
+
+    records = [dict(tracker=t, sequence=f"s{s}", seed=0, protocol="ope", auc=a + 0.01 * s, fps=100.0)
+               for s in range(6) for t, a in (("color-pf", 0.4), ("fusion-pf", 0.5))]
+    page = write_report(records, tmp_path / "r")["index"].read_text(encoding="utf-8")
+    assert "<h2>Paired AUC differences against color-pf</h2>" in page
+    assert "<td>fusion-pf</td><td>6</td><td>+0.100</td><td>0.000</td><td>6 / 0</td>" in page

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..io.sinks import prepare_output
 from .jobs import ONE_PASS, failed
+from .paired import paired_html, paired_markdown, paired_reference
 
 CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "mean_iou", "failures", "accuracy",
                "fps", "frames", "lost_frames", "lost_recall", "false_lost", "absent_frames", "reappearances",
@@ -264,6 +265,9 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
     lines.append("")
     if peer is not None:
         lines += speed_notes(records, agg, peer, order) + [""]
+    reference = paired_reference(agg["trackers"], peer) if ope else None
+    if reference is not None:
+        lines += paired_markdown(agg, reference, order)
     metric = "auc" if ope else "failures"
     label = "AUC" if ope else "failures"
     lines += [f"## {label} per sequence (mean over seeds)", ""]
@@ -460,6 +464,9 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
     if peer is not None:
         parts += ["<p>" + re.sub(r"`([^`]+)`", r"<code>\1</code>", e(line)) + "</p>"
                   for line in speed_notes(records, agg, peer, agg["trackers"])]
+    reference = paired_reference(agg["trackers"], peer) if ope else None
+    if reference is not None:
+        parts.append(paired_html(agg, reference, agg["trackers"]))
     bad = [r for r in records if failed(r)]
     if bad:
         parts.append(f"<h2>Failed runs: {len(bad)} of {len(records)}</h2><p>The tracker raised; tracebacks in "
