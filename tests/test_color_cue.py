@@ -8,11 +8,12 @@ from pftrack.cues.histogram_cue import ColorCue
 from pftrack.cues.quantize import make_lut, quantize
 
 
-def reference_histogram(frame_bins, ellipse, n_bins, kernel="nummiaro"):
-    """One-ellipse reference written straight from Eqs. 2-4 (loops over pixels)."""
+def reference_histogram(frame_bins, ellipse, n_bins, kernel="nummiaro", parts=1):
+    """One-ellipse reference written straight from Eqs. 2-4 (loops over pixels); with ``parts=2`` the rows below the
+    centre (dy > 0) count in bins ``n_bins .. 2 n_bins - 1``, normalised together with the rows above."""
     cx, cy, hx, hy = ellipse
     a2 = hx * hx + hy * hy
-    h = np.zeros(n_bins)
+    h = np.zeros(n_bins * parts)
     H, W = frame_bins.shape
     for j in range(H):
         for i in range(W):
@@ -20,7 +21,7 @@ def reference_histogram(frame_bins, ellipse, n_bins, kernel="nummiaro"):
             if (dx / hx) ** 2 + (dy / hy) ** 2 <= 1.0:
                 k = 1 - (dx * dx + dy * dy) / a2 if kernel == "nummiaro" else 1 - ((dx / hx) ** 2 + (dy / hy) ** 2)
                 if k > 0:
-                    h[frame_bins[j, i]] += k
+                    h[frame_bins[j, i] + (n_bins if parts == 2 and dy > 0 else 0)] += k
     return h / h.sum()
 
 
@@ -274,23 +275,6 @@ def test_channel_levels_are_the_medians_of_the_lattice():
 
 
 
-def reference_two_part(frame_bins, ellipse, n_bins, kernel="nummiaro"):
-    """The two-part histogram from Eqs. 2-4 by loops: rows above the centre (dy <= 0) in bins 0..n-1, rows below in
-    n..2n-1, normalised together."""
-    cx, cy, hx, hy = ellipse
-    a2 = hx * hx + hy * hy
-    h = np.zeros(2 * n_bins)
-    H, W = frame_bins.shape
-    for j in range(H):
-        for i in range(W):
-            dx, dy = i + 0.5 - cx, j + 0.5 - cy
-            if (dx / hx) ** 2 + (dy / hy) ** 2 <= 1.0:
-                k = 1 - (dx * dx + dy * dy) / a2 if kernel == "nummiaro" else 1 - ((dx / hx) ** 2 + (dy / hy) ** 2)
-                if k > 0:
-                    h[frame_bins[j, i] + (n_bins if dy > 0 else 0)] += k
-    return h / h.sum()
-
-
 @pytest.mark.parametrize("kernel", ["nummiaro", "epanechnikov"])
 @pytest.mark.parametrize("backend", ["numpy", "numba"])
 def test_two_part_histograms_follow_the_rows_of_each_ellipse(image, kernel, backend, rng):
@@ -305,7 +289,7 @@ def test_two_part_histograms_follow_the_rows_of_each_ellipse(image, kernel, back
     ell[0] = (40.5, 30.5, 6.0, 6.0)  # a centre on a pixel centre: its row (dy = 0) is in the upper part
     hist, tot = ellipse_histograms(bins, 0, 0, ell, 1024, kernel=kernel, backend=backend, parts=2)
     for n in range(len(ell)):
-        assert hist[n] == pytest.approx(reference_two_part(bins, ell[n], 512, kernel), abs=1e-12)
+        assert hist[n] == pytest.approx(reference_histogram(bins, ell[n], 512, kernel, parts=2), abs=1e-12)
     inside = (ell[:, 0] - ell[:, 2] >= 0) & (ell[:, 0] + ell[:, 2] <= 80) & (ell[:, 1] - ell[:, 3] >= 0) & (
         ell[:, 1] + ell[:, 3] <= 60)
     upper = hist[inside, :512].sum(axis=1)
