@@ -105,6 +105,29 @@ def test_on_probation_nothing_is_learned_and_it_ends_after_probation_frames():
     assert not np.array_equal(t.q, q) and "probation" not in st.info  # learning resumed
 
 
+def test_probation_lost_llr_reports_a_doubtful_candidate_absent_while_following_it():
+    """``probation_lost_llr``: a frame on probation whose ratio stays below it is reported lost (score at most 0.5)
+    while the candidate is followed as before (the same boxes); off (0), the candidate is reported as the target."""
+    rng = np.random.default_rng(0)
+    frames = []
+    for _ in range(5):
+        f = np.clip(rng.normal(90, 20, (120, 160, 3)), 0, 255).astype(np.uint8)
+        f[40:70, 50:80] = np.clip(rng.normal((30, 40, 200), 25, (30, 30, 3)), 0, 255).astype(np.uint8)
+        frames.append(f)
+    runs = {}
+    for t_llr in (0.0, 40.0):  # 40: above any ratio (clipped at 30), so every frame on probation is doubtful
+        t = pftrack.create_tracker("color-pf", seed=0, probation_llr=50.0, probation_frames=10,
+                                   probation_lost_llr=t_llr)
+        t.init(frames[0], (50, 40, 30, 30))
+        t.loss.llr = 2.0
+        t._begin_probation(None)
+        runs[t_llr] = [t.update(f) for f in frames[1:]]
+    assert all(st.info["probation"] for st in runs[40.0])
+    assert all(st.lost and st.score <= 0.5 for st in runs[40.0])
+    assert not any(st.lost for st in runs[0.0])
+    assert [st.box for st in runs[40.0]] == [st.box for st in runs[0.0]]
+
+
 @pytest.mark.parametrize("kind, seed", [("vanish", 315), ("teleport", 301), ("teleport", 317)])
 def test_fusion_pf_reacquires_after_a_weak_wrong_acquisition_with_probation(kind, seed):
     """Fresh scenes (seeds of neither split, picked from a run over seeds 300-319 as the scenes where probation makes

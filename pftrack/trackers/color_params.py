@@ -31,6 +31,10 @@ class ColorModelParams(Params):
     gray_bins: tuple[int, ...] = param((16, 8), ge=1, le=256, doc=(
         "Grey features: (intensity bins after global equalisation, gradient-orientation bins); one more bin "
         "holds flat pixels. More intensity bins: more discriminative, less tolerant to local lighting."))
+    probation_lost_llr: float = param(0.0, ge=0, le=100, doc=(
+        "t > 0: while on probation (probation_llr) a frame whose fused log-likelihood ratio is below t reports "
+        "the target absent (lost, score at most 0.5); the candidate is still followed and the search beside it "
+        "goes on. 0: off (a candidate on probation is reported as the target)."))
     histogram_parts: int = param(1, ge=1, le=2, doc=(
         "2: two-part histograms (Pérez et al., ECCV 2002; Okuma et al., ECCV 2004): the features of the rows "
         "above and below the ellipse's centre count in separate halves of every histogram (the model, the "

@@ -450,7 +450,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         if self.miss == 0:
             self.last_box = box
         self.last_score = rho_e
-        if out:  # reported absent, tracked on: the target comes back where it left, and no search is started
+        if out or self._doubtful():  # reported absent, tracked on (out of view: no search is started)
             return self._state(box=box, score=min(score, 0.5), lost=True, info=info)
         return self._state(box=box, score=score, lost=False, info=info)
 

@@ -466,7 +466,9 @@ class SearchMixin:
             self.last_box = box
             self.size = self._confident_size = (float(est[HX]), float(est[HY]))
             score = float(rho[best]) if conf is None else conf
-            return self._state(box=box, score=score, lost=False, info={**info, "mode": "acquired"})
+            doubt = self._doubtful()  # a weak acquisition under probation_lost_llr: followed, reported absent
+            return self._state(box=box, score=min(score, 0.5) if doubt else score, lost=doubt,
+                               info={**info, "mode": "acquired"})
         box = self.last_box
         if box is None:
             box = tuple(float(v) for v in ellipse_to_box(ell[best]))

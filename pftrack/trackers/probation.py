@@ -19,7 +19,10 @@ most ``probation_frames`` frames, during which
   elsewhere that passes the acquisition test with a ratio ``probation_margin`` above the followed one's
   posterior odds takes over (its own probation starting if it is weak too);
 * probation ends, and learning resumes, on the first frame whose ratio reaches ``probation_llr``, or after
-  ``probation_frames`` frames; a loss ends it too (at the next search), and the search resumes as before.
+  ``probation_frames`` frames; a loss ends it too (at the next search), and the search resumes as before;
+* with ``probation_lost_llr`` > 0, a frame on probation whose ratio is below it reports the target absent
+  (``lost``, score at most 0.5) while the candidate is followed: a look-alike acquired after a real exit keeps
+  the flag up until the evidence confirms it (:meth:`ProbationMixin._doubtful`).
 
 A tracked frame on probation says so in ``state.info["probation"]``.  On by default for ``fusion-pf`` only
 (``FusionPFParams``): on ``color-pf`` it made no measurable difference.
@@ -58,6 +61,11 @@ class ProbationMixin:
         if self._probation_left:
             self._lost_at = lost_at
 
+    def _doubtful(self) -> bool:
+        """Is this frame on probation with a ratio below ``probation_lost_llr`` (reported absent)?"""
+        t = self.params.probation_lost_llr
+        return t > 0 and self._probation_left > 0 and self.loss.llr < t
+
     def _end_probation(self) -> None:
         self._probation_left = 0
         self.loss.frozen = False
@@ -95,5 +103,6 @@ class ProbationMixin:
         box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
         self.last_box = box
         self.size = self._confident_size = (float(est[HX]), float(est[HY]))
-        return self._state(box=box, score=confidence(llr), lost=False,
+        doubt = self._doubtful()
+        return self._state(box=box, score=min(confidence(llr), 0.5) if doubt else confidence(llr), lost=doubt,
                            info={"mode": "acquired", "probation": self.on_probation, "switched": True})
