@@ -34,7 +34,9 @@ class ColorModelParams(Params):
     probation_lost_llr: float = param(0.0, ge=0, le=100, doc=(
         "t > 0: while on probation (probation_llr) a frame whose fused log-likelihood ratio is below t reports "
         "the target absent (lost, score at most 0.5); the candidate is still followed and the search beside it "
-        "goes on. 0: off (a candidate on probation is reported as the target)."))
+        "goes on. 0: off (a candidate on probation is reported as the target). An option: 5 raised fusion-pf's flag "
+        "on more of the frames after real exits among look-alikes, but on grey input also on right re-acquisitions "
+        "(docs/robustness.md)."))
     histogram_parts: int = param(1, ge=1, le=2, doc=(
         "2: two-part histograms (Pérez et al., ECCV 2002; Okuma et al., ECCV 2004): the features of the rows "
         "above and below the ellipse's centre count in separate halves of every histogram (the model, the "
