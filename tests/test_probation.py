@@ -126,6 +126,15 @@ def test_probation_lost_llr_reports_a_doubtful_candidate_absent_while_following_
     assert all(st.lost and st.score <= 0.5 for st in runs[40.0])
     assert not any(st.lost for st in runs[0.0])
     assert [st.box for st in runs[40.0]] == [st.box for st in runs[0.0]]
+    # scoped to exits: a probation that did not follow an exit through the edge reports the candidate
+    scoped = pftrack.create_tracker("color-pf", seed=0, probation_llr=50.0, probation_frames=10,
+                                    probation_lost_llr=40.0, probation_lost_exit_only=True)
+    scoped.init(frames[0], (50, 40, 30, 30))
+    scoped.loss.llr = 2.0
+    scoped._begin_probation(None, exited=False)
+    assert scoped.on_probation and not scoped._doubtful()
+    scoped._begin_probation(None, exited=True)
+    assert scoped._doubtful() and scoped.update(frames[1]).lost
 
 
 @pytest.mark.parametrize("kind, seed", [("vanish", 315), ("teleport", 301), ("teleport", 317)])

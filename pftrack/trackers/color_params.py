@@ -37,6 +37,11 @@ class ColorModelParams(Params):
         "goes on. 0: off (a candidate on probation is reported as the target). An option: 5 raised fusion-pf's flag "
         "on more of the frames after real exits among look-alikes, but on grey input also on right re-acquisitions "
         "(docs/robustness.md)."))
+    probation_lost_exit_only: bool = param(False, doc=(
+        "With probation_lost_llr: only after a loss in which the target left the view through the frame's edge "
+        "(reenter_border's exit strip), where a look-alike walking there is the likelier candidate. An option: with "
+        "probation_lost_llr=5 it passed fusion-pf's tune rule, but on the report data it lost 2 of 96 "
+        "re-acquisitions (docs/robustness.md)."))
     histogram_parts: int = param(1, ge=1, le=2, doc=(
         "2: two-part histograms (Pérez et al., ECCV 2002; Okuma et al., ECCV 2004): the features of the rows "
         "above and below the ellipse's centre count in separate halves of every histogram (the model, the "

@@ -459,8 +459,9 @@ class SearchMixin:
         info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr, "vetoed": vetoed}
         if found:
             lost_at = self._lost_at
+            exited = self._exit_strip() is not None  # the target had left the view through an edge
             self._start_tracking(states[cluster], loglik[cluster])
-            self._begin_probation(lost_at)
+            self._begin_probation(lost_at, exited=exited)
             est = self.estimate
             box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
             self.last_box = box

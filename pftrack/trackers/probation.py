@@ -44,17 +44,20 @@ class ProbationMixin:
     """Probation after a weak acquisition, for :class:`pftrack.trackers.color_pf.ColorParticleFilter`."""
 
     _probation_left: int = 0
+    _probation_exit: bool = False  # the probation's acquisition followed an exit through the frame's edge
 
     @property
     def on_probation(self) -> bool:
         """Is the tracker following a weakly acquired candidate without learning from it?"""
         return self._probation_left > 0
 
-    def _begin_probation(self, lost_at) -> None:
+    def _begin_probation(self, lost_at, *, exited: bool | None = None) -> None:
         """Called on an acquisition: probation when its ratio is below ``probation_llr``.  ``lost_at``: where and
         how the target was last seen clearly (the search's position prior and prediction), kept for the search
         beside the track."""
         p = self.params
+        if exited is not None:  # a switch during probation keeps the first acquisition's
+            self._probation_exit = exited
         weak = p.probation_llr > 0 and p.probation_frames > 0 and p.loss_test == "likelihood"
         self._probation_left = int(p.probation_frames) if weak and self.loss.llr < p.probation_llr else 0
         self.loss.frozen = self._probation_left > 0
@@ -63,8 +66,10 @@ class ProbationMixin:
 
     def _doubtful(self) -> bool:
         """Is this frame on probation with a ratio below ``probation_lost_llr`` (reported absent)?"""
-        t = self.params.probation_lost_llr
-        return t > 0 and self._probation_left > 0 and self.loss.llr < t
+        p = self.params
+        t = p.probation_lost_llr
+        return (t > 0 and self._probation_left > 0 and self.loss.llr < t
+                and (self._probation_exit or not p.probation_lost_exit_only))
 
     def _end_probation(self) -> None:
         self._probation_left = 0
