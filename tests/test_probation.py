@@ -77,13 +77,19 @@ def test_probation_defaults_and_only_for_weak_acquisitions():
     assert not on.on_probation and not on.loss.frozen
 
 
-def test_on_probation_nothing_is_learned_and_it_ends_after_probation_frames():
+def _blue_square_frames(n):
+    """``n`` noisy frames of a still blue square on grey (seeded)."""
     rng = np.random.default_rng(0)
     frames = []
-    for _ in range(6):
+    for _ in range(n):
         f = np.clip(rng.normal(90, 20, (120, 160, 3)), 0, 255).astype(np.uint8)
         f[40:70, 50:80] = np.clip(rng.normal((30, 40, 200), 25, (30, 30, 3)), 0, 255).astype(np.uint8)
         frames.append(f)
+    return frames
+
+
+def test_on_probation_nothing_is_learned_and_it_ends_after_probation_frames():
+    frames = _blue_square_frames(6)
     # a ratio no frame reaches (the ratio is clipped at 30): only probation_frames ends the probation
     t = pftrack.create_tracker("color-pf", seed=0, probation_llr=50.0, probation_frames=4, probation_interval=2)
     t.init(frames[0], (50, 40, 30, 30))
@@ -108,12 +114,7 @@ def test_on_probation_nothing_is_learned_and_it_ends_after_probation_frames():
 def test_probation_lost_llr_reports_a_doubtful_candidate_absent_while_following_it():
     """``probation_lost_llr``: a frame on probation whose ratio stays below it is reported lost (score at most 0.5)
     while the candidate is followed as before (the same boxes); off (0), the candidate is reported as the target."""
-    rng = np.random.default_rng(0)
-    frames = []
-    for _ in range(5):
-        f = np.clip(rng.normal(90, 20, (120, 160, 3)), 0, 255).astype(np.uint8)
-        f[40:70, 50:80] = np.clip(rng.normal((30, 40, 200), 25, (30, 30, 3)), 0, 255).astype(np.uint8)
-        frames.append(f)
+    frames = _blue_square_frames(5)
     runs = {}
     for t_llr in (0.0, 40.0):  # 40: above any ratio (clipped at 30), so every frame on probation is doubtful
         t = pftrack.create_tracker("color-pf", seed=0, probation_llr=50.0, probation_frames=10,
