@@ -124,7 +124,7 @@ def test_probation_lost_llr_reports_a_doubtful_candidate_absent_while_following_
         t._begin_probation(None)
         runs[t_llr] = [t.update(f) for f in frames[1:]]
     assert all(st.info["probation"] for st in runs[40.0])
-    assert all(st.lost and st.score <= 0.5 for st in runs[40.0])
+    assert all(st.lost and st.score <= 0.5 and st.info["doubtful"] for st in runs[40.0])
     assert not any(st.lost for st in runs[0.0])
     assert [st.box for st in runs[40.0]] == [st.box for st in runs[0.0]]
     # scoped to exits: a probation that did not follow an exit through the edge reports the candidate

@@ -31,17 +31,6 @@ class ColorModelParams(Params):
     gray_bins: tuple[int, ...] = param((16, 8), ge=1, le=256, doc=(
         "Grey features: (intensity bins after global equalisation, gradient-orientation bins); one more bin "
         "holds flat pixels. More intensity bins: more discriminative, less tolerant to local lighting."))
-    probation_lost_llr: float = param(0.0, ge=0, le=100, doc=(
-        "t > 0: while on probation (probation_llr) a frame whose fused log-likelihood ratio is below t reports "
-        "the target absent (lost, score at most 0.5); the candidate is still followed and the search beside it "
-        "goes on. 0: off (a candidate on probation is reported as the target). An option: 5 raised fusion-pf's flag "
-        "on more of the frames after real exits among look-alikes, but on grey input also on right re-acquisitions "
-        "(docs/robustness.md)."))
-    probation_lost_exit_only: bool = param(False, doc=(
-        "With probation_lost_llr: only after a loss in which the target left the view through the frame's edge "
-        "(reenter_border's exit strip), where a look-alike walking there is the likelier candidate. An option: with "
-        "probation_lost_llr=5 it passed fusion-pf's tune rule, but on the report data it lost 2 of 96 "
-        "re-acquisitions (docs/robustness.md)."))
     histogram_parts: int = param(1, ge=1, le=2, doc=(
         "2: two-part histograms (Pérez et al., ECCV 2002; Okuma et al., ECCV 2004): the features of the rows "
         "above and below the ellipse's centre count in separate halves of every histogram (the model, the "
@@ -201,6 +190,17 @@ class ColorModelParams(Params):
     probation_frames: int = param(30, ge=0, le=100_000, doc="Longest probation, in frames (see probation_llr).")
     probation_interval: int = param(1, ge=1, le=1000, doc=(
         "On probation, the search beside the track runs on every this many frames (its cost: one search each)."))
+    probation_lost_llr: float = param(0.0, ge=0, le=100, doc=(
+        "t > 0: while on probation (probation_llr) a frame whose fused log-likelihood ratio is below t reports "
+        "the target absent (lost, score at most 0.5); the candidate is still followed and the search beside it "
+        "goes on. 0: off (a candidate on probation is reported as the target). An option: 5 raised fusion-pf's flag "
+        "on more of the frames after real exits among look-alikes, but on grey input also on right re-acquisitions "
+        "(docs/robustness.md)."))
+    probation_lost_exit_only: bool = param(False, doc=(
+        "With probation_lost_llr: only after a loss in which the target left the view through the frame's edge "
+        "(reenter_border's exit strip), where a look-alike walking there is the likelier candidate. An option: with "
+        "probation_lost_llr=5 it passed fusion-pf's tune rule, but on the report data it lost 2 of 96 "
+        "re-acquisitions (docs/robustness.md)."))
     probation_margin: float = param(3.0, ge=0, le=50, doc=(
         "Ratio by which a candidate found beside a track on probation must beat the followed one to take over."))
     persist_frames: int = param(0, ge=0, le=1000, doc=(

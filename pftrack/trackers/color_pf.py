@@ -450,7 +450,9 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         if self.miss == 0:
             self.last_box = box
         self.last_score = rho_e
-        if out or self._doubtful():  # reported absent, tracked on (out of view: no search is started)
+        if self._doubtful():  # on probation, its ratio below probation_lost_llr: followed, reported absent
+            out = info["doubtful"] = True
+        if out:  # reported absent, tracked on (out of view: the target comes back where it left, no search)
             return self._state(box=box, score=min(score, 0.5), lost=True, info=info)
         return self._state(box=box, score=score, lost=False, info=info)
 
