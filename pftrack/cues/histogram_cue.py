@@ -109,14 +109,14 @@ class ColorCue:
     gradient_threshold : Sobel magnitude (on the equalised image, levels 0-255) below
         which a pixel falls in the "flat" orientation bin.
     fallback : the colour space ``"auto"`` uses on colour input.
-    parts : 1, or 2 for two-part histograms (:func:`~pftrack.cues.color.ellipse_histograms`): the features of the
-        rows above and below each ellipse's centre in separate halves of ``n_bins`` (``feature_bins`` each).
     normalize : RGB features under changing light: ``"none"``; ``"gain"`` divides each channel
         by its gain relative to the initialisation frame (per-channel medians, von Kries);
         ``"adaptive"`` is ``"gain"`` with a reference that follows the frames the tracker is
         confident on (:meth:`confirm`) and freezes otherwise, so a lighting change that
         happens while the target is hidden is undone when it reappears;
         ``"equalize"`` equalises each channel's histogram over the frame.
+    parts : 1, or 2 for two-part histograms (:func:`~pftrack.cues.color.ellipse_histograms`): the features of the
+        rows above and below each ellipse's centre in separate halves of ``n_bins`` (``feature_bins`` each).
     """
 
     def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
