@@ -106,7 +106,8 @@ def test_labels_survive_an_occlusion_by_direction_and_energy():
                 objs = trk.step([_g(108 + (t - 12), 100, w=40, d=90.0, e=1e6)])
                 assert len(objs) == 1 and objs[0].status == 1
             else:
-                objs = trk.step([_g(110 - 4 * (t - 22), 100, d=180.0, e=1e6), _g(150 + 4 * (t - 22), 100, d=0.0, e=1e4)])
+                objs = trk.step([_g(110 - 4 * (t - 22), 100, d=180.0, e=1e6),
+                                 _g(150 + 4 * (t - 22), 100, d=0.0, e=1e4)])
                 assert {o.group.direction: o.label for o in objs} == before, mode
 
 

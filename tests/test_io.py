@@ -251,7 +251,8 @@ def test_vot_reader_polygons_and_boxes(tmp_path):
 def test_mot_reader(tmp_path):
     seq = tmp_path / "MOT"
     write_frames(seq / "img1", 4, start=1, ext=".jpg")
-    (seq / "seqinfo.ini").write_text("[Sequence]\nname=MOT\nimDir=img1\nframeRate=7\nseqLength=3\nimWidth=40\nimHeight=30\n")
+    (seq / "seqinfo.ini").write_text(
+        "[Sequence]\nname=MOT\nimDir=img1\nframeRate=7\nseqLength=3\nimWidth=40\nimHeight=30\n")
     (seq / "gt").mkdir()
     (seq / "gt" / "gt.txt").write_text("1,1,5,5,10,20,1,-1,-1,-1\n2,1,6,5,10,20,1,-1,-1,-1\n")
     s = read_sequence(seq)

@@ -79,7 +79,8 @@ def test_birth_is_confirmed_after_k_frames():
 
 
 def test_target_leaving_the_image_dies_and_ids_are_never_reused():
-    spec = SceneSpec(n_frames=60, seed=2, targets=(Target(path=((0, 200.0, 120.0), (45, 360.0, 120.0)), size=(24, 60)),))
+    spec = SceneSpec(n_frames=60, seed=2,
+                     targets=(Target(path=((0, 200.0, 120.0), (45, 360.0, 120.0)), size=(24, 60)),))
     scene, frames, truths = render_scene(spec)
     dets = [[tuple(truths[t].boxes[0])] if truths[t].present[0] and truths[t].boxes[0][0] < 300 else []
             for t in range(60)]

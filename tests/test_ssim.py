@@ -85,7 +85,8 @@ def _analytic_image(seed):
 
 
 def test_dssim_gradient_matches_finite_differences():
-    """Eq. (39) with the corrected A3 = 2/(2 sigma_IJ + C2) against central differences of rho; the printed A3 is off."""
+    """Eq. (39) with the corrected A3 = 2/(2 sigma_IJ + C2) against central differences of rho; the printed A3 is
+    off."""
     f, grad = _analytic_image(1)
     u, v = S.patch_grid((30, 40))
     uu, vv = np.meshgrid(u, v)

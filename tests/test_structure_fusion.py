@@ -491,7 +491,8 @@ def test_box_bounds_compiled_and_numpy_agree_and_cover_uses_them():
     from pftrack.cues.structure import Reduced, box_bounds
 
     rng = np.random.default_rng(7)
-    ell = np.column_stack([rng.uniform(0, 100, 20), rng.uniform(0, 80, 20), rng.uniform(1, 9, 20), rng.uniform(1, 9, 20)])
+    ell = np.column_stack([rng.uniform(0, 100, 20), rng.uniform(0, 80, 20), rng.uniform(1, 9, 20),
+                           rng.uniform(1, 9, 20)])
     ref = (np.min(ell[:, 0] - ell[:, 2]), np.min(ell[:, 1] - ell[:, 3]), np.max(ell[:, 0] + ell[:, 2]),
            np.max(ell[:, 1] + ell[:, 3]))
     assert box_bounds(ell) == pytest.approx(ref)
