@@ -11,7 +11,7 @@ import pytest
 import pftrack
 from pftrack.trackers import registry
 
-from .test_eval import write_otb
+from .test_eval_runner import write_otb
 
 PLUGIN = '''
 from dataclasses import dataclass

@@ -214,7 +214,7 @@ def test_a_still_twin_in_view_is_not_taken_for_a_target_that_left():
     """The exit scene of test_loss_flag without the exit strip (``reenter_border=0``): the twin that stood still
     in view while the target was tracked is the scene's, and is not acquired."""
     from .conftest import Scene
-    from .test_loss_flag import _exit_scene, iou
+    from .test_exits import _exit_scene, iou
 
     for seed in (0, 1, 2):
         scene = Scene(_exit_scene(seed))
