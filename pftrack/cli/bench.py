@@ -175,9 +175,9 @@ def _twocam_ranges(args) -> tuple[tuple[int, int] | None, tuple[int, int] | None
             raise ParameterError(f"--strip must look like 340 or 340,90, got {args.strip!r}") from None
         width = seq.size[0] if seq.size else None
         if width is None:
-            import cv2
+            from ..io.sources import read_image
 
-            width = cv2.imread(str(seq.frames[0])).shape[1]
+            width = read_image(seq.frames[0]).shape[1]
         try:
             split = default_split(width, vals[0], vals[1] if len(vals) > 1 else None)
         except ValueError as e:

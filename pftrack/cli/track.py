@@ -33,7 +33,7 @@ def add_track(sub) -> None:
 def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=None, seed=0, params=None,
               skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False) -> dict:
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
-    from ..errors import ParameterError
+    from ..errors import BoxError, ParameterError
     from ..geometry import parse_box
     from ..io.sinks import CsvTrackSink, JsonLinesSink, VideoSink, prepare_output
     from ..io.sources import open_source
@@ -57,6 +57,9 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     if json_out:
         prepare_output(json_out)
     source = open_source(source_spec, skip_bad_frames=skip_bad_frames)
+    if init_box is None and source.init_box is None:  # said before any output file is created
+        source.close()
+        raise BoxError(f"{source.name}: give an initial box (--box X,Y,W,H); the source has no ground truth")
     run = TrackRun()
     sinks: list = []
     drawer = TrackDrawer()

@@ -21,6 +21,8 @@ Layouts
   (``absence.label``).
 * **MOTChallenge**: ``img1/``, ``seqinfo.ini`` and, when present, ``gt/gt.txt``
   (``frame,id,x,y,w,h,conf,class,visibility``).
+* **video**: a folder holding one video file and no images, with ``groundtruth_rect.txt`` (OTB rows) or
+  ``groundtruth.txt`` (VOT rows) beside it, like the bundled clip; its frames are :class:`VideoFrame` s.
 * **frames**: any folder of images, sorted by name.
 """
 
@@ -28,166 +30,29 @@ from __future__ import annotations
 
 import configparser
 import json
-import math
 import re
-import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import FormatError, SourceError
-from ..geometry import polygon_to_box
-
-IMAGE_EXTENSIONS = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".ppm", ".pgm", ".pbm", ".jp2"}
-VIDEO_EXTENSIONS = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".mpg", ".mpeg", ".wmv", ".webm", ".flv", ".3gp", ".ts"}
-
-
-@dataclass
-class Sequence:
-    """One sequence on disk with its ground truth."""
-
-    name: str
-    kind: str  # "otb" | "vot" | "mot" | "frames"
-    path: Path
-    frames: list[Path]
-    groundtruth: np.ndarray | None = None  # (n_frames, 4) boxes, NaN = not visible (single object)
-    polygons: np.ndarray | None = None  # VOT: (n_frames, k) raw rows when they were polygons
-    mot_gt: np.ndarray | None = None  # MOT: (rows, >=6) frame,id,x,y,w,h,conf,...
-    fps: float | None = None
-    size: tuple[int, int] | None = None  # (width, height) when the layout states it
-    attributes: list[str] = field(default_factory=list)
-    #: (n_frames,) bool: frames where the target is out of view or fully hidden (ground truth rows of NaN
-    #: in the file, or the ``hidden`` frames of a ``meta.json`` beside it); None when unknown
-    absent: np.ndarray | None = None
-    meta: dict = field(default_factory=dict)  # the parsed meta.json, when present
-    #: OTB folders with several annotated targets (``groundtruth_rect.1.txt``, ``.2.txt``: Jogging, Skating2): which
-    #: one this sequence is (its name is then ``FOLDER.N``); None for a folder's only or first target
-    target: int | None = None
-
-    def __len__(self) -> int:
-        return len(self.frames)
-
-    @property
-    def init_box(self) -> tuple[float, float, float, float] | None:
-        """The first valid ground-truth box (the standard initialisation)."""
-        if self.groundtruth is None:
-            return None
-        gt = self.groundtruth
-        ok = np.all(np.isfinite(gt), axis=1) & (gt[:, 2] > 0) & (gt[:, 3] > 0)
-        if not ok.any():
-            return None
-        return tuple(float(v) for v in gt[int(np.argmax(ok))])
-
-    @property
-    def init_index(self) -> int:
-        """Index of the frame whose ground truth gives :attr:`init_box` (0 normally)."""
-        if self.groundtruth is None:
-            return 0
-        gt = self.groundtruth
-        ok = np.all(np.isfinite(gt), axis=1) & (gt[:, 2] > 0) & (gt[:, 3] > 0)
-        return int(np.argmax(ok)) if ok.any() else 0
-
-
-# ------------------------------------------------------------------------------ helpers
-
-def _natural_key(p: Path):
-    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", p.name)]
-
-
-def list_images(folder: Path) -> list[Path]:
-    """Image files of a folder, sorted by name (numbers in natural order)."""
-    try:
-        entries = list(folder.iterdir())
-    except OSError as exc:
-        raise SourceError(f"{folder}: cannot list folder ({exc.strerror or exc})") from None
-    files = [p for p in entries if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS]
-    files.sort(key=_natural_key)
-    return files
-
-
-_SPLIT = re.compile(r"[,\t; ]+")
-
-
-def read_number_rows(path: Path, *, widths: tuple[int, ...], allow_nan: bool = True) -> list[list[float]]:
-    """Read rows of numbers separated by commas, tabs, semicolons or spaces.
-
-    Each non-empty row must have one of ``widths`` values.  Raises FormatError
-    with the file and line number otherwise.
-    """
-    try:
-        text = path.read_text(encoding="utf-8", errors="strict")
-    except UnicodeDecodeError:
-        raise FormatError(f"{path}: not a text file") from None
-    except OSError as exc:
-        raise FormatError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    rows = []
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        line = line.strip()
-        if not line:
-            continue
-        parts = [p for p in _SPLIT.split(line) if p]
-        try:
-            vals = [float(p) for p in parts]
-        except ValueError:
-            raise FormatError(f"{path}:{lineno}: expected numbers, got {line[:60]!r}") from None
-        if len(vals) not in widths:
-            want = " or ".join(str(w) for w in widths)
-            raise FormatError(f"{path}:{lineno}: expected {want} values, got {len(vals)}")
-        if not allow_nan and not all(math.isfinite(v) for v in vals):
-            raise FormatError(f"{path}:{lineno}: non-finite value")
-        if any(math.isinf(v) for v in vals):
-            raise FormatError(f"{path}:{lineno}: infinite value")
-        rows.append(vals)
-    return rows
-
-
-def write_groundtruth(path: str | Path, boxes, *, decimals: int = 2) -> Path:
-    """An OTB ``groundtruth_rect.txt``: one ``x,y,w,h`` row per frame, ``NaN,NaN,NaN,NaN`` where a box is missing
-    (read back by :func:`read_otb`)."""
-    lines = ["NaN,NaN,NaN,NaN" if not np.all(np.isfinite(b)) else ",".join(f"{v:.{decimals}f}" for v in b)
-             for b in np.asarray(boxes, dtype=np.float64).reshape(-1, 4)]
-    path = Path(path)
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
-
-
-def write_mot_groundtruth(path: str | Path, rows) -> Path:
-    """A MOTChallenge ``gt.txt``: rows ``frame,id,x,y,w,h,...``, the box with 2 decimals and every other column an
-    integer (read back by :func:`read_mot_txt`)."""
-    lines = [",".join(f"{v:.2f}" if i in (2, 3, 4, 5) else f"{int(v)}" for i, v in enumerate(r))
-             for r in np.asarray(rows, dtype=np.float64)]
-    path = Path(path)
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
-
-
-def write_seqinfo(folder: str | Path, *, name: str, fps: float, length: int, width: int, height: int,
-                  ext: str = ".jpg") -> Path:
-    """A MOTChallenge ``seqinfo.ini`` for the frames in ``folder/img1``."""
-    path = Path(folder) / "seqinfo.ini"
-    path.write_text(f"[Sequence]\nname={name}\nimDir=img1\nframeRate={fps:g}\nseqLength={length}\n"
-                    f"imWidth={width}\nimHeight={height}\nimExt={ext}\n", encoding="utf-8")
-    return path
-
-
-def _pad_gt(boxes: np.ndarray, n: int) -> np.ndarray:
-    out = np.full((n, 4), np.nan)
-    m = min(n, boxes.shape[0])
-    out[:m] = boxes[:m]
-    return out
-
+from .layout_writers import write_groundtruth, write_mot_groundtruth, write_seqinfo  # noqa: F401 - re-exported
+from .sequence import (IMAGE_EXTENSIONS, Sequence, _absent_rows, _natural_key, _pad_gt,  # noqa: F401 - re-exported
+                       _vot_rows, _warn_rows, list_images, read_meta, read_number_rows)
+from .video_frames import VIDEO_EXTENSIONS, _video_groundtruth, read_video_folder, single_video  # noqa: F401
 
 # ------------------------------------------------------------------------------ detection
 
 def detect_layout(path: Path) -> str | None:
-    """``"otb"``, ``"vot"``, ``"mot"``, ``"frames"`` or None for a folder."""
+    """``"otb"``, ``"vot"``, ``"mot"``, ``"video"``, ``"frames"`` or None for a folder."""
     if not path.is_dir():
         return None
     if (path / "img1").is_dir() and ((path / "seqinfo.ini").is_file() or (path / "gt").is_dir()):
         return "mot"
     if (path / "img").is_dir() and (any(path.glob("groundtruth_rect*.txt")) or _tc128_gt(path) is not None):
         return "otb"
+    if single_video(path) is not None:
+        return "video"
     if (path / "groundtruth.txt").is_file():
         return "vot"
     if (path / "img").is_dir() and list_images(path / "img"):
@@ -209,10 +74,12 @@ def read_sequence(path: str | Path) -> Sequence:
         return read_vot(path)
     if layout == "mot":
         return read_mot(path)
+    if layout == "video":
+        return read_video_folder(path)
     if layout == "frames":
         folder = path / "img" if (path / "img").is_dir() and list_images(path / "img") else path
         return Sequence(path.name, "frames", path, list_images(folder))
-    raise SourceError(f"{path}: not a sequence folder (no images, OTB, VOT or MOTChallenge layout)")
+    raise SourceError(f"{path}: not a sequence folder (no images, no single video, no OTB, VOT or MOTChallenge layout)")
 
 
 def discover_sequences(path: str | Path) -> list[Sequence]:
@@ -222,13 +89,20 @@ def discover_sequences(path: str | Path) -> list[Sequence]:
         raise SourceError(f"{path}: no such file or folder")
     if not path.is_dir():
         raise SourceError(f"{path}: not a folder")
-    if detect_layout(path) in ("otb", "vot", "mot"):
+    if _annotated(path):
         return _targets_of(path)
     subs = sorted((p for p in path.iterdir() if p.is_dir()), key=_natural_key)
-    seqs = [s for p in subs if detect_layout(p) in ("otb", "vot", "mot") for s in _targets_of(p)]
+    seqs = [s for p in subs if _annotated(p) for s in _targets_of(p)]
     if not seqs:
-        raise SourceError(f"{path}: no OTB, VOT or MOTChallenge sequences found")
+        raise SourceError(f"{path}: no OTB, VOT or MOTChallenge sequences or annotated videos found")
     return seqs
+
+
+def _annotated(path: Path) -> bool:
+    """Is ``path`` a sequence folder with ground truth (an OTB, VOT or MOTChallenge folder, or a video with its
+    ground-truth file)?"""
+    layout = detect_layout(path)
+    return layout in ("otb", "vot", "mot") or (layout == "video" and _video_groundtruth(path) is not None)
 
 
 def _targets_of(path: Path) -> list[Sequence]:
@@ -335,49 +209,15 @@ def read_otb(path: str | Path, *, target: int | None = None) -> Sequence:
             attributes = [str(a) for a in attrs]
     elif (rng := _otb_range(path.name, len(files), boxes.shape[0])) is not None:
         files = files[rng[0] - 1:rng[1]]
-    if boxes.shape[0] != len(files):  # a misaligned folder scores near zero; say so
-        rest = ("the images past the rows are not scored" if boxes.shape[0] < len(files)
-                else "the extra rows are ignored")
-        warnings.warn(f"{path.name}: {boxes.shape[0]} ground-truth rows for {len(files)} images; row i is taken for "
-                      f"image i ({rest})", stacklevel=2)
+    _warn_rows(path.name, boxes.shape[0], len(files), "images")
     attrs_txt = path / "attrs.txt"
     if not attributes and attrs_txt.is_file():
         attributes = [a.strip() for a in attrs_txt.read_text(encoding="utf-8", errors="replace").split(",") if a.strip()]
-    absent = np.zeros(len(files), dtype=bool)
-    m = min(len(files), boxes.shape[0])
-    absent[:m] = ~np.all(np.isfinite(boxes[:m]), axis=1)  # NaN rows in the file: out of view (TLD convention)
     meta = read_meta(path)
-    # meta.json: "hidden" frames (fully occluded) are absent; "unannotated" frames have no box but show the target
-    # (a MOT track cut short at the border), so they are neither absent nor scored
-    for key, value in (("hidden", True), ("unannotated", False)):
-        for number in _frame_numbers(meta, key, path):
-            if 1 <= number <= len(files):
-                absent[number - 1] = value
+    absent = _absent_rows(boxes, len(files), meta, path)
     name = path.name if target is None else f"{path.name}.{int(target)}"
     return Sequence(name, "otb", path, files, groundtruth=_pad_gt(boxes, len(files)), attributes=attributes,
                     absent=absent, meta=meta, target=None if target is None else int(target))
-
-
-def _frame_numbers(meta: dict, key: str, path: Path) -> list[int]:
-    """``meta[key]``, a list of frame numbers from 1 (empty when missing)."""
-    numbers = meta.get(key, [])
-    if not isinstance(numbers, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in numbers):
-        raise FormatError(f"{path / 'meta.json'}: '{key}' must be a list of frame numbers (from 1)")
-    return numbers
-
-
-def read_meta(path: Path) -> dict:
-    """The optional ``meta.json`` of a sequence folder (synthetic scenes write one), or ``{}``."""
-    meta_path = Path(path) / "meta.json"
-    if not meta_path.is_file():
-        return {}
-    try:
-        meta = json.loads(meta_path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise FormatError(f"{meta_path}: invalid JSON ({exc})") from None
-    if not isinstance(meta, dict):
-        raise FormatError(f"{meta_path}: expected a JSON object")
-    return meta
 
 
 # ------------------------------------------------------------------------------ VOT
@@ -416,19 +256,7 @@ def read_vot(path: str | Path) -> Sequence:
     files = list_images(folder)
     if not files:
         raise SourceError(f"{folder}: no images")
-    gt_path = path / "groundtruth.txt"
-    rows = read_number_rows(gt_path, widths=(1, 4, 6, 8, 10, 12, 14, 16))
-    width = max((len(r) for r in rows), default=4)
-    boxes = np.full((len(rows), 4), np.nan)
-    polys = None
-    if width > 4:
-        polys = np.full((len(rows), width), np.nan)
-    for i, r in enumerate(rows):
-        if len(r) == 1:  # VOT marks a missing annotation with a single 0/NaN
-            continue
-        if polys is not None:
-            polys[i, : len(r)] = r
-        boxes[i] = polygon_to_box(np.asarray(r, dtype=np.float64))
+    boxes, polys = _vot_rows(path / "groundtruth.txt")
     return Sequence(path.name, "vot", path, files, groundtruth=_pad_gt(boxes, len(files)), polygons=polys,
                     absent=_absent_flags(path, len(files)))
 

@@ -24,10 +24,13 @@ from ..frames import as_bgr_uint8
 from .datasets import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, read_sequence
 from .prefetch import prefetch
 from .quiet import quiet_opencv
+from .video_frames import VideoFrame, read_video_folder, read_video_frame, single_video
 
 
-def read_image(path: Path) -> np.ndarray | None:
-    """Decode an image file (any bit depth, alpha kept); None when it cannot be decoded."""
+def read_image(path: Path | VideoFrame) -> np.ndarray | None:
+    """Decode an image file (any bit depth, alpha kept), or one frame of a video; None when it cannot be decoded."""
+    if isinstance(path, VideoFrame):
+        return read_video_frame(path)
     try:
         data = np.fromfile(str(path), dtype=np.uint8)
     except OSError:
@@ -212,7 +215,11 @@ def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False) -> Fra
     if path.is_dir():
         layout = detect_layout(path)
         if layout is None:
-            raise SourceError(f"{path}: folder has no images")
+            raise SourceError(f"{path}: folder has no images and no single video file")
+        if layout == "video":  # streamed: the ground truth is read, the frames are not counted ahead
+            source = VideoSource(str(single_video(path)), str(path), skip_bad_frames=skip_bad_frames)
+            source.sequence = read_video_folder(path, count=False)
+            return source
         seq = read_sequence(path)
         return ImageFolderSource(seq.frames, str(path), sequence=seq if layout != "frames" else None,
                                  skip_bad_frames=skip_bad_frames)
