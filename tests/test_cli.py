@@ -83,7 +83,8 @@ def test_unwritable_video_is_one_line_on_the_terminal(clip, tmp_path, capfd):
     out = ["--out", str(tmp_path / "o.csv"), "--video-out", str(tmp_path / "v.xyz"), "--quiet"]
     assert main(["track", str(clip[0]), "--box", "1,1,5,5", *out]) == 2
     err = [line for line in capfd.readouterr().err.splitlines() if line.strip()]
-    assert len(err) == 1 and "video writer" in err[0]
+    assert len(err) == 1 and "cannot write a video as '.xyz'" in err[0]  # refused before the run starts
+    assert not (tmp_path / "o.csv").exists()
 
 
 def test_corrupt_frame_keeps_earlier_rows(tmp_path, capsys):

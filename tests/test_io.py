@@ -303,6 +303,31 @@ def test_video_sink(tmp_path):
     cap.release()
 
 
+@pytest.mark.parametrize("ext", [".mkv", ".avi", ".mov", ".wmv"])
+def test_video_sink_writes_each_listed_container(tmp_path, ext):
+    with VideoSink(tmp_path / f"v{ext}", fps=10) as v:
+        for i in range(3):
+            v.write(np.full((32, 48, 3), 50 * i, np.uint8))
+    cap = cv2.VideoCapture(str(tmp_path / f"v{ext}"))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    assert n == 3
+
+
+def test_a_video_format_that_cannot_be_written_is_refused_before_any_work(tmp_path, capsys):
+    from pftrack.cli import main
+
+    with pytest.raises(OutputError, match="cannot write a video as '.gif'"):
+        VideoSink(tmp_path / "v.gif")
+    frames = tmp_path / "frames"
+    write_frames(frames, n=3)
+    out = tmp_path / "t.csv"
+    assert main(["track", str(frames), "--box", "5,5,10,10", "--out", str(out), "--video-out",
+                 str(tmp_path / "v.gif"), "--quiet"]) == 2
+    assert "use .avi, .m4v, .mkv" in capsys.readouterr().err and not out.exists()
+
+
 def test_unwritable_outputs(tmp_path):
     (tmp_path / "adir").mkdir()
     with pytest.raises(OutputError, match="is a folder"):

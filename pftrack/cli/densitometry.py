@@ -40,7 +40,7 @@ def cmd_densitometry(args) -> int:
     from ..densitometry.run import check_line
     from ..errors import BoxError, ParameterError
     from ..geometry import parse_box, validate_box
-    from ..io.sinks import VideoSink, prepare_output
+    from ..io.sinks import VideoSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..params import parse_param_assignments
     from ..pipeline import interrupt_on_sigterm
@@ -59,7 +59,7 @@ def cmd_densitometry(args) -> int:
     box = parse_box(args.box)
     prepare_output(args.out)
     if args.video_out:
-        prepare_output(args.video_out)
+        prepare_video_output(args.video_out)
     source = open_source(args.source)
     frames = source.numbered()
     if args.template_frame < 1:

@@ -85,7 +85,7 @@ def cmd_tripwire(args) -> int:
 
     from ..errors import ParameterError, SourceError
     from ..events.tripwire import TrackerlessTripwire, TripwireParams, estimate_radius
-    from ..io.sinks import VideoSink, _TextSink, prepare_output
+    from ..io.sinks import VideoSink, _TextSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..params import parse_param_assignments
     from ..pipeline import interrupt_on_sigterm
@@ -107,7 +107,7 @@ def cmd_tripwire(args) -> int:
             raise ParameterError(f"--radius must be a number or 'auto', got {args.radius!r}") from None
     prepare_output(args.out)
     if args.video_out:
-        prepare_output(args.video_out)
+        prepare_video_output(args.video_out)
     source = open_source(args.source)
     fps = float(args.fps or source.fps or 25.0)
     if args.radius == "auto":

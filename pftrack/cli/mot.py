@@ -47,7 +47,7 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
         raise ParameterError("--mpeg7 needs --tracker cd")
     import time as _time
 
-    from ..io.sinks import MotSink, VideoSink, prepare_output
+    from ..io.sinks import MotSink, VideoSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..multi import create_multi_tracker
     from ..pipeline import interrupt_on_sigterm
@@ -55,7 +55,7 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
 
     prepare_output(out)
     if video_out:
-        prepare_output(video_out)
+        prepare_video_output(video_out)
     cv_threads = None
     if detector == "mv":
         from ..io.motion_vectors import MVSource
@@ -124,7 +124,7 @@ def run_cd(source_spec, *, out, video_out=None, params=None, quiet=False, mpeg7:
     import numpy as np
 
     from ..io.motion_vectors import iter_mv_frames
-    from ..io.sinks import MotSink, VideoSink, prepare_output
+    from ..io.sinks import MotSink, VideoSink, prepare_output, prepare_video_output
     from ..multi.compressed import (
         BlockAnalyser,
         CDParams,
@@ -139,7 +139,7 @@ def run_cd(source_spec, *, out, video_out=None, params=None, quiet=False, mpeg7:
     p = CDParams.from_mapping(params or {})
     prepare_output(out)
     if video_out:
-        prepare_output(video_out)
+        prepare_video_output(video_out)
     if mpeg7:
         prepare_output(mpeg7)
     trajectories: dict[int, list] = {}

@@ -87,16 +87,17 @@ def _fmt(v: float) -> str:
 def cmd_points(args) -> int:
     import cv2
 
-    from ..io.sinks import VideoSink, _TextSink, prepare_output
+    from ..io.sinks import VideoSink, _TextSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..params import parse_param_assignments
     from ..trackers.point_gate import SOURCES, PointParams, PointTracker
 
     params = PointParams.from_mapping({"method": args.method, **parse_param_assignments(args.param)})
     prepare_output(args.out)
-    for extra in (args.diag, args.video_out):
-        if extra:
-            prepare_output(extra)
+    if args.diag:
+        prepare_output(args.diag)
+    if args.video_out:
+        prepare_video_output(args.video_out)
     source = open_source(args.source)
     frames, (number, frame) = first_frame(source, args.source)
     try:

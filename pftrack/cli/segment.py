@@ -33,7 +33,7 @@ def cmd_segment(args) -> int:
 
     from ..errors import BoxError, InputError, ParameterError, SourceError
     from ..geometry import parse_box, validate_box
-    from ..io.sinks import VideoSink, prepare_output
+    from ..io.sinks import VideoSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..params import parse_param_assignments
     from ..segmentation.tracker import GraphCutParams, GraphCutTracker
@@ -50,7 +50,7 @@ def cmd_segment(args) -> int:
     out_dir = Path(args.out_dir)
     prepare_output(out_dir / "000001.png")
     if args.video_out:
-        prepare_output(args.video_out)
+        prepare_video_output(args.video_out)
     source = open_source(args.source)
     frames, (number, frame) = first_frame(source, args.source)
     H, W = frame.shape[:2]

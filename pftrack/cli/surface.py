@@ -34,7 +34,7 @@ def cmd_surface(args) -> int:
 
     from ..errors import BoxError, ParameterError
     from ..geometry import parse_box
-    from ..io.sinks import VideoSink, _TextSink, prepare_output
+    from ..io.sinks import VideoSink, _TextSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..surfaces.mesh import parse_mesh
     from ..surfaces.render import draw_mesh, retexture
@@ -52,7 +52,7 @@ def cmd_surface(args) -> int:
     texture = image_file(args.texture) if args.texture else None
     prepare_output(args.out)
     if args.video_out:
-        prepare_output(args.video_out)
+        prepare_video_output(args.video_out)
     source = open_source(args.source)
     frames, (number, frame) = first_frame(source, args.source)
     H, W = frame.shape[:2]

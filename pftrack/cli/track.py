@@ -35,7 +35,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
     from ..errors import BoxError, ParameterError
     from ..geometry import parse_box
-    from ..io.sinks import CsvTrackSink, JsonLinesSink, VideoSink, prepare_output
+    from ..io.sinks import CsvTrackSink, JsonLinesSink, VideoSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..pipeline import TrackRun, interrupt_on_sigterm, track_source
     from ..trackers.registry import create_tracker
@@ -53,7 +53,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     # check every output before any work starts
     prepare_output(out)
     if video_out:
-        prepare_output(video_out)
+        prepare_video_output(video_out)
     if json_out:
         prepare_output(json_out)
     source = open_source(source_spec, skip_bad_frames=skip_bad_frames)

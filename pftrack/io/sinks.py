@@ -149,14 +149,27 @@ def read_track_csv(path: str | Path) -> np.ndarray:
     return np.array(out, dtype=np.float64).reshape(-1, 7)
 
 
+#: the codec written for each video file extension (OpenCV's FFmpeg writer)
+VIDEO_FOURCC = {".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v", ".mkv": "mp4v", ".avi": "MJPG", ".wmv": "WMV2"}
+
+
+def prepare_video_output(path: str | Path, fourcc: str | None = None) -> Path:
+    """:func:`prepare_output` for an annotated video, whose extension must name a format it can be written in
+    (:data:`VIDEO_FOURCC`) unless a codec is given."""
+    p = prepare_output(path)
+    if fourcc is None and p.suffix.lower() not in VIDEO_FOURCC:
+        raise OutputError(f"{path}: cannot write a video as {p.suffix or 'a file without extension'!r}; "
+                          f"use {', '.join(sorted(VIDEO_FOURCC))}")
+    return p
+
+
 class VideoSink:
     """Annotated video writer; the file is opened on the first frame and finalised by :meth:`close`."""
 
     def __init__(self, path: str | Path, fps: float | None = None, fourcc: str | None = None):
-        self.path = prepare_output(path)
+        self.path = prepare_video_output(path, fourcc)
         self.fps = float(fps) if fps and fps > 0 else 25.0
-        ext = self.path.suffix.lower()
-        self.fourcc = fourcc or {".avi": "MJPG", ".mp4": "mp4v", ".m4v": "mp4v", ".mov": "mp4v"}.get(ext, "mp4v")
+        self.fourcc = fourcc or VIDEO_FOURCC[self.path.suffix.lower()]
         self._writer: cv2.VideoWriter | None = None
         self._size: tuple[int, int] | None = None
         self.frames = 0
