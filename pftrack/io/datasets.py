@@ -29,7 +29,6 @@ Layouts
 from __future__ import annotations
 
 import configparser
-import json
 import re
 from pathlib import Path
 
@@ -38,7 +37,7 @@ import numpy as np
 from ..errors import FormatError, SourceError
 from .layout_writers import write_groundtruth, write_mot_groundtruth, write_seqinfo  # noqa: F401 - re-exported
 from .sequence import (IMAGE_EXTENSIONS, Sequence, _absent_rows, _natural_key, _pad_gt,  # noqa: F401 - re-exported
-                       _vot_rows, _warn_rows, list_images, read_meta, read_number_rows)
+                       _vot_rows, _warn_rows, list_images, read_json_object, read_meta, read_number_rows)
 from .video_frames import VIDEO_EXTENSIONS, _video_groundtruth, read_video_folder, single_video  # noqa: F401
 
 # ------------------------------------------------------------------------------ detection
@@ -190,12 +189,7 @@ def read_otb(path: str | Path, *, target: int | None = None) -> Sequence:
     attributes: list[str] = []
     cfg_path = path / "cfg.json"
     if cfg_path.is_file():
-        try:
-            cfg = json.loads(cfg_path.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise FormatError(f"{cfg_path}: invalid JSON ({exc})") from None
-        if not isinstance(cfg, dict):
-            raise FormatError(f"{cfg_path}: expected a JSON object")
+        cfg = read_json_object(cfg_path)
         start, end, fmt = cfg.get("startFrame"), cfg.get("endFrame"), cfg.get("imgFormat")
         if isinstance(start, int) and isinstance(end, int) and isinstance(fmt, str) and end >= start:
             try:

@@ -131,18 +131,21 @@ def _frame_numbers(meta: dict, key: str, path: Path) -> list[int]:
     return numbers
 
 
+def read_json_object(path: Path) -> dict:
+    """A JSON file holding one object; FormatError with the file's name otherwise."""
+    try:
+        obj = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise FormatError(f"{path}: invalid JSON ({exc})") from None
+    if not isinstance(obj, dict):
+        raise FormatError(f"{path}: expected a JSON object")
+    return obj
+
+
 def read_meta(path: Path) -> dict:
     """The optional ``meta.json`` of a sequence folder (synthetic scenes write one), or ``{}``."""
     meta_path = Path(path) / "meta.json"
-    if not meta_path.is_file():
-        return {}
-    try:
-        meta = json.loads(meta_path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise FormatError(f"{meta_path}: invalid JSON ({exc})") from None
-    if not isinstance(meta, dict):
-        raise FormatError(f"{meta_path}: expected a JSON object")
-    return meta
+    return read_json_object(meta_path) if meta_path.is_file() else {}
 
 
 def _absent_rows(boxes: np.ndarray, n: int, meta: dict, path: Path) -> np.ndarray:
