@@ -206,7 +206,8 @@ def read_otb(path: str | Path, *, target: int | None = None) -> Sequence:
     _warn_rows(path.name, boxes.shape[0], len(files), "images")
     attrs_txt = path / "attrs.txt"
     if not attributes and attrs_txt.is_file():
-        attributes = [a.strip() for a in attrs_txt.read_text(encoding="utf-8", errors="replace").split(",") if a.strip()]
+        text = attrs_txt.read_text(encoding="utf-8", errors="replace")
+        attributes = [a.strip() for a in text.split(",") if a.strip()]
     meta = read_meta(path)
     absent = _absent_rows(boxes, len(files), meta, path)
     name = path.name if target is None else f"{path.name}.{int(target)}"
