@@ -120,3 +120,14 @@ def test_track_and_eval_a_video_folder(tmp_path, capsys):
     bare, _ = _video_folder(tmp_path / "bare", gt=None)
     assert main(["track", str(bare), "--out", str(tmp_path / "b.csv"), "--quiet"]) == 2  # no ground truth, no --box
     assert "give an initial box" in capsys.readouterr().err and not (tmp_path / "b.csv").exists()
+
+
+def test_a_malformed_ground_truth_beside_a_video_is_one_line(tmp_path, capsys):
+    from pftrack.cli import main
+
+    folder, _ = _video_folder(tmp_path / "clip")
+    (folder / "groundtruth_rect.txt").write_text("1,2,3\n")
+    assert main(["track", str(folder), "--out", str(tmp_path / "t.csv"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "groundtruth_rect.txt:1: expected 4 values" in err[0]
+    assert main(["eval", str(folder), "--trackers", "color-pf", "--quiet"]) == 2

@@ -216,9 +216,10 @@ def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False) -> Fra
         layout = detect_layout(path)
         if layout is None:
             raise SourceError(f"{path}: folder has no images and no single video file")
-        if layout == "video":  # streamed: the ground truth is read, the frames are not counted ahead
+        if layout == "video":  # streamed: the ground truth is read (first), the frames are not counted ahead
+            seq = read_video_folder(path, count=False)
             source = VideoSource(str(single_video(path)), str(path), skip_bad_frames=skip_bad_frames)
-            source.sequence = read_video_folder(path, count=False)
+            source.sequence = seq
             return source
         seq = read_sequence(path)
         return ImageFolderSource(seq.frames, str(path), sequence=seq if layout != "frames" else None,
