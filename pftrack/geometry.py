@@ -204,3 +204,23 @@ def parabola_peak(a: float, b: float, c: float) -> float:
     minimum, pass the negated samples."""
     den = a - 2.0 * b + c
     return 0.0 if den >= 0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
+
+
+def background_grid(width: float, height: float, hx: float, hy: float, cap: int, exclude=None) -> np.ndarray:
+    """Ellipses ``(cx, cy, hx, hy)`` of one size on a regular grid over a ``width`` x ``height`` frame, row by row
+    (at most about ``cap``, and no denser than one half-axis per cell), without those that overlap the ellipse
+    ``exclude``'s bounding box: the background samples of the colour trackers' statistics (Nummiaro Eqs. 13-14)."""
+    nx = max(1, min(int(width / max(hx, 1.0)), int(math.ceil(math.sqrt(cap * width / max(height, 1))))))
+    ny = max(1, min(int(height / max(hy, 1.0)), int(math.ceil(cap / nx))))
+    xs = (np.arange(nx) + 0.5) * (width / nx)
+    ys = (np.arange(ny) + 0.5) * (height / ny)
+    ell = np.empty((nx * ny, 4))  # the grid row by row (np.meshgrid's order)
+    ell[:, 0] = np.tile(xs, ny)
+    ell[:, 1] = np.repeat(ys, nx)
+    ell[:, 2] = hx
+    ell[:, 3] = hy
+    if exclude is not None:
+        ex = exclude
+        far = (np.abs(ell[:, 0] - ex[0]) >= hx + ex[2]) | (np.abs(ell[:, 1] - ex[1]) >= hy + ex[3])
+        ell = ell[far]
+    return ell

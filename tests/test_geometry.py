@@ -62,3 +62,16 @@ def test_parse_and_validate_box():
 def test_ellipse_mask_area():
     m = ellipse_mask((200, 200), (100, 100, 40, 20))
     assert abs(m.sum() - np.pi * 40 * 20) / (np.pi * 40 * 20) < 0.01
+
+
+def test_background_grid_covers_the_frame_and_leaves_out_the_target():
+    from pftrack.geometry import background_grid
+
+    ell = background_grid(320, 240, 10.0, 20.0, 100)
+    assert 80 <= len(ell) <= 120 and np.all(ell[:, 2] == 10.0) and np.all(ell[:, 3] == 20.0)
+    assert ell[:, 0].min() > 0 and ell[:, 0].max() < 320 and ell[:, 1].min() > 0 and ell[:, 1].max() < 240
+    target = np.array([160.0, 120.0, 15.0, 25.0])
+    kept = background_grid(320, 240, 10.0, 20.0, 100, exclude=target)
+    assert 0 < len(kept) < len(ell)
+    assert np.all((np.abs(kept[:, 0] - 160.0) >= 25.0) | (np.abs(kept[:, 1] - 120.0) >= 45.0))
+    assert len(background_grid(320, 240, 400.0, 400.0, 100)) == 1  # no denser than one half-axis per cell

@@ -55,7 +55,7 @@ from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
 from ..filtering.loss import LossDetector, toward_background
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
-from ..geometry import Box, box_to_ellipse, displacement_rate, in_frame_fraction
+from ..geometry import Box, background_grid, box_to_ellipse, displacement_rate, in_frame_fraction
 from .base import Tracker, TrackState
 from .color_hooks import ColorHooks
 from .color_params import ColorModelParams, ColorPFParams
@@ -209,21 +209,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
     def _background_stats(self, frame: np.ndarray, exclude: np.ndarray | None) -> None:
         """mu and sigma of rho over background ellipses (Eqs. 13-14)."""
         h, w = self._shape
-        hx, hy = self.size
-        cap = self.params.background_positions
-        nx = max(1, min(int(w / max(hx, 1.0)), int(math.ceil(math.sqrt(cap * w / max(h, 1))))))
-        ny = max(1, min(int(h / max(hy, 1.0)), int(math.ceil(cap / nx))))
-        xs = (np.arange(nx) + 0.5) * (w / nx)
-        ys = (np.arange(ny) + 0.5) * (h / ny)
-        ell = np.empty((nx * ny, 4))  # the grid row by row (np.meshgrid's order)
-        ell[:, 0] = np.tile(xs, ny)
-        ell[:, 1] = np.repeat(ys, nx)
-        ell[:, 2] = hx
-        ell[:, 3] = hy
-        if exclude is not None:
-            ex = exclude
-            far = (np.abs(ell[:, 0] - ex[0]) >= hx + ex[2]) | (np.abs(ell[:, 1] - ex[1]) >= hy + ex[3])
-            ell = ell[far]
+        ell = background_grid(w, h, *self.size, self.params.background_positions, exclude)
         if ell.shape[0] < 2:
             return  # nothing left that is background: keep the previous statistics
         # The background histograms are computed exactly like the samples' (a subsampled frame would
