@@ -98,3 +98,29 @@ def cut_features(stored: ColorFeatures | None, roi: tuple[int, int, int, int], p
     if nh <= 0 or nw <= 0 or r0 < 0 or c0 < 0 or r0 + nh > sh or c0 + nw > sw:
         return None
     return ColorFeatures(np.ascontiguousarray(stored.bins[r0:r0 + nh, c0:c0 + nw]), x0, y0, pitch)
+
+
+def mark_occlusions(tracks: list, radius: float, drop: float) -> None:
+    """Sugandi et al.'s occlusion reasoning on the tracks' predictions (in place): of two tracks predicted closer
+    than ``radius`` times their mean width, the one whose likelihood fell most below its own history (below
+    ``drop`` times it) and that has no detection is behind, ``occluded``; a track stops being occluded when no
+    other is predicted near it, its likelihood recovers, or a detection is associated with it."""
+    n = len(tracks)
+    predicted = [False] * n
+    for i in range(n):
+        for j in range(i + 1, n):
+            a, b = tracks[i], tracks[j]
+            r = radius * 0.5 * (a.pred[4] + b.pred[4])
+            if (a.pred[0] - b.pred[0]) ** 2 + (a.pred[1] - b.pred[1]) ** 2 < r * r:
+                predicted[i] = predicted[j] = True
+                # the one whose likelihood fell most below its history is behind
+                ra = a.max_lik / a.hist_max if a.hist_max else 1.0
+                rb = b.max_lik / b.hist_max if b.hist_max else 1.0
+                behind, r_behind = (a, ra) if ra < rb else (b, rb)
+                if r_behind < drop and behind.det is None:
+                    behind.occluded = True
+    for i, tr in enumerate(tracks):
+        if tr.occluded:
+            recovered = tr.hist_max and tr.max_lik >= drop * tr.hist_max
+            if not predicted[i] or recovered or tr.det is not None:
+                tr.occluded = False

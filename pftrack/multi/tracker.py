@@ -68,6 +68,7 @@ from .track_state import box_to_state as _box_to_state
 from .track_state import cover_matrix as _cover_matrix
 from .track_state import cut_features as _cut
 from .track_state import ellipses as _ellipses
+from .track_state import mark_occlusions
 from .track_state import state_boxes as _state_boxes
 
 STATE_NAMES = ("x", "y", "vx", "vy", "w", "h", "vw", "vh")
@@ -335,26 +336,7 @@ class MultiPF:
                 live[i].grouped = i != front
 
     def _occlusions(self) -> None:
-        p = self.params
-        n = len(self.tracks)
-        predicted = [False] * n
-        for i in range(n):
-            for j in range(i + 1, n):
-                a, b = self.tracks[i], self.tracks[j]
-                r = p.occlusion_radius * 0.5 * (a.pred[4] + b.pred[4])
-                if (a.pred[0] - b.pred[0]) ** 2 + (a.pred[1] - b.pred[1]) ** 2 < r * r:
-                    predicted[i] = predicted[j] = True
-                    # the one whose likelihood fell most below its history is behind
-                    ra = a.max_lik / a.hist_max if a.hist_max else 1.0
-                    rb = b.max_lik / b.hist_max if b.hist_max else 1.0
-                    behind, r_behind = (a, ra) if ra < rb else (b, rb)
-                    if r_behind < p.occlusion_drop and behind.det is None:
-                        behind.occluded = True
-        for i, tr in enumerate(self.tracks):
-            if tr.occluded:
-                recovered = tr.hist_max and tr.max_lik >= p.occlusion_drop * tr.hist_max
-                if not predicted[i] or recovered or tr.det is not None:
-                    tr.occluded = False
+        mark_occlusions(self.tracks, self.params.occlusion_radius, self.params.occlusion_drop)
 
     def _weigh_and_resample(self) -> None:
         p = self.params
