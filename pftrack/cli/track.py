@@ -14,7 +14,8 @@ from .common import DEFAULT_TRACKER, close_all, progress
 def add_track(sub) -> None:
     p = sub.add_parser("track", help="track one object through a video, frame folder or sequence",
                        description="Track one object. Writes CSV rows frame,x,y,w,h,score,lost, flushed per frame.")
-    p.add_argument("source", help="video file, frame folder, OTB/VOT/MOTChallenge folder or camera index")
+    p.add_argument("source", help="video file, frame folder, OTB/VOT/MOTChallenge folder, a folder holding a video "
+                   "and its ground truth, or camera index")
     p.add_argument("--box", help="initial box X,Y,W,H (default: the sequence's first ground-truth box)")
     p.add_argument("--tracker", default=DEFAULT_TRACKER, help=f"tracker name (default {DEFAULT_TRACKER}; see 'pftrack list')")
     p.add_argument("--out", default="track.csv", help="CSV output (default track.csv)")
