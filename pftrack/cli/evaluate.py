@@ -14,8 +14,8 @@ from .common import reproduce_command
 def add_eval(sub) -> None:
     p = sub.add_parser("eval", help="rank trackers on OTB/VOT sequences (one-pass or reset protocol)",
                        description="Run trackers x sequences x seeds and report accuracy and speed.")
-    p.add_argument("data", nargs="+", help="sequence folders or folders of sequences (OTB, VOT, MOTChallenge, a video with its "
-                   "ground truth)")
+    p.add_argument("data", nargs="+", help="sequence folders or folders of sequences (OTB, VOT, MOTChallenge, "
+                   "a video with its ground truth)")
     p.add_argument("--trackers", required=True,
                    help="comma-separated tracker specs: NAME or NAME[key=value;...]; 'all', 'ours', 'baselines', "
                         "'opencv' expand to registered families; with --protocol mot: multi-pf[...]")
