@@ -37,6 +37,13 @@ def test_multi_target_writes_and_scores_tracks(tmp_path):
     assert mota > 0.3
 
 
+def test_tripwire_prints_events_and_their_score(tmp_path):
+    text = _run("tripwire.py", "--seed", "0", cwd=tmp_path)
+    events = [line for line in text.splitlines() if line.startswith("frame")]
+    last = text.strip().splitlines()[-1]
+    assert events and last.startswith("7 true crossings") and f"{len(events)} events" in last
+
+
 def test_custom_tracker_registers_and_is_compared(tmp_path):
     rows = _run("custom_tracker.py", "--seeds", "0", cwd=tmp_path).splitlines()[1:]
     assert [r.split()[0] for r in rows] == ["ncc-template", "color-pf", "fusion-pf"]
