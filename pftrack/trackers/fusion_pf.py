@@ -124,6 +124,11 @@ class FusionPFParams(ColorPFParams):
     ring: float = param(0.5, gt=0, le=3, doc=(
         "Width of the surrounding ring on each side, as a fraction of the box size (for the contrast and the "
         "surround colour counts)."))
+    contrast_shape: Literal["box", "ellipse"] = param("box", doc=(
+        "Where a particle's contrast is scored: 'box', its bounding box against the rectangular ring around it; "
+        "'ellipse', the ellipse against the elliptic annulus (half-axes 1 + 2 ring times), each read from the "
+        "integral image as horizontal strips. A box's corners are background around an elliptic target, which "
+        "pulls the box contrast toward smaller boxes (docs/robustness.md)."))
     contrast_alpha: float = param(0.02, ge=0, le=1, doc=(
         "Learning rate of the object and surround colour counts, updated with the colour model's gate."))
     motion: bool = param(False, doc=(
@@ -347,7 +352,8 @@ class FusionPF(ColorPF):
             else:
                 ii = self._ii = probability_integral(feats.bins, self._lut, out=self._ii)
                 self._ii_of = (self.frame_index, feats)
-            c = contrast_scores_ellipses(ii, feats.x0, feats.y0, ell, ring=p.ring, pitch=feats.pitch)
+            c = contrast_scores_ellipses(ii, feats.x0, feats.y0, ell, ring=p.ring, pitch=feats.pitch,
+                                         shape=p.contrast_shape)
             log_lik = log_lik + p.contrast_gain * c
         if p.structure and p.structure_gain > 0 and self.structure.ready:
             log_lik = log_lik + (w_str * p.structure_gain) * self.structure.scores(frame, roi, ell)
