@@ -349,3 +349,14 @@ def test_the_html_report_gives_the_paired_differences(tmp_path):
     page = write_report(records, tmp_path / "r")["index"].read_text(encoding="utf-8")
     assert "<h2>Paired AUC differences against color-pf</h2>" in page
     assert "<td>fusion-pf</td><td>6</td><td>+0.100</td><td>0.000</td><td>6 / 0</td>" in page
+
+
+def test_per_frame_iou_keeps_the_frames_aligned():
+    """The timelines' overlap: one value per frame, NaN where the ground truth has no box, 0 for a missing box."""
+    from pftrack.eval.timeline import _runs, per_frame_iou
+
+    gt = np.array([[0, 0, 10, 10], [np.nan] * 4, [0, 0, 10, 10], [0, 0, 10, 10]], dtype=float)
+    pred = np.array([[0, 0, 10, 10], [0, 0, 10, 10], [5, 0, 10, 10], [np.nan] * 4], dtype=float)
+    got = per_frame_iou(pred, gt)
+    assert got[0] == 1.0 and np.isnan(got[1]) and got[2] == pytest.approx(50 / 150) and got[3] == 0.0
+    assert _runs(np.array([0, 1, 1, 0, 1], bool)) == [(1, 3), (4, 5)] and _runs(np.zeros(3, bool)) == []

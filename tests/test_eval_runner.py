@@ -106,6 +106,7 @@ def test_report_html_references_existing_files(dataset, tmp_path):
     html = paths["index"].read_text()
     refs = re.findall(r"(?:src|href)='([^']+)'", html)
     assert "results.csv" in refs and "success.png" in refs and any(r.startswith("frames/") for r in refs)
+    assert "timelines/seqA.png" in refs and "timelines/seqB.png" in refs
     for ref in refs:
         assert (tmp_path / "rep" / ref).is_file(), ref
     header = (tmp_path / "rep" / "results.csv").read_text().splitlines()[0]

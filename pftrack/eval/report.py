@@ -9,6 +9,8 @@ Everything is written inside the report folder the user named:
   ``failures_per_sequence.png`` (Matplotlib, Agg backend);
 * ``frames/*.jpg`` — a few frames per sequence with the ground truth (green) and
   every tracker's box (seed 0);
+* ``timelines/*.png`` — per one-pass sequence, each tracker's IoU per frame, its lost flag and the frames where
+  the target is absent (:mod:`pftrack.eval.timeline`);
 * ``index.html`` — one self-contained static page (no external resources) that
   links and shows all of the above.
 """
@@ -28,6 +30,7 @@ import numpy as np
 from ..io.sinks import prepare_output
 from .jobs import ONE_PASS, failed
 from .paired import paired_html, paired_markdown, paired_reference
+from .timeline import timelines
 
 CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "mean_iou", "failures", "accuracy",
                "fps", "frames", "lost_frames", "lost_recall", "false_lost", "absent_frames", "reappearances",
@@ -407,11 +410,13 @@ def write_report(records: list[dict], report_dir: str | Path, *, sequences: dict
     (out / "summary.md").write_text(md, encoding="utf-8")
     plots = _plots(records, out)
     frames = _frames(records, sequences or {}, out) if sequences else {}
-    _html(records, out, plots, frames, command, title)
+    lines = timelines(records, sequences, out) if sequences else {}
+    _html(records, out, plots, frames, command, title, lines)
     return {"results": out / "results.csv", "summary": out / "summary.md", "index": out / "index.html"}
 
 
-def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]], command, title) -> None:
+def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]], command, title,
+          lines: dict[str, str] | None = None) -> None:
     from ..viz.draw import color_for
 
     agg = aggregate(records)
@@ -477,10 +482,14 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
                              for r in bad) + "</table>")
     for p in plots:
         parts.append(f"<div><a href='{e(p)}'><img src='{e(p)}' alt='{e(p)}'></a></div>")
-    if frames:
-        parts.append(f"<h2>Frames</h2><p>Ground truth in green; {legend}</p>")
-        for seq, files in frames.items():
-            parts.append(f"<h3>{e(seq)}</h3><div class='frames'>" +
-                         "".join(f"<img src='{e(f)}' alt='{e(f)}'>" for f in files) + "</div>")
+    if frames or lines:
+        parts.append(f"<h2>Sequences</h2><p>Frames: ground truth in green; {legend}. Timelines: each tracker's "
+                     "overlap per frame, its lost flag (bars) and the frames where the target is absent (shaded).</p>")
+        for seq in dict.fromkeys([*(lines or {}), *frames]):
+            parts.append(f"<h3>{e(seq)}</h3>")
+            if lines and seq in lines:
+                parts.append(f"<div><img src='{e(lines[seq])}' alt='{e(lines[seq])}'></div>")
+            parts.append("<div class='frames'>" +
+                         "".join(f"<img src='{e(f)}' alt='{e(f)}'>" for f in frames.get(seq, [])) + "</div>")
     parts.append("</body></html>")
     (out / "index.html").write_text("\n".join(parts), encoding="utf-8")
