@@ -8,6 +8,7 @@ and positioned after the last frame read); any other order seeks.
 
 from __future__ import annotations
 
+import functools
 import threading
 from pathlib import Path
 from typing import NamedTuple
@@ -41,7 +42,17 @@ class VideoFrame(NamedTuple):
 
 def count_frames(video: Path) -> int:
     """The number of frames a video decodes to (counted by reading it: a container's stated count can be wrong);
-    0 when it cannot be opened."""
+    0 when it cannot be opened.  Remembered per file, size and modification time: an evaluation reads the same
+    sequence once per job."""
+    try:
+        st = Path(video).stat()
+    except OSError:
+        return 0
+    return _count_frames(str(video), st.st_size, st.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=256)
+def _count_frames(video: str, size: int, mtime_ns: int) -> int:
     with quiet_opencv():
         cap = cv2.VideoCapture(str(video))
     try:
