@@ -41,6 +41,20 @@ def test_track_writes_one_row_per_frame(clip, tmp_path, capsys):
     assert "20 frames tracked" in capsys.readouterr().err
 
 
+def test_json_lines_carry_the_trackers_scalar_info(clip, tmp_path):
+    """Every line is JSON with the box, score and flag, and the scalar entries of the state's info: the tracker's
+    mode and the loss test's ratio for fusion-pf."""
+    import json
+
+    path, box = clip
+    out = tmp_path / "t.jsonl"
+    assert main(["track", str(path), "--box", box, "--out", str(tmp_path / "t.csv"), "--json-out", str(out),
+                 "--quiet"]) == 0
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    assert len(lines) == 20 and lines[0]["frame"] == 1 and len(lines[5]["box"]) == 4
+    assert lines[5]["info"]["mode"] == "tracking" and isinstance(lines[5]["info"]["llr"], float)
+
+
 @pytest.mark.parametrize("args, needle", [
     (["track", "MISSING.mp4", "--box", "1,1,5,5"], "no such file"),
     (["track", "{clip}", "--box", "1,1,0,5"], "zero or negative size"),

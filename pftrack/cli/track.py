@@ -31,6 +31,21 @@ def add_track(sub) -> None:
     p.set_defaults(func=cmd_track)
 
 
+def scalar_info(info: dict) -> dict:
+    """The entries of a state's ``info`` that are plain scalars (the tracker's mode, the loss test's ratio, the
+    Bhattacharyya coefficient, flags such as ``probation``), non-finite numbers as None, for the JSON Lines."""
+    import math
+
+    out = {}
+    for k, v in info.items():
+        if isinstance(v, (bool, str)) or v is None:
+            out[k] = v
+        elif isinstance(v, (int, float, np.integer, np.floating)):
+            f = float(v)
+            out[k] = (int(v) if isinstance(v, (int, np.integer)) else f) if math.isfinite(f) else None
+    return out
+
+
 def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=None, seed=0, params=None,
               skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False) -> dict:
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
@@ -85,6 +100,9 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
                     rec = {"frame": number, "box": list(state.box), "score": state.score, "lost": state.lost}
                     if state.particles is not None and state.weights is not None:
                         rec["n_particles"] = len(state.particles)
+                    info = scalar_info(state.info)
+                    if info:
+                        rec["info"] = info
                     jsonl.write(rec)
                 if video:
                     g = gt[number - 1] if gt is not None and number - 1 < len(gt) else None
