@@ -112,12 +112,9 @@ def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans, h
     if half == 0:
         _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0, acc1, mark, j_lo, 0, n_rows, span_a, span_b, 0)
         return
-    # the first row below the centre: the smallest j with j + 0.5 - cy > 0
-    split = min(max(int(math.floor(cy - 0.5)) + 1 - j_lo, 0), n_rows)
-    if split < n_rows and j_lo + split + 0.5 - cy <= 0.0:
+    split = 0  # the rows at or above the centre (j + 0.5 - cy <= 0) come first
+    while split < n_rows and j_lo + split + 0.5 - cy <= 0.0:
         split += 1
-    while split > 0 and j_lo + split - 1 + 0.5 - cy > 0.0:
-        split -= 1
     _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0, acc1, mark, j_lo, 0, split, span_a, span_b, 0)
     _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0[half:], acc1[half:], mark, j_lo, split, n_rows,
                      span_a, span_b, half)
