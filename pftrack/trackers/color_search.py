@@ -466,10 +466,9 @@ class SearchMixin:
             box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
             self.last_box = box
             self.size = self._confident_size = (float(est[HX]), float(est[HY]))
-            score = float(rho[best]) if conf is None else conf
-            doubt = self._doubtful()  # a weak acquisition under probation_lost_llr: followed, reported absent
-            return self._state(box=box, score=min(score, 0.5) if doubt else score, lost=doubt,
-                               info={**info, "mode": "acquired"})
+            # a weak acquisition under probation_lost_llr: followed, reported absent
+            score, lost = self._as_reported(float(rho[best]) if conf is None else conf)
+            return self._state(box=box, score=score, lost=lost, info={**info, "mode": "acquired"})
         box = self.last_box
         if box is None:
             box = tuple(float(v) for v in ellipse_to_box(ell[best]))

@@ -71,6 +71,12 @@ class ProbationMixin:
         return (t > 0 and self._probation_left > 0 and self.loss.llr < t
                 and (self._probation_exit or not p.probation_lost_exit_only))
 
+    def _as_reported(self, score: float) -> tuple[float, bool]:
+        """``(score, lost)`` of a followed candidate: a doubtful frame (:meth:`_doubtful`) is reported absent, its
+        score at most 0.5."""
+        doubt = self._doubtful()
+        return (min(score, 0.5) if doubt else score), doubt
+
     def _end_probation(self) -> None:
         self._probation_left = 0
         self.loss.frozen = False
@@ -108,6 +114,6 @@ class ProbationMixin:
         box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
         self.last_box = box
         self.size = self._confident_size = (float(est[HX]), float(est[HY]))
-        doubt = self._doubtful()
-        return self._state(box=box, score=min(confidence(llr), 0.5) if doubt else confidence(llr), lost=doubt,
+        score, lost = self._as_reported(confidence(llr))
+        return self._state(box=box, score=score, lost=lost,
                            info={"mode": "acquired", "probation": self.on_probation, "switched": True})
