@@ -39,6 +39,7 @@ from ..cues.intensity import channel_levels, gain_maps, is_gray
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
 from ..cues.scale_search import aspect_factor, size_factor
 from ..cues.structure import StructureCue
+from ..cues.structure_hog import BestStructure, HogStructure
 from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, VX, VY
 from ..filtering.loss import FusedLoss
@@ -238,6 +239,12 @@ class FusionPFParams(ColorPFParams):
         "histogram cue and the search see the grey levels either way. Chosen on the tune split "
         "(docs/robustness.md): on its grey scenes mean AUC 0.593 against 0.588 ('levels'), face proxy 0.779 against "
         "0.720 (lowest run 0.695 against 0.471); 'quotient' lost the grey + light copies (0.359 against 0.469)."))
+    structure_features: Literal["ncc", "hog", "both", "hog-on-grey"] = param("ncc", doc=(
+        "What the structural cue correlates. 'ncc': grey patches (on grey input as grey_structure says); 'hog': "
+        "histograms of oriented gradients, each cell normalised by its own contrast (pftrack.cues.structure_hog; "
+        "Dalal & Triggs, CVPR 2005), which a light that varies across the target changes less; 'both': a box "
+        "scores the better of the two, each with its own references; 'hog-on-grey': 'hog' on grey input, 'ncc' on "
+        "colour. The gain, rates and gates are shared."))
     lk_levels: int = param(2, ge=1, le=6, doc="Pyramid levels of the flow when motion is on.")
     max_features: int = param(150, ge=1, le=1_000_000, doc="Flow features per frame when motion is on.")
 
@@ -282,18 +289,31 @@ class FusionPF(ColorPF):
         """A fresh structural cue for the input ``frame`` (None: unknown): on grey input with ``grey_structure`` other
         than 'levels', the quotient and grey-level pair of pftrack.cues.structure_light."""
         p = self.params
+        if p.structure_features == "hog" or (p.structure_features == "hog-on-grey" and frame is not None
+                                             and is_gray(frame)):
+            return HogStructure()
         if frame is not None and p.grey_structure != "levels" and p.illumination == "none" and is_gray(frame):
-            return LitStructure(p.structure_pixels, weighting=p.structure_weighting, sigma=p.illumination_sigma,
-                                mode=p.grey_structure, gray_of=self._frame_gray)
-        return StructureCue(p.structure_pixels, weighting=p.structure_weighting)
+            ncc = LitStructure(p.structure_pixels, weighting=p.structure_weighting, sigma=p.illumination_sigma,
+                               mode=p.grey_structure, gray_of=self._frame_gray)
+        else:
+            ncc = StructureCue(p.structure_pixels, weighting=p.structure_weighting)
+        if p.structure_features in ("ncc", "hog-on-grey"):
+            return ncc
+        return BestStructure(ncc, HogStructure())
+
+    def _lit_structure(self) -> LitStructure | None:
+        """The structural cue's quotient and grey-level pair, when it has one."""
+        s = self.structure.primary if isinstance(self.structure, BestStructure) else self.structure
+        return s if isinstance(s, LitStructure) else None
 
     def _grey_shared(self) -> bool:
-        return (self.cue.color_space == "gray" and isinstance(self.structure, LitStructure)
-                and self.structure.shares_gray) or super()._grey_shared()
+        lit = self._lit_structure()
+        return (self.cue.color_space == "gray" and lit is not None and lit.shares_gray) or super()._grey_shared()
 
     def _shared_quotient(self):
         """The grey structural cue's self-quotient image (same frames, same ``illumination_sigma``), when it has one."""
-        return self.structure._qf if isinstance(self.structure, LitStructure) else None
+        lit = self._lit_structure()
+        return lit._qf if lit is not None else None
 
     def init_auto(self, frame, histogram, size, *, regions=None):
         """As :meth:`ColorPF.init_auto`; a known histogram gives no reference patch, so the structural cue
