@@ -30,14 +30,16 @@ def test_shifted_rho_finds_a_histogram_moved_along_the_intensity_axis():
 @pytest.mark.parametrize("seed", [0, 1])
 def test_fusion_pf_reacquires_a_grey_target_relit_while_away(seed):
     """Grey teleport 919 (a fresh tune scene): the light on the target alone falls (gains 0.63-0.82) and the target
-    jumps. The default search misses its return (6 run seeds of 6); with the shifted intensity histograms it is
-    re-acquired within 15 frames (5 of 6)."""
+    jumps. With the grey-patch structural cue the search misses its return (6 run seeds of 6); with the shifted
+    intensity histograms it is re-acquired within 15 frames (5 of 6). The gradient cue (the default on grey input)
+    re-acquires it without the shift."""
     from pftrack.synth import teleport_scene
 
     from .conftest import lost_flag_run
 
     spec = teleport_scene(919, gray=1.0)
-    off = lost_flag_run(spec, "fusion-pf", seed=seed)
-    on = lost_flag_run(spec, "fusion-pf", seed=seed, grey_relit_shift=3)
+    off = lost_flag_run(spec, "fusion-pf", seed=seed, structure_features="ncc")
+    on = lost_flag_run(spec, "fusion-pf", seed=seed, grey_relit_shift=3, structure_features="ncc")
     assert off.reappearances == on.reappearances == 1
     assert off.reacquired == 0 and on.reacquired == 1
+    assert lost_flag_run(spec, "fusion-pf", seed=seed).reacquired == 1

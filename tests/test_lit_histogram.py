@@ -102,11 +102,16 @@ def test_color_pf_picks_the_quotient_model_from_the_input(gray, params, has_lit)
     assert frame_ious(np.array([st.box]), np.array([box]))[0] > 0.7 and not st.lost
     if has_lit:  # one quotient image per frame for the histogram and the fused structural check
         assert t._lit.quotient == t._structure_check.cue._qf
-    t = pftrack.create_tracker("fusion-pf", seed=0, **{"grey_histogram": "both", **params})
+    t = pftrack.create_tracker("fusion-pf", seed=0, **{"grey_histogram": "both", "structure_features": "ncc", **params})
     t.init(frame, box)
     assert (t._lit is not None) is has_lit
     if has_lit:  # one quotient image per frame for both grey cues
         assert t._lit.quotient == t.structure._qf
+    t = pftrack.create_tracker("fusion-pf", seed=0, **{"grey_histogram": "both", **params})  # the gradient cue
+    t.init(frame, box)
+    assert (t._lit is not None) is has_lit
+    if has_lit:  # no quotient in the structural cue: the histogram's own starts from the shared grey conversion
+        assert t._grey_shared() and not hasattr(t.structure, "_qf")
 
 
 @pytest.mark.parametrize("params", [{}, {"illumination_sigma": 0.2}])
@@ -156,8 +161,9 @@ def test_default_color_pf_holds_a_grey_face_under_a_lamp_and_a_shadow(seed):
     assert not any(lost)  # the face is in view in every frame
 
 
-@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
-def test_grey_frames_are_converted_once_for_the_quotient_image_and_the_equalisation(name, monkeypatch):
+@pytest.mark.parametrize(("name", "params"), [("color-pf", {}), ("fusion-pf", {}),
+                                              ("fusion-pf", {"structure_features": "ncc"})])
+def test_grey_frames_are_converted_once_for_the_quotient_image_and_the_equalisation(name, params, monkeypatch):
     """On grey input the self-quotient image and the equalisation table start from one grey conversion of each frame
     (the tracker's ``_frame_gray``), with the numbers of converting separately."""
     from pftrack.cues.illumination import QuotientImage
@@ -167,7 +173,7 @@ def test_grey_frames_are_converted_once_for_the_quotient_image_and_the_equalisat
     gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
     assert np.array_equal(equalization_lut(frame, gray=gray), equalization_lut(frame))
     assert np.array_equal(QuotientImage(0.1, bgr=False)(frame, gray=gray), QuotientImage(0.1, bgr=False)(frame))
-    t = pftrack.create_tracker(name, seed=0)
+    t = pftrack.create_tracker(name, seed=0, **params)
     t.init(frame, (120.0, 80.0, 80.0, 80.0))
     assert t._grey_shared()
     whole = []

@@ -10,8 +10,16 @@ import pytest
 
 import pftrack
 from pftrack.cues.structure import StructureCue
-from pftrack.cues.structure_hog import (BestStructure, HogStructure, _atan2_numpy, cell_grid, hog_descriptors, hog_ncc,
-                                        orientation_integrals, standardize_descriptors)
+from pftrack.cues.structure_hog import (
+    BestStructure,
+    HogStructure,
+    _atan2_numpy,
+    cell_grid,
+    hog_descriptors,
+    hog_ncc,
+    orientation_integrals,
+    standardize_descriptors,
+)
 from pftrack.cues.structure_light import LitStructure
 from pftrack.eval.metrics import frame_ious
 

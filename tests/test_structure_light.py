@@ -80,13 +80,13 @@ def test_fusion_pf_picks_the_grey_structure_from_the_input(gray, mode, kind):
     g = _scene(2)
     frame = _bgr(g) if gray else cv2.merge([g.astype(np.uint8), (255 - g).astype(np.uint8), g.astype(np.uint8)])
     box = (120.0, 80.0, 80.0, 80.0)
-    t = pftrack.create_tracker("fusion-pf", seed=0, grey_structure=mode)
+    t = pftrack.create_tracker("fusion-pf", seed=0, grey_structure=mode, structure_features="ncc")
     t.init(frame, box)
     assert type(t.structure) is kind
     st = t.update(frame)
     assert frame_ious(np.array([st.box]), np.array([box]))[0] > 0.7 and not st.lost
     # illumination='quotient' already transforms every grey frame: the structural cue is left alone
-    t = pftrack.create_tracker("fusion-pf", seed=0, illumination="quotient")
+    t = pftrack.create_tracker("fusion-pf", seed=0, illumination="quotient", structure_features="ncc")
     t.init(frame, box)
     assert type(t.structure) is StructureCue
 

@@ -41,8 +41,8 @@ __all__ = ["BestStructure", "HogStructure", "cell_grid", "hog_descriptors", "hog
 def cell_grid(w: float, h: float, cells: int) -> tuple[int, int]:
     """``(nx, ny)``: about ``cells`` cells in the aspect of a ``w x h`` box, at least 2 along each side."""
     a = max(float(w), 1e-6) / max(float(h), 1e-6)
-    nx = max(2, int(round(math.sqrt(cells * a))))
-    ny = max(2, int(round(cells / nx)))
+    nx = max(2, round(math.sqrt(cells * a)))
+    ny = max(2, round(cells / nx))
     return nx, ny
 
 
@@ -149,7 +149,7 @@ def _edges(lo: np.ndarray, hi: np.ndarray, n: int, limit: int) -> np.ndarray:
 
 
 def _descriptors_numpy(ii: np.ndarray, boxes: np.ndarray, nx: int, ny: int, eps: float) -> np.ndarray:
-    h1, w1, bins = ii.shape
+    h1, w1, _ = ii.shape
     xe = _edges(boxes[:, 0], boxes[:, 2], nx, w1 - 1)  # (N, nx + 1)
     ye = _edges(boxes[:, 1], boxes[:, 3], ny, h1 - 1)
     corner = ii[ye[:, :, None], xe[:, None, :]]  # (N, ny + 1, nx + 1, bins)
@@ -223,8 +223,7 @@ def _hog_ncc_numba(ii, boxes, nx, ny, eps, refs, out, per_ref):
                 dot += (desc[t] - m) * refs[q, t]
             r = dot / math.sqrt(ss) if ss > 0.0 else 0.0
             per_ref[n, q] = r
-            if r > best:
-                best = r
+            best = max(best, r)
         out[n] = best
     return out
 
