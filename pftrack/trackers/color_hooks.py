@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..cues.illumination import QuotientImage
 from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, X, Y
 from ..filtering.particles import ParticleSet
@@ -46,15 +47,19 @@ class ColorHooks:
         np.clip(states[:, HX:HY + 1], self.params.min_half_axis, None, out=states[:, HX:HY + 1])
 
     def _shared_quotient(self):
-        """A cached self-quotient image ``frame -> image`` of another cue, for the second grey histogram to share:
-        that of the structural check of ``grey_check="fused"`` when it sees the same frames at the same scale
-        (``illumination_sigma``), else none (it computes its own)."""
+        """A cached self-quotient image ``frame -> image`` for the second grey histogram: that of the structural
+        check of ``grey_check="fused"`` when it sees the same frames at the same scale (``illumination_sigma``);
+        otherwise its own, started from the tracker's one grey conversion of each frame (``_frame_gray``, which the
+        equalisation table then shares); none under ``illumination="quotient"``."""
+        if self._quotient is not None:
+            return None
         check = self._fused_check
         cue = check.cue if check is not None else None
-        if (not isinstance(cue, LitStructure) or self._quotient is not None
-                or cue.sigma != self.params.illumination_sigma):
-            return None
-        return cue._qf
+        if isinstance(cue, LitStructure) and cue.sigma == self.params.illumination_sigma:
+            return cue._qf
+        q = QuotientImage(self.params.illumination_sigma, bgr=False)
+        self._own_quotient = True
+        return lambda frame: q(frame, gray=self._frame_gray(frame))
 
     def _extra_log_lik(self, frame: np.ndarray, states: np.ndarray, log_lik: np.ndarray,
                        roi: tuple[int, int, int, int], feats) -> np.ndarray:
@@ -160,8 +165,8 @@ class ColorHooks:
         """Grey input whose self-quotient image starts from the tracker's grey conversion of each frame
         (``_frame_gray``): the equalisation table then starts from it too."""
         check = self._fused_check
-        return (self.cue.color_space == "gray" and check is not None and isinstance(check.cue, LitStructure)
-                and check.cue.shares_gray)
+        return self.cue.color_space == "gray" and (self._own_quotient or (
+            check is not None and isinstance(check.cue, LitStructure) and check.cue.shares_gray))
 
     def _wants_grey_check(self) -> bool:
         """Does this input get the structural check at re-acquisition (``grey_check`` on grey input)?"""

@@ -115,6 +115,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
 
     # ------------------------------------------------------------------ state
     def _reset(self) -> None:
+        self._own_quotient = False  # the quotient histogram's image starts from _frame_gray (color_hooks)
         self.q: np.ndarray | None = None
         self._sqrt_q: np.ndarray | None = None
         self.ps: ParticleSet | None = None

@@ -35,7 +35,6 @@ from ..cues.contrast import (
     foreground_lut,
     probability_integral,
 )
-from ..cues.illumination import QuotientImage
 from ..cues.intensity import channel_levels, gain_maps, is_gray
 from ..cues.motion import LocalMotionCue, local_motion, to_gray
 from ..cues.scale_search import aspect_factor, size_factor
@@ -283,7 +282,6 @@ class FusionPF(ColorPF):
         self.v_ref = None
         self._ref_levels: np.ndarray | None = None
         self._levels: tuple[int, np.ndarray] | None = None
-        self._own_quotient = False  # the quotient histogram's image starts from _frame_gray (see _shared_quotient)
 
     @property
     def _fused(self) -> bool:
@@ -314,19 +312,13 @@ class FusionPF(ColorPF):
 
     def _grey_shared(self) -> bool:
         lit = self._lit_structure()
-        return (self.cue.color_space == "gray" and ((lit is not None and lit.shares_gray) or self._own_quotient)
-                or super()._grey_shared())
+        return (self.cue.color_space == "gray" and lit is not None and lit.shares_gray) or super()._grey_shared()
 
     def _shared_quotient(self):
         """The grey structural cue's self-quotient image (same frames, same ``illumination_sigma``), when it has one;
-        otherwise (the gradient cue on grey input) one that starts from the tracker's grey conversion of each frame,
-        which the equalisation table then shares."""
+        otherwise (the gradient cue on grey input) :meth:`ColorPF._shared_quotient`'s own."""
         lit = self._lit_structure()
-        if lit is not None:
-            return lit._qf
-        q = QuotientImage(self.params.illumination_sigma, bgr=False)
-        self._own_quotient = True
-        return lambda frame: q(frame, gray=self._frame_gray(frame))
+        return lit._qf if lit is not None else super()._shared_quotient()
 
     def init_auto(self, frame, histogram, size, *, regions=None):
         """As :meth:`ColorPF.init_auto`; a known histogram gives no reference patch, so the structural cue
@@ -336,7 +328,6 @@ class FusionPF(ColorPF):
 
     def _init(self, frame, box):
         p = self.params
-        self._own_quotient = False
         if p.structure:  # before the colour init: its background statistics need the structural reference
             self.structure = self._structure_cue(frame)
             self.structure.init(frame, box_to_ellipse(box))

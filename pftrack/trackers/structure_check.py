@@ -43,6 +43,7 @@ import numpy as np
 
 from ..cues.scale_search import scale_candidates, size_factor
 from ..cues.structure import StructureCue
+from ..cues.structure_hog import HogStructure
 from ..cues.structure_light import LitStructure
 from ..filtering.loss import FusedLoss, LossDetector
 
@@ -91,12 +92,20 @@ class StructureCheck:
     references are refreshed on every confident frame."""
 
     def __init__(self, detector: LossDetector, *, fused: bool = False, template_pixels: int = TEMPLATE_PIXELS,
-                 rate: float = RATE, anchor_gate: float = ANCHOR_GATE, sigma: float = 0.1, gray_of=None):
+                 rate: float = RATE, anchor_gate: float = ANCHOR_GATE, sigma: float = 0.1, gray_of=None,
+                 features: str = "ncc"):
         # fused: the patches of the grey levels and of their self-quotient image (scale sigma), the better of the
         # two (fusion-pf's grey_structure="both"): a lamp or a shadow across a face lowered the grey levels' NCC
-        # alone until the fused test declared the face lost (docs/robustness.md)
-        self.cue = (LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both", gray_of=gray_of)
-                    if fused else StructureCue(template_pixels, anchor=True, weighting="uniform"))
+        # alone until the fused test declared the face lost (docs/robustness.md); or (features="hog") histograms
+        # of oriented gradients, fusion-pf's structural cue on grey input
+        if features not in ("ncc", "hog"):
+            raise ValueError(f"features must be 'ncc' or 'hog', got {features!r}")
+        if fused and features == "hog":
+            self.cue = HogStructure()
+        elif fused:
+            self.cue = LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both", gray_of=gray_of)
+        else:
+            self.cue = StructureCue(template_pixels, anchor=True, weighting="uniform")
         self.detector = detector
         self.fused = bool(fused)
         self.update_every = 1 if self.fused else UPDATE_EVERY
@@ -110,7 +119,8 @@ class StructureCheck:
         (``gray_of``: the tracker's cached grey image of the frames the check sees, for the quotient image)."""
         return cls(LossDetector(history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                 sd_floor_background=p.score_sd_floor, learn_z=p.history_z),
-                   fused=p.grey_check == "fused", sigma=p.illumination_sigma, gray_of=gray_of)
+                   fused=p.grey_check == "fused", sigma=p.illumination_sigma, gray_of=gray_of,
+                   features=p.grey_check_features)
 
     def init(self, frame: np.ndarray, ellipse: np.ndarray) -> None:
         self.cue.init(frame, np.asarray(ellipse, dtype=np.float64).reshape(1, 4))
