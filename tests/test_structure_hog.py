@@ -178,3 +178,28 @@ def test_fusion_pf_builds_the_structural_cue_its_parameter_names_and_tracks(feat
         assert not st.lost
     truth = np.array([[box[0] + dx, box[1], box[2], box[3]] for dx in range(3, 31, 3)])
     assert frame_ious(np.array(boxes), truth).mean() > 0.7
+
+
+def test_color_pf_builds_its_grey_check_on_gradients_when_asked():
+    from pftrack.filtering.loss import LossDetector
+    from pftrack.trackers.structure_check import StructureCheck
+
+    assert type(StructureCheck(LossDetector(), fused=True, features="hog").cue) is HogStructure
+    assert type(StructureCheck(LossDetector(), fused=True).cue) is LitStructure
+    assert type(StructureCheck(LossDetector(), fused=False, features="hog").cue) is StructureCue  # re-acquisition only
+    with pytest.raises(ValueError):
+        StructureCheck(LossDetector(), features="sift")
+    g = _texture(7)
+    box = (120.0, 80.0, 80.0, 80.0)
+    t = pftrack.create_tracker("color-pf", seed=0, grey_check_features="hog")
+    t.init(_bgr(g), box)
+    assert type(t._structure_check.cue) is HogStructure
+    assert t._grey_shared()  # no structural quotient: the histogram's own starts from the one grey conversion
+    for dx in range(3, 16, 3):
+        st = t.update(_bgr(np.roll(g, dx, axis=1)))
+        assert not st.lost
+    assert frame_ious(np.array([st.box]), np.array([[box[0] + 15, box[1], box[2], box[3]]]))[0] > 0.7
+    colour = cv2.merge([g.astype(np.uint8), (255 - g).astype(np.uint8), g.astype(np.uint8)])
+    t = pftrack.create_tracker("color-pf", seed=0, grey_check_features="hog")
+    t.init(colour, box)
+    assert t._structure_check is None
