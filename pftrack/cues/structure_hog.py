@@ -104,6 +104,7 @@ def _orientation_integrals_numba(gray, bins, out):
         for b in range(bins):
             out[0, i, b] = 0.0
     row = np.zeros(bins)
+    scale = bins / math.pi
     for j in range(h):
         for b in range(bins):
             out[j + 1, 0, b] = 0.0
@@ -112,12 +113,15 @@ def _orientation_integrals_numba(gray, bins, out):
             gx = float(gray[j, i + 1]) - float(gray[j, i - 1]) if 0 < i < w - 1 else 0.0
             gy = float(gray[j + 1, i]) - float(gray[j - 1, i]) if 0 < j < h - 1 else 0.0
             mag = math.sqrt(gx * gx + gy * gy)
-            t = _unsigned_angle(gy, gx) * (bins / math.pi) - 0.5
+            t = _unsigned_angle(gy, gx) * scale - 0.5
             b0 = math.floor(t)
             f = t - b0
-            i0 = int(b0) % bins
+            i0 = int(b0)  # -1 .. bins - 1 (t in [-0.5, bins - 0.5]): the bins wrap without an integer division
+            if i0 < 0:
+                i0 += bins
+            i1 = i0 + 1 if i0 + 1 < bins else 0
             row[i0] += mag * (1.0 - f)
-            row[(i0 + 1) % bins] += mag * f
+            row[i1] += mag * f
             for b in range(bins):
                 out[j + 1, i + 1, b] = row[b] + out[j, i + 1, b]
     return out
