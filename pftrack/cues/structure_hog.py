@@ -285,9 +285,9 @@ class HogStructure:
     particle boxes on histograms of oriented gradients; the interface of
     :class:`~pftrack.cues.structure.StructureCue`.
 
-    ``cells``: about this many cells a box (its aspect); ``bins``: unsigned orientations; ``cell_px``: reduced
-    pixels along a cell's shorter side (the block size of the region follows the boxes' mean size);
-    ``eps``: the cell normalisation's floor, a fraction of the box's mean cell norm."""
+    ``cells``: about this many cells a box (its aspect); ``bins``: unsigned orientations; ``cell_px``: a cell
+    spans at least this many reduced pixels along each side (the region's block size follows the boxes' mean
+    size); ``eps``: the cell normalisation's floor, a fraction of the box's mean cell norm."""
 
     def __init__(self, cells: int = 16, bins: int = 9, cell_px: int = 8, eps: float = 0.2):
         self.cells, self.bins, self.cell_px, self.eps = int(cells), int(bins), int(cell_px), float(eps)
