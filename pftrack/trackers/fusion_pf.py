@@ -249,6 +249,9 @@ class FusionPFParams(ColorPFParams):
         "(docs/robustness.md): on the grey tune set mean AUC 0.701 against 0.667 ('ncc'), re-acquired 102 against "
         "91 of 123, false-lost 0.022 against 0.040; 'hog' on colour input too lost the tune views' flag (pooled "
         "recall 0.344 against 0.400) and 17 % of the speed; 'both' gained nothing on grey (0.669)."))
+    hog_cells: int = param(16, ge=4, le=100, doc=(
+        "With the gradient cue (structure_features 'hog', 'both', or 'hog-on-grey' on grey input): about this many "
+        "cells a box, in its aspect (each at least 8 reduced pixels a side)."))
     lk_levels: int = param(2, ge=1, le=6, doc="Pyramid levels of the flow when motion is on.")
     max_features: int = param(150, ge=1, le=1_000_000, doc="Flow features per frame when motion is on.")
 
@@ -295,7 +298,7 @@ class FusionPF(ColorPF):
         p = self.params
         if p.structure_features == "hog" or (p.structure_features == "hog-on-grey" and frame is not None
                                              and is_gray(frame)):
-            return HogStructure()
+            return HogStructure(cells=p.hog_cells)
         if frame is not None and p.grey_structure != "levels" and p.illumination == "none" and is_gray(frame):
             ncc = LitStructure(p.structure_pixels, weighting=p.structure_weighting, sigma=p.illumination_sigma,
                                mode=p.grey_structure, gray_of=self._frame_gray)
@@ -303,7 +306,7 @@ class FusionPF(ColorPF):
             ncc = StructureCue(p.structure_pixels, weighting=p.structure_weighting)
         if p.structure_features in ("ncc", "hog-on-grey"):
             return ncc
-        return BestStructure(ncc, HogStructure())
+        return BestStructure(ncc, HogStructure(cells=p.hog_cells))
 
     def _lit_structure(self) -> LitStructure | None:
         """The structural cue's quotient and grey-level pair, when it has one."""
