@@ -203,3 +203,9 @@ def test_color_pf_builds_its_grey_check_on_gradients_when_asked():
     t = pftrack.create_tracker("color-pf", seed=0, grey_check_features="hog")
     t.init(colour, box)
     assert t._structure_check is None
+
+
+def test_fusion_pf_passes_its_cell_count_to_the_gradient_cue():
+    t = pftrack.create_tracker("fusion-pf", seed=0, hog_cells=36)
+    t.init(_bgr(_texture(8)), (120.0, 80.0, 80.0, 80.0))
+    assert type(t.structure) is HogStructure and t.structure.grid == (6, 6) and t.structure.shape == (48, 48)
