@@ -173,7 +173,7 @@ def test_the_frame_region_is_reused_for_the_estimate_and_at_the_frame_edge():
     cue = StructureCue(256)
     cue.init(img, np.array([80.0, 60.0, 15.0, 12.0]))
     calls = []
-    import pftrack.cues.structure as S
+    import pftrack.cues.reduced_region as S  # where the cue's regions are reduced (reduced_for)
 
     orig = S.reduce_region
     S.reduce_region = lambda *a: calls.append(a[1]) or orig(*a)

@@ -209,3 +209,16 @@ def test_fusion_pf_passes_its_cell_count_to_the_gradient_cue():
     t = pftrack.create_tracker("fusion-pf", seed=0, hog_cells=36)
     t.init(_bgr(_texture(8)), (120.0, 80.0, 80.0, 80.0))
     assert type(t.structure) is HogStructure and t.structure.grid == (6, 6) and t.structure.shape == (48, 48)
+
+
+def test_the_correlations_can_bring_the_descriptors_they_were_computed_from():
+    rng = np.random.default_rng(9)
+    ii = orientation_integrals(_texture(9, (60, 80)).astype(np.uint8), 9)
+    boxes = rng.uniform(0, 40, (5, 4))
+    boxes[:, 2:] = boxes[:, :2] + rng.uniform(8, 30, (5, 2))
+    refs = standardize_descriptors(hog_descriptors(ii, boxes[:2], 3, 4))
+    for backend in ("numba", "numpy"):
+        best, per = hog_ncc(ii, boxes, 3, 4, refs, backend=backend)
+        best_k, per_k, desc = hog_ncc(ii, boxes, 3, 4, refs, backend=backend, keep=True)
+        assert np.array_equal(best, best_k) and np.array_equal(per, per_k)
+        assert np.array_equal(desc, hog_descriptors(ii, boxes, 3, 4, backend=backend))

@@ -192,3 +192,17 @@ def _box_roi(ell: np.ndarray, width: int, height: int) -> tuple[int, int, int, i
     y1 = int(math.ceil(by1)) + 1
     x0, y0 = min(max(x0, 0), max(width - 1, 0)), min(max(y0, 0), max(height - 1, 0))
     return x0, y0, max(min(x1, width), x0 + 1), max(min(y1, height), y0 + 1)
+
+
+def reduced_for(frame: np.ndarray, roi, ell: np.ndarray, shape: tuple[int, int], pad_blocks: int = 0) -> Reduced:
+    """The reduced region (block size :func:`reduction_factor` for patches of ``shape``) of the boxes' bounding
+    rectangle within ``roi`` (None: the rectangle itself), widened by ``pad_blocks`` blocks on every side (so that
+    later boxes of the same frame near these, the estimate's, are covered too)."""
+    k = reduction_factor(ell, shape)
+    pad = pad_blocks * k
+    bx0, by0, bx1, by1 = _box_roi(ell, frame.shape[1], frame.shape[0])
+    if roi is None:
+        roi = (bx0, by0, bx1, by1)
+    x0, y0 = max(roi[0], bx0 - pad, 0), max(roi[1], by0 - pad, 0)
+    x1, y1 = max(min(roi[2], bx1 + pad), x0 + 1), max(min(roi[3], by1 + pad), y0 + 1)
+    return reduce_region(frame, (x0, y0, x1, y1), k)

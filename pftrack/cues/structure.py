@@ -37,7 +37,7 @@ import numpy as np
 
 from .._numba import numba_enabled
 from .ncc_kernels import _ncc_boxes, _ncc_one
-from .reduced_region import Reduced, _box_roi, box_bounds, gray_region, reduce_region, reduction_factor
+from .reduced_region import Reduced, box_bounds, gray_region, reduce_region, reduced_for, reduction_factor
 from .structure_search import propose_centres
 
 __all__ = ["Reduced", "StructureCue", "box_bounds", "gray_region", "kernel_weights", "ncc_reduced", "ncc_scores",
@@ -98,18 +98,7 @@ def sample_boxes(frame: np.ndarray, roi: tuple[int, int, int, int], ellipses: np
     ell = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
     if ell.shape[0] == 0:
         return np.empty((0, shape[0] * shape[1]), dtype=np.float32)
-    return sample_reduced(_reduced_for(frame, roi, ell, shape), ell, shape)
-
-
-def _reduced_for(frame, roi, ell, shape, pad_blocks: int = 0) -> Reduced:
-    """The reduced region of the boxes' bounding rectangle within ``roi``, widened by ``pad_blocks`` blocks on
-    every side (so that later boxes of the same frame near these, the estimate's, are covered too)."""
-    k = reduction_factor(ell, shape)
-    pad = pad_blocks * k
-    bx0, by0, bx1, by1 = _box_roi(ell, frame.shape[1], frame.shape[0])
-    x0, y0 = max(roi[0], bx0 - pad, 0), max(roi[1], by0 - pad, 0)
-    x1, y1 = max(min(roi[2], bx1 + pad), x0 + 1), max(min(roi[3], by1 + pad), y0 + 1)
-    return reduce_region(frame, (x0, y0, x1, y1), k)
+    return sample_reduced(reduced_for(frame, roi, ell, shape), ell, shape)
 
 
 def kernel_weights(shape: tuple[int, int], kind: str = "kernel") -> np.ndarray:
@@ -242,9 +231,7 @@ class StructureCue:
         boxes' own bounding rectangle)."""
         red = self._reduced
         if red is None or not red.covers(ell):
-            if roi is None:
-                roi = _box_roi(ell, frame.shape[1], frame.shape[0])
-            red = self._reduced = _reduced_for(frame, roi, ell, self.shape, pad_blocks=2)
+            red = self._reduced = reduced_for(frame, roi, ell, self.shape, pad_blocks=2)
         return red
 
     def patch(self, frame: np.ndarray, ellipse) -> np.ndarray:

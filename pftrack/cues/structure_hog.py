@@ -33,9 +33,10 @@ import math
 import numpy as np
 
 from .._numba import njit, numba_enabled
-from .reduced_region import Reduced, _box_roi, reduce_region, reduction_factor
+from .reduced_region import Reduced, reduced_for
 
-__all__ = ["BestStructure", "HogStructure", "cell_grid", "hog_descriptors", "hog_ncc", "orientation_integrals"]
+__all__ = ["BestStructure", "HogStructure", "cell_grid", "hog_descriptors", "hog_ncc", "orientation_integrals",
+           "standardize_descriptors"]
 
 
 def cell_grid(w: float, h: float, cells: int) -> tuple[int, int]:
@@ -203,15 +204,17 @@ def _descriptor_one(ii, bx0, by0, bx1, by1, nx, ny, eps, xe, ye, out):
 
 
 @njit(cache=True)
-def _hog_ncc_numba(ii, boxes, nx, ny, eps, refs, out, per_ref):
+def _hog_ncc_numba(ii, boxes, nx, ny, eps, refs, out, per_ref, descs):
     """Best zero-mean NCC of every box's descriptor with the standardised ``refs`` ``(R, D)``; ``per_ref`` ``(N, R)``
-    receives each correlation."""
+    receives each correlation, and ``descs`` ``(N, D)`` each descriptor when it has rows (``(0, D)``: not kept)."""
     bins = ii.shape[2]
     d = nx * ny * bins
-    desc = np.empty(d)
+    work = np.empty(d)
+    keep = descs.shape[0] > 0
     xe = np.empty(nx + 1, np.int64)
     ye = np.empty(ny + 1, np.int64)
     for n in range(boxes.shape[0]):
+        desc = descs[n] if keep else work
         _descriptor_one(ii, boxes[n, 0], boxes[n, 1], boxes[n, 2], boxes[n, 3], nx, ny, eps, xe, ye, desc)
         m = 0.0
         for t in range(d):
@@ -263,20 +266,22 @@ def standardize_descriptors(d: np.ndarray) -> np.ndarray:
 
 
 def hog_ncc(ii: np.ndarray, boxes: np.ndarray, nx: int, ny: int, refs: np.ndarray, eps: float = 0.2, *,
-            backend: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+            backend: str | None = None, keep: bool = False):
     """``(best, per_ref)``: the zero-mean NCC of each box's descriptor with each standardised reference ``refs``
-    ``(R, D)`` (``per_ref``, ``(N, R)``) and the best of them (``(N,)``)."""
+    ``(R, D)`` (``per_ref``, ``(N, R)``) and the best of them (``(N,)``); with ``keep``, also the descriptors
+    (:func:`hog_descriptors`' numbers) as a third item."""
     b = np.ascontiguousarray(boxes, dtype=np.float64).reshape(-1, 4)
     r = np.ascontiguousarray(refs, dtype=np.float64)
     use_numba = numba_enabled() if backend is None else backend == "numba"
     if use_numba:
         out = np.empty(len(b))
         per = np.empty((len(b), r.shape[0]))
-        _hog_ncc_numba(ii, b, int(nx), int(ny), float(eps), r, out, per)
-        return out, per
-    z = standardize_descriptors(_descriptors_numpy(ii, b, int(nx), int(ny), float(eps)))
-    per = z @ r.T
-    return per.max(axis=1), per
+        descs = np.empty((len(b) if keep else 0, int(nx) * int(ny) * ii.shape[2]))
+        _hog_ncc_numba(ii, b, int(nx), int(ny), float(eps), r, out, per, descs)
+        return (out, per, descs) if keep else (out, per)
+    d = _descriptors_numpy(ii, b, int(nx), int(ny), float(eps))
+    per = standardize_descriptors(d) @ r.T
+    return (per.max(axis=1), per, d) if keep else (per.max(axis=1), per)
 
 
 # ---------------------------------------------------------------------------------------------- the cue
@@ -315,15 +320,7 @@ class HogStructure:
     def _region(self, frame: np.ndarray, roi, ell: np.ndarray) -> tuple[Reduced, np.ndarray]:
         red = self._red
         if red is None or not red.covers(ell):
-            h, w = frame.shape[:2]
-            k = reduction_factor(ell, self.shape)
-            bx0, by0, bx1, by1 = _box_roi(ell, w, h)
-            pad = 2 * k
-            if roi is None:
-                roi = (bx0, by0, bx1, by1)
-            x0, y0 = max(roi[0], bx0 - pad, 0), max(roi[1], by0 - pad, 0)
-            x1, y1 = max(min(roi[2], bx1 + pad), x0 + 1), max(min(roi[3], by1 + pad), y0 + 1)
-            red = self._red = reduce_region(frame, (x0, y0, x1, y1), k)
+            red = self._red = reduced_for(frame, roi, ell, self.shape, pad_blocks=2)
             self._ii = orientation_integrals(red.gray, self.bins)
         return red, self._ii
 
@@ -354,12 +351,14 @@ class HogStructure:
     def _refresh(self) -> None:
         self._refs = standardize_descriptors(np.stack([self._run, self._first]))
 
-    def _correlate(self, frame: np.ndarray, roi, ellipses) -> tuple[np.ndarray, np.ndarray]:
+    def _correlate(self, frame: np.ndarray, roi, ellipses, keep: bool = False):
+        """:func:`hog_ncc` of the ellipses' boxes with the references (``keep``: with their descriptors)."""
         ell = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
         if ell.shape[0] == 0:
-            return np.empty(0), np.empty((0, 2))
+            empty = (np.empty(0), np.empty((0, 2)))
+            return (*empty, np.empty((0, self._refs.shape[1]))) if keep else empty
         red, ii = self._region(frame, roi, ell)
-        return hog_ncc(ii, self._boxes(red, ell), *self.grid, self._refs, self.eps)
+        return hog_ncc(ii, self._boxes(red, ell), *self.grid, self._refs, self.eps, keep=keep)
 
     def scores(self, frame: np.ndarray, roi, ellipses: np.ndarray) -> np.ndarray:
         """NCC in [-1, 1] of every ellipse's box descriptor with the references (the better of the two)."""
@@ -378,9 +377,14 @@ class HogStructure:
         if rate <= 0 or self._run is None:
             return False
         e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
-        if anchor_gate > -1.0 and self._correlate(frame, None, e)[1][0, 1] < anchor_gate:
-            return False
-        self._run = (1.0 - rate) * self._run + rate * self._describe(frame, e)
+        if anchor_gate > -1.0:  # the estimate's descriptor comes with its correlations: computed once
+            _, per, desc = self._correlate(frame, None, e, keep=True)
+            if per[0, 1] < anchor_gate:
+                return False
+            desc = desc[0]
+        else:
+            desc = self._describe(frame, e)
+        self._run = (1.0 - rate) * self._run + rate * desc
         self._refresh()
         return True
 
