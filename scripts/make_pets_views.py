@@ -45,9 +45,9 @@ START_FRACTION = 0.9  # the first box must be this much inside the window
 MIN_HEIGHT = 16.0
 
 
-def windows(width: int, height: int) -> dict[str, tuple[int, int, int, int]]:
-    """The four views ``x0, y0, w, h``: left, right, top and bottom 55 % of the frame."""
-    w, h = int(round(0.55 * width)), int(round(0.55 * height))
+def windows(width: int, height: int, share: float = 0.55) -> dict[str, tuple[int, int, int, int]]:
+    """The four views ``x0, y0, w, h``: left, right, top and bottom ``share`` of the frame (55 %)."""
+    w, h = int(round(share * width)), int(round(share * height))
     return {"left": (0, 0, w, height), "right": (width - w, 0, w, height),
             "top": (0, 0, width, h), "bottom": (0, height - h, width, h)}
 
@@ -94,8 +94,14 @@ def main() -> None:
     ap.add_argument("mot", help="a MOTChallenge sequence folder (img1/, gt/gt.txt), or a single-target one")
     ap.add_argument("--frames", help="frame range, 1-based and inclusive, e.g. 1-200 (default: all)")
     ap.add_argument("--min-frames", type=int, default=30)
+    ap.add_argument("--share", type=float, default=0.55,
+                    help="each window's share of the frame's width or height (0.55; other shares give other exits "
+                         "from the same frames, named with the share)")
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
+    if not 0.1 <= args.share < 1.0:
+        ap.error("--share must be in [0.1, 1)")
+    tag = "" if args.share == 0.55 else f"{int(round(100 * args.share))}"
     seq = read_sequence(args.mot)
     lo, hi = (int(v) for v in args.frames.split("-")) if args.frames else (1, len(seq.frames))
     hi = min(hi, len(seq.frames))
@@ -109,7 +115,8 @@ def main() -> None:
         gt = np.column_stack([ok + 1.0, np.ones(ok.size), seq.groundtruth[ok]])
         stem = Path(args.mot).name
     made = []
-    for name, win in windows(first.shape[1], first.shape[0]).items():
+    for name, win in windows(first.shape[1], first.shape[0], args.share).items():
+        name += tag
         x0, y0, ww, wh = win
         frames_dir = out.with_name(out.name + "_frames") / f"{stem}_{name}_f{lo}-{hi}"
         frames_dir.mkdir(parents=True, exist_ok=True)

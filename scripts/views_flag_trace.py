@@ -1,0 +1,130 @@
+"""Where a tracker's estimate is on the absent frames of the PETS views on which its lost flag is down.
+
+    python scripts/views_flag_trace.py reports/views_report --pets ../shared/data/pets09_s2l1_dev \
+        --trackers fusion-pf,color-pf --seeds 0,1
+
+The views (``scripts/make_pets_views.py``) are single-person sequences cut from PETS 2009 S2.L1 through four
+fixed windows. On a frame where the person is out of the window (absent), the flag should be up. Each absent
+frame with the flag down is put in the first class that applies:
+
+* ``walker, never up`` / ``walker, taken again``: the estimate overlaps (IoU >= 0.3) the box of another annotated
+  person, clipped to the window; the flag has not been up since the person's last present frame (the estimate
+  was on the other walker before the exit, or moved to them without a loss) / it was up, and the search has since
+  taken that walker;
+* ``sliver``: less than 60 % of the estimate's box lies inside the window;
+* ``never up``: the flag has not been up since the person's last present frame;
+* ``taken again``: the flag was up after the exit, and the search has since acquired something unannotated.
+
+Diagnosis only: it chooses nothing. Each view folder's ``img/`` links to its window's frames, named by the PETS
+frame number, which maps the view's frames onto the PETS annotation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from pftrack.geometry import in_frame_fraction, iou
+from pftrack.io.datasets import read_sequence
+from pftrack.trackers import create_tracker
+
+sys.path.insert(0, str(Path(__file__).parent))
+from make_pets_views import windows  # noqa: E402
+
+CLASSES = ("walker, never up", "walker, taken again", "sliver", "never up", "taken again")
+
+
+def view_window(folder: Path, width: int, height: int) -> tuple[int, int, int, int]:
+    """The window ``x0, y0, w, h`` of a view, from its folder name (``..._right_f..``, ``..._right40_f..``: the
+    share of :func:`make_pets_views.windows`, 55 % when not named)."""
+    side, share = re.search(r"_(left|right|top|bottom)(\d*)_f", folder.name).groups()
+    return windows(width, height, int(share) / 100 if share else 0.55)[side]
+
+
+def pets_frame(path: Path) -> int:
+    """The PETS frame number a view's image links to (its file name)."""
+    return int(re.findall(r"(\d+)", Path(os.readlink(path)).stem)[-1])
+
+
+def classify(seq, boxes, lost, others, window) -> dict[str, int]:
+    """Counts of the absent frames with the flag down by class (see the module's docstring)."""
+    x0, y0, ww, wh = window
+    out = dict.fromkeys(CLASSES, 0)
+    up_since_exit = False
+    for t in range(1, len(boxes)):
+        if not seq.absent[t]:
+            up_since_exit = False
+            continue
+        up_since_exit |= bool(lost[t])
+        if lost[t]:
+            continue
+        b = boxes[t]
+        on_other = False
+        for g in others.get(t, ()):
+            gx, gy = max(g[0], x0), max(g[1], y0)
+            gw, gh = min(g[0] + g[2], x0 + ww) - gx, min(g[1] + g[3], y0 + wh) - gy
+            if gw > 0 and gh > 0 and iou(b, (gx - x0, gy - y0, gw, gh)) >= 0.3:
+                on_other = True
+                break
+        if on_other:
+            out["walker, taken again" if up_since_exit else "walker, never up"] += 1
+        elif in_frame_fraction(b, ww, wh) < 0.6:
+            out["sliver"] += 1
+        elif not up_since_exit:
+            out["never up"] += 1
+        else:
+            out["taken again"] += 1
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("views", type=Path)
+    ap.add_argument("--pets", type=Path, default=Path("../shared/data/pets09_s2l1_dev"))
+    ap.add_argument("--trackers", default="fusion-pf,color-pf")
+    ap.add_argument("--seeds", default="0,1")
+    args = ap.parse_args()
+    pets = read_sequence(args.pets)
+    gt = pets.mot_gt
+    height, width = cv2.imread(str(pets.frames[0])).shape[:2]
+    seeds = [int(s) for s in args.seeds.split(",")]
+    for name in args.trackers.split(","):
+        total = dict.fromkeys(CLASSES, 0)
+        absent = up = 0
+        for folder in sorted(p for p in args.views.iterdir() if (p / "meta.json").exists()):
+            seq = read_sequence(folder)
+            if seq.absent is None or not seq.absent[1:].any():
+                continue
+            pid = int(folder.name.rsplit("_id", 1)[1])
+            window = view_window(folder, width, height)
+            numbers = [pets_frame(p) for p in seq.frames]
+            others = {t: gt[(gt[:, 0] == n) & (gt[:, 1] != pid), 2:6] for t, n in enumerate(numbers)}
+            frames = [cv2.imread(str(p)) for p in seq.frames]
+            for seed in seeds:
+                tr = create_tracker(name, seed=seed)
+                boxes, lost = [seq.init_box], [False]
+                tr.init(frames[0], seq.init_box)
+                for f in frames[1:]:
+                    st = tr.update(f)
+                    boxes.append(st.box)
+                    lost.append(bool(st.lost))
+                counts = classify(seq, np.asarray(boxes, float), lost, others, window)
+                n_abs = int(seq.absent[1:].sum())
+                absent += n_abs
+                up += n_abs - sum(counts.values())
+                for k in CLASSES:
+                    total[k] += counts[k]
+                print(f"{name} {folder.name} seed {seed}: absent {n_abs}, flag up {n_abs - sum(counts.values())}, "
+                      + ", ".join(f"{k} {v}" for k, v in counts.items()), flush=True)
+        print(f"== {name}: {absent} absent frames, flag up on {up} ({up / max(absent, 1):.3f}); down: "
+              + ", ".join(f"{k} {v}" for k, v in total.items()), flush=True)
+
+
+if __name__ == "__main__":
+    main()
