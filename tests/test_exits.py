@@ -86,6 +86,21 @@ def test_the_exit_strip_widens_at_reenter_grow_times_the_exit_speed(grow, width)
     np.testing.assert_allclose(t._exit_band()[0, 2], 3 * hx + width)
 
 
+@pytest.mark.parametrize("reach, sizes", [(0.0, 3.0 + 6.0), (3.0, 6.0), (1.0, 3.0)])
+def test_the_exit_strip_grows_no_deeper_than_reenter_reach_target_sizes(reach, sizes):
+    """Ten frames at 6 px a frame widen the strip by 60 px (six half-widths here); reenter_reach caps its depth at
+    that many target widths, never below the strip the search starts with (reenter_border = 1: 3 half-widths)."""
+    t = pftrack.create_tracker("color-pf", seed=0, reenter_reach=reach)
+    frame = np.zeros((240, 320, 3), np.uint8)
+    frame[100:140, 100:120] = (0, 0, 200)
+    t.init(frame, (100, 100, 20, 40))
+    hx = t.size[0]
+    t.frame_index, t._search_since = 30, 20
+    t._lost_at = (16, np.array([310.0, 120.0]), np.zeros(2))
+    t._exit_velocity = (6.0 * hx / 10.0, 0.0)
+    np.testing.assert_allclose(t._exit_band()[0, 2], sizes * hx)
+
+
 def _flow_scene(seed: int) -> SceneSpec:
     """The target walks out through the right edge; its twin (same colours) follows at the same speed, 170 px
     behind, and leaves too."""

@@ -296,6 +296,10 @@ class ColorModelParams(Params):
         "With reenter_border: the strip widens at this many times the speed the target left with, from the start "
         "of the search (0: a fixed strip, which a target coming back must cross). An option: 0 gained on fusion-pf's "
         "synthetic tune scenes but lost a real report sequence whose pedestrian comes back (docs/robustness.md)."))
+    reenter_reach: float = param(0.0, ge=0, le=100, doc=(
+        "With reenter_border: the strip widens no deeper than this many target widths (heights, for the top and "
+        "bottom edges) from the edge, however long the target has been out; 0: no limit. A look-alike walking in "
+        "the view long after the exit lies deep in a strip that has grown over it (docs/robustness.md)."))
     reenter_outward: float = param(0.0, ge=0, le=100, doc=(
         "With reenter_border: a target coming back through the edge it left by moves into the view, not out. A "
         "candidate of the exit strip whose own motion since the previous frame (its patch found again in the "

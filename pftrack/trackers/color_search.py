@@ -211,7 +211,10 @@ class SearchMixin:
         speed = self.params.reenter_grow * math.hypot(*self._exit_velocity)
         grow = speed * max(self.frame_index - self._search_since, 0)
         half, extent = (hx, fw) if edge < 2 else (hy, fh)
-        return edge, min(half * (1.0 + 2.0 * b) + grow, float(extent))
+        depth = half * (1.0 + 2.0 * b) + grow
+        if self.params.reenter_reach > 0:  # a strip grown this deep is as far as a returning target is looked for
+            depth = min(depth, max(half * (1.0 + 2.0 * b), 2.0 * half * self.params.reenter_reach))
+        return edge, min(depth, float(extent))
 
     def _exit_band(self) -> np.ndarray | None:
         """The strip of :meth:`_exit_strip` as a rectangle ``[[x, y, w, h]]`` of sample centres (``None`` as
