@@ -97,7 +97,8 @@ def main() -> None:
     for name in args.trackers.split(","):
         total = dict.fromkeys(CLASSES, 0)
         absent = up = 0
-        for folder in sorted(p for p in args.views.iterdir() if (p / "meta.json").exists()):
+        # every view has its ground truth; only some have a meta.json (the frames left unscored)
+        for folder in sorted(p for p in args.views.iterdir() if (p / "groundtruth_rect.txt").exists()):
             seq = read_sequence(folder)
             if seq.absent is None or not seq.absent[1:].any():
                 continue

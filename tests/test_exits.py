@@ -88,8 +88,8 @@ def test_the_exit_strip_widens_at_reenter_grow_times_the_exit_speed(grow, width)
 
 @pytest.mark.parametrize("reach, sizes", [(0.0, 3.0 + 6.0), (3.0, 6.0), (1.0, 3.0)])
 def test_the_exit_strip_grows_no_deeper_than_reenter_reach_target_sizes(reach, sizes):
-    """Ten frames at 6 px a frame widen the strip by 60 px (six half-widths here); reenter_reach caps its depth at
-    that many target widths, never below the strip the search starts with (reenter_border = 1: 3 half-widths)."""
+    """Ten frames at 0.6 target half-widths a frame widen the strip by six half-widths; reenter_reach caps its depth
+    at that many target widths, never below the strip the search starts with (reenter_border = 1: 3 half-widths)."""
     t = pftrack.create_tracker("color-pf", seed=0, reenter_reach=reach)
     frame = np.zeros((240, 320, 3), np.uint8)
     frame[100:140, 100:120] = (0, 0, 200)
