@@ -353,7 +353,8 @@ def test_the_html_report_gives_the_paired_differences(tmp_path):
 
 def test_per_frame_iou_keeps_the_frames_aligned():
     """The timelines' overlap: one value per frame, NaN where the ground truth has no box, 0 for a missing box."""
-    from pftrack.eval.timeline import _runs, per_frame_iou
+    from pftrack.eval.metrics import per_frame_iou
+    from pftrack.eval.timeline import _runs
 
     gt = np.array([[0, 0, 10, 10], [np.nan] * 4, [0, 0, 10, 10], [0, 0, 10, 10]], dtype=float)
     pred = np.array([[0, 0, 10, 10], [0, 0, 10, 10], [5, 0, 10, 10], [np.nan] * 4], dtype=float)

@@ -42,6 +42,17 @@ def frame_ious(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     return iou(_clean_pred(pred[ok]), gt[ok])
 
 
+def per_frame_iou(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """IoU of each frame's box with the ground truth, aligned with the frames (unlike :func:`frame_ious`): NaN
+    where the ground truth has no usable box, 0 where the prediction is missing."""
+    pred = np.asarray(pred, dtype=np.float64).reshape(-1, 4)
+    gt = np.asarray(gt, dtype=np.float64).reshape(-1, 4)[: len(pred)]
+    out = np.full(len(gt), np.nan)
+    ok = valid_gt(gt)
+    out[ok] = iou(_clean_pred(pred[: len(gt)][ok]), gt[ok])
+    return out
+
+
 def frame_center_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     pred, gt = _align(pred, gt)
     ok = valid_gt(gt)

@@ -9,23 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..geometry import iou
-from .metrics import valid_gt
+from .metrics import per_frame_iou
 
-__all__ = ["per_frame_iou", "timelines"]
-
-
-def per_frame_iou(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
-    """IoU of each frame's box with the ground truth, aligned with the frames: NaN where the ground truth has no
-    usable box, 0 where the prediction is missing."""
-    pred = np.asarray(pred, dtype=np.float64).reshape(-1, 4)
-    gt = np.asarray(gt, dtype=np.float64).reshape(-1, 4)[: len(pred)]
-    out = np.full(len(gt), np.nan)
-    ok = valid_gt(gt)
-    p = pred[: len(gt)][ok].copy()
-    p[~np.all(np.isfinite(p), axis=1)] = 0.0  # a missing prediction overlaps nothing
-    out[ok] = iou(p, gt[ok])
-    return out
+__all__ = ["timelines"]
 
 
 def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
