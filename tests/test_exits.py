@@ -212,3 +212,82 @@ def test_acquire_in_frame_waits_until_half_of_the_candidate_is_in(seed):
         first[g] = (k, in_frame_fraction(states[k - 1].box, w, h))
     assert first[0.0][1] < 0.4 and first[0.5][1] >= 0.45, first
     assert first[0.0][0] < first[0.5][0] <= 56, first
+
+
+def _resident_scene(seed: int) -> SceneSpec:
+    """The target walks out through the right edge (gone from frame 27) and stays out; its twin (same colours) walks
+    up the view 20-30 px from that edge all the while, inside the exit strip from the start of the search."""
+    target = Target(path=((0, 230.0, 120.0), (30, 360.0, 120.0)), size=(26.0, 52.0))
+    twin = Target(path=((0, 288.0 - 3.0 * seed, 225.0), (75, 288.0 - 3.0 * seed, 75.0)), size=(26.0, 52.0))
+    return SceneSpec(n_frames=75, seed=seed, targets=(target, twin), background="flat", kind="exit")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("tracker", ["color-pf", "fusion-pf"])
+def test_a_look_alike_that_stayed_in_view_is_not_the_target_coming_back(tracker, seed):
+    """reenter_resident: the twin walking in the exit strip was in view the whole time the target was out, so it
+    is not acquired (it is, on the first search frame, without the rule); the target returning through the edge
+    is still acquired within a few frames of being half in (frames 52-54, test above)."""
+    scene = Scene(_resident_scene(seed))
+    frames = scene.frames()
+    gt, twin = scene.groundtruth(), scene.groundtruth(target=1)
+    taken = {}
+    for k in (0, 30):
+        t = pftrack.create_tracker(tracker, seed=seed, reenter_resident=k)
+        t.init(frames[0], tuple(gt[0]))
+        states = [t.update(f) for f in frames[1:]]
+        taken[k] = [i for i, s in enumerate(states, start=1) if not s.lost and iou(s.box, twin[i]) > 0.5]
+        if k:
+            assert all(s.lost for s in states[29:])  # frames 30-74: the target is out of view
+    assert taken[0] and min(taken[0]) <= 32 and not taken[30], taken
+    back = Scene(_return_scene(seed))
+    frames, gt = back.frames(), back.groundtruth()
+    t = pftrack.create_tracker(tracker, seed=seed, reenter_resident=30)
+    t.init(frames[0], tuple(gt[0]))
+    states = [t.update(f) for f in frames[1:]]
+    k = next(k for k, s in enumerate(states, start=1) if k > 30 and not s.lost)
+    b, g = np.asarray(states[k - 1].box), gt[k]
+    assert k <= 58 and np.hypot(*(b[:2] + b[2:] / 2 - g[:2] - g[2:] / 2)) < g[2], (k, b, g)  # on the target
+
+
+def test_resident_traces_a_candidate_back_to_the_border_or_not():
+    """_resident follows a textured patch back through the kept grey frames: one that moved inside the view on every
+    frame stayed in view; one whose trace reaches the right edge came in; off (0), or with a frame missing from the
+    kept ones, nothing is refused."""
+    rng = np.random.default_rng(0)
+    background = rng.integers(0, 60, (240, 320), dtype=np.uint8)
+    patch = rng.integers(120, 255, (40, 20), dtype=np.uint8)
+
+    def grey(x, y):
+        g = background.copy()
+        x0, x1 = max(x, 0), min(x + 20, 320)
+        g[y:y + 40, x0:x1] = patch[:, x0 - x:x1 - x]
+        return g
+
+    def tracker(k, path):
+        t = pftrack.create_tracker("color-pf", seed=0, reenter_resident=k)
+        frame = np.zeros((240, 320, 3), np.uint8)
+        frame[100:140, 100:120] = (0, 0, 200)
+        t.init(frame, (100, 100, 20, 40))
+        t._search_since = 10
+        t._lost_at = (6, np.array([310.0, 120.0]), np.zeros(2))
+        t._exit_velocity = (6.0, 0.0)  # out through the right edge: the search's strip is along it
+        for i, (x, y) in enumerate(path[:-1]):
+            t._search_grays.append((10 + i, grey(x, y)))
+        t.frame_index = 10 + len(path) - 1
+        x, y = path[-1]
+        now = cv2.cvtColor(grey(x, y), cv2.COLOR_GRAY2BGR)
+        ell = np.array([x + 10.0, y + 20.0, 10.0, 20.0])
+        return t, now, ell
+
+    inside = [(270, 40 + 4 * i) for i in range(6)]
+    entering = [(304 - 5 * i, 100) for i in range(6)]  # a quarter outside on the oldest frame
+    t, now, ell = tracker(30, inside)
+    assert t._resident(now, ell)
+    t, now, ell = tracker(30, entering)
+    assert not t._resident(now, ell)
+    t, now, ell = tracker(0, inside)
+    assert not t._resident(now, ell)
+    t, now, ell = tracker(30, inside)
+    t.frame_index += 1  # the last kept frame is not the previous one
+    assert not t._resident(now, ell)

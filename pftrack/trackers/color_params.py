@@ -306,6 +306,11 @@ class ColorModelParams(Params):
         "previous frame by normalised correlation) carries it towards that edge faster than this many times the "
         "speed the target left with (at least 1 px/frame) is another object on its way out, and is not acquired. "
         "0: off."))
+    reenter_resident: int = param(0, ge=0, le=10_000, doc=(
+        "With reenter_border: a target coming back entered the view since it left. A candidate of the exit strip "
+        "traced back (its patch found again frame by frame) over the frames since the search began, at most this "
+        "many, with at least 90 % of its box inside the view on every one of them, stayed in view while the "
+        "target was out: another object, not acquired. 0: off."))
     search_prior: float = param(0.0, ge=0, le=1, doc=(
         "Re-acquisition with a position prior: a candidate's ratio gets the log prior odds of its position, "
         "log((1 - e) A N(x; m, s^2) + e), m the constant-velocity prediction from the last confident frame and s "

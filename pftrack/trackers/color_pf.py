@@ -143,7 +143,8 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self._search_loglik: np.ndarray | None = None
         self._search_since = 0  # frame index at which the current search began
         self._last_search: TrackState | None = None  # its latest result (re-reported between searches)
-        self._search_gray: tuple[int, np.ndarray] | None = None  # (frame index, grey frame) while searching
+        # (frame index, grey frame) of the last frames while searching an exit strip (.vetoes)
+        self._search_grays: deque = deque(maxlen=max(1, int(self.params.reenter_resident)))
         self._gray_now: tuple | None = None  # (frame index, grey image, frame): this frame's grey image, once converted
         self._vetoed: list = []  # (frame index, centre, shift) of the candidates reenter_outward refused lately
         self._ell = np.empty((0, 4))
@@ -310,9 +311,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
             self._last_search = state if self.mode == "searching" else None
         else:
             state = self._waiting_state()
-        # the previous frame while the search is confined to an exit strip (reenter_outward: a candidate's motion)
-        self._search_gray = ((self.frame_index, self._frame_gray(frame)) if self.mode == "searching"
-                             and self.params.reenter_outward > 0 and self._exit_strip() is not None else None)
+        self._keep_search_gray(frame)  # the frames while the search is confined to an exit strip (.vetoes)
         self._on_frame(frame)
         return state
 

@@ -5,6 +5,8 @@ candidate that would end the loss can still be refused, as another object of the
 
 - ``reenter_outward``: after the target left the view, a candidate of the exit strip moving out through that
   edge (:meth:`VetoMixin._leaving`);
+- ``reenter_resident``: after the target left the view, a candidate that was inside the view all the while the
+  target was out (:meth:`VetoMixin._resident`);
 - the raw-colour check and the grey structure check (:mod:`.raw_check`, :mod:`.structure_check`): their own
   evidence calls the candidate background;
 - the distractor memory (:mod:`.distractors`): a look-alike met beyond the target's reach early in the loss.
@@ -34,7 +36,11 @@ from ..cues.template import patch_shift
 from ..filtering.dynamics import X, Y
 from ..geometry import ellipse_to_box, in_frame_fraction
 
-__all__ = ["Acquisition", "VetoMixin", "near_mask"]
+__all__ = ["Acquisition", "RESIDENT_IN_FRAME", "VetoMixin", "near_mask"]
+
+#: ``reenter_resident``: the share of a candidate's box inside the view on every frame of its trace that makes it
+#: an object that stayed in view
+RESIDENT_IN_FRAME = 0.9
 
 
 class Acquisition(NamedTuple):
@@ -69,7 +75,7 @@ class VetoMixin:
         candidate where an object vetoed on the previous frame has moved to is that object; otherwise unknown
         motion vetoes nothing. Several candidates of one frame may be asked."""
         k = self.params.reenter_outward
-        prev = self._search_gray
+        prev = self._search_grays[-1] if self._search_grays else None
         strip = self._exit_strip() if k > 0 and prev is not None else None
         if strip is None or self.frame_index - prev[0] != 1:
             return False
@@ -86,10 +92,51 @@ class VetoMixin:
             return True
         return False
 
+    def _keep_search_gray(self, frame: np.ndarray) -> None:
+        """Keep this frame's grey image while the search is confined to an exit strip (the last
+        ``reenter_resident`` frames, at least one, consecutive); forget them otherwise."""
+        p = self.params
+        grays = self._search_grays
+        if (self.mode == "searching" and (p.reenter_outward > 0 or p.reenter_resident > 0)
+                and self._exit_strip() is not None):
+            if grays and grays[-1][0] != self.frame_index - 1:
+                grays.clear()
+            grays.append((self.frame_index, self._frame_gray(frame)))
+        else:
+            grays.clear()
+
+    def _resident(self, frame: np.ndarray, ell: np.ndarray) -> bool:
+        """``reenter_resident``: was a candidate (ellipse ``ell``) inside the view all the while the target was
+        out?  Its box is traced back frame by frame through the grey frames kept since the search began in the
+        exit strip (at most ``reenter_resident`` of them): its patch found again in the frame before by normalised
+        correlation, within three exit speeds (at least 8 px). A target coming back entered through an edge since
+        it left, so its trace reaches the border; a candidate whose box stays at least :data:`RESIDENT_IN_FRAME`
+        inside the view on every frame back to the oldest kept is another object. A trace that is lost (a flat
+        patch, no match) refuses nothing."""
+        grays = self._search_grays
+        strip = self._exit_strip() if self.params.reenter_resident > 0 and grays else None
+        if strip is None or grays[-1][0] != self.frame_index - 1:
+            return False
+        fh, fw = self._shape
+        radius = max(8, math.ceil(3.0 * max(math.hypot(*self._exit_velocity), 1.0)))
+        box = np.array(ellipse_to_box(ell), dtype=np.float64)
+        cur = self._frame_gray(frame)
+        for _, prev in reversed(grays):
+            if in_frame_fraction(tuple(box), fw, fh) < RESIDENT_IN_FRAME:
+                return False
+            d = patch_shift(prev, cur, box, radius)
+            if d is None:
+                return False
+            box[:2] -= d
+            cur = prev
+        return in_frame_fraction(tuple(box), fw, fh) >= RESIDENT_IN_FRAME
+
     def _vetoed_by(self, frame: np.ndarray, ell: np.ndarray) -> str | None:
         """The veto that refuses candidate ``ell`` (``(4,)``), or ``None``."""
         if self._leaving(frame, ell):
             return "leaving"
+        if self._resident(frame, ell):
+            return "resident"
         if self._raw_check is not None and self._raw_check.vetoes(self._raw, ell):
             return "raw"
         check = self._structure_check
