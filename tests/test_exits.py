@@ -252,8 +252,8 @@ def test_a_look_alike_that_stayed_in_view_is_not_the_target_coming_back(tracker,
 
 def test_resident_traces_a_candidate_back_to_the_border_or_not():
     """_resident follows a textured patch back through the kept grey frames: one that moved inside the view on every
-    frame stayed in view; one whose trace reaches the right edge came in; off (0), or with a frame missing from the
-    kept ones, nothing is refused."""
+    frame stayed in view; one whose trace reaches the right edge came in, also when the candidate's box is larger
+    than the object; off (0), or with a frame missing from the kept ones, nothing is refused."""
     rng = np.random.default_rng(0)
     background = rng.integers(0, 60, (240, 320), dtype=np.uint8)
     patch = rng.integers(120, 255, (40, 20), dtype=np.uint8)
@@ -264,7 +264,7 @@ def test_resident_traces_a_candidate_back_to_the_border_or_not():
         g[y:y + 40, x0:x1] = patch[:, x0 - x:x1 - x]
         return g
 
-    def tracker(k, path):
+    def tracker(k, path, grow=(0.0, 0.0)):
         t = pftrack.create_tracker("color-pf", seed=0, reenter_resident=k)
         frame = np.zeros((240, 320, 3), np.uint8)
         frame[100:140, 100:120] = (0, 0, 200)
@@ -277,7 +277,7 @@ def test_resident_traces_a_candidate_back_to_the_border_or_not():
         t.frame_index = 10 + len(path) - 1
         x, y = path[-1]
         now = cv2.cvtColor(grey(x, y), cv2.COLOR_GRAY2BGR)
-        ell = np.array([x + 10.0, y + 20.0, 10.0, 20.0])
+        ell = np.array([x + 10.0 - grow[0], y + 20.0, 10.0 + grow[0], 20.0 + grow[1]])
         return t, now, ell
 
     inside = [(270, 40 + 4 * i) for i in range(6)]
@@ -290,4 +290,8 @@ def test_resident_traces_a_candidate_back_to_the_border_or_not():
     assert not t._resident(now, ell)
     t, now, ell = tracker(30, inside)
     t.frame_index += 1  # the last kept frame is not the previous one
+    assert not t._resident(now, ell)
+    # a candidate box half as wide again as the object, on the textured ground, while the object comes in slowly:
+    # the box's central part follows the object back to the border (the whole box would match the still ground)
+    t, now, ell = tracker(30, [(305 - 2 * i, 100) for i in range(6)], grow=(5.0, 8.0))
     assert not t._resident(now, ell)

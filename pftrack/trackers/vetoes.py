@@ -36,11 +36,13 @@ from ..cues.template import patch_shift
 from ..filtering.dynamics import X, Y
 from ..geometry import ellipse_to_box, in_frame_fraction
 
-__all__ = ["Acquisition", "RESIDENT_IN_FRAME", "VetoMixin", "near_mask"]
+__all__ = ["Acquisition", "RESIDENT_CORE", "RESIDENT_IN_FRAME", "VetoMixin", "near_mask"]
 
 #: ``reenter_resident``: the share of a candidate's box inside the view on every frame of its trace that makes it
 #: an object that stayed in view
 RESIDENT_IN_FRAME = 0.9
+#: ``reenter_resident``: the share of the candidate's half-axes that is traced (its central part)
+RESIDENT_CORE = 0.5
 
 
 class Acquisition(NamedTuple):
@@ -108,11 +110,12 @@ class VetoMixin:
     def _resident(self, frame: np.ndarray, ell: np.ndarray) -> bool:
         """``reenter_resident``: was a candidate (ellipse ``ell``) inside the view all the while the target was
         out?  Its box is traced back frame by frame through the grey frames kept since the search began in the
-        exit strip (at most ``reenter_resident`` of them): its patch found again in the frame before by normalised
-        correlation, within three exit speeds (at least 8 px). A target coming back entered through an edge since
-        it left, so its trace reaches the border; a candidate whose box stays at least :data:`RESIDENT_IN_FRAME`
-        inside the view on every frame back to the oldest kept is another object. A trace that is lost (a flat
-        patch, no match) refuses nothing."""
+        exit strip (at most ``reenter_resident`` of them): the box's central part (:data:`RESIDENT_CORE` of its
+        half-axes, mostly the object rather than the still scene around it) found again in the frame before by
+        normalised correlation, within three exit speeds (at least 8 px), and the box moved with it. A target
+        coming back entered through an edge since it left, so its trace reaches the border; a candidate whose box
+        stays at least :data:`RESIDENT_IN_FRAME` inside the view on every frame back to the oldest kept is another
+        object. A trace that is lost (a flat patch, no match) refuses nothing."""
         grays = self._search_grays
         strip = self._exit_strip() if self.params.reenter_resident > 0 and grays else None
         if strip is None or grays[-1][0] != self.frame_index - 1:
@@ -120,14 +123,16 @@ class VetoMixin:
         fh, fw = self._shape
         radius = max(8, math.ceil(3.0 * max(math.hypot(*self._exit_velocity), 1.0)))
         box = np.array(ellipse_to_box(ell), dtype=np.float64)
+        core = np.array(ellipse_to_box(np.array([*ell[:2], *(RESIDENT_CORE * np.asarray(ell[2:4]))])), np.float64)
         cur = self._frame_gray(frame)
         for _, prev in reversed(grays):
             if in_frame_fraction(tuple(box), fw, fh) < RESIDENT_IN_FRAME:
                 return False
-            d = patch_shift(prev, cur, box, radius)
+            d = patch_shift(prev, cur, core, radius)
             if d is None:
                 return False
             box[:2] -= d
+            core[:2] -= d
             cur = prev
         return in_frame_fraction(tuple(box), fw, fh) >= RESIDENT_IN_FRAME
 
