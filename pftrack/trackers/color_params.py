@@ -389,12 +389,6 @@ class ColorPFParams(ColorModelParams):
         "split's exit scenes (a target leaving in a flow of look-alikes, docs/robustness.md): color-pf AUC 0.783 "
         "against 0.757 off, lost recall 0.978 against 0.957 (0.25: the same; 1 and 2: no gain); fusion-pf and "
         "every other tune group unchanged."))
-    reenter_resident: int = param(15, ge=0, le=10_000, doc=(
-        "See ColorModelParams.reenter_resident (off there). 15 for color-pf and fusion-pf, chosen on the tune data "
-        "under a rule stated before the runs (reports/resident_rule.txt, docs/robustness.md): PETS tune views' "
-        "pooled lost recall 0.330 against 0.240 off (fusion-pf) and 0.279 against 0.216 (color-pf), 50: 0.276 and "
-        "0.242; tune split mean AUC 0.7003 against 0.7011 and 0.5753 against 0.5741, re-acquired 77 against 78 and "
-        "80 against 80 of 90."))
     grey_check: Literal["off", "structure", "fused"] = param("fused", doc=(
         "See ColorModelParams.grey_check. 'fused' for color-pf, chosen on the grey tune set (docs/robustness.md; "
         "without the size search): mean AUC 0.627 against 0.514 ('structure') and 0.501 ('off'), re-acquired 72 "

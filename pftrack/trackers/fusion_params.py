@@ -32,6 +32,11 @@ class FusionPFParams(ColorPFParams):
         "0.188 and 0.913; 0.7: mean AUC 0.6906). Report split, run once: lost recall on its five real sequences with "
         "absences 0.804 against 0.681 (mean over the five), real AUC 0.578 against 0.566, re-acquired 74 against 77 "
         "of 96. color-pf's tune gain was smaller and its report run lost (0.632 against 0.750): off there."))
+    reenter_resident: int = param(15, ge=0, le=10_000, doc=(
+        "See ColorModelParams.reenter_resident (off there and for color-pf). 15 for fusion-pf, chosen on the tune "
+        "data under a rule stated before the runs (reports/resident_rule.txt, docs/robustness.md): PETS tune views' "
+        "pooled lost recall 0.276 against 0.240 off; tune split mean AUC 0.7025 against 0.7011, re-acquired 78 of "
+        "90 both, false-lost 0.019 both. color-pf gained 0.026 there, under the rule's 0.03: off."))
     grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
         "See ColorModelParams.grey_scale_search (color-pf's, with grey_check='fused'): off for fusion-pf, whose "
         "own option is scale_search."))
