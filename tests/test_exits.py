@@ -101,6 +101,24 @@ def test_the_exit_strip_grows_no_deeper_than_reenter_reach_target_sizes(reach, s
     np.testing.assert_allclose(t._exit_band()[0, 2], sizes * hx)
 
 
+@pytest.mark.parametrize("share, exit_", [(0.5, False), (0.9, True)])
+def test_reenter_exit_share_takes_a_box_left_on_the_edge_for_an_exit(share, exit_):
+    """An estimate that stopped on the right edge with 70 % of its box inside (it lagged the target sliding out) is
+    not an exit at the default share (over half outside), and is one at 0.9."""
+    t = pftrack.create_tracker("color-pf", seed=0, reenter_exit_share=share)
+    frame = np.zeros((240, 320, 3), np.uint8)
+    frame[100:140, 100:120] = (0, 0, 200)
+    t.init(frame, (100, 100, 20, 40))
+    hx = t.size[0]
+    t.frame_index = t._search_since = 20
+    t._lost_at = (16, np.array([320.0 - 0.4 * hx, 120.0]), np.zeros(2))  # 70 % of the box inside
+    t._exit_velocity = (0.0, 0.0)
+    band = t._exit_band()
+    assert (band is not None) == exit_
+    if exit_:
+        np.testing.assert_allclose(band, [[320 - 3 * hx, 0.0, 3 * hx, 240.0]])
+
+
 def _flow_scene(seed: int) -> SceneSpec:
     """The target walks out through the right edge; its twin (same colours) follows at the same speed, 170 px
     behind, and leaves too."""

@@ -296,6 +296,10 @@ class ColorModelParams(Params):
         "With reenter_border: the strip widens at this many times the speed the target left with, from the start "
         "of the search (0: a fixed strip, which a target coming back must cross). An option: 0 gained on fusion-pf's "
         "synthetic tune scenes but lost a real report sequence whose pedestrian comes back (docs/robustness.md)."))
+    reenter_exit_share: float = param(0.5, gt=0, le=1, doc=(
+        "With reenter_border: the loss is an exit when less than this share of the box lies inside the frame at the "
+        "last confident position moved on at the last confident frames' speed. 0.5: over half outside; higher "
+        "values also take an estimate that stayed on the edge as the target slid out for an exit."))
     reenter_reach: float = param(0.0, ge=0, le=100, doc=(
         "With reenter_border: the strip widens no deeper than this many target widths (heights, for the top and "
         "bottom edges) from the edge, however long the target has been out; 0: no limit. A look-alike walking in "

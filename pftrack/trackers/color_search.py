@@ -195,8 +195,8 @@ class SearchMixin:
         3 bottom) and how far from it a candidate's centre may lie: a box within ``b`` target sizes of the edge,
         plus the distance the target could have walked in since the loss at the speed it left with. ``None`` when
         off, with entry regions, or when the target was not seen leaving (its last confident position, moved on
-        at the mean displacement of its last confident frames to the frame the loss was declared, is over half
-        inside)."""
+        at the mean displacement of its last confident frames to the frame the loss was declared, has at least
+        ``reenter_exit_share`` of its box inside)."""
         b = self.params.reenter_border
         if b <= 0 or self.regions is not None or self._lost_at is None:
             return None
@@ -204,7 +204,7 @@ class SearchMixin:
         fh, fw = self._shape
         k = self._search_since - self._lost_at[0]
         cx, cy = self._lost_at[1] + k * np.asarray(self._exit_velocity)
-        if in_frame_fraction((cx - hx, cy - hy, 2.0 * hx, 2.0 * hy), fw, fh) >= 0.5:
+        if in_frame_fraction((cx - hx, cy - hy, 2.0 * hx, 2.0 * hy), fw, fh) >= self.params.reenter_exit_share:
             return None
         # the edge it left through: the one its predicted centre is furthest beyond (in target sizes)
         edge = int(np.argmin([cx / hx, (fw - cx) / hx, cy / hy, (fh - cy) / hy]))
