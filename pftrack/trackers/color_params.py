@@ -299,7 +299,9 @@ class ColorModelParams(Params):
     reenter_exit_share: float = param(0.5, gt=0, le=1, doc=(
         "With reenter_border: the loss is an exit when less than this share of the box lies inside the frame at the "
         "last confident position moved on at the last confident frames' speed. 0.5: over half outside; higher "
-        "values also take an estimate that stayed on the edge as the target slid out for an exit."))
+        "values also take an estimate that stayed on the edge as the target slid out for an exit. An option: 0.95 "
+        "raised fusion-pf's flag on the PETS views but missed its tune rule on false-lost, and on the report split "
+        "lost a pedestrian lost near the edge while still in view (docs/robustness.md)."))
     reenter_reach: float = param(0.0, ge=0, le=100, doc=(
         "With reenter_border: the strip widens no deeper than this many target widths (heights, for the top and "
         "bottom edges) from the edge, however long the target has been out; 0: no limit. A look-alike walking in "
@@ -312,9 +314,9 @@ class ColorModelParams(Params):
         "0: off."))
     reenter_resident: int = param(0, ge=0, le=10_000, doc=(
         "With reenter_border: a target coming back entered the view since it left. A candidate of the exit strip "
-        "traced back (its patch found again frame by frame) over the frames since the search began, at most this "
-        "many, with at least 90 % of its box inside the view on every one of them, stayed in view while the "
-        "target was out: another object, not acquired. 0: off."))
+        "traced back (the central part of its box found again frame by frame) over the frames since the search "
+        "began, at most this many, with at least 90 % of its box inside the view on every one of them, stayed in "
+        "view while the target was out: another object, not acquired. 0: off."))
     search_prior: float = param(0.0, ge=0, le=1, doc=(
         "Re-acquisition with a position prior: a candidate's ratio gets the log prior odds of its position, "
         "log((1 - e) A N(x; m, s^2) + e), m the constant-velocity prediction from the last confident frame and s "
