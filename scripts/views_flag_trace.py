@@ -15,6 +15,10 @@ frame with the flag down is put in the first class that applies:
 * ``never up``: the flag has not been up since the person's last present frame;
 * ``taken again``: the flag was up after the exit, and the search has since acquired something unannotated.
 
+It also counts the acquisitions made while the person is absent (the flag going down), by whether the search was
+confined to an exit strip (``reenter_border``: the loss taken for an exit) on the frame before, and how many of
+them took another annotated walker.
+
 Diagnosis only: it chooses nothing. Each view folder's ``img/`` links to its window's frames, named by the PETS
 frame number, which maps the view's frames onto the PETS annotation.
 """
@@ -52,9 +56,21 @@ def pets_frame(path: Path) -> int:
     return int(re.findall(r"(\d+)", Path(os.readlink(path)).stem)[-1])
 
 
+def on_walker(box, others_t, window) -> bool:
+    """Does ``box`` (window coordinates) overlap (IoU >= 0.3) one of the boxes ``others_t`` (frame coordinates),
+    clipped to the window?"""
+    x0, y0, ww, wh = window
+    for g in others_t:
+        gx, gy = max(g[0], x0), max(g[1], y0)
+        gw, gh = min(g[0] + g[2], x0 + ww) - gx, min(g[1] + g[3], y0 + wh) - gy
+        if gw > 0 and gh > 0 and iou(box, (gx - x0, gy - y0, gw, gh)) >= 0.3:
+            return True
+    return False
+
+
 def classify(seq, boxes, lost, others, window) -> dict[str, int]:
     """Counts of the absent frames with the flag down by class (see the module's docstring)."""
-    x0, y0, ww, wh = window
+    ww, wh = window[2:]
     out = dict.fromkeys(CLASSES, 0)
     up_since_exit = False
     for t in range(1, len(boxes)):
@@ -65,14 +81,7 @@ def classify(seq, boxes, lost, others, window) -> dict[str, int]:
         if lost[t]:
             continue
         b = boxes[t]
-        on_other = False
-        for g in others.get(t, ()):
-            gx, gy = max(g[0], x0), max(g[1], y0)
-            gw, gh = min(g[0] + g[2], x0 + ww) - gx, min(g[1] + g[3], y0 + wh) - gy
-            if gw > 0 and gh > 0 and iou(b, (gx - x0, gy - y0, gw, gh)) >= 0.3:
-                on_other = True
-                break
-        if on_other:
+        if on_walker(b, others.get(t, ()), window):
             out["walker, taken again" if up_since_exit else "walker, never up"] += 1
         elif in_frame_fraction(b, ww, wh) < 0.6:
             out["sliver"] += 1
@@ -97,6 +106,7 @@ def main() -> None:
     for name in args.trackers.split(","):
         total = dict.fromkeys(CLASSES, 0)
         absent = up = 0
+        acquired = {True: [0, 0], False: [0, 0]}  # exit strip on the frame before -> [acquisitions, on a walker]
         # every view has its ground truth; only some have a meta.json (the frames left unscored)
         for folder in sorted(p for p in args.views.iterdir() if (p / "groundtruth_rect.txt").exists()):
             seq = read_sequence(folder)
@@ -111,10 +121,14 @@ def main() -> None:
                 tr = create_tracker(name, seed=seed)
                 boxes, lost = [seq.init_box], [False]
                 tr.init(frames[0], seq.init_box)
-                for f in frames[1:]:
+                for t, f in enumerate(frames[1:], start=1):
+                    strip = tr._exit_strip() is not None
                     st = tr.update(f)
                     boxes.append(st.box)
                     lost.append(bool(st.lost))
+                    if lost[-2] and not st.lost and seq.absent[t]:
+                        acquired[strip][0] += 1
+                        acquired[strip][1] += on_walker(st.box, others.get(t, ()), window)
                 counts = classify(seq, np.asarray(boxes, float), lost, others, window)
                 n_abs = int(seq.absent[1:].sum())
                 absent += n_abs
@@ -125,6 +139,8 @@ def main() -> None:
                       + ", ".join(f"{k} {v}" for k, v in counts.items()), flush=True)
         print(f"== {name}: {absent} absent frames, flag up on {up} ({up / max(absent, 1):.3f}); down: "
               + ", ".join(f"{k} {v}" for k, v in total.items()), flush=True)
+        print(f"== {name}: acquisitions while absent, with an exit strip {acquired[True][0]} ({acquired[True][1]} "
+              f"on a walker), without {acquired[False][0]} ({acquired[False][1]} on a walker)", flush=True)
 
 
 if __name__ == "__main__":
