@@ -15,6 +15,16 @@ REPO = Path(__file__).resolve().parents[1]
 SHARED_DATA = Path(os.environ.get("PFTRACK_SHARED_DATA", REPO.parent / "shared" / "data"))
 
 
+def load_script(name: str):
+    """The module of ``scripts/NAME.py`` (the scripts are not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, REPO / "scripts" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def shared_sequence(name: str) -> Path:
     """Path of a development sequence, or skip the test when ../shared/data is absent."""
     path = SHARED_DATA / name

@@ -1,19 +1,13 @@
 """scripts/make_pets_views.py: single-person sequences of a MOT recording (or a single-target sequence) seen through
 narrower views."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 
-SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "make_pets_views.py"
+from .conftest import load_script
 
 
 def _module():
-    spec = importlib.util.spec_from_file_location("make_pets_views", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("make_pets_views")
 
 
 def test_windows_cover_the_four_sides():

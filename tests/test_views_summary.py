@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import csv
-import importlib.util
 import math
 import subprocess
 import sys
 from pathlib import Path
+
+from .conftest import load_script
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "views_summary.py"
 FIELDS = ["tracker", "sequence", "seed", "auc", "lost_recall", "absent_frames", "reappearances", "reacquired",
@@ -24,10 +25,7 @@ ROWS = [
 
 
 def _load():
-    spec = importlib.util.spec_from_file_location("views_summary", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("views_summary")
 
 
 def test_share_of_reads_the_window_from_the_name():

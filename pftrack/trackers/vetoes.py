@@ -36,7 +36,7 @@ from ..cues.template import patch_shift
 from ..filtering.dynamics import X, Y
 from ..geometry import ellipse_to_box, in_frame_fraction
 
-__all__ = ["Acquisition", "RESIDENT_CORE", "RESIDENT_IN_FRAME", "VetoMixin", "near_mask"]
+__all__ = ["RESIDENT_CORE", "RESIDENT_IN_FRAME", "Acquisition", "VetoMixin", "near_mask"]
 
 #: ``reenter_resident``: the share of a candidate's box inside the view on every frame of its trace that makes it
 #: an object that stayed in view
@@ -81,7 +81,7 @@ class VetoMixin:
         strip = self._exit_strip() if k > 0 and prev is not None else None
         if strip is None or self.frame_index - prev[0] != 1:
             return False
-        speed = max(math.hypot(*self._exit_velocity), 1.0)
+        speed = self._exit_speed()
         d = patch_shift(prev[1], self._frame_gray(frame), ellipse_to_box(ell), max(8, math.ceil(3.0 * speed)))
         # the objects refused on the previous frame (and those of this one, kept for the next)
         self._vetoed = [v for v in self._vetoed if v[0] >= self.frame_index - 1]
@@ -93,6 +93,10 @@ class VetoMixin:
             self._vetoed.append((self.frame_index, np.array(ell[:2], dtype=np.float64), d))
             return True
         return False
+
+    def _exit_speed(self) -> float:
+        """The speed the target left with, in px per frame, at least 1 (the patch searches' scale)."""
+        return max(math.hypot(*self._exit_velocity), 1.0)
 
     def _keep_search_gray(self, frame: np.ndarray) -> None:
         """Keep this frame's grey image while the search is confined to an exit strip (the last
@@ -121,7 +125,7 @@ class VetoMixin:
         if strip is None or grays[-1][0] != self.frame_index - 1:
             return False
         fh, fw = self._shape
-        radius = max(8, math.ceil(3.0 * max(math.hypot(*self._exit_velocity), 1.0)))
+        radius = max(8, math.ceil(3.0 * self._exit_speed()))
         box = np.array(ellipse_to_box(ell), dtype=np.float64)
         core = np.array(ellipse_to_box(np.array([*ell[:2], *(RESIDENT_CORE * np.asarray(ell[2:4]))])), np.float64)
         cur = self._frame_gray(frame)
