@@ -1,0 +1,138 @@
+"""Would a re-identification check at acquisition tell the target coming back from a look-alike?
+
+    python scripts/reid_acquisitions.py reports/views_tune reports/views_tune_more --tracker fusion-pf --seeds 0,1
+
+Runs a tracker over single-object sequences and, at every acquisition (the lost flag going down), compares the
+acquired box with the target's appearance before the loss, by the book's ch. 11 appearances
+(:mod:`pftrack.multicam.appearance`: whole box, two ellipses, positional rings x sectors; RGB histograms of
+``--bins`` bins per channel, similarity ``1 - D_B``):
+
+* ``gallery``: the mean histogram of the last 50 frames tracked with the flag down before the loss;
+* ``first``: the first frame's box;
+* ``relative``: the gallery similarity minus the median of the tracked frames' own similarities to the gallery
+  (each frame against the gallery before it), so that a target that varies a lot is not held to a steady one's
+  standard.
+
+An acquisition is *right* when the box overlaps the ground truth (IoU >= 0.3), *wrong* when the target is absent
+or the overlap is below 0.1 (others are left out). For each score it prints the area under the ROC curve of
+right against wrong (0.5: no separation; 1: every right acquisition scores above every wrong one).
+
+Diagnosis only: it chooses nothing and changes no tracker.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from pftrack.geometry import in_frame_fraction, iou
+from pftrack.io.datasets import read_sequence
+from pftrack.multicam.appearance import region_histograms, similarity_matrix
+from pftrack.trackers import create_tracker
+
+FEATURES = ("whole", "ellipse2", "positional")
+SCORES = ("gallery", "first", "relative")
+GALLERY = 50
+
+
+def histograms(frame: np.ndarray, box, feature: str, bins: int) -> np.ndarray:
+    """``(regions, 3, bins)`` normalised RGB histograms of ``box``'s regions (ch. 11's appearance, coarser bins)."""
+    h = region_histograms(frame, box, feature)
+    return h.reshape(h.shape[0], 3, bins, 256 // bins).sum(axis=-1)
+
+
+def sim(a: np.ndarray, b: np.ndarray) -> float:
+    return float(similarity_matrix(a[None], b[None])[0, 0])
+
+
+def roc_auc(right, wrong) -> float:
+    """The probability that a right acquisition scores above a wrong one (ties count half)."""
+    r, w = np.asarray(right, float)[:, None], np.asarray(wrong, float)[None, :]
+    if r.size == 0 or w.size == 0:
+        return float("nan")
+    return float(np.mean((r > w) + 0.5 * (r == w)))
+
+
+def label(box, truth) -> str | None:
+    """``right`` / ``wrong`` / ``None`` (ambiguous) for an acquired ``box`` against the ground-truth row."""
+    present = bool(np.all(np.isfinite(truth)) and truth[2] > 0 and truth[3] > 0)
+    o = iou(tuple(box), tuple(truth)) if present else 0.0
+    return "right" if o >= 0.3 else ("wrong" if o < 0.1 else None)
+
+
+def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:
+    """The scores of every acquisition of ``tracker`` (already created) over ``frames``."""
+    tracker.init(frames[0], init_box)
+    first = {k: histograms(frames[0], init_box, k, bins) for k in FEATURES}
+    gallery = {k: [first[k]] for k in FEATURES}
+    own = {k: [] for k in FEATURES}
+    out, was_lost = [], False
+    for t in range(1, len(frames)):
+        st = tracker.update(frames[t])
+        if was_lost and not st.lost and (lab := label(st.box, truth[t])) is not None:
+            fh, fw = frames[t].shape[:2]
+            rec = {"t": t, "label": lab, "in_frame": in_frame_fraction(tuple(st.box), fw, fh)}
+            for k in FEATURES:
+                h, g = histograms(frames[t], st.box, k, bins), np.mean(gallery[k][-GALLERY:], axis=0)
+                rec[k] = {"gallery": sim(h, g), "first": sim(h, first[k]),
+                          "relative": sim(h, g) - (float(np.median(own[k])) if own[k] else 1.0)}
+            out.append(rec)
+        if not st.lost and not was_lost:
+            for k in FEATURES:
+                h = histograms(frames[t], st.box, k, bins)
+                own[k].append(sim(h, np.mean(gallery[k][-GALLERY:], axis=0)))
+                gallery[k].append(h)
+        was_lost = bool(st.lost)
+    return out
+
+
+def summary(records: list[dict]) -> dict:
+    """ROC AUC of right against wrong acquisitions for every appearance and score."""
+    right = [r for r in records if r["label"] == "right"]
+    wrong = [r for r in records if r["label"] == "wrong"]
+    return {"right": len(right), "wrong": len(wrong),
+            "in_frame": {"right": float(np.median([r["in_frame"] for r in right])) if right else float("nan"),
+                         "wrong": float(np.median([r["in_frame"] for r in wrong])) if wrong else float("nan")},
+            "auc": {f"{k} {s}": roc_auc([r[k][s] for r in right], [r[k][s] for r in wrong])
+                    for k in FEATURES for s in SCORES}}
+
+
+def sequence_folders(paths: list[Path]) -> list[Path]:
+    out = []
+    for p in paths:
+        is_seq = (p / "groundtruth_rect.txt").exists() or (p / "img").is_dir()
+        out += [p] if is_seq else sorted(q for q in p.iterdir() if q.is_dir())
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("sequences", nargs="+", type=Path, help="sequence folders, or folders of them")
+    ap.add_argument("--tracker", default="fusion-pf")
+    ap.add_argument("--seeds", default="0,1")
+    ap.add_argument("--bins", type=int, default=32, help="histogram bins per channel (a divisor of 256)")
+    ap.add_argument("--json", type=Path, help="also write every acquisition's scores here")
+    args = ap.parse_args()
+    records = []
+    for folder in sequence_folders(args.sequences):
+        seq = read_sequence(folder)
+        frames = [cv2.imread(str(p)) for p in seq.frames[seq.init_index:]]
+        truth = np.asarray(seq.groundtruth, dtype=np.float64)[seq.init_index:]
+        for seed in (int(s) for s in args.seeds.split(",")):
+            for rec in acquisitions(frames, truth, seq.init_box, create_tracker(args.tracker, seed=seed), args.bins):
+                records.append({"sequence": folder.name, "seed": seed, **rec})
+    if args.json:
+        args.json.write_text(json.dumps(records) + "\n", encoding="utf-8")
+    s = summary(records)
+    print(f"{args.tracker}: {s['right']} right and {s['wrong']} wrong acquisitions; median share of the box in the "
+          f"frame {s['in_frame']['right']:.2f} and {s['in_frame']['wrong']:.2f}")
+    for name, a in s["auc"].items():
+        print(f"  {name:22s} ROC AUC {a:.3f}")
+
+
+if __name__ == "__main__":
+    main()

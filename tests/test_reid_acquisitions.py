@@ -1,0 +1,65 @@
+"""scripts/reid_acquisitions.py: ch. 11's appearances scored at a tracker's acquisitions (a diagnosis)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.synth import Scene
+from pftrack.synth.scenes import SceneSpec, Target
+
+from .conftest import load_script
+
+
+@pytest.fixture(scope="module")
+def mod():
+    return load_script("reid_acquisitions")
+
+
+def test_roc_auc_counts_pairs_and_ties(mod):
+    assert mod.roc_auc([2.0, 3.0], [1.0]) == 1.0
+    assert mod.roc_auc([1.0], [2.0, 3.0]) == 0.0
+    assert mod.roc_auc([1.0, 3.0], [1.0, 2.0]) == pytest.approx((0.5 + 0.0 + 1.0 + 1.0) / 4)
+    assert math.isnan(mod.roc_auc([], [1.0]))
+
+
+def test_label_right_wrong_or_left_out(mod):
+    truth = np.array([10.0, 10.0, 20.0, 40.0])
+    assert mod.label((10, 10, 20, 40), truth) == "right"
+    assert mod.label((200, 10, 20, 40), truth) == "wrong"
+    assert mod.label((10, 10, 20, 40), np.full(4, np.nan)) == "wrong"  # the target is absent
+    assert mod.label((22, 10, 20, 40), truth) is None  # IoU 0.25: neither
+
+
+@pytest.mark.parametrize("feature,regions", [("whole", 1), ("ellipse2", 2), ("positional", 8)])
+def test_histograms_are_coarse_normalised_region_histograms(mod, feature, regions):
+    rng = np.random.default_rng(0)
+    frame = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+    h = mod.histograms(frame, (10, 5, 30, 50), feature, 32)
+    assert h.shape == (regions, 3, 32)
+    np.testing.assert_allclose(h.sum(axis=(0, 2)), 1.0)
+    assert mod.sim(h, h) == pytest.approx(1.0)
+
+
+def test_a_twin_taken_after_the_exit_is_a_wrong_acquisition_that_colour_cannot_tell(mod):
+    """The target walks out through the right edge; its twin (the same colours) stands inside. Without the exit
+    strip the search takes the twin: a wrong acquisition, whose whole-box colours match the target's."""
+    target = Target(path=((0, 230.0, 120.0), (30, 360.0, 120.0)), size=(26.0, 52.0))
+    twin = Target(path=((0, 80.0, 150.0),), size=(26.0, 52.0))
+    scene = Scene(SceneSpec(n_frames=60, seed=0, targets=(target, twin), background="flat", kind="exit"))
+    frames = scene.frames()
+    truth = np.asarray(scene.groundtruth(), dtype=np.float64)
+    truth[28:] = np.nan  # out of view
+    tracker = pftrack.create_tracker("color-pf", seed=0, reenter_border=0.0, static_ncc=0.0)
+    recs = mod.acquisitions(frames, truth, tuple(truth[0]), tracker, 32)
+    wrong = [r for r in recs if r["label"] == "wrong"]
+    assert wrong
+    for r in wrong:
+        assert r["in_frame"] == pytest.approx(1.0)
+        assert all(0.0 <= r[k]["gallery"] <= 1.0 for k in mod.FEATURES)
+        assert r["whole"]["gallery"] > 0.8
+    s = mod.summary(recs)
+    assert s["wrong"] == len(wrong) and set(s["auc"]) == {f"{k} {v}" for k in mod.FEATURES for v in mod.SCORES}
