@@ -13,6 +13,12 @@ acquired box with the target's appearance before the loss, by the book's ch. 11 
   (each frame against the gallery before it), so that a target that varies a lot is not held to a steady one's
   standard.
 
+A second check judges where the acquired object was when the target was lost: the box's central half is traced
+back frame by frame (normalised correlation, :func:`pftrack.cues.template.patch_shift`, within 16 px, peak at least
+``min_score``) to the last frame tracked before the loss, for acquisitions at most 5 frames after it. An object
+traced all the way to a box that does not overlap the tracker's box there was elsewhere while the tracker still
+held the target: such a check would refuse it (``apart``).
+
 An acquisition is *right* when the box overlaps the ground truth (IoU >= 0.3), *wrong* when the target is absent
 or the overlap is below 0.1 (others are left out). For each score it prints the area under the ROC curve of
 right against wrong (0.5: no separation; 1: every right acquisition scores above every wrong one).
@@ -29,6 +35,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pftrack.cues.template import patch_shift
 from pftrack.geometry import in_frame_fraction, iou
 from pftrack.io.datasets import read_sequence
 from pftrack.multicam.appearance import region_histograms, similarity_matrix
@@ -37,6 +44,8 @@ from pftrack.trackers import create_tracker
 FEATURES = ("whole", "ellipse2", "positional")
 SCORES = ("gallery", "first", "relative")
 GALLERY = 50
+TRACE_FRAMES = 5
+MIN_SCORES = (0.5, 0.8)
 
 
 def histograms(frame: np.ndarray, box, feature: str, bins: int) -> np.ndarray:
@@ -64,6 +73,19 @@ def label(box, truth) -> str | None:
     return "right" if o >= 0.3 else ("wrong" if o < 0.1 else None)
 
 
+def traced_back(grays: list[np.ndarray], box, radius: int = 16, min_score: float = 0.5) -> np.ndarray | None:
+    """``box`` on ``grays[-1]`` traced back to ``grays[0]`` by its central half (``None`` when the trace is lost)."""
+    b = np.asarray(box, dtype=np.float64).copy()
+    core = np.array([b[0] + b[2] / 4, b[1] + b[3] / 4, b[2] / 2, b[3] / 2])
+    for k in range(len(grays) - 1, 0, -1):
+        d = patch_shift(grays[k - 1], grays[k], core, radius, min_score=min_score)
+        if d is None:
+            return None
+        b[:2] -= d
+        core[:2] -= d
+    return b
+
+
 def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:
     """The scores of every acquisition of ``tracker`` (already created) over ``frames``."""
     tracker.init(frames[0], init_box)
@@ -71,11 +93,20 @@ def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:
     gallery = {k: [first[k]] for k in FEATURES}
     own = {k: [] for k in FEATURES}
     out, was_lost = [], False
+    grays = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
+    last_box, lost_at, box_before = tuple(init_box), 0, tuple(init_box)
     for t in range(1, len(frames)):
+        strip = getattr(tracker, "_exit_strip", lambda: None)() is not None  # the loss taken for an exit
         st = tracker.update(frames[t])
+        if st.lost and not was_lost:
+            lost_at, box_before = t, last_box
         if was_lost and not st.lost and (lab := label(st.box, truth[t])) is not None:
             fh, fw = frames[t].shape[:2]
-            rec = {"t": t, "label": lab, "in_frame": in_frame_fraction(tuple(st.box), fw, fh)}
+            rec = {"t": t, "label": lab, "in_frame": in_frame_fraction(tuple(st.box), fw, fh), "delay": t - lost_at,
+                   "exit_strip": strip}
+            for ms in MIN_SCORES:
+                b = traced_back(grays[lost_at - 1:t + 1], st.box, min_score=ms) if t - lost_at <= TRACE_FRAMES else None
+                rec[f"apart {ms}"] = bool(b is not None and iou(tuple(b), box_before) == 0.0)
             for k in FEATURES:
                 h, g = histograms(frames[t], st.box, k, bins), np.mean(gallery[k][-GALLERY:], axis=0)
                 rec[k] = {"gallery": sim(h, g), "first": sim(h, first[k]),
@@ -86,6 +117,8 @@ def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:
                 h = histograms(frames[t], st.box, k, bins)
                 own[k].append(sim(h, np.mean(gallery[k][-GALLERY:], axis=0)))
                 gallery[k].append(h)
+        if not st.lost:
+            last_box = tuple(st.box)
         was_lost = bool(st.lost)
     return out
 
@@ -98,7 +131,10 @@ def summary(records: list[dict]) -> dict:
             "in_frame": {"right": float(np.median([r["in_frame"] for r in right])) if right else float("nan"),
                          "wrong": float(np.median([r["in_frame"] for r in wrong])) if wrong else float("nan")},
             "auc": {f"{k} {s}": roc_auc([r[k][s] for r in right], [r[k][s] for r in wrong])
-                    for k in FEATURES for s in SCORES}}
+                    for k in FEATURES for s in SCORES},
+            "wrong_no_strip": [r["delay"] for r in wrong if not r["exit_strip"]],
+            "apart": {ms: (sum(r[f"apart {ms}"] for r in right), sum(r[f"apart {ms}"] for r in wrong))
+                      for ms in MIN_SCORES}}
 
 
 def sequence_folders(paths: list[Path]) -> list[Path]:
@@ -132,6 +168,11 @@ def main() -> None:
           f"frame {s['in_frame']['right']:.2f} and {s['in_frame']['wrong']:.2f}")
     for name, a in s["auc"].items():
         print(f"  {name:22s} ROC AUC {a:.3f}")
+    d = s["wrong_no_strip"]
+    print(f"  wrong acquisitions with no exit strip: {len(d)}, a median of "
+          f"{np.median(d) if d else float('nan'):.0f} frames after the loss")
+    for ms, (r, w) in s["apart"].items():
+        print(f"  elsewhere at the loss (min_score {ms}): {r} right and {w} wrong acquisitions")
 
 
 if __name__ == "__main__":

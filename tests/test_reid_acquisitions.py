@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -46,7 +47,8 @@ def test_histograms_are_coarse_normalised_region_histograms(mod, feature, region
 
 def test_a_twin_taken_after_the_exit_is_a_wrong_acquisition_that_colour_cannot_tell(mod):
     """The target walks out through the right edge; its twin (the same colours) stands inside. Without the exit
-    strip the search takes the twin: a wrong acquisition, whose whole-box colours match the target's."""
+    strip the search takes the twin: a wrong acquisition, whose whole-box colours match the target's, and which
+    was elsewhere when the target was lost."""
     target = Target(path=((0, 230.0, 120.0), (30, 360.0, 120.0)), size=(26.0, 52.0))
     twin = Target(path=((0, 80.0, 150.0),), size=(26.0, 52.0))
     scene = Scene(SceneSpec(n_frames=60, seed=0, targets=(target, twin), background="flat", kind="exit"))
@@ -62,4 +64,17 @@ def test_a_twin_taken_after_the_exit_is_a_wrong_acquisition_that_colour_cannot_t
         assert all(0.0 <= r[k]["gallery"] <= 1.0 for k in mod.FEATURES)
         assert r["whole"]["gallery"] > 0.8
     s = mod.summary(recs)
+    assert all(r["delay"] >= 1 and isinstance(r["apart 0.5"], bool) for r in recs)
+    assert all(r["apart 0.5"] for r in wrong)  # the twin stood elsewhere when the target was lost
     assert s["wrong"] == len(wrong) and set(s["auc"]) == {f"{k} {v}" for k in mod.FEATURES for v in mod.SCORES}
+
+
+def test_traced_back_follows_a_moving_texture_and_loses_a_flat_patch(mod):
+    rng = np.random.default_rng(1)
+    texture = rng.integers(0, 256, (200, 260), dtype=np.uint8)
+    texture = np.asarray(cv2.GaussianBlur(texture, (5, 5), 1.0))
+    grays = [np.roll(texture, (2 * k, 3 * k), axis=(0, 1)) for k in range(4)]  # moves 3 px right, 2 down a frame
+    box = (100.0 + 9, 80.0 + 6, 40.0, 60.0)  # on the last frame
+    np.testing.assert_allclose(mod.traced_back(grays, box), [100.0, 80.0, 40.0, 60.0], atol=0.5)
+    flat = [np.full((200, 260), 90, np.uint8)] * 3
+    assert mod.traced_back(flat, box) is None
