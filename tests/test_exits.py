@@ -313,3 +313,42 @@ def test_resident_traces_a_candidate_back_to_the_border_or_not():
     # the box's central part follows the object back to the border (the whole box would match the still ground)
     t, now, ell = tracker(30, [(305 - 2 * i, 100) for i in range(6)], grow=(5.0, 8.0))
     assert not t._resident(now, ell)
+
+
+def test_weak_reentry_refuses_only_a_weak_candidate_of_the_exit_strip():
+    """reenter_min_llr: a candidate whose acquisition ratio is below it is refused while the search is confined to
+    the exit strip; not otherwise, and never when off (0)."""
+    def tracker(k, exit_speed):
+        t = pftrack.create_tracker("fusion-pf", seed=0, reenter_min_llr=k)
+        frame = np.zeros((240, 320, 3), np.uint8)
+        frame[100:140, 100:120] = (0, 0, 200)
+        t.init(frame, (100, 100, 20, 40))
+        t._search_since = t.frame_index = 10
+        t._lost_at = (6, np.array([310.0, 120.0]), np.zeros(2))
+        t._exit_velocity = (exit_speed, 0.0)  # 6 px a frame: out through the right edge; 0: still inside
+        return t
+
+    t = tracker(10.0, 6.0)
+    assert t._exit_strip() is not None
+    assert t._weak_reentry(9.9) and not t._weak_reentry(10.0) and not t._weak_reentry(math.inf)
+    assert t._vetoed_by(np.zeros((240, 320, 3), np.uint8), np.array([300.0, 120.0, 10.0, 20.0]), 5.0) == "weak"
+    assert not tracker(0.0, 6.0)._weak_reentry(1.0)
+    t = tracker(10.0, 0.0)
+    assert t._exit_strip() is None and not t._weak_reentry(1.0)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_reenter_min_llr_keeps_a_strong_return_and_can_refuse_it(seed):
+    """The target coming back through the edge it left by scores the fused ratio's ceiling (20, two cues clipped
+    at 10): taken at reenter_min_llr 12 on the same frame as without it; a bound above the ceiling refuses it while
+    the search stays in the strip."""
+    scene = Scene(_return_scene(seed))
+    frames, gt = scene.frames(), scene.groundtruth()
+    first = {}
+    for k in (0.0, 12.0, 25.0):
+        t = pftrack.create_tracker("fusion-pf", seed=seed, reenter_min_llr=k)
+        t.init(frames[0], tuple(gt[0]))
+        states = [t.update(f) for f in frames[1:]]
+        first[k] = next((i for i, s in enumerate(states, start=1) if i > 30 and not s.lost), None)
+    assert first[0.0] is not None and first[0.0] <= 58 and first[12.0] == first[0.0], first
+    assert first[25.0] is None or first[25.0] > 70, first

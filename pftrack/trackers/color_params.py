@@ -317,6 +317,10 @@ class ColorModelParams(Params):
         "traced back (the central part of its box found again frame by frame) over the frames since the search "
         "began, at most this many, with at least 90 % of its box inside the view on every one of them, stayed in "
         "view while the target was out: another object, not acquired. 0: off."))
+    reenter_min_llr: float = param(0.0, ge=0, le=1000, doc=(
+        "With reenter_border: while the search is confined to the exit strip, a candidate is acquired only when its "
+        "fused log-likelihood ratio (the acquisition test's, log prior included) is at least this; a weaker one is "
+        "refused like a vetoed one. 0: off."))
     search_prior: float = param(0.0, ge=0, le=1, doc=(
         "Re-acquisition with a position prior: a candidate's ratio gets the log prior odds of its position, "
         "log((1 - e) A N(x; m, s^2) + e), m the constant-velocity prediction from the last confident frame and s "

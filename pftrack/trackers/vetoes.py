@@ -7,6 +7,8 @@ candidate that would end the loss can still be refused, as another object of the
   edge (:meth:`VetoMixin._leaving`);
 - ``reenter_resident``: after the target left the view, a candidate that was inside the view all the while the
   target was out (:meth:`VetoMixin._resident`);
+- ``reenter_min_llr``: while the search is confined to the exit strip, a candidate whose ratio is below it
+  (:meth:`VetoMixin._weak_reentry`);
 - the raw-colour check and the grey structure check (:mod:`.raw_check`, :mod:`.structure_check`): their own
   evidence calls the candidate background;
 - the distractor memory (:mod:`.distractors`): a look-alike met beyond the target's reach early in the loss.
@@ -140,8 +142,15 @@ class VetoMixin:
             cur = prev
         return in_frame_fraction(tuple(box), fw, fh) >= RESIDENT_IN_FRAME
 
-    def _vetoed_by(self, frame: np.ndarray, ell: np.ndarray) -> str | None:
-        """The veto that refuses candidate ``ell`` (``(4,)``), or ``None``."""
+    def _weak_reentry(self, llr: float) -> bool:
+        """``reenter_min_llr``: is a candidate of the exit strip, with acquisition ratio ``llr``, too weak?"""
+        k = self.params.reenter_min_llr
+        return k > 0 and llr < k and self._exit_strip() is not None
+
+    def _vetoed_by(self, frame: np.ndarray, ell: np.ndarray, llr: float = math.inf) -> str | None:
+        """The veto that refuses candidate ``ell`` (``(4,)``, acquisition ratio ``llr``), or ``None``."""
+        if self._weak_reentry(llr):
+            return "weak"
         if self._leaving(frame, ell):
             return "leaving"
         if self._resident(frame, ell):
@@ -175,11 +184,14 @@ class VetoMixin:
         g = p.acquire_in_frame
         for attempt in range(retries + 1):
             cluster = near & supporters
-            if cluster.sum() < need or not self.loss.would_acquire(s_best, lp)[0]:
+            if cluster.sum() < need:
+                break
+            ok, llr = self.loss.would_acquire(s_best, lp)
+            if not ok:
                 break
             if g > 0 and in_frame_fraction(tuple(ellipse_to_box(c.ell[best])), self._shape[1], self._shape[0]) < g:
                 break
-            if self._vetoed_by(frame, c.ell[best]) is None:
+            if self._vetoed_by(frame, c.ell[best], llr) is None:
                 self.loss.acquire(s_best, lp)
                 return Acquisition(best, s_best, lp, near, cluster, True, vetoed)
             vetoed = True
