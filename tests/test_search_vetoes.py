@@ -52,7 +52,7 @@ class _Host(VetoMixin):
         self.states[:, 4:6] = 10.0
         self.score = dict(zip((50.0, 150.0, 250.0), scores))
 
-    def _vetoed_by(self, frame, ell):
+    def _vetoed_by(self, frame, ell, llr=float("inf")):
         self.asked.append(float(ell[0]))
         return "leaving" if float(ell[0]) in self.refused else None
 
