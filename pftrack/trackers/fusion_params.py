@@ -37,12 +37,6 @@ class FusionPFParams(ColorPFParams):
         "data under a rule stated before the runs (reports/resident_rule.txt, docs/robustness.md): PETS tune views' "
         "pooled lost recall 0.276 against 0.240 off; tune split mean AUC 0.7025 against 0.7011, re-acquired 78 of "
         "90 both, false-lost 0.019 both. color-pf gained 0.026 there, under the rule's 0.03: off."))
-    reenter_min_llr: float = param(10.0, ge=0, le=1000, doc=(
-        "See ColorModelParams.reenter_min_llr (off there and for color-pf). 10 for fusion-pf, chosen on the tune "
-        "data under a rule stated before the runs (reports/reentry_llr_rule.txt, docs/robustness.md): PETS tune "
-        "views' pooled lost recall 0.331 against 0.276 off; tune split mean AUC 0.7013 against 0.7025, re-acquired "
-        "78 of 90 both, false-lost 0.019 both; tune real-exit windows re-acquired 21 of 60 against 20. 12 raised "
-        "the views to 0.394 but cost 4 re-acquisitions and 0.0044 of mean AUC."))
     grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
         "See ColorModelParams.grey_scale_search (color-pf's, with grey_check='fused'): off for fusion-pf, whose "
         "own option is scale_search."))
