@@ -321,7 +321,7 @@ class ColorModelParams(Params):
         "With reenter_border: while the search is confined to the exit strip, a candidate is acquired only when its "
         "fused log-likelihood ratio (the acquisition test's, log prior included) is at least this; a weaker one is "
         "refused like a vetoed one. 0: off, for both trackers (10, chosen for fusion-pf on the tune data, cost the "
-        "report split re-acquisitions of real returns: docs/robustness.md)."))
+        "report split 8 of its 78 re-acquisitions: docs/robustness.md)."))
     search_prior: float = param(0.0, ge=0, le=1, doc=(
         "Re-acquisition with a position prior: a candidate's ratio gets the log prior odds of its position, "
         "log((1 - e) A N(x; m, s^2) + e), m the constant-velocity prediction from the last confident frame and s "
