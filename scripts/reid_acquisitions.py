@@ -36,6 +36,7 @@ import cv2
 import numpy as np
 
 from pftrack.cues.template import patch_shift
+from pftrack.eval.runner import parse_tracker_list
 from pftrack.geometry import in_frame_fraction, iou
 from pftrack.io.datasets import read_sequence
 from pftrack.multicam.appearance import region_histograms, similarity_matrix
@@ -148,18 +149,20 @@ def sequence_folders(paths: list[Path]) -> list[Path]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("sequences", nargs="+", type=Path, help="sequence folders, or folders of them")
-    ap.add_argument("--tracker", default="fusion-pf")
+    ap.add_argument("--tracker", default="fusion-pf", help="a tracker, with parameters as NAME[key=value;...]")
     ap.add_argument("--seeds", default="0,1")
     ap.add_argument("--bins", type=int, default=32, help="histogram bins per channel (a divisor of 256)")
     ap.add_argument("--json", type=Path, help="also write every acquisition's scores here")
     args = ap.parse_args()
+    config = parse_tracker_list(args.tracker)[0]  # NAME or NAME[key=value;...], as pftrack eval
     records = []
     for folder in sequence_folders(args.sequences):
         seq = read_sequence(folder)
         frames = [cv2.imread(str(p)) for p in seq.frames[seq.init_index:]]
         truth = np.asarray(seq.groundtruth, dtype=np.float64)[seq.init_index:]
         for seed in (int(s) for s in args.seeds.split(",")):
-            for rec in acquisitions(frames, truth, seq.init_box, create_tracker(args.tracker, seed=seed), args.bins):
+            tracker = create_tracker(config.name, seed=seed, **config.param_dict)
+            for rec in acquisitions(frames, truth, seq.init_box, tracker, args.bins):
                 records.append({"sequence": folder.name, "seed": seed, **rec})
     if args.json:
         args.json.write_text(json.dumps(records) + "\n", encoding="utf-8")

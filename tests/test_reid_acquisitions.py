@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -78,3 +79,29 @@ def test_traced_back_follows_a_moving_texture_and_loses_a_flat_patch(mod):
     np.testing.assert_allclose(mod.traced_back(grays, box), [100.0, 80.0, 40.0, 60.0], atol=0.5)
     flat = [np.full((200, 260), 90, np.uint8)] * 3
     assert mod.traced_back(flat, box) is None
+
+
+def test_the_command_prints_the_separations_of_a_sequence_folder(mod, tmp_path):
+    """End to end on an OTB-style folder (img/ and groundtruth_rect.txt, NaN rows while the target is out)."""
+    import json
+    import subprocess
+    import sys
+
+    target = Target(path=((0, 230.0, 120.0), (30, 360.0, 120.0)), size=(26.0, 52.0))
+    twin = Target(path=((0, 80.0, 150.0),), size=(26.0, 52.0))
+    scene = Scene(SceneSpec(n_frames=60, seed=0, targets=(target, twin), background="flat", kind="exit"))
+    seq = tmp_path / "exit_twin"
+    (seq / "img").mkdir(parents=True)
+    truth = np.asarray(scene.groundtruth(), dtype=np.float64)
+    truth[28:] = np.nan
+    for k, f in enumerate(scene.frames()):
+        cv2.imwrite(str(seq / "img" / f"{k + 1:04d}.png"), f)
+    np.savetxt(seq / "groundtruth_rect.txt", truth, fmt="%.2f", delimiter=",")
+    out = tmp_path / "acq.json"
+    script = Path(mod.__file__)
+    run = subprocess.run([sys.executable, str(script), str(tmp_path), "--tracker", "color-pf[reenter_border=0;static_ncc=0]",
+                          "--seeds", "0", "--json", str(out)], capture_output=True, text=True, check=True)
+    assert "ROC AUC" in run.stdout and "elsewhere at the loss" in run.stdout
+    recs = json.loads(out.read_text())
+    assert recs and {r["sequence"] for r in recs} == {"exit_twin"} and {r["label"] for r in recs} == {"wrong"}
+    assert "0 right and 1 wrong acquisitions" in run.stdout
