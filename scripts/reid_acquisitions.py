@@ -35,7 +35,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from pftrack.cues.template import patch_shift
+from pftrack.cues.template import trace_back
 from pftrack.eval.runner import parse_tracker_list
 from pftrack.geometry import in_frame_fraction, iou
 from pftrack.io.datasets import read_sequence
@@ -76,15 +76,13 @@ def label(box, truth) -> str | None:
 
 def traced_back(grays: list[np.ndarray], box, radius: int = 16, min_score: float = 0.5) -> np.ndarray | None:
     """``box`` on ``grays[-1]`` traced back to ``grays[0]`` by its central half (``None`` when the trace is lost)."""
-    b = np.asarray(box, dtype=np.float64).copy()
-    core = np.array([b[0] + b[2] / 4, b[1] + b[3] / 4, b[2] / 2, b[3] / 2])
-    for k in range(len(grays) - 1, 0, -1):
-        d = patch_shift(grays[k - 1], grays[k], core, radius, min_score=min_score)
-        if d is None:
+    start = np.asarray(box, dtype=np.float64)
+    core = (start[0] + start[2] / 4, start[1] + start[3] / 4, start[2] / 2, start[3] / 2)
+    out = start
+    for out in trace_back(reversed(grays[:-1]), grays[-1], start, core, radius, min_score=min_score):
+        if out is None:
             return None
-        b[:2] -= d
-        core[:2] -= d
-    return b
+    return out
 
 
 def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:

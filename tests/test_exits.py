@@ -352,3 +352,18 @@ def test_reenter_min_llr_keeps_a_strong_return_and_can_refuse_it(seed):
         first[k] = next((i for i, s in enumerate(states, start=1) if i > 30 and not s.lost), None)
     assert first[0.0] is not None and first[0.0] <= 58 and first[12.0] == first[0.0], first
     assert first[25.0] is None or first[25.0] > 70, first
+
+
+def test_trace_back_yields_the_box_on_each_earlier_frame_and_stops_when_lost():
+    """cues.template.trace_back: the box moved by its core's shift on each earlier frame, newest first; None once
+    the core is lost (a flat frame), and nothing after."""
+    from pftrack.cues.template import trace_back
+
+    rng = np.random.default_rng(3)
+    texture = cv2.GaussianBlur(rng.integers(0, 256, (120, 160), dtype=np.uint8), (5, 5), 1.0)
+    frames = [np.roll(texture, 2 * k, axis=1) for k in range(4)]  # 2 px right a frame; frames[3] is now
+    flat = np.full((120, 160), 80, np.uint8)
+    box, core = (60.0, 40.0, 30.0, 40.0), (67.5, 50.0, 15.0, 20.0)
+    boxes = list(trace_back([frames[2], frames[1], frames[0]], frames[3], box, core, 8))
+    assert [round(float(b[0])) for b in boxes] == [58, 56, 54] and all(abs(b[1] - 40.0) < 0.5 for b in boxes)
+    assert list(trace_back([frames[2], flat, frames[0]], frames[3], box, core, 8))[1:] == [None]

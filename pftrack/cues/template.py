@@ -24,6 +24,7 @@ measures the peak's sharpness.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 import cv2
@@ -295,3 +296,24 @@ def patch_shift(prev_gray: np.ndarray, gray: np.ndarray, box, radius: int, *, mi
     if peak.value < min_score:
         return None
     return np.array([x0 - (sx0 + peak.l), y0 - (sy0 + peak.k)])
+
+
+def trace_back(earlier_grays: Iterable[np.ndarray], gray: np.ndarray, box, core, radius: int, *,
+               min_score: float = 0.5) -> Iterator[np.ndarray | None]:
+    """``box`` (x, y, w, h on ``gray``) followed back through ``earlier_grays`` (newest first) by its part ``core``
+    (a box, usually its central part, mostly the object rather than the still scene around it): on each earlier
+    frame, the box moved by :func:`patch_shift` of the core. Yields the box on each earlier frame in turn, or
+    ``None`` once the trace is lost (a flat core, no match), and then stops; lazily, so a caller that has its
+    answer stops the searches."""
+    box = np.array(box, dtype=np.float64)
+    core = np.array(core, dtype=np.float64)
+    cur = gray
+    for prev in earlier_grays:
+        d = patch_shift(prev, cur, core, radius, min_score=min_score)
+        if d is None:
+            yield None
+            return
+        box[:2] -= d
+        core[:2] -= d
+        cur = prev
+        yield box.copy()

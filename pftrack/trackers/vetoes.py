@@ -34,7 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..cues.template import patch_shift
+from ..cues.template import patch_shift, trace_back
 from ..filtering.dynamics import X, Y
 from ..geometry import ellipse_to_box, in_frame_fraction
 
@@ -127,20 +127,15 @@ class VetoMixin:
         if strip is None or grays[-1][0] != self.frame_index - 1:
             return False
         fh, fw = self._shape
+        box = ellipse_to_box(ell)
+        if in_frame_fraction(tuple(box), fw, fh) < RESIDENT_IN_FRAME:
+            return False
+        core = ellipse_to_box(np.array([*ell[:2], *(RESIDENT_CORE * np.asarray(ell[2:4]))]))
         radius = max(8, math.ceil(3.0 * self._exit_speed()))
-        box = np.array(ellipse_to_box(ell), dtype=np.float64)
-        core = np.array(ellipse_to_box(np.array([*ell[:2], *(RESIDENT_CORE * np.asarray(ell[2:4]))])), np.float64)
-        cur = self._frame_gray(frame)
-        for _, prev in reversed(grays):
-            if in_frame_fraction(tuple(box), fw, fh) < RESIDENT_IN_FRAME:
+        for b in trace_back((g for _, g in reversed(grays)), self._frame_gray(frame), box, core, radius):
+            if b is None or in_frame_fraction(tuple(b), fw, fh) < RESIDENT_IN_FRAME:
                 return False
-            d = patch_shift(prev, cur, core, radius)
-            if d is None:
-                return False
-            box[:2] -= d
-            core[:2] -= d
-            cur = prev
-        return in_frame_fraction(tuple(box), fw, fh) >= RESIDENT_IN_FRAME
+        return True
 
     def _weak_reentry(self, llr: float) -> bool:
         """``reenter_min_llr``: is a candidate of the exit strip, with acquisition ratio ``llr``, too weak?"""
