@@ -160,6 +160,10 @@ class ColorModelParams(Params):
         "At the view's edge a sliver of a box can match the legs or shadow of someone walking along the edge, or "
         "ground the model was learned with; a target coming back is taken once half of it is in. "
         "0: off (default here; 0.5 for color-pf and fusion-pf)."))
+    acquire_unique: bool = param(False, doc=(
+        "With loss_test='likelihood', while lost: a candidate is not acquired while another one elsewhere in the frame "
+        "(beyond two half-axes each way, not the still scene) passes the acquisition test too: two look-alikes, and "
+        "the search waits for one to stand alone (Lowe's ratio test; pftrack.trackers.vetoes). False: off."))
     loss_test: Literal["likelihood", "appearance"] = param("likelihood", doc=(
         "'likelihood': the estimate's rho is tested against two distributions, the background's (Eqs. 13-14, "
         "spread floored) and the target's own score history, LLR = log N(rho; mu_t, s_t) - log N(rho; mu_b, "

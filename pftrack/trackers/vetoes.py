@@ -160,6 +160,17 @@ class VetoMixin:
             return "distractor"
         return None
 
+    def _rival(self, frame: np.ndarray, c, best: int) -> bool:
+        """``acquire_unique``: does a candidate of search ``c`` elsewhere than sample ``best`` (beyond two half-axes
+        each way, the still scene skipped) pass the acquisition test too?"""
+        if c.rank is None:
+            return False
+        rank = np.where(near_mask(c.states, c.states[best, X:Y + 1], self.size), -np.inf, c.rank)
+        if not np.isfinite(rank).any():
+            return False
+        j, s = self._skip_scene(frame, c.ell, rank, int(np.argmax(rank)), c.scores)
+        return bool(np.isfinite(rank[j]) and self.loss.would_acquire(*s)[0])
+
     def _choose(self, frame: np.ndarray, c, supporters: np.ndarray) -> Acquisition:
         """The candidate of search ``c`` (:class:`~.color_search.SearchCandidates`) to acquire, if any.
 
@@ -185,6 +196,9 @@ class VetoMixin:
             if not ok:
                 break
             if g > 0 and in_frame_fraction(tuple(ellipse_to_box(c.ell[best])), self._shape[1], self._shape[0]) < g:
+                break
+            if p.acquire_unique and self._rival(frame, c, best):
+                vetoed = True  # two look-alikes: no candidate of this frame is taken (the next would be the rival)
                 break
             if self._vetoed_by(frame, c.ell[best], llr) is None:
                 self.loss.acquire(s_best, lp)
