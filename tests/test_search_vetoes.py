@@ -37,9 +37,11 @@ class _Loss:
 class _Host(VetoMixin):
     """Three candidates 100 px apart; the ones at ``refused`` x positions are vetoed."""
 
-    def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3), *, width=320, acquire_in_frame=0.0):
+    def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3), *, width=320, acquire_in_frame=0.0,
+                 acquire_unique=False):
         self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
-                                      n_particles=30, acquire_in_frame=acquire_in_frame)
+                                      n_particles=30, acquire_in_frame=acquire_in_frame,
+                                      acquire_unique=acquire_unique)
         self._shape = (120, width)
         self.loss = _Loss()
         self.size = (10.0, 10.0)
@@ -123,6 +125,22 @@ def test_a_best_candidate_mostly_outside_the_frame_ends_the_choice(width, found)
     assert a.found == found and host.states[a.best, 0] == 250.0
     assert host.asked == ([250.0] if found else [])
     assert host.loss.unseen == 1 and host.loss.lost != found  # the loss test moved one frame either way
+
+
+def test_a_candidate_with_a_passing_rival_elsewhere_is_not_taken():
+    """acquire_unique: the best (x = 50) would end the loss, and so would the candidate at x = 150: nothing is
+    taken on this frame, the rival is not taken either, and the loss test moves one frame on the first."""
+    host = _Host(2, refused=(), scores=(0.9, 0.8, 0.3), acquire_unique=True)
+    a = _choose(host)
+    assert not a.found and a.vetoed and host.states[a.best, 0] == 50.0
+    assert host.asked == [] and host.loss.lost and host.loss.unseen == 1 and host.loss.acquired == [0.9]
+
+
+def test_a_candidate_that_stands_alone_is_taken():
+    """acquire_unique: the samples near the best pass too (they are the same object), the others do not."""
+    host = _Host(2, refused=(), scores=(0.9, 0.3, 0.2), acquire_unique=True)
+    a = _choose(host)
+    assert a.found and not a.vetoed and host.states[a.best, 0] == 50.0 and host.asked == [50.0]
 
 
 @pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
