@@ -37,6 +37,12 @@ class FusionPFParams(ColorPFParams):
         "data under a rule stated before the runs (reports/resident_rule.txt, docs/robustness.md): PETS tune views' "
         "pooled lost recall 0.276 against 0.240 off; tune split mean AUC 0.7025 against 0.7011, re-acquired 78 of "
         "90 both, false-lost 0.019 both. color-pf gained 0.026 there, under the rule's 0.03: off."))
+    acquire_unique: bool = param(True, doc=(
+        "See ColorModelParams.acquire_unique (off there and for color-pf). On for fusion-pf, chosen on the tune data "
+        "under a rule stated before the runs (reports/acquire_unique_rule.txt, docs/robustness.md): PETS tune views' "
+        "pooled lost recall 0.319 against 0.276 off; tune split and tune real-exit windows unchanged (mean AUC 0.7025, "
+        "re-acquired 78 of 90 and 20 of 60, false-lost 0.019). color-pf gained 0.022 on the views, under the rule's "
+        "0.03, and lost 10 of its 26 exit re-acquisitions: off."))
     grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
         "See ColorModelParams.grey_scale_search (color-pf's, with grey_check='fused'): off for fusion-pf, whose "
         "own option is scale_search."))
