@@ -19,6 +19,10 @@ back frame by frame (normalised correlation, :func:`pftrack.cues.template.patch_
 traced all the way to a box that does not overlap the tracker's box there was elsewhere while the tracker still
 held the target: such a check would refuse it (``apart``).
 
+A third records whether another candidate elsewhere in the frame passed the acquisition test too when the search
+took its candidate (``rival``: the question of ``acquire_unique``, asked here with the tracker's own test, whatever
+the option's setting), and the margin of the two ratios (``margin``; infinite without a candidate elsewhere).
+
 An acquisition is *right* when the box overlaps the ground truth (IoU >= 0.3), *wrong* when the target is absent
 or the overlap is below 0.1 (others are left out). For each score it prints the area under the ROC curve of
 right against wrong (0.5: no separation; 1: every right acquisition scores above every wrong one).
@@ -30,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 import cv2
@@ -41,6 +46,7 @@ from pftrack.geometry import in_frame_fraction, iou
 from pftrack.io.datasets import read_sequence
 from pftrack.multicam.appearance import region_histograms, similarity_matrix
 from pftrack.trackers import create_tracker
+from pftrack.trackers.vetoes import near_mask
 
 FEATURES = ("whole", "ellipse2", "positional")
 SCORES = ("gallery", "first", "relative")
@@ -85,9 +91,38 @@ def traced_back(grays: list[np.ndarray], box, radius: int = 16, min_score: float
     return out
 
 
+def watch_rivals(tracker) -> dict:
+    """Wrap a colour tracker's choice of a search candidate (its ``_choose``, on this instance only) so that, on a
+    frame whose search acquires its best candidate, the returned dict holds ``rival`` (did a candidate elsewhere
+    pass the acquisition test too: ``_rival``) and ``margin`` (the candidate's ratio minus that one's). Emptied on
+    every search frame; stays empty for other trackers."""
+    seen: dict = {}
+    choose = getattr(tracker, "_choose", None)
+    if choose is None or not hasattr(tracker, "_rival"):
+        return seen
+
+    def wrapped(frame, c, supporters):
+        seen.clear()
+        rival, margin = tracker._rival(frame, c, c.best), math.inf  # before the loss test moves
+        if c.rank is not None:
+            far = np.where(near_mask(c.states, c.states[c.best, :2], tracker.size), -np.inf, c.rank)
+            if np.isfinite(far).any():
+                j, s = tracker._skip_scene(frame, c.ell, far, int(np.argmax(far)), c.scores)
+                if np.isfinite(far[j]):
+                    margin = tracker.loss.would_acquire(c.s_best, c.lp)[1] - tracker.loss.would_acquire(*s)[1]
+        a = choose(frame, c, supporters)
+        if a.found and a.best == c.best:
+            seen.update(rival=bool(rival), margin=float(margin))
+        return a
+
+    tracker._choose = wrapped
+    return seen
+
+
 def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:
     """The scores of every acquisition of ``tracker`` (already created) over ``frames``."""
     tracker.init(frames[0], init_box)
+    rivals = watch_rivals(tracker)
     first = {k: histograms(frames[0], init_box, k, bins) for k in FEATURES}
     gallery = {k: [first[k]] for k in FEATURES}
     own = {k: [] for k in FEATURES}
@@ -102,7 +137,7 @@ def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:
         if was_lost and not st.lost and (lab := label(st.box, truth[t])) is not None:
             fh, fw = frames[t].shape[:2]
             rec = {"t": t, "label": lab, "in_frame": in_frame_fraction(tuple(st.box), fw, fh), "delay": t - lost_at,
-                   "exit_strip": strip}
+                   "exit_strip": strip, "rival": rivals.get("rival"), "margin": rivals.get("margin")}
             for ms in MIN_SCORES:
                 b = traced_back(grays[lost_at - 1:t + 1], st.box, min_score=ms) if t - lost_at <= TRACE_FRAMES else None
                 rec[f"apart {ms}"] = bool(b is not None and iou(tuple(b), box_before) == 0.0)
@@ -133,7 +168,10 @@ def summary(records: list[dict]) -> dict:
                     for k in FEATURES for s in SCORES},
             "wrong_no_strip": [r["delay"] for r in wrong if not r["exit_strip"]],
             "apart": {ms: (sum(r[f"apart {ms}"] for r in right), sum(r[f"apart {ms}"] for r in wrong))
-                      for ms in MIN_SCORES}}
+                      for ms in MIN_SCORES},
+            "rival": (sum(bool(r["rival"]) for r in right), sum(bool(r["rival"]) for r in wrong)),
+            "margin_auc": roc_auc([r["margin"] for r in right if r["margin"] is not None],
+                                  [r["margin"] for r in wrong if r["margin"] is not None])}
 
 
 def sequence_folders(paths: list[Path]) -> list[Path]:
@@ -174,6 +212,9 @@ def main() -> None:
           f"{np.median(d) if d else float('nan'):.0f} frames after the loss")
     for ms, (r, w) in s["apart"].items():
         print(f"  elsewhere at the loss (min_score {ms}): {r} right and {w} wrong acquisitions")
+    r, w = s["rival"]
+    print(f"  a candidate elsewhere passed the acquisition test too: {r} right and {w} wrong acquisitions; "
+          f"margin of the ratios ROC AUC {s['margin_auc']:.3f}")
 
 
 if __name__ == "__main__":

@@ -68,6 +68,26 @@ def test_a_twin_taken_after_the_exit_is_a_wrong_acquisition_that_colour_cannot_t
     assert all(r["delay"] >= 1 and isinstance(r["apart 0.5"], bool) for r in recs)
     assert all(r["apart 0.5"] for r in wrong)  # the twin stood elsewhere when the target was lost
     assert s["wrong"] == len(wrong) and set(s["auc"]) == {f"{k} {v}" for k in mod.FEATURES for v in mod.SCORES}
+    assert all(r["rival"] is False and r["margin"] > 0 for r in wrong)  # the twin stood alone
+    assert s["rival"] == (0, 0)
+
+
+def test_two_twins_in_view_are_rivals_at_the_acquisition(mod):
+    """The target leaves; two twins stand inside. The search takes one, and the other passed the acquisition test
+    too (``acquire_unique``'s question); with the option on, that frame takes neither (a later one may, when the
+    search's samples miss the other twin)."""
+    target = Target(path=((0, 230.0, 120.0), (30, 360.0, 120.0)), size=(26.0, 52.0))
+    twins = tuple(Target(path=((0, x, 150.0),), size=(26.0, 52.0)) for x in (60.0, 150.0))
+    scene = Scene(SceneSpec(n_frames=60, seed=0, targets=(target, *twins), background="flat", kind="exit"))
+    frames = scene.frames()
+    truth = np.asarray(scene.groundtruth(), dtype=np.float64)
+    truth[28:] = np.nan
+    params = {"reenter_border": 0.0, "static_ncc": 0.0}
+    recs = mod.acquisitions(frames, truth, tuple(truth[0]), pftrack.create_tracker("color-pf", seed=0, **params), 32)
+    assert recs and recs[0]["label"] == "wrong" and recs[0]["rival"] is True and recs[0]["margin"] < 5.0
+    unique = pftrack.create_tracker("color-pf", seed=0, acquire_unique=True, **params)
+    later = mod.acquisitions(frames, truth, tuple(truth[0]), unique, 32)
+    assert not later or (later[0]["t"] > recs[0]["t"] and later[0]["rival"] is False)
 
 
 def test_traced_back_follows_a_moving_texture_and_loses_a_flat_patch(mod):
@@ -101,7 +121,7 @@ def test_the_command_prints_the_separations_of_a_sequence_folder(mod, tmp_path):
     script = Path(mod.__file__)
     run = subprocess.run([sys.executable, str(script), str(tmp_path), "--tracker", "color-pf[reenter_border=0;static_ncc=0]",
                           "--seeds", "0", "--json", str(out)], capture_output=True, text=True, check=True)
-    assert "ROC AUC" in run.stdout and "elsewhere at the loss" in run.stdout
+    assert "ROC AUC" in run.stdout and "elsewhere at the loss" in run.stdout and "passed the acquisition" in run.stdout
     recs = json.loads(out.read_text())
     assert recs and {r["sequence"] for r in recs} == {"exit_twin"} and {r["label"] for r in recs} == {"wrong"}
     assert "0 right and 1 wrong acquisitions" in run.stdout
