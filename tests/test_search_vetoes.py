@@ -38,10 +38,11 @@ class _Host(VetoMixin):
     """Three candidates 100 px apart; the ones at ``refused`` x positions are vetoed."""
 
     def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3), *, width=320, acquire_in_frame=0.0,
-                 acquire_unique=False):
+                 acquire_unique=False, hold=0):
         self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
                                       n_particles=30, acquire_in_frame=acquire_in_frame,
-                                      acquire_unique=acquire_unique)
+                                      acquire_unique=acquire_unique, acquire_unique_hold=hold)
+        self.frame_index, self._ambiguous_until = 0, -1
         self._shape = (120, width)
         self.loss = _Loss()
         self.size = (10.0, 10.0)
@@ -141,6 +142,22 @@ def test_a_candidate_that_stands_alone_is_taken():
     host = _Host(2, refused=(), scores=(0.9, 0.3, 0.2), acquire_unique=True)
     a = _choose(host)
     assert a.found and not a.vetoed and host.states[a.best, 0] == 50.0 and host.asked == [50.0]
+
+
+@pytest.mark.parametrize("hold, found", [(0, True), (2, False)])
+def test_a_hold_after_two_look_alikes_refuses_the_next_frames(hold, found):
+    """acquire_unique_hold: two frames after a frame with a rival, a candidate standing alone is still refused
+    with a hold of 2 (none asked, the loss test moves one frame), and taken without one."""
+    host = _Host(2, refused=(), scores=(0.9, 0.8, 0.3), acquire_unique=True, hold=hold)
+    assert not _choose(host).found
+    host.frame_index = 2
+    host.score = {50.0: 0.9, 150.0: 0.3, 250.0: 0.2}
+    host.asked, host.loss.unseen = [], 0
+    a = _choose(host)
+    assert a.found == found and a.vetoed != found and host.loss.unseen == 1
+    assert host.asked == ([50.0] if found else [])
+    host.frame_index = 3  # the hold is over
+    assert _choose(host).found
 
 
 @pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])

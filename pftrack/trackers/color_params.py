@@ -164,6 +164,8 @@ class ColorModelParams(Params):
         "With loss_test='likelihood', while lost: a candidate is not acquired while another one elsewhere in the frame "
         "(beyond two half-axes each way, not the still scene) passes the acquisition test too: two look-alikes, and "
         "the search waits for one to stand alone (Lowe's ratio test; pftrack.trackers.vetoes). False: off."))
+    acquire_unique_hold: int = param(0, ge=0, le=10_000, doc=(
+        "With acquire_unique: after a frame with two such candidates, none is acquired for this many more frames."))
     loss_test: Literal["likelihood", "appearance"] = param("likelihood", doc=(
         "'likelihood': the estimate's rho is tested against two distributions, the background's (Eqs. 13-14, "
         "spread floored) and the target's own score history, LLR = log N(rho; mu_t, s_t) - log N(rho; mu_b, "

@@ -147,6 +147,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self._search_grays: deque = deque(maxlen=max(1, int(self.params.reenter_resident)))
         self._gray_now: tuple | None = None  # (frame index, grey image, frame): this frame's grey image, once converted
         self._vetoed: list = []  # (frame index, centre, shift) of the candidates reenter_outward refused lately
+        self._ambiguous_until = -1  # acquire_unique_hold: no acquisition up to this frame
         self._ell = np.empty((0, 4))
         self._lit: LitHistogram | None = None  # grey_histogram="both" on grey input (decided by _init)
 

@@ -199,8 +199,12 @@ class VetoMixin:
                 break
             if g > 0 and in_frame_fraction(tuple(ellipse_to_box(c.ell[best])), self._shape[1], self._shape[0]) < g:
                 break
-            if p.acquire_unique and self._rival(frame, c, best):
-                vetoed = True  # two look-alikes: no candidate of this frame is taken (the next would be the rival)
+            if p.acquire_unique and (self.frame_index <= self._ambiguous_until or self._rival(frame, c, best)):
+                # two look-alikes (on this frame, or within acquire_unique_hold frames): no candidate is taken (the
+                # next would be the rival)
+                if self.frame_index > self._ambiguous_until:
+                    self._ambiguous_until = self.frame_index + int(p.acquire_unique_hold)
+                vetoed = True
                 break
             if self._vetoed_by(frame, c.ell[best], llr) is None:
                 self.loss.acquire(s_best, lp)
