@@ -43,6 +43,11 @@ class FusionPFParams(ColorPFParams):
         "pooled lost recall 0.319 against 0.276 off; tune split and tune real-exit windows unchanged (mean AUC 0.7025, "
         "re-acquired 78 of 90 and 20 of 60, false-lost 0.019). color-pf gained 0.022 on the views, under the rule's "
         "0.03, and lost 10 of its 26 exit re-acquisitions: off."))
+    acquire_unique_hold: int = param(15, ge=0, le=10_000, doc=(
+        "See ColorModelParams.acquire_unique_hold (0 there). 15 for fusion-pf, chosen on the tune data under a rule "
+        "stated before the runs (reports/acquire_hold_rule.txt, docs/robustness.md): PETS tune views' pooled lost "
+        "recall 0.403 against 0.319 with 0 (5: 0.370); tune split and tune real-exit windows unchanged. The views' "
+        "own re-acquisitions fell from 6 to 4 of 18."))
     grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
         "See ColorModelParams.grey_scale_search (color-pf's, with grey_check='fused'): off for fusion-pf, whose "
         "own option is scale_search."))
