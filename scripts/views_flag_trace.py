@@ -1,6 +1,6 @@
 """Where a tracker's estimate is on the absent frames of the PETS views on which its lost flag is down.
 
-    python scripts/views_flag_trace.py reports/views_report --pets ../shared/data/pets09_s2l1_dev \
+    python scripts/views_flag_trace.py reports/views_report [MORE_VIEWS ...] --pets ../shared/data/pets09_s2l1_dev \
         --trackers fusion-pf,color-pf --seeds 0,1
 
 The views (``scripts/make_pets_views.py``) are single-person sequences cut from PETS 2009 S2.L1 through four
@@ -94,7 +94,7 @@ def classify(seq, boxes, lost, others, window) -> dict[str, int]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("views", type=Path)
+    ap.add_argument("views", type=Path, nargs="+", help="folders of views (scripts/make_pets_views.py)")
     ap.add_argument("--pets", type=Path, default=Path("../shared/data/pets09_s2l1_dev"))
     ap.add_argument("--trackers", default="fusion-pf,color-pf")
     ap.add_argument("--seeds", default="0,1")
@@ -108,7 +108,7 @@ def main() -> None:
         absent = up = 0
         acquired = {True: [0, 0], False: [0, 0]}  # exit strip on the frame before -> [acquisitions, on a walker]
         # every view has its ground truth; only some have a meta.json (the frames left unscored)
-        for folder in sorted(p for p in args.views.iterdir() if (p / "groundtruth_rect.txt").exists()):
+        for folder in sorted(p for v in args.views for p in v.iterdir() if (p / "groundtruth_rect.txt").exists()):
             seq = read_sequence(folder)
             if seq.absent is None or not seq.absent[1:].any():
                 continue
