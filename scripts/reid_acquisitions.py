@@ -95,15 +95,20 @@ def watch_rivals(tracker) -> dict:
     """Wrap a colour tracker's choice of a search candidate (its ``_choose``, on this instance only) so that, on a
     frame whose search acquires its best candidate, the returned dict holds ``rival`` (did a candidate elsewhere
     pass the acquisition test too: ``_rival``) and ``margin`` (the candidate's ratio minus that one's). Emptied on
-    every search frame; stays empty for other trackers."""
+    every search frame; stays empty for other trackers. Its list ``"two"`` keeps the frame indices on which the
+    search's first candidate and a rival both passed (``acquire_unique_hold``'s question)."""
     seen: dict = {}
+    two: list[int] = []
     choose = getattr(tracker, "_choose", None)
     if choose is None or not hasattr(tracker, "_rival"):
         return seen
 
     def wrapped(frame, c, supporters):
         seen.clear()
+        seen["two"] = two
         rival, margin = tracker._rival(frame, c, c.best), math.inf  # before the loss test moves
+        if rival and tracker.loss.would_acquire(c.s_best, c.lp)[0]:
+            two.append(tracker.frame_index)
         if c.rank is not None:
             far = np.where(near_mask(c.states, c.states[c.best, :2], tracker.size), -np.inf, c.rank)
             if np.isfinite(far).any():
@@ -137,7 +142,8 @@ def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:
         if was_lost and not st.lost and (lab := label(st.box, truth[t])) is not None:
             fh, fw = frames[t].shape[:2]
             rec = {"t": t, "label": lab, "in_frame": in_frame_fraction(tuple(st.box), fw, fh), "delay": t - lost_at,
-                   "exit_strip": strip, "rival": rivals.get("rival"), "margin": rivals.get("margin")}
+                   "exit_strip": strip, "rival": rivals.get("rival"), "margin": rivals.get("margin"),
+                   "two_in_loss": any(lost_at <= f < t for f in rivals.get("two", ()))}
             for ms in MIN_SCORES:
                 b = traced_back(grays[lost_at - 1:t + 1], st.box, min_score=ms) if t - lost_at <= TRACE_FRAMES else None
                 rec[f"apart {ms}"] = bool(b is not None and iou(tuple(b), box_before) == 0.0)
@@ -170,6 +176,7 @@ def summary(records: list[dict]) -> dict:
             "apart": {ms: (sum(r[f"apart {ms}"] for r in right), sum(r[f"apart {ms}"] for r in wrong))
                       for ms in MIN_SCORES},
             "rival": (sum(bool(r["rival"]) for r in right), sum(bool(r["rival"]) for r in wrong)),
+            "two_in_loss": (sum(r["two_in_loss"] for r in right), sum(r["two_in_loss"] for r in wrong)),
             "margin_auc": roc_auc([r["margin"] for r in right if r["margin"] is not None],
                                   [r["margin"] for r in wrong if r["margin"] is not None])}
 
@@ -215,6 +222,8 @@ def main() -> None:
     r, w = s["rival"]
     print(f"  a candidate elsewhere passed the acquisition test too: {r} right and {w} wrong acquisitions; "
           f"margin of the ratios ROC AUC {s['margin_auc']:.3f}")
+    r, w = s["two_in_loss"]
+    print(f"  two candidates passed together on an earlier search frame of the loss: {r} right and {w} wrong")
 
 
 if __name__ == "__main__":

@@ -69,7 +69,7 @@ def test_a_twin_taken_after_the_exit_is_a_wrong_acquisition_that_colour_cannot_t
     assert all(r["apart 0.5"] for r in wrong)  # the twin stood elsewhere when the target was lost
     assert s["wrong"] == len(wrong) and set(s["auc"]) == {f"{k} {v}" for k in mod.FEATURES for v in mod.SCORES}
     assert all(r["rival"] is False and r["margin"] > 0 for r in wrong)  # the twin stood alone
-    assert s["rival"] == (0, 0)
+    assert s["rival"] == (0, 0) and s["two_in_loss"] == (0, 0)
 
 
 def test_two_twins_in_view_are_rivals_at_the_acquisition(mod):
@@ -85,6 +85,7 @@ def test_two_twins_in_view_are_rivals_at_the_acquisition(mod):
     params = {"reenter_border": 0.0, "static_ncc": 0.0}
     recs = mod.acquisitions(frames, truth, tuple(truth[0]), pftrack.create_tracker("color-pf", seed=0, **params), 32)
     assert recs and recs[0]["label"] == "wrong" and recs[0]["rival"] is True and recs[0]["margin"] < 5.0
+    assert isinstance(recs[0]["two_in_loss"], bool)
     unique = pftrack.create_tracker("color-pf", seed=0, acquire_unique=True, **params)
     later = mod.acquisitions(frames, truth, tuple(truth[0]), unique, 32)
     assert not later or (later[0]["t"] > recs[0]["t"] and later[0]["rival"] is False)
