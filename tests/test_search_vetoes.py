@@ -164,3 +164,30 @@ def test_a_hold_after_two_look_alikes_refuses_the_next_frames(hold, found):
 def test_the_trackers_default_to_two_retries(name):
     assert pftrack.create_tracker(name).params.search_retries == 2
     assert pftrack.create_tracker(name, search_retries=0).params.search_retries == 0
+
+
+def _twins_after_a_vanish(seed: int):
+    """The target vanishes at frame 30; two twins walk up and down at either side of the view."""
+    from pftrack.synth import Scene
+    from pftrack.synth.scenes import SceneSpec, Target
+
+    target = Target(path=((0, 160.0, 120.0), (30, 200.0, 120.0)), size=(26.0, 52.0), disappear=30)
+    twins = (Target(path=((0, 50.0, 60.0), (70, 50.0, 190.0)), size=(26.0, 52.0)),
+             Target(path=((0, 280.0, 190.0), (70, 280.0, 60.0)), size=(26.0, 52.0)))
+    scene = Scene(SceneSpec(n_frames=70, seed=seed, targets=(target, *twins), background="flat", kind="vanish"))
+    return scene.frames(), scene.groundtruth()
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_rival_reached_off_its_centre_is_found_by_the_refined_look(seed):
+    """acquire_unique_refine: after the target vanishes, the search's best candidate is one twin and its samples
+    reach the other only off its centre, where it fails the test. Scored again on the grid around that sample, the
+    other twin passes too, and neither is taken: the flag stays up. Without the refined look a twin is taken."""
+    frames, truth = _twins_after_a_vanish(seed)
+    up = {}
+    for refine in (False, True):
+        t = pftrack.create_tracker("fusion-pf", seed=seed, acquire_unique_refine=refine)
+        t.init(frames[0], tuple(truth[0]))
+        lost = [t.update(f).lost for f in frames[1:]]
+        up[refine] = float(np.mean(lost[30:]))
+    assert up[False] < 0.2 and up[True] > 0.9

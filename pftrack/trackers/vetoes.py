@@ -39,7 +39,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..cues.template import patch_shift, trace_back
-from ..filtering.dynamics import X, Y
+from ..filtering.dynamics import HX, HY, X, Y
 from ..geometry import ellipse_to_box, in_frame_fraction
 
 __all__ = ["RESIDENT_CORE", "RESIDENT_IN_FRAME", "Acquisition", "VetoMixin", "near_mask"]
@@ -49,6 +49,11 @@ __all__ = ["RESIDENT_CORE", "RESIDENT_IN_FRAME", "Acquisition", "VetoMixin", "ne
 RESIDENT_IN_FRAME = 0.9
 #: ``reenter_resident``: the share of the candidate's half-axes that is traced (its central part)
 RESIDENT_CORE = 0.5
+#: ``acquire_unique_refine``: the offsets, in half-axes, at which a rival's neighbourhood is scored again, coarse
+#: then fine around the best coarse one (the search's samples are about a half-axis apart, and its likelihood peak
+#: is narrower than the target)
+RIVAL_GRID = np.array([(dx, dy) for dx in (-1.0, -0.5, 0.0, 0.5, 1.0) for dy in (-1.0, -0.5, 0.0, 0.5, 1.0)])
+RIVAL_STEPS = (1.0, 0.25)
 
 
 class Acquisition(NamedTuple):
@@ -173,7 +178,42 @@ class VetoMixin:
         if not np.isfinite(rank).any():
             return False
         j, s = self._skip_scene(frame, c.ell, rank, int(np.argmax(rank)), c.scores)
-        return bool(np.isfinite(rank[j]) and self.loss.would_acquire(*s)[0])
+        if not np.isfinite(rank[j]):
+            return False
+        if self.loss.would_acquire(*s)[0]:
+            return True
+        return bool(self.params.acquire_unique_refine and self._rival_refined(frame, c, j))
+
+    def _rival_refined(self, frame: np.ndarray, c, j: int) -> bool:
+        """``acquire_unique_refine``: does a position of :data:`RIVAL_GRID` around sample ``j`` of search ``c`` pass
+        the acquisition test, at the coarse spacing or then at the fine one around the best coarse position? The
+        candidate's own peak was refined by the search's second layer; a look-alike that only a sample off its
+        centre reached is given the same chance, on a fixed grid (no random draw). The search's result buffers
+        are restored afterwards (the cue reuses them)."""
+        centre = c.states[j]
+        kept = (c.rho.copy(), c.tot.copy())
+        try:
+            for step in RIVAL_STEPS:
+                st = np.repeat(centre[None, :], len(RIVAL_GRID), axis=0)
+                st[:, X] += step * RIVAL_GRID[:, 0] * st[:, HX]
+                st[:, Y] += step * RIVAL_GRID[:, 1] * st[:, HY]
+                self._clip_states(st)
+                ell = np.ascontiguousarray(st[:, [X, Y, HX, HY]])
+                rho, tot, feats = self._search_rho(frame, ell)
+                rho, tot = rho.copy(), tot.copy()
+                rank = self._search_log_lik(frame, st, self._log_lik(rho, tot), feats)
+                prior = self._position_log_prior(st)
+                rank = np.where(tot > 0, rank if prior is None else rank + prior, -np.inf)
+                if not np.isfinite(rank).any():
+                    return False
+                k = int(np.argmax(rank))
+                s = self._loss_scores(frame, ell[k:k + 1], rho[k:k + 1], feats.roi)[0]
+                if self.loss.would_acquire(s, 0.0 if prior is None else float(prior[k]))[0]:
+                    return True
+                centre = st[k]
+            return False
+        finally:
+            c.rho[:], c.tot[:] = kept
 
     def _choose(self, frame: np.ndarray, c, supporters: np.ndarray) -> Acquisition:
         """The candidate of search ``c`` (:class:`~.color_search.SearchCandidates`) to acquire, if any.
