@@ -41,7 +41,8 @@ class _Host(VetoMixin):
                  acquire_unique=False, hold=0):
         self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
                                       n_particles=30, acquire_in_frame=acquire_in_frame,
-                                      acquire_unique=acquire_unique, acquire_unique_hold=hold)
+                                      acquire_unique=acquire_unique, acquire_unique_hold=hold,
+                                      acquire_unique_refine=False)
         self.frame_index, self._ambiguous_until = 0, -1
         self._shape = (120, width)
         self.loss = _Loss()
