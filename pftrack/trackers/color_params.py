@@ -167,7 +167,8 @@ class ColorModelParams(Params):
     acquire_unique_hold: int = param(0, ge=0, le=10_000, doc=(
         "With acquire_unique: after a frame with two such candidates, none is acquired for this many more frames."))
     acquire_unique_refine: bool = param(False, doc=(
-        "With acquire_unique: a best sample elsewhere that fails is scored again on a fixed 5 x 5 grid around it."))
+        "With acquire_unique: a best sample elsewhere that fails is scored again on fixed grids around it (an option "
+        "for fusion-pf too: tune views' recall up, re-acquisitions down; docs/robustness.md)."))
     loss_test: Literal["likelihood", "appearance"] = param("likelihood", doc=(
         "'likelihood': the estimate's rho is tested against two distributions, the background's (Eqs. 13-14, "
         "spread floored) and the target's own score history, LLR = log N(rho; mu_t, s_t) - log N(rho; mu_b, "
