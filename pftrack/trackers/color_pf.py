@@ -58,7 +58,8 @@ from ..filtering.resampling import get_resampler
 from ..geometry import Box, background_grid, box_to_ellipse, displacement_rate, in_frame_fraction
 from .base import Tracker, TrackState
 from .color_hooks import ColorHooks
-from .color_params import ColorModelParams, ColorPFParams
+from .color_params import ColorModelParams
+from .color_pf_params import ColorPFParams
 from .color_search import SearchMixin
 from .distractors import DistractorMemory
 from .persistence import PersistenceMixin

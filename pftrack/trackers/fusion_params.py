@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from ..params import param
-from .color_params import ColorPFParams
+from .color_pf_params import ColorPFParams
 
 __all__ = ["FusionPFParams"]
 
