@@ -106,7 +106,8 @@ def watch_rivals(tracker) -> dict:
     def wrapped(frame, c, supporters):
         seen.clear()
         seen["two"] = two
-        rival, margin = tracker._rival(frame, c, c.best), math.inf  # before the loss test moves
+        llr = tracker.loss.would_acquire(c.s_best, c.lp)[1]
+        rival, margin = tracker._rival(frame, c, c.best, llr), math.inf  # before the loss test moves
         if rival and tracker.loss.would_acquire(c.s_best, c.lp)[0]:
             two.append(tracker.frame_index)
         if c.rank is not None:

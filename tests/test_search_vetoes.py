@@ -38,11 +38,11 @@ class _Host(VetoMixin):
     """Three candidates 100 px apart; the ones at ``refused`` x positions are vetoed."""
 
     def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3), *, width=320, acquire_in_frame=0.0,
-                 acquire_unique=False, hold=0):
+                 acquire_unique=False, hold=0, margin=0.0):
         self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
                                       n_particles=30, acquire_in_frame=acquire_in_frame,
                                       acquire_unique=acquire_unique, acquire_unique_hold=hold,
-                                      acquire_unique_refine=False)
+                                      acquire_unique_refine=False, acquire_unique_margin=margin)
         self.frame_index, self._ambiguous_until = 0, -1
         self._shape = (120, width)
         self.loss = _Loss()
@@ -143,6 +143,15 @@ def test_a_candidate_that_stands_alone_is_taken():
     host = _Host(2, refused=(), scores=(0.9, 0.3, 0.2), acquire_unique=True)
     a = _choose(host)
     assert a.found and not a.vetoed and host.states[a.best, 0] == 50.0 and host.asked == [50.0]
+
+
+@pytest.mark.parametrize("margin, found", [(0.0, False), (0.2, False), (0.05, True)])
+def test_a_rival_counts_within_the_margin_of_the_candidates_ratio(margin, found):
+    """acquire_unique_margin: the candidate's ratio is 0.9 and the rival's 0.8 (both pass). Any passing rival counts
+    with 0; with a margin of 0.2 the rival is close enough; with 0.05 it is not, and the candidate is taken."""
+    host = _Host(2, refused=(), scores=(0.9, 0.8, 0.3), acquire_unique=True, margin=margin)
+    a = _choose(host)
+    assert a.found == found and host.states[a.best, 0] == 50.0
 
 
 @pytest.mark.parametrize("hold, found", [(0, True), (2, False)])

@@ -166,6 +166,8 @@ class ColorModelParams(Params):
         "the search waits for one to stand alone (Lowe's ratio test; pftrack.trackers.vetoes). False: off."))
     acquire_unique_hold: int = param(0, ge=0, le=10_000, doc=(
         "With acquire_unique: after a frame with two such candidates, none is acquired for this many more frames."))
+    acquire_unique_margin: float = param(0.0, ge=0, le=100, doc=(
+        "With acquire_unique: m > 0, a rival counts only when its ratio is within m of the candidate's. 0: any."))
     acquire_unique_refine: bool = param(False, doc=(
         "With acquire_unique: a best sample elsewhere that fails is scored again on fixed grids around it (an option "
         "for fusion-pf too: tune views' recall up, re-acquisitions down; docs/robustness.md)."))

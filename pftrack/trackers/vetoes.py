@@ -169,9 +169,10 @@ class VetoMixin:
             return "distractor"
         return None
 
-    def _rival(self, frame: np.ndarray, c, best: int) -> bool:
+    def _rival(self, frame: np.ndarray, c, best: int, llr: float | None = None) -> bool:
         """``acquire_unique``: does a candidate of search ``c`` elsewhere than sample ``best`` (beyond two half-axes
-        each way, the still scene skipped) pass the acquisition test too?"""
+        each way, the still scene skipped) pass the acquisition test too? With ``acquire_unique_margin`` and the
+        candidate's ratio ``llr``, only a rival whose ratio comes that close counts."""
         if c.rank is None:
             return False
         rank = np.where(near_mask(c.states, c.states[best, X:Y + 1], self.size), -np.inf, c.rank)
@@ -180,11 +181,18 @@ class VetoMixin:
         j, s = self._skip_scene(frame, c.ell, rank, int(np.argmax(rank)), c.scores)
         if not np.isfinite(rank[j]):
             return False
-        if self.loss.would_acquire(*s)[0]:
+        if self._close(*s, llr):
             return True
-        return bool(self.params.acquire_unique_refine and self._rival_refined(frame, c, j))
+        return bool(self.params.acquire_unique_refine and self._rival_refined(frame, c, j, llr))
 
-    def _rival_refined(self, frame: np.ndarray, c, j: int) -> bool:
+    def _close(self, s, lp: float, llr: float | None) -> bool:
+        """Does a rival with loss-test scores ``s`` and log prior ``lp`` pass the acquisition test, within
+        ``acquire_unique_margin`` of the candidate's ratio ``llr`` (when both are set)?"""
+        ok, r = self.loss.would_acquire(s, lp)
+        m = self.params.acquire_unique_margin
+        return bool(ok and (m <= 0 or llr is None or r >= llr - m))
+
+    def _rival_refined(self, frame: np.ndarray, c, j: int, llr: float | None = None) -> bool:
         """``acquire_unique_refine``: does a position of :data:`RIVAL_GRID` around sample ``j`` of search ``c`` pass
         the acquisition test, at the coarse spacing or then at the fine one around the best coarse position? The
         candidate's own peak was refined by the search's second layer; a look-alike that only a sample off its
@@ -208,7 +216,7 @@ class VetoMixin:
                     return False
                 k = int(np.argmax(rank))
                 s = self._loss_scores(frame, ell[k:k + 1], rho[k:k + 1], feats.roi)[0]
-                if self.loss.would_acquire(s, 0.0 if prior is None else float(prior[k]))[0]:
+                if self._close(s, 0.0 if prior is None else float(prior[k]), llr):
                     return True
                 centre = st[k]
             return False
@@ -241,7 +249,7 @@ class VetoMixin:
                 break
             if g > 0 and in_frame_fraction(tuple(ellipse_to_box(c.ell[best])), self._shape[1], self._shape[0]) < g:
                 break
-            if p.acquire_unique and (self.frame_index <= self._ambiguous_until or self._rival(frame, c, best)):
+            if p.acquire_unique and (self.frame_index <= self._ambiguous_until or self._rival(frame, c, best, llr)):
                 # two look-alikes (on this frame, or within acquire_unique_hold frames): no candidate is taken (the
                 # next would be the rival)
                 if self.frame_index > self._ambiguous_until:
