@@ -15,7 +15,9 @@ candidate that would end the loss can still be refused, as another object of the
 - ``acquire_unique``: another candidate elsewhere passes the acquisition test too (:meth:`VetoMixin._rival`). Two
   look-alikes qualify, so neither is taken on that frame, and the next best is not tried (it would be the rival);
   with ``acquire_unique_hold`` = k, nor on the k frames after it. A candidate already refused on the frame, or a
-  look-alike the distractor memory follows, has left the ranking and is not a rival.
+  look-alike the distractor memory follows, has left the ranking and is not a rival. Two options (off): a rival
+  sample that fails is scored again on a fixed grid around it (``acquire_unique_refine``), and a rival counts only
+  within a margin of the candidate's ratio (``acquire_unique_margin``).
 
 A refused best candidate used to end the frame's search, and the samples that ranked below it were never
 tested. Traced on the grey tune scene ``exit-019`` (``color-pf`` and ``fusion-pf``, seed 0): a look-alike
