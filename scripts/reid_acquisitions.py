@@ -46,7 +46,6 @@ from pftrack.geometry import in_frame_fraction, iou
 from pftrack.io.datasets import read_sequence
 from pftrack.multicam.appearance import region_histograms, similarity_matrix
 from pftrack.trackers import create_tracker
-from pftrack.trackers.vetoes import near_mask
 
 FEATURES = ("whole", "ellipse2", "positional")
 SCORES = ("gallery", "first", "relative")
@@ -106,16 +105,13 @@ def watch_rivals(tracker) -> dict:
     def wrapped(frame, c, supporters):
         seen.clear()
         seen["two"] = two
-        llr = tracker.loss.would_acquire(c.s_best, c.lp)[1]
+        ok, llr = tracker.loss.would_acquire(c.s_best, c.lp)
         rival, margin = tracker._rival(frame, c, c.best, llr), math.inf  # before the loss test moves
-        if rival and tracker.loss.would_acquire(c.s_best, c.lp)[0]:
+        if rival and ok:
             two.append(tracker.frame_index)
-        if c.rank is not None:
-            far = np.where(near_mask(c.states, c.states[c.best, :2], tracker.size), -np.inf, c.rank)
-            if np.isfinite(far).any():
-                j, s = tracker._skip_scene(frame, c.ell, far, int(np.argmax(far)), c.scores)
-                if np.isfinite(far[j]):
-                    margin = tracker.loss.would_acquire(c.s_best, c.lp)[1] - tracker.loss.would_acquire(*s)[1]
+        found = tracker._rival_sample(frame, c, c.best)
+        if found is not None:
+            margin = llr - tracker.loss.would_acquire(*found[1])[1]
         a = choose(frame, c, supporters)
         if a.found and a.best == c.best:
             seen.update(rival=bool(rival), margin=float(margin))

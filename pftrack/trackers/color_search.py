@@ -25,7 +25,7 @@ from ..filtering.loss import confidence
 from ..frames import as_bgr_uint8
 from ..geometry import Box, box_to_ellipse, ellipse_to_box, in_frame_fraction, validate_box
 from .base import TrackState
-from .vetoes import near_mask
+from .vetoes import near_mask, search_rank
 
 _ELL_COLS = np.array([X, Y, HX, HY])
 
@@ -304,8 +304,7 @@ class SearchMixin:
         returned together (the region of the colour features then spans both)."""
         p = self.params
         roi = feats.roi
-        rank = loglik if prior is None else loglik + prior
-        rank = np.where(tot > 0, rank, -np.inf)
+        rank = search_rank(loglik, prior, tot)
         if not np.isfinite(rank).any():
             return states, ell, rho, tot, loglik, prior, roi
         rho, tot = rho.copy(), tot.copy()  # the cue's result buffers are reused by the next call
@@ -387,8 +386,7 @@ class SearchMixin:
                                                                              prior, feats)
         self._search_states = states
         self._search_loglik = loglik
-        rank = loglik if prior is None else loglik + prior
-        rank = np.where(tot > 0, rank, -np.inf)
+        rank = search_rank(loglik, prior, tot)
         if exclude is not None:
             ex, ey, ehx, ehy = (float(v) for v in exclude)
             rank = np.where(near_mask(states, (ex, ey), (ehx, ehy)), -np.inf, rank)

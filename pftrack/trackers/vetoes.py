@@ -44,7 +44,7 @@ from ..cues.template import patch_shift, trace_back
 from ..filtering.dynamics import HX, HY, X, Y
 from ..geometry import ellipse_to_box, in_frame_fraction
 
-__all__ = ["RESIDENT_CORE", "RESIDENT_IN_FRAME", "Acquisition", "VetoMixin", "near_mask"]
+__all__ = ["RESIDENT_CORE", "RESIDENT_IN_FRAME", "Acquisition", "VetoMixin", "near_mask", "search_rank"]
 
 #: ``reenter_resident``: the share of a candidate's box inside the view on every frame of its trace that makes it
 #: an object that stayed in view
@@ -77,6 +77,12 @@ def near_mask(states: np.ndarray, centre_xy, size: tuple[float, float]) -> np.nd
     states or ellipses, the centre in their first two columns."""
     hx, hy = size
     return (np.abs(states[:, X] - centre_xy[0]) < 2 * hx) & (np.abs(states[:, Y] - centre_xy[1]) < 2 * hy)
+
+
+def search_rank(loglik: np.ndarray, prior: np.ndarray | None, tot: np.ndarray) -> np.ndarray:
+    """The search samples' ranking: log-likelihood plus the position log prior (when there is one), ``-inf`` for a
+    sample with no pixel in the frame (kernel mass ``tot`` 0)."""
+    return np.where(tot > 0, loglik if prior is None else loglik + prior, -np.inf)
 
 
 class VetoMixin:
@@ -171,18 +177,25 @@ class VetoMixin:
             return "distractor"
         return None
 
-    def _rival(self, frame: np.ndarray, c, best: int, llr: float | None = None) -> bool:
-        """``acquire_unique``: does a candidate of search ``c`` elsewhere than sample ``best`` (beyond two half-axes
-        each way, the still scene skipped) pass the acquisition test too? With ``acquire_unique_margin`` and the
-        candidate's ratio ``llr``, only a rival whose ratio comes that close counts."""
+    def _rival_sample(self, frame: np.ndarray, c, best: int) -> tuple[int, tuple] | None:
+        """The best-ranked sample of search ``c`` beyond two half-axes (each way) of sample ``best``, the still scene
+        skipped, and its ``c.scores`` (loss-test scores, log prior); ``None`` when there is none."""
         if c.rank is None:
-            return False
+            return None
         rank = np.where(near_mask(c.states, c.states[best, X:Y + 1], self.size), -np.inf, c.rank)
         if not np.isfinite(rank).any():
-            return False
+            return None
         j, s = self._skip_scene(frame, c.ell, rank, int(np.argmax(rank)), c.scores)
-        if not np.isfinite(rank[j]):
+        return (j, s) if np.isfinite(rank[j]) else None
+
+    def _rival(self, frame: np.ndarray, c, best: int, llr: float | None = None) -> bool:
+        """``acquire_unique``: does a candidate of search ``c`` elsewhere than sample ``best`` (:meth:`_rival_sample`)
+        pass the acquisition test too? With ``acquire_unique_margin`` and the candidate's ratio ``llr``, only a rival
+        whose ratio comes that close counts."""
+        found = self._rival_sample(frame, c, best)
+        if found is None:
             return False
+        j, s = found
         if self._close(*s, llr):
             return True
         return bool(self.params.acquire_unique_refine and self._rival_refined(frame, c, j, llr))
@@ -211,9 +224,9 @@ class VetoMixin:
                 ell = np.ascontiguousarray(st[:, [X, Y, HX, HY]])
                 rho, tot, feats = self._search_rho(frame, ell)
                 rho, tot = rho.copy(), tot.copy()
-                rank = self._search_log_lik(frame, st, self._log_lik(rho, tot), feats)
+                loglik = self._search_log_lik(frame, st, self._log_lik(rho, tot), feats)
                 prior = self._position_log_prior(st)
-                rank = np.where(tot > 0, rank if prior is None else rank + prior, -np.inf)
+                rank = search_rank(loglik, prior, tot)
                 if not np.isfinite(rank).any():
                     return False
                 k = int(np.argmax(rank))
