@@ -23,7 +23,6 @@ auto``), and :func:`label_stats` the blobs' boxes from a label image.
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass, field
 
 import cv2
@@ -32,17 +31,7 @@ import numpy as np
 from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground
 from .geometry import _segments, polyline_project
 
-__all__ = ["FootCrossings", "FootEvent", "estimate_radius", "group_size", "label_stats"]
-
-
-def group_size(aspect: float, typical: float, ratio: float, most: int = 4) -> int:
-    """How many upright objects side by side a blob of width-to-height ``aspect`` holds, when one object's is
-    ``typical``: 1 below ``ratio`` × ``typical``, then one more for each further ``typical`` (at most ``most``).
-    ``ratio`` <= 0 or an unknown ``typical``: 1."""
-    if ratio <= 0 or not typical > 0 or not np.isfinite(aspect):
-        return 1
-    k = aspect / typical
-    return 1 if k < ratio else int(min(most, 2 + np.floor(k - ratio)))
+__all__ = ["FootCrossings", "FootEvent", "estimate_radius", "label_stats"]
 
 
 @dataclass(frozen=True)
@@ -64,7 +53,6 @@ class _Blob:
     counted: dict = field(default_factory=dict)  # (source, direction) -> frame number of its last event
     pending: FootEvent | None = None     # a crossing held for ``hold`` frames
     age: int = 0                         # frames the pending crossing has been held
-    aspect: float = float("nan")         # its box's width / height on the last frame it was seen
 
 
 class FootCrossings:
@@ -80,7 +68,7 @@ class FootCrossings:
 
     def __init__(self, polyline: np.ndarray, origin: tuple[int, int], width: int, *, point: str = "foot",
                  hysteresis: float = 5.0, min_area: int = 60, window: float = 20.0, hold: int = 0,
-                 inherit: str = "wire", group_ratio: float = 0.0, group_memory: int = 2000, group_min: int = 50):
+                 inherit: str = "wire"):
         self.polyline = np.asarray(polyline, dtype=np.float64)
         self.x0, self.y0 = origin
         self.width = int(width)
@@ -99,8 +87,6 @@ class FootCrossings:
         self._next = 0
         self._prev: np.ndarray | None = None   # the previous frame's labels (flat)
         self._bid_of: dict[int, int] = {}      # the previous frame's label -> blob id
-        self.group_ratio, self.group_min = float(group_ratio), int(group_min)
-        self._aspects: deque[float] = deque(maxlen=max(1, int(group_memory)))   # followed blobs' w / h
 
     # -- geometry ------------------------------------------------------------------------------
     def _points(self, stats: np.ndarray) -> np.ndarray:
@@ -182,10 +168,6 @@ class FootCrossings:
             by_label[lab] = bid
         parent_of = {bid: self.blobs[p] for bid, p in heirs.items()}
         gone = [b for bid, b in self.blobs.items() if bid not in blobs and b.pending is not None]
-        if self.group_ratio > 0 and by_label:
-            for lab, bid in by_label.items():
-                blobs[bid].aspect = a = float(stats[lab, cv2.CC_STAT_WIDTH]) / float(stats[lab, cv2.CC_STAT_HEIGHT])
-                self._aspects.append(a)
         self.blobs = blobs
         self._bid_of = by_label
         self._prev = flat  # a fresh label image every frame: kept, not copied
@@ -194,9 +176,9 @@ class FootCrossings:
             bid = by_label.get(lab)
             if bid is not None and not self._count(blobs[bid], "patch", ev.direction, ev.frame, ("foot",)):
                 continue
-            kept += [ev] * (self._group(blobs[bid]) if bid is not None else 1)
+            kept.append(ev)
         # a held crossing of a blob no longer seen (merged, gone) is counted
-        found = [ev for b in gone if (ev := self._release(b)) is not None for _ in range(self._group(b))]
+        found = [ev for ev in map(self._release, gone) if ev is not None]
         if not by_label:
             return kept, found
         labs = np.fromiter(by_label, np.int64, len(by_label))
@@ -211,14 +193,8 @@ class FootCrossings:
                 b.state, b.tail = parent_of[bid].state, list(parent_of[bid].tail)
             ev = self._advance(b, number, t, float(signed[k]), pts[k], int(areas[lab]))
             if ev is not None and self._count(b, "foot", ev.direction, ev.frame, ("patch", "foot")):
-                found += [ev] * self._group(b)
+                found.append(ev)
         return kept, found
-
-    def _group(self, b: _Blob) -> int:
-        """How many objects an event of ``b`` counts (:func:`group_size`; 1 without ``group_ratio``)."""
-        if self.group_ratio <= 0 or len(self._aspects) < self.group_min:
-            return 1
-        return group_size(b.aspect, float(np.median(self._aspects)), self.group_ratio)
 
     def _count(self, b: _Blob, source: str, direction: int, frame: int, against: tuple[str, ...]) -> bool:
         """Count an event of ``b`` from ``source`` in ``direction`` at ``frame``, unless an event from one of
@@ -268,7 +244,7 @@ class FootCrossings:
 
     def finish(self) -> list[FootEvent]:
         """At the end of the stream: the crossings still held."""
-        return [ev for b in self.blobs.values() if (ev := self._release(b)) is not None for _ in range(self._group(b))]
+        return [ev for ev in map(self._release, self.blobs.values()) if ev is not None]
 
 
 def label_stats(labels: np.ndarray) -> np.ndarray:

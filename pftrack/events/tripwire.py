@@ -166,11 +166,6 @@ class TripwireParams(Params):
         "36 at 0.75)"))
     foot_window: float = param(6.0, gt=0, doc="with feet: seconds within which one blob's events of one direction "
                                               "are one event (6 chosen on the tune data among 1.5, 3, 6, 10)")
-    group_aspect: float = param(0.0, ge=0, doc=(
-        "with feet: a blob whose width-to-height ratio is at least this many times the median of the blobs "
-        "followed near the wire is several upright objects side by side, and its event counts once for each "
-        "(pftrack.events.blobs.group_size: 2 from this ratio, one more per further median; 0: off). Two walkers "
-        "who cross together form one blob"))
     merge_blob: bool = param(True, doc="with timing foot/centre: events of one direction on one blob are one event")
     lookback: float = param(2.5, ge=0, doc=(
         "with confirm: seconds the blob is followed backwards from the frame an event fires (the event is then "
@@ -275,7 +270,7 @@ class TrackerlessTripwire:
             feet=FootCrossings(self.polyline, (self.x0, self.y0), rw, point=p.timing, hysteresis=p.foot_hysteresis,
                                min_area=int(round(p.foot_min_area * r * r)),
                                window=p.foot_window * self.fps, hold=p.foot_hold,
-                               inherit=p.foot_inherit, group_ratio=p.group_aspect) if p.feet else None)
+                               inherit=p.foot_inherit) if p.feet else None)
         self.frames = 0
 
     # -- per frame ------------------------------------------------------------------------------
