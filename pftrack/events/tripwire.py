@@ -60,6 +60,11 @@ class TripwireParams(Params):
         "twice as dark as the ground: a darker pixel is a shadow only above this fraction of the background's "
         "brightness (1: none; 0.5: OpenCV's, as on colour frames; 0.85 chosen on the grey tune data, "
         "docs/tripwire.md; pftrack.cues.foreground)"))
+    bgs_bootstrap: float = param(0.0, ge=0, doc=(
+        "seconds of processed frames (at least 3) held at the start; MOG2 learns them with their moving pixels "
+        "replaced by the per-pixel median (pftrack.cues.foreground.still_frames), then they are processed (0: off; "
+        "MOG2 alone takes the first frames' objects for background). An option: 4 s found 80 of the PETS tune "
+        "frames' 96 crossings at strides 1-3 against 74, at mean F1 0.825 against 0.817, short of its rule"))
     diff_threshold: int = param(25, ge=1, le=255, doc="grey-level threshold of the frame difference")
     fg_ratio: float = param(0.3, gt=0, le=1, doc="foreground fraction of a disc that makes the patch foreground")
     contact: Literal["any", "bottom"] = param("any", doc=(
@@ -272,6 +277,10 @@ class TrackerlessTripwire:
                                window=p.foot_window * self.fps, hold=p.foot_hold,
                                inherit=p.foot_inherit) if p.feet else None)
         self.frames = 0
+        # bgs_bootstrap: the first frames' regions, held until the background is started from them
+        self._boot_n = (max(3, int(round(p.bgs_bootstrap * self.fps / self.stride)))
+                        if p.bgs_bootstrap > 0 and p.bgs == "mog2" and not p.faithful else 0)
+        self._held: list[tuple[np.ndarray, int]] | None = [] if self._boot_n else None
 
     # -- per frame ------------------------------------------------------------------------------
     def foreground(self, roi: np.ndarray, gray: np.ndarray) -> np.ndarray:
@@ -288,10 +297,23 @@ class TrackerlessTripwire:
         return cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._kernel)
 
     def process(self, frame: np.ndarray, number: int) -> list[CrossingEvent]:
-        p = self.params
         roi = frame[self.y0:self.y1, self.x0:self.x1]
         if roi.ndim == 2:
             roi = cv2.cvtColor(roi, cv2.COLOR_GRAY2BGR)
+        if self._held is None:
+            return self._process(roi, number)
+        self._held.append((roi.copy(), number))
+        return self._release_held() if len(self._held) >= self._boot_n else []
+
+    def _release_held(self) -> list[CrossingEvent]:
+        """``bgs_bootstrap``: start the background from the held frames, then process them."""
+        held, self._held = self._held or [], None
+        if held:
+            self._bgs.prime([r for r, _ in held])
+        return [ev for roi, n in held for ev in self._process(roi, n)]
+
+    def _process(self, roi: np.ndarray, number: int) -> list[CrossingEvent]:
+        p = self.params
         gray = cv2.cvtColor(roi, cv2.COLOR_BGR2GRAY)
         fg2d = self.foreground(roi, gray)
         self._fg = fg2d
@@ -333,11 +355,13 @@ class TrackerlessTripwire:
         return events
 
     def finish(self) -> list[CrossingEvent]:
-        """At the end of the stream: the events still waiting for their point to cross (none with confirm)."""
+        """At the end of the stream: the events still waiting for their point to cross (none with confirm), after
+        the frames still held for ``bgs_bootstrap``."""
+        held = self._release_held() if self._held is not None else []
         if self._timer is None:
-            return []
+            return held
         feet = self._timer.feet.finish() if self._timer.feet is not None else []
-        return self._timer.finish() + [_foot_event(f) for f in feet]
+        return held + self._timer.finish() + [_foot_event(f) for f in feet]
 
     def _update_history(self, i: int, hist: np.ndarray, t: float, number: int, gray: np.ndarray) -> bool:
         p = self.params
