@@ -246,3 +246,54 @@ def test_a_detection_covering_two_targets_is_a_group_but_not_a_duplicate():
     b.pred = b.state.copy()
     mt._associate(frame, blob)
     assert not a.grouped and not b.grouped
+
+
+def test_the_mog2_background_started_from_the_first_frames_finds_who_was_there_from_the_start():
+    """MOG2 takes its first frame for the background: the two movers, in view from frame 1, are not found on the
+    first frames. Started from the first 8 frames with their moving pixels replaced by the median (``prime``),
+    the detector finds them from the first frame, and multi-pf reports them 5 frames earlier."""
+    scene, frames, _ = render_scene(movers(3))
+    plain, primed = create_detector("mog2"), create_detector("mog2")
+    primed.prime(frames[:8])
+    assert [len(plain(f)) for f in frames[:4]] == [0, 0, 0, 0]
+    assert len(primed(frames[0])) == 2
+    first = {}
+    for k in (0, 8):
+        tr = create_multi_tracker("multi-pf", seed=0, bootstrap_frames=k)
+        assert tr.bootstrap_frames == k
+        if k:
+            tr.prime(frames[:k])
+        first[k] = next(t for t, f in enumerate(frames, 1) if tr.update(f))
+    assert first[8] <= first[0] - 3
+    assert create_multi_tracker("multi-pf", detector="hog", bootstrap_frames=8).bootstrap_frames == 0  # no background
+
+
+def test_mot_cli_and_eval_read_the_bootstrap_frames_ahead(tmp_path):
+    import cv2
+
+    from pftrack.eval.runner import Job, TrackerConfig, run_job
+    from pftrack.io.datasets import write_mot_groundtruth, write_seqinfo
+
+    scene, frames, truths = render_scene(movers(3))
+    d = tmp_path / "movers" / "movers"
+    (d / "img1").mkdir(parents=True)
+    (d / "gt").mkdir()
+    for t, f in enumerate(frames, 1):
+        cv2.imwrite(str(d / "img1" / f"{t:06d}.png"), f)
+    rows = [[t, k + 1, *box, 1, 1, 1] for t, tr in enumerate(truths, 1) for k, box in enumerate(tr.boxes)
+            if np.all(np.isfinite(box))]
+    write_mot_groundtruth(d / "gt" / "gt.txt", np.array(rows, dtype=np.float64))
+    write_seqinfo(d, name="movers", fps=10, length=len(frames), width=320, height=240, ext=".png")
+    firsts = {}
+    for k in (0, 8):
+        out = tmp_path / f"tracks{k}.txt"
+        assert main(["mot", str(d), "--out", str(out), "--quiet", "--param", f"bootstrap_frames={k}"]) == 0
+        got = read_mot_txt(out)
+        firsts[k] = got[:, 0].min()
+        assert got[:, 0].max() == len(frames)          # every frame tracked once, numbered as read
+        rec = run_job(Job(TrackerConfig("multi-pf", "multi-pf", (("bootstrap_frames", k),)), str(d), "movers", 0,
+                          "mot"))
+        assert rec["frames"] == len(frames)
+        firsts[f"eval {k}"] = rec["mota"]
+    assert firsts[8] < firsts[0]
+    assert firsts["eval 8"] > firsts["eval 0"]

@@ -248,11 +248,21 @@ def _run_mot_job(job: Job, seq) -> dict:
     failure: dict = {}
     answered = 0  # frames the tracker answered
     t_all = time.perf_counter()
-    for t, path in enumerate(seq.frames, start=1):
+
+    def decoded(t: int, path) -> np.ndarray:
         img = read_image(path)
         if img is None:
             raise FormatError(f"{path}: frame {t} cannot be decoded")
-        frame = as_bgr_uint8(img, where=str(path))
+        return as_bgr_uint8(img, where=str(path))
+
+    if tracker.bootstrap_frames:  # the first frames read ahead for the detector's background (counted as updates)
+        ahead = [decoded(t, path) for t, path in enumerate(seq.frames[:tracker.bootstrap_frames], start=1)]
+        t0 = time.perf_counter()
+        tracker.prime(ahead)
+        upd += time.perf_counter() - t0
+        del ahead
+    for t, path in enumerate(seq.frames, start=1):
+        frame = decoded(t, path)
         t0 = time.perf_counter()
         try:
             outs = tracker.update(frame)

@@ -160,11 +160,19 @@ class MOG2Detector:
         self._open = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (p.opening, p.opening))
         self._close = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (p.closing, p.closing))
 
+    def _reduced(self, frame: np.ndarray) -> np.ndarray:
+        f = as_bgr_uint8(frame)
+        d = self.params.downscale
+        return cv2.resize(f, (f.shape[1] // d, f.shape[0] // d), interpolation=cv2.INTER_AREA) if d > 1 else f
+
+    def prime(self, frames) -> None:
+        """Start the background from the first ``frames`` of the stream, their moving pixels replaced by the
+        per-pixel median (:meth:`pftrack.cues.foreground.Foreground.prime`)."""
+        self._sub.prime([self._reduced(f) for f in frames])
+
     def __call__(self, frame: np.ndarray) -> np.ndarray:
         p = self.params
-        f = as_bgr_uint8(frame)
-        if p.downscale > 1:
-            f = cv2.resize(f, (f.shape[1] // p.downscale, f.shape[0] // p.downscale), interpolation=cv2.INTER_AREA)
+        f = self._reduced(frame)
         mask = self._sub.apply(f, p.learning_rate) * np.uint8(255)  # MOG2's shadows are background on colour frames
         mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, self._open)
         mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, self._close)

@@ -25,6 +25,12 @@ class MultiPFParams(Params):
         "twice as dark as the ground: a darker pixel is a shadow only above this fraction of the background's "
         "brightness (1: none; 0.5: OpenCV's, as on colour frames; 0.85 chosen on the grey tune frames of PETS: "
         "MOTA 0.472 against 0.275 with 0.5; pftrack.cues.foreground)."))
+    bootstrap_frames: int = param(0, ge=0, le=10_000, doc=(
+        "mog2: the caller (pftrack mot, pftrack eval) reads this many first frames ahead and the detector's "
+        "background starts from them with their moving pixels replaced by the per-pixel median (MultiPF.prime, "
+        "pftrack.cues.foreground.still_frames); 0: MOG2 starts from the first frame and takes its people for "
+        "background. An option: on the PETS tune half 56 frames raised MOTA from 0.550 to 0.580 but IDF1 fell from "
+        "0.705 to 0.671 (docs/mot.md)."))
     n_particles: int = param(100, ge=1, le=100_000, doc="Particles per target.")
     max_pixels: int = param(600, ge=0, le=1_000_000, doc=(
         "Colour histograms of larger boxes are sampled on a lattice of about this many pixels (speed)."))

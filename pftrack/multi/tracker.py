@@ -101,6 +101,8 @@ class MultiPF:
             extra = {"split_aspect": p.object_aspect} if p.detector in ("mog2", "motion") else {}
             extra |= {"grey_shadow_threshold": p.grey_shadow_threshold} if p.detector == "mog2" else {}
             self.detector = create_detector(p.detector, **extra)
+        # frames the caller reads ahead for prime() (a detector that learns a background)
+        self.bootstrap_frames = p.bootstrap_frames if hasattr(self.detector, "prime") else 0
         self._group_merges = p.group_merges == "on" or (
             p.group_merges == "auto" and (detector_fn is not None or p.detector != "motion"))
         self.cue = ColorCue("rgb", (8, 8, 8), "nummiaro", p.max_pixels)
@@ -187,6 +189,12 @@ class MultiPF:
         return self.rng.standard_normal((n, 8)) * std
 
     # ------------------------------------------------------------------ the frame
+    def prime(self, frames) -> None:
+        """Before the first update: start the detector's background from the first frames of the stream (read ahead
+        by the caller, ``bootstrap_frames`` of them); a detector without a background ignores it."""
+        if hasattr(self.detector, "prime") and len(frames):
+            self.detector.prime(frames)
+
     def update(self, frame: np.ndarray) -> list[TrackOutput]:
         """Process one frame; returns the reported targets."""
         frame = as_bgr_uint8(frame, where=f"frame {self.frame_index + 1}")
