@@ -1,0 +1,126 @@
+"""The trackerless tripwire's tune families, for choosing a parameter on the tune data only (docs/tripwire.md).
+
+    python scripts/ch10_tune.py bgs_bootstrap 2,4,8                      # the six families
+    python scripts/ch10_tune.py group_blob 0.2,0.5 --families pets,walkers
+
+For each value (and the current default beside them), F1 (events one-to-one, right direction, within +-10 frames)
+of each family, and the mean over the families:
+
+* ``pets``: PETS 2009 S2.L1 frames 1-200 only (the report frames are not processed), the four lines of
+  scripts/ch10_experiments.py, ``--radius auto`` as there, strides 1, 2 and 3 (three families);
+* ``walkers``: ``pftrack synth walkers`` seeds 0-9 (one family);
+* ``traffic``: ``pftrack synth traffic-sparse`` and ``traffic-dense`` seeds 0-2 at stride 1, the book's timing
+  (``timing=match``; ``bgs_history=100`` for dense), as scripts/ch10_experiments.py runs them (two families).
+
+Two worker processes; a few minutes. It chooses nothing: the rule that reads its table is written beforehand
+(``reports/*_rule.txt``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+from ch10_experiments import PETS_LINES, add, ntt, score, summarise  # noqa: E402
+
+from pftrack.events.eval import track_crossings  # noqa: E402
+from pftrack.events.geometry import parse_polyline  # noqa: E402
+from pftrack.events.tripwire import TripwireParams, estimate_radius  # noqa: E402
+from pftrack.io.datasets import read_sequence  # noqa: E402
+
+
+def _pets(args) -> dict:
+    data, stride, key, values = args
+    seq = read_sequence(Path(data) / "pets09_s2l1_dev")
+    frames = [cv2.imread(str(p)) for p in seq.frames[:200]]
+    numbers = list(range(1, 201, stride))
+    sub = [frames[n - 1] for n in numbers]
+    acc: dict = {}
+    for text in PETS_LINES:
+        line = parse_polyline(text)
+        r = estimate_radius(sub[:max(1, 70 // stride)], line)
+        truth = track_crossings(seq.mot_gt, line, hysteresis=5)
+        for v in values:
+            ev, _ = ntt(sub, numbers, line, 7.0, stride, radius=r, **{key: v})
+            add(acc, f"pets stride {stride} | {v}", score([(e.frame, e.direction) for e in ev], truth, 1, 200))
+    return acc
+
+
+def _walkers(args) -> dict:
+    from pftrack.synth.walkers import walkers_scene
+
+    seed, key, values = args
+    sc = walkers_scene(seed)
+    truth = track_crossings(sc.tracks, sc.wire, hysteresis=3)
+    numbers = list(range(1, len(sc.frames) + 1))
+    r = estimate_radius(sc.frames[:int(10 * sc.fps)], sc.wire)
+    acc: dict = {}
+    for v in values:
+        ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, radius=r, **{key: v})
+        add(acc, f"walkers | {v}", score([(e.frame, e.direction) for e in ev], truth, 0, 1e9))
+    return acc
+
+
+def _traffic(args) -> dict:
+    from pftrack.synth.traffic import traffic_scene
+
+    kind, seed, key, values = args
+    sc = traffic_scene(seed, kind=kind)
+    truth = track_crossings(sc.tracks, sc.wire, hysteresis=3, point="centre")
+    numbers = list(range(1, len(sc.frames) + 1))
+    acc: dict = {}
+    for v in values:
+        kw = {"timing": "match", **({"bgs_history": 100} if kind == "dense" else {}), key: v}
+        ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, **kw)
+        add(acc, f"traffic {kind} | {v}", score([(e.frame, e.direction) for e in ev], truth, 0, 1e9))
+    return acc
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("param", help="a TripwireParams field")
+    ap.add_argument("values", help="comma-separated values to try beside the default")
+    ap.add_argument("--families", default="pets,walkers,traffic")
+    ap.add_argument("--data", default="../shared/data")
+    args = ap.parse_args()
+    field = TripwireParams.__dataclass_fields__.get(args.param)
+    if field is None:
+        raise SystemExit(f"unknown tripwire parameter {args.param!r}")
+    default = getattr(TripwireParams(), args.param)
+    kind = type(default)
+    values = [default] + [kind(v) if kind is not bool else v.lower() in ("1", "true") for v in args.values.split(",")]
+    fams = set(args.families.split(","))
+    jobs = []
+    with ProcessPoolExecutor(2) as ex:
+        if "pets" in fams:
+            jobs += [ex.submit(_pets, (args.data, s, args.param, values)) for s in (1, 2, 3)]
+        if "walkers" in fams:
+            jobs += [ex.submit(_walkers, (s, args.param, values)) for s in range(10)]
+        if "traffic" in fams:
+            jobs += [ex.submit(_traffic, (k, s, args.param, values)) for k in ("sparse", "dense") for s in range(3)]
+        total: dict = {}
+        for j in jobs:
+            for k, (g, d, t) in j.result().items():
+                x = total.setdefault(k, [0, 0, 0])
+                x[0] += g
+                x[1] += d
+                x[2] += t
+    res = summarise(total)
+    families = sorted({k.split(" | ")[0] for k in res})
+    print(f"{args.param}: F1 (found of gt, events) per family; the first value is the default")
+    for v in values:
+        cells = [f"{f} {res[f'{f} | {v}']['f1']:.3f} ({res[f'{f} | {v}']['tp']} of {res[f'{f} | {v}']['gt']}, "
+                 f"{res[f'{f} | {v}']['det']})" for f in families]
+        mean = np.mean([res[f"{f} | {v}"]["f1"] for f in families])
+        print(f"{v}: mean {mean:.4f} | " + " | ".join(cells), flush=True)
+
+
+if __name__ == "__main__":
+    cv2.setNumThreads(1)
+    main()

@@ -1,0 +1,55 @@
+"""PETS 2009 S2.L1's two halves as MOTChallenge folders renumbered from 1 (docs/mot.md).
+
+    python scripts/make_mot_halves.py [--data ../shared/data] [--out reports/mot_halves]
+    pftrack eval reports/mot_halves/pets_tune --protocol mot --trackers "multi-pf,multi-pf[bootstrap_frames=56]" \
+        --seeds 3 --workers 2 --report reports/mot_halves/tune
+
+``OUT/pets_tune/pets_tune`` holds frames 1-200 and ``OUT/pets_report/pets_report`` frames 201-400, each as
+``img1/`` (links to the dataset's frames), ``gt/gt.txt`` (the annotation of those frames, renumbered) and
+``seqinfo.ini``: each half is tracked from a fresh start, as a recording that begins there. (The grey copies are
+written by scripts/grey_foreground.py.)
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+import numpy as np
+
+from pftrack.io.datasets import write_mot_groundtruth, write_seqinfo
+
+HALVES = {"tune": (1, 200), "report": (201, 400)}
+
+
+def write_halves(pets: Path, out: Path) -> dict[str, Path]:
+    gt = np.loadtxt(pets / "gt" / "gt.txt", delimiter=",", ndmin=2)
+    folders = {}
+    for half, (lo, hi) in HALVES.items():
+        d = out / f"pets_{half}" / f"pets_{half}"
+        (d / "img1").mkdir(parents=True, exist_ok=True)
+        (d / "gt").mkdir(exist_ok=True)
+        for n in range(lo, hi + 1):
+            link = d / "img1" / f"{n - lo + 1:06d}.jpg"
+            if not link.exists():
+                os.symlink(os.path.relpath((pets / "img1" / f"{n:06d}.jpg").resolve(), link.parent.resolve()), link)
+        rows = gt[(gt[:, 0] >= lo) & (gt[:, 0] <= hi)].copy()
+        rows[:, 0] -= lo - 1
+        write_mot_groundtruth(d / "gt" / "gt.txt", rows)
+        write_seqinfo(d, name=d.name, fps=7, length=hi - lo + 1, width=768, height=576, ext=".jpg")
+        folders[half] = d.parent
+    return folders
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--data", default="../shared/data")
+    ap.add_argument("--out", default="reports/mot_halves")
+    args = ap.parse_args()
+    for half, folder in write_halves(Path(args.data) / "pets09_s2l1_dev", Path(args.out)).items():
+        print(f"{half}: {folder}")
+
+
+if __name__ == "__main__":
+    main()
