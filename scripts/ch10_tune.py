@@ -2,6 +2,7 @@
 
     python scripts/ch10_tune.py bgs_bootstrap 2,4,8                      # the six families
     python scripts/ch10_tune.py group_blob 0.2,0.5 --families pets,walkers
+    python scripts/ch10_tune.py foot_hold 1,2 --with bgs_bootstrap=4   # every row with another setting too
 
 For each value (and the current default beside them), F1 (events one-to-one, right direction, within +-10 frames)
 of each family, and the mean over the families:
@@ -36,7 +37,7 @@ from pftrack.io.datasets import read_sequence  # noqa: E402
 
 
 def _pets(args) -> dict:
-    data, stride, key, values = args
+    data, stride, key, values, fixed = args
     seq = read_sequence(Path(data) / "pets09_s2l1_dev")
     frames = [cv2.imread(str(p)) for p in seq.frames[:200]]
     numbers = list(range(1, 201, stride))
@@ -47,7 +48,7 @@ def _pets(args) -> dict:
         r = estimate_radius(sub[:max(1, 70 // stride)], line)
         truth = track_crossings(seq.mot_gt, line, hysteresis=5)
         for v in values:
-            ev, _ = ntt(sub, numbers, line, 7.0, stride, radius=r, **{key: v})
+            ev, _ = ntt(sub, numbers, line, 7.0, stride, radius=r, **fixed, **{key: v})
             add(acc, f"pets stride {stride} | {v}", score([(e.frame, e.direction) for e in ev], truth, 1, 200))
     return acc
 
@@ -55,14 +56,14 @@ def _pets(args) -> dict:
 def _walkers(args) -> dict:
     from pftrack.synth.walkers import walkers_scene
 
-    seed, key, values = args
+    seed, key, values, fixed = args
     sc = walkers_scene(seed)
     truth = track_crossings(sc.tracks, sc.wire, hysteresis=3)
     numbers = list(range(1, len(sc.frames) + 1))
     r = estimate_radius(sc.frames[:int(10 * sc.fps)], sc.wire)
     acc: dict = {}
     for v in values:
-        ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, radius=r, **{key: v})
+        ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, radius=r, **fixed, **{key: v})
         add(acc, f"walkers | {v}", score([(e.frame, e.direction) for e in ev], truth, 0, 1e9))
     return acc
 
@@ -70,13 +71,13 @@ def _walkers(args) -> dict:
 def _traffic(args) -> dict:
     from pftrack.synth.traffic import traffic_scene
 
-    kind, seed, key, values = args
+    kind, seed, key, values, fixed = args
     sc = traffic_scene(seed, kind=kind)
     truth = track_crossings(sc.tracks, sc.wire, hysteresis=3, point="centre")
     numbers = list(range(1, len(sc.frames) + 1))
     acc: dict = {}
     for v in values:
-        kw = {"timing": "match", **({"bgs_history": 100} if kind == "dense" else {}), key: v}
+        kw = {"timing": "match", **({"bgs_history": 100} if kind == "dense" else {}), **fixed, key: v}
         ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, **kw)
         add(acc, f"traffic {kind} | {v}", score([(e.frame, e.direction) for e in ev], truth, 0, 1e9))
     return acc
@@ -88,7 +89,11 @@ def main() -> None:
     ap.add_argument("values", help="comma-separated values to try beside the default")
     ap.add_argument("--families", default="pets,walkers,traffic")
     ap.add_argument("--data", default="../shared/data")
+    ap.add_argument("--with", dest="fixed", action="append", default=[], metavar="KEY=VALUE",
+                    help="another setting for every row (repeatable)")
     args = ap.parse_args()
+    fixed = dict(TripwireParams.from_mapping(dict(kv.split("=", 1) for kv in args.fixed)).as_dict().items())
+    fixed = {k: v for k, v in fixed.items() if k in {kv.split("=", 1)[0] for kv in args.fixed}}
     field = TripwireParams.__dataclass_fields__.get(args.param)
     if field is None:
         raise SystemExit(f"unknown tripwire parameter {args.param!r}")
@@ -99,11 +104,12 @@ def main() -> None:
     jobs = []
     with ProcessPoolExecutor(2) as ex:
         if "pets" in fams:
-            jobs += [ex.submit(_pets, (args.data, s, args.param, values)) for s in (1, 2, 3)]
+            jobs += [ex.submit(_pets, (args.data, s, args.param, values, fixed)) for s in (1, 2, 3)]
         if "walkers" in fams:
-            jobs += [ex.submit(_walkers, (s, args.param, values)) for s in range(10)]
+            jobs += [ex.submit(_walkers, (s, args.param, values, fixed)) for s in range(10)]
         if "traffic" in fams:
-            jobs += [ex.submit(_traffic, (k, s, args.param, values)) for k in ("sparse", "dense") for s in range(3)]
+            jobs += [ex.submit(_traffic, (k, s, args.param, values, fixed)) for k in ("sparse", "dense")
+                     for s in range(3)]
         total: dict = {}
         for j in jobs:
             for k, (g, d, t) in j.result().items():
@@ -113,7 +119,8 @@ def main() -> None:
                 x[2] += t
     res = summarise(total)
     families = sorted({k.split(" | ")[0] for k in res})
-    print(f"{args.param}: F1 (found of gt, events) per family; the first value is the default")
+    print(f"{args.param}: F1 (found of gt, events) per family; the first value is the default"
+          + (f"; every row with {fixed}" if fixed else ""))
     for v in values:
         cells = [f"{f} {res[f'{f} | {v}']['f1']:.3f} ({res[f'{f} | {v}']['tp']} of {res[f'{f} | {v}']['gt']}, "
                  f"{res[f'{f} | {v}']['det']})" for f in families]
