@@ -110,7 +110,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self._plain_loss: LossDetector | None = None  # the histogram's test while grey_check="fused" replaces it
         self._raw: np.ndarray | None = None  # the untransformed frame
         self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames)  # look-alikes met during a loss
-        self._scene = SceneReference(p.static_ncc)  # a confident frame: the scene's look-alikes (static_ncc)
+        self._scene = SceneReference(p.static_ncc, p.static_quarters)  # a confident frame: the scene's look-alikes (static_ncc)
         warmup()
         self._reset()
 

@@ -101,7 +101,8 @@ class PersistenceMixin:
         self._persist_reset()
         box = tuple(float(v) for v in ellipse_to_box(np.asarray(ellipse, dtype=np.float64)[:4]))
         still = p.static_ncc if p.static_ncc > 0 else STILL_NCC
-        if gray0 is not None and unchanged_patch(self._structure_frame(frame), box, gray0, still, self._scene.noise):
+        if gray0 is not None and unchanged_patch(self._structure_frame(frame), box, gray0, still, self._scene.noise,
+                                                 self._scene.quarters):
             return None  # the same patch of the scene as when the streak began: not a target that changed
         state = self._init(frame, box)
         return replace(state, info={**(state.info or {}), "mode": "acquired", "persist": True})

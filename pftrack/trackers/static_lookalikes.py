@@ -116,7 +116,8 @@ def noise_grid(shape) -> int:
     return max(1, math.ceil(math.sqrt(shape[0] * shape[1] / NOISE_SAMPLES)))
 
 
-def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = SHIFT, noise: float = 0.0) -> float:
+def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = SHIFT, noise: float = 0.0,
+                      quarters: int = 4) -> float:
     """How well ``gray``'s patch under ``box`` (x, y, w, h, clipped to the frame) is found again in ``ref_gray``
     within ``shift`` px of the same place: the normalised correlation of each quarter of the patch (2 x 2) at the
     patch's best shift, the lowest of the quarters that are not flat, so that a patch only partly the scene's (a
@@ -127,7 +128,10 @@ def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = 
     quarter of variance ``v`` correlate at ``1 - noise**2 / v`` only, which is far below 1 on a nearly flat quarter
     (an occluder's plain face: 0.78 at a standard deviation of 4.3 with noise of 2). Each quarter's correlation is
     divided by that ceiling (at most 1), and a quarter is flat when its variance less the noise's is below
-    ``FLAT_SD**2``."""
+    ``FLAT_SD**2``.
+
+    ``quarters`` < 4: the ``quarters``-th highest of the non-flat quarters' correlations instead of the lowest (all
+    of them when fewer are not flat), so that that many quarters unchanged make the patch the scene's."""
     h, w = gray.shape[:2]
     bx, by, bw, bh = (float(v) for v in box)
     x0, y0 = max(int(round(bx)), shift), max(int(round(by)), shift)
@@ -148,7 +152,10 @@ def scene_correlation(gray: np.ndarray, ref_gray: np.ndarray, box, shift: int = 
         return float("nan")
     den = n * np.sqrt(np.maximum(vp * vr, 0.0))  # as cues.lk.ncc: 0 where the reference is flat there (changed)
     r = np.where(den > 1e-9, n * cov / np.where(den > 1e-9, den, 1.0), 0.0)
-    return float(np.minimum(r[ok] / (1.0 - n2 / vp[ok]), 1.0).min())
+    q = np.minimum(r[ok] / (1.0 - n2 / vp[ok]), 1.0)
+    if quarters >= 4 or q.size <= 1:
+        return float(q.min())
+    return float(np.sort(q)[::-1][min(int(quarters), q.size) - 1])
 
 
 def _quarter_moments(patch: np.ndarray, ref: np.ndarray):
@@ -168,10 +175,11 @@ class SceneReference:
     """The grey frame of a recent confident frame and the target's box on it; :meth:`is_scene` tests a
     candidate against it.  ``threshold`` <= 0: off (nothing is kept, nothing is the scene)."""
 
-    __slots__ = ("_noise", "_previous", "box", "frame_index", "gray", "threshold")
+    __slots__ = ("_noise", "_previous", "box", "frame_index", "gray", "quarters", "threshold")
 
-    def __init__(self, threshold: float):
+    def __init__(self, threshold: float, quarters: int = 4):
         self.threshold = float(threshold)
+        self.quarters = int(quarters)
         self.clear()
 
     def clear(self) -> None:
@@ -220,19 +228,20 @@ class SceneReference:
                 break
             if float(intersection_area(box, ref_box)) <= 0.0:
                 # one camera: the noise measured last stands for both references
-                return unchanged_patch(frame, box, gray, self.threshold, self.noise)
+                return unchanged_patch(frame, box, gray, self.threshold, self.noise, self.quarters)
             part = clear_part(box, ref_box)
             if part is not None:
                 refs.append((part[2] * part[3], part, gray))
         if not refs:
             return False
         _, part, gray = max(refs, key=lambda r: r[0])
-        return unchanged_patch(frame, part, gray, self.threshold, self.noise)
+        return unchanged_patch(frame, part, gray, self.threshold, self.noise, self.quarters)
 
 
-def unchanged_patch(frame: np.ndarray, box, ref_gray: np.ndarray, threshold: float, noise: float) -> bool:
-    """Is the patch of ``frame`` under ``box`` found again, correlating at ``threshold`` or more (every quarter, the
-    ``noise`` taken out), in the grey reference frame ``ref_gray``?"""
+def unchanged_patch(frame: np.ndarray, box, ref_gray: np.ndarray, threshold: float, noise: float,
+                    quarters: int = 4) -> bool:
+    """Is the patch of ``frame`` under ``box`` found again, correlating at ``threshold`` or more (every quarter, or
+    ``quarters`` of them, the ``noise`` taken out), in the grey reference frame ``ref_gray``?"""
     bx, by, bw, bh = (float(v) for v in box)
     h, w = frame.shape[:2]
     k = max(1, math.ceil(max(bw, bh) / PATCH))  # block size of the comparison
@@ -248,7 +257,8 @@ def unchanged_patch(frame: np.ndarray, box, ref_gray: np.ndarray, threshold: flo
         size = ((x1 - x0) // k, (y1 - y0) // k)
         sub = cv2.resize(sub, size, interpolation=cv2.INTER_AREA)
         ref = cv2.resize(ref, size, interpolation=cv2.INTER_AREA)
-    r = scene_correlation(sub, ref, ((bx - x0) / k, (by - y0) / k, bw / k, bh / k), noise=noise / k)
+    r = scene_correlation(sub, ref, ((bx - x0) / k, (by - y0) / k, bw / k, bh / k), noise=noise / k,
+                          quarters=quarters)
     return bool(r >= threshold)
 
 
