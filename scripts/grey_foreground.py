@@ -30,38 +30,22 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from ch10_experiments import PETS_LINES, add, mot_tracks, ntt, score, summarise  # noqa: E402
+from make_mot_halves import HALVES, write_halves  # noqa: E402
 
 from pftrack.cli import main as cli_main  # noqa: E402
 from pftrack.events.eval import track_crossings  # noqa: E402
 from pftrack.events.geometry import parse_polyline  # noqa: E402
 from pftrack.events.tripwire import estimate_radius  # noqa: E402
-from pftrack.io.datasets import read_sequence, write_mot_groundtruth, write_seqinfo  # noqa: E402
+from pftrack.io.datasets import read_sequence  # noqa: E402
 from pftrack.synth.traffic import traffic_scene  # noqa: E402
 
-HALVES = {"tune": (1, 200), "report": (201, 400)}
+def write_mot_halves(pets: Path, out: Path) -> dict[str, Path]:
+    """Grey MOTChallenge copies of the two halves (frames and ground truth renumbered from 1)."""
+    return write_halves(pets, out, prefix="pets_grey", convert=lambda f: cv2.cvtColor(f, cv2.COLOR_BGR2GRAY))
 
 
 def grey(frame: np.ndarray) -> np.ndarray:
     return cv2.cvtColor(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
-
-
-def write_mot_halves(pets: Path, out: Path) -> dict[str, Path]:
-    """Grey MOTChallenge copies of the two halves (frames and ground truth renumbered from 1)."""
-    gt = np.loadtxt(pets / "gt" / "gt.txt", delimiter=",", ndmin=2)
-    folders = {}
-    for half, (lo, hi) in HALVES.items():
-        d = out / f"pets_grey_{half}" / f"pets_grey_{half}"
-        (d / "img1").mkdir(parents=True, exist_ok=True)
-        (d / "gt").mkdir(exist_ok=True)
-        for n in range(lo, hi + 1):
-            img = cv2.imread(str(pets / "img1" / f"{n:06d}.jpg"))
-            cv2.imwrite(str(d / "img1" / f"{n - lo + 1:06d}.png"), cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
-        rows = gt[(gt[:, 0] >= lo) & (gt[:, 0] <= hi)].copy()
-        rows[:, 0] -= lo - 1
-        write_mot_groundtruth(d / "gt" / "gt.txt", rows)
-        write_seqinfo(d, name=d.name, fps=7, length=hi - lo + 1, width=768, height=576, ext=".png")
-        folders[half] = d.parent
-    return folders
 
 
 def mot(folders: dict[str, Path], taus: list[float], out: Path) -> dict:

@@ -6,8 +6,8 @@
 
 ``OUT/pets_tune/pets_tune`` holds frames 1-200 and ``OUT/pets_report/pets_report`` frames 201-400, each as
 ``img1/`` (links to the dataset's frames), ``gt/gt.txt`` (the annotation of those frames, renumbered) and
-``seqinfo.ini``: each half is tracked from a fresh start, as a recording that begins there. (The grey copies are
-written by scripts/grey_foreground.py.)
+``seqinfo.ini``: each half is tracked from a fresh start, as a recording that begins there. scripts/grey_foreground.py
+writes grey copies the same way (:func:`write_halves` with a conversion).
 """
 
 from __future__ import annotations
@@ -23,21 +23,28 @@ from pftrack.io.datasets import write_mot_groundtruth, write_seqinfo
 HALVES = {"tune": (1, 200), "report": (201, 400)}
 
 
-def write_halves(pets: Path, out: Path) -> dict[str, Path]:
+def write_halves(pets: Path, out: Path, *, prefix: str = "pets", convert=None) -> dict[str, Path]:
+    """The two halves under ``OUT/PREFIX_HALF/PREFIX_HALF``: frames linked (``convert`` None), or written as PNG
+    after ``convert(frame)`` (e.g. a grey conversion); their folder per half."""
+    import cv2
+
     gt = np.loadtxt(pets / "gt" / "gt.txt", delimiter=",", ndmin=2)
     folders = {}
+    ext = ".jpg" if convert is None else ".png"
     for half, (lo, hi) in HALVES.items():
-        d = out / f"pets_{half}" / f"pets_{half}"
+        d = out / f"{prefix}_{half}" / f"{prefix}_{half}"
         (d / "img1").mkdir(parents=True, exist_ok=True)
         (d / "gt").mkdir(exist_ok=True)
         for n in range(lo, hi + 1):
-            link = d / "img1" / f"{n - lo + 1:06d}.jpg"
-            if not link.exists():
-                os.symlink(os.path.relpath((pets / "img1" / f"{n:06d}.jpg").resolve(), link.parent.resolve()), link)
+            src, dst = pets / "img1" / f"{n:06d}.jpg", d / "img1" / f"{n - lo + 1:06d}{ext}"
+            if convert is not None:
+                cv2.imwrite(str(dst), convert(cv2.imread(str(src))))
+            elif not dst.exists():
+                os.symlink(os.path.relpath(src.resolve(), dst.parent.resolve()), dst)
         rows = gt[(gt[:, 0] >= lo) & (gt[:, 0] <= hi)].copy()
         rows[:, 0] -= lo - 1
         write_mot_groundtruth(d / "gt" / "gt.txt", rows)
-        write_seqinfo(d, name=d.name, fps=7, length=hi - lo + 1, width=768, height=576, ext=".jpg")
+        write_seqinfo(d, name=d.name, fps=7, length=hi - lo + 1, width=768, height=576, ext=ext)
         folders[half] = d.parent
     return folders
 
