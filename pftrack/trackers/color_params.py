@@ -317,6 +317,11 @@ class ColorModelParams(Params):
         "values also take an estimate that stayed on the edge as the target slid out for an exit. An option: 0.95 "
         "raised fusion-pf's flag on the PETS views but missed its tune rule on false-lost, and on the report split "
         "lost a pedestrian lost near the edge while still in view (docs/robustness.md)."))
+    reenter_memory: int = param(0, ge=0, le=1000, doc=(
+        "With reenter_border: the loss is also an exit when the estimate's box was less than half inside the frame "
+        "on one of this many tracked frames before the loss was declared (the edge that box was beyond): a tracker "
+        "that slid back onto a companion as the target left loses it inside the view, and its last confident "
+        "position says no exit. 0: off (reports/exit_memory_rule.txt)."))
     reenter_reach: float = param(0.0, ge=0, le=100, doc=(
         "With reenter_border: the strip widens no deeper than this many target widths (heights, for the top and "
         "bottom edges) from the edge, however long the target has been out; 0: no limit. A look-alike walking in "

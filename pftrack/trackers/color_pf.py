@@ -110,7 +110,8 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self._plain_loss: LossDetector | None = None  # the histogram's test while grey_check="fused" replaces it
         self._raw: np.ndarray | None = None  # the untransformed frame
         self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames)  # look-alikes met during a loss
-        self._scene = SceneReference(p.static_ncc, p.static_quarters)  # a confident frame: the scene's look-alikes (static_ncc)
+        # a confident frame: the scene's look-alikes (static_ncc)
+        self._scene = SceneReference(p.static_ncc, p.static_quarters)
         warmup()
         self._reset()
 
@@ -148,6 +149,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self._search_grays: deque = deque(maxlen=max(1, int(self.params.reenter_resident)))
         self._gray_now: tuple | None = None  # (frame index, grey image, frame): this frame's grey image, once converted
         self._vetoed: list = []  # (frame index, centre, shift) of the candidates reenter_outward refused lately
+        self._edge_seen: deque = deque(maxlen=max(1, self.params.reenter_memory))  # (frame, cx, cy) mostly outside
         self._ambiguous_until = -1  # acquire_unique_hold: no acquisition up to this frame
         self._ell = np.empty((0, 4))
         self._lit: LitHistogram | None = None  # grey_histogram="both" on grey input (decided by _init)
@@ -354,7 +356,9 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         if self._probation_left:
             info["probation"] = True  # following a weak acquisition without learning from it (.probation)
         # a target leaving the view still matches on its last visible sliver: out of view, it is reported absent
-        inside = in_frame_fraction(box, fw, fh) if p.min_in_frame > 0 or p.edge_share > 0 else 1.0
+        inside = in_frame_fraction(box, fw, fh) if p.min_in_frame > 0 or p.edge_share > 0 or p.reenter_memory else 1.0
+        if p.reenter_memory and inside < 0.5:
+            self._edge_seen.append((self.frame_index, cx, cy))
         out = inside < p.min_in_frame
         if out:
             info["out_of_view"] = True

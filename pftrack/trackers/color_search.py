@@ -205,7 +205,11 @@ class SearchMixin:
         k = self._search_since - self._lost_at[0]
         cx, cy = self._lost_at[1] + k * np.asarray(self._exit_velocity)
         if in_frame_fraction((cx - hx, cy - hy, 2.0 * hx, 2.0 * hy), fw, fh) >= self.params.reenter_exit_share:
-            return None
+            # reenter_memory: a box seen mostly outside just before the loss (the tracker slid back inside after)
+            seen = [e for e in self._edge_seen if e[0] >= self._search_since - self.params.reenter_memory]
+            if not seen:
+                return None
+            cx, cy = seen[-1][1], seen[-1][2]
         # the edge it left through: the one its predicted centre is furthest beyond (in target sizes)
         edge = int(np.argmin([cx / hx, (fw - cx) / hx, cy / hy, (fh - cy) / hy]))
         speed = self.params.reenter_grow * math.hypot(*self._exit_velocity)
