@@ -367,3 +367,29 @@ def test_trace_back_yields_the_box_on_each_earlier_frame_and_stops_when_lost():
     boxes = list(trace_back([frames[2], frames[1], frames[0]], frames[3], box, core, 8))
     assert [round(float(b[0])) for b in boxes] == [58, 56, 54] and all(abs(b[1] - 40.0) < 0.5 for b in boxes)
     assert list(trace_back([frames[2], flat, frames[0]], frames[3], box, core, 8))[1:] == [None]
+
+
+def test_a_box_seen_mostly_outside_just_before_the_loss_makes_it_an_exit():
+    """reenter_memory: the last confident position, moved on, is inside the view (the tracker slid back onto a
+    companion as the target left), so the loss is no exit; a box seen less than half inside on one of the last K
+    tracked frames makes it one, through the edge that box was beyond. Older sightings, and 0, change nothing."""
+    def tracker(k, seen):
+        t = pftrack.create_tracker("fusion-pf", seed=0, reenter_memory=k)
+        frame = np.zeros((240, 320, 3), np.uint8)
+        frame[100:140, 100:120] = (0, 0, 200)
+        t.init(frame, (100, 100, 20, 40))
+        t._search_since = t.frame_index = 20
+        t._lost_at = (18, np.array([250.0, 120.0]), np.zeros(2))   # inside, still: no exit by the former test
+        t._exit_velocity = (0.0, 0.0)
+        for f, cx, cy in seen:
+            t._edge_seen.append((f, cx, cy))
+        return t
+
+    beyond_right = [(16, 318.0, 120.0)]   # a 20 px wide box centred 2 px from the right edge: 40 % inside
+    assert tracker(0, beyond_right)._exit_strip() is None
+    strip = tracker(5, beyond_right)._exit_strip()
+    assert strip is not None and strip[0] == 1
+    assert tracker(5, [(12, 318.0, 120.0)])._exit_strip() is None       # 8 frames before the loss: too old for 5
+    assert tracker(10, [(12, 318.0, 120.0)])._exit_strip()[0] == 1
+    assert tracker(5, [(16, 5.0, 120.0), (17, 160.0, 238.0)])._exit_strip()[0] == 3   # the latest: the bottom edge
+    assert tracker(5, [])._exit_strip() is None

@@ -106,6 +106,11 @@ class ColorPFParams(ColorModelParams):
         "against 0.537 and 0.734 against 0.613; the tune split +0.0019 +- 0.0017 mean AUC and re-acquired 61 / "
         "90 against 59 (color-pf), unchanged (fusion-pf); colour vanish scenes unchanged. Report split "
         "(reports/final_r8): within +-0.001, re-acquired 66 / 96 (the same) and 74 / 96 (73)."))
+    reenter_memory: int = param(5, ge=0, le=1000, doc=(
+        "See ColorModelParams.reenter_memory (0 there). 5 for color-pf and fusion-pf, chosen on the tune data under "
+        "a rule stated before the runs (reports/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled "
+        "lost recall 0.262 against 0.216 (fusion-pf 0.475 against 0.439); tune split unchanged; tune exit windows "
+        "re-acquired 25 against 26 of 60 (10: 22)."))
     static_ncc: float = param(0.8, ge=0, le=1, doc=(
         "Background test (pftrack.trackers.static_lookalikes): a frame is kept (grey) every 30 confident frames; "
         "a search candidate that would end the loss, or the estimate while tracking (every 10th frame, not at the "

@@ -48,6 +48,10 @@ class FusionPFParams(ColorPFParams):
         "stated before the runs (reports/acquire_hold_rule.txt, docs/robustness.md): PETS tune views' pooled lost "
         "recall 0.403 against 0.319 with 0 (5: 0.370); tune split and tune real-exit windows unchanged. The views' "
         "own re-acquisitions fell from 6 to 4 of 18."))
+    reenter_memory: int = param(5, ge=0, le=1000, doc=(
+        "See ColorModelParams.reenter_memory (0 there). 5 for fusion-pf, chosen on the tune data under a rule stated "
+        "before the runs (reports/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled lost recall "
+        "0.475 against 0.439; tune split and tune exit windows unchanged (10 gave the same)."))
     static_quarters: int = param(3, ge=1, le=4, doc=(
         "See ColorModelParams.static_quarters (4 there and for color-pf). 3 for fusion-pf, chosen on the tune data "
         "under a rule stated before the runs (reports/static_quarters_rule.txt, docs/robustness.md): PETS tune "
