@@ -337,6 +337,10 @@ class ColorModelParams(Params):
         "traced back (the central part of its box found again frame by frame) over the frames since the search "
         "began, at most this many, with at least 90 % of its box inside the view on every one of them, stayed in "
         "view while the target was out: another object, not acquired. 0: off."))
+    reenter_resident_reach: float = param(0.0, ge=0, le=10, doc=(
+        "With reenter_resident: the trace back searches at least this many of the candidate's half-widths around "
+        "it (besides three exit speeds, at least 8 px), so that a walker faster than the target left is followed; "
+        "0: off (reports/resident_reach_rule.txt)."))
     reenter_min_llr: float = param(0.0, ge=0, le=1000, doc=(
         "With reenter_border: while the search is confined to the exit strip, a candidate is acquired only when its "
         "fused log-likelihood ratio (the acquisition test's, log prior included) is at least this; a weaker one is "

@@ -135,7 +135,8 @@ class VetoMixin:
         out?  Its box is traced back frame by frame through the grey frames kept since the search began in the
         exit strip (at most ``reenter_resident`` of them): the box's central part (:data:`RESIDENT_CORE` of its
         half-axes, mostly the object rather than the still scene around it) found again in the frame before by
-        normalised correlation, within three exit speeds (at least 8 px), and the box moved with it. A target
+        normalised correlation, within three exit speeds (at least 8 px, and ``reenter_resident_reach`` half-widths
+        of the candidate), and the box moved with it. A target
         coming back entered through an edge since it left, so its trace reaches the border; a candidate whose box
         stays at least :data:`RESIDENT_IN_FRAME` inside the view on every frame back to the oldest kept is another
         object. A trace that is lost (a flat patch, no match) refuses nothing."""
@@ -148,7 +149,7 @@ class VetoMixin:
         if in_frame_fraction(tuple(box), fw, fh) < RESIDENT_IN_FRAME:
             return False
         core = ellipse_to_box(np.array([*ell[:2], *(RESIDENT_CORE * np.asarray(ell[2:4]))]))
-        radius = max(8, math.ceil(3.0 * self._exit_speed()))
+        radius = max(8, math.ceil(3.0 * self._exit_speed()), math.ceil(self.params.reenter_resident_reach * ell[2]))
         for b in trace_back((g for _, g in reversed(grays)), self._frame_gray(frame), box, core, radius):
             if b is None or in_frame_fraction(tuple(b), fw, fh) < RESIDENT_IN_FRAME:
                 return False
