@@ -393,3 +393,37 @@ def test_a_box_seen_mostly_outside_just_before_the_loss_makes_it_an_exit():
     assert tracker(10, [(12, 318.0, 120.0)])._exit_strip()[0] == 1
     assert tracker(5, [(16, 5.0, 120.0), (17, 160.0, 238.0)])._exit_strip()[0] == 3   # the latest: the bottom edge
     assert tracker(5, [])._exit_strip() is None
+
+
+def test_the_resident_trace_reaches_as_far_as_a_fast_walker_goes():
+    """reenter_resident_reach: a textured object walking along the exit edge at 20 px a frame, inside the view on
+    every frame, is lost by a trace that searches three exit speeds (18 px here) around it, so nothing is refused;
+    searching at least 2.5 of its half-widths (25 px) follows it back, and it is found resident."""
+    rng = np.random.default_rng(0)
+    background = rng.integers(0, 60, (240, 320), dtype=np.uint8)
+    patch = rng.integers(120, 255, (40, 20), dtype=np.uint8)
+
+    def grey(x, y):
+        g = background.copy()
+        g[y:y + 40, x:x + 20] = patch
+        return g
+
+    def tracker(reach):
+        t = pftrack.create_tracker("fusion-pf", seed=0, reenter_resident=30, reenter_resident_reach=reach)
+        frame = np.zeros((240, 320, 3), np.uint8)
+        frame[100:140, 100:120] = (0, 0, 200)
+        t.init(frame, (100, 100, 20, 40))
+        t._search_since = 10
+        t._lost_at = (6, np.array([310.0, 120.0]), np.zeros(2))
+        t._exit_velocity = (6.0, 0.0)  # out through the right edge at 6 px a frame
+        path = [(260, 10 + 20 * i) for i in range(6)]  # down along the right edge, 20 px a frame
+        for i, (x, y) in enumerate(path[:-1]):
+            t._search_grays.append((10 + i, grey(x, y)))
+        t.frame_index = 10 + len(path) - 1
+        x, y = path[-1]
+        return t, cv2.cvtColor(grey(x, y), cv2.COLOR_GRAY2BGR), np.array([x + 10.0, y + 20.0, 10.0, 20.0])
+
+    t, now, ell = tracker(0.0)
+    assert t._exit_strip() is not None and not t._resident(now, ell)
+    t, now, ell = tracker(2.5)
+    assert t._resident(now, ell)
