@@ -197,8 +197,9 @@ class ColorModelParams(Params):
         "search starts. 0: off."))
     static_quarters: int = param(4, ge=1, le=4, doc=(
         "With static_ncc: how many of a patch's four quarters (2 x 2; all of the non-flat ones when fewer) must be "
-        "found again unchanged for the background test to call it the scene's; 4 (default): every one. A railing "
-        "whose top quarter walkers pass over is the scene's by three of them (reports/static_quarters_rule.txt)."))
+        "found again unchanged for the background test (and the persistence's still test) to call it the scene's; "
+        "4 (default): every one. A railing whose top quarter walkers pass over is the scene's by three of them "
+        "(reports/static_quarters_rule.txt)."))
     probation_llr: float = param(0.0, ge=0, le=50, doc=(
         "Probation after a weak re-acquisition (pftrack.trackers.probation): an acquisition whose loss-test "
         "ratio is below this starts a probation, during which the tracker follows the candidate without "

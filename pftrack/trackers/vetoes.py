@@ -136,10 +136,10 @@ class VetoMixin:
         exit strip (at most ``reenter_resident`` of them): the box's central part (:data:`RESIDENT_CORE` of its
         half-axes, mostly the object rather than the still scene around it) found again in the frame before by
         normalised correlation, within three exit speeds (at least 8 px, and ``reenter_resident_reach`` half-widths
-        of the candidate), and the box moved with it. A target
-        coming back entered through an edge since it left, so its trace reaches the border; a candidate whose box
-        stays at least :data:`RESIDENT_IN_FRAME` inside the view on every frame back to the oldest kept is another
-        object. A trace that is lost (a flat patch, no match) refuses nothing."""
+        of the candidate), and the box moved with it. A target coming back entered through an edge since it left,
+        so its trace reaches the border; a candidate whose box stays at least :data:`RESIDENT_IN_FRAME` inside the
+        view on every frame back to the oldest kept is another object. A trace that is lost (a flat patch, no
+        match) refuses nothing."""
         grays = self._search_grays
         strip = self._exit_strip() if self.params.reenter_resident > 0 and grays else None
         if strip is None or grays[-1][0] != self.frame_index - 1:
