@@ -333,6 +333,10 @@ class ColorModelParams(Params):
         "previous frame by normalised correlation) carries it towards that edge faster than this many times the "
         "speed the target left with (at least 1 px/frame) is another object on its way out, and is not acquired. "
         "0: off."))
+    reenter_along: float = param(0.0, ge=0, le=100, doc=(
+        "With reenter_outward: a candidate of the exit strip moving along the exit edge faster than this many exit "
+        "speeds (at least 1 px/frame) and over twice as fast as across it is passing by, not coming back, and is "
+        "not acquired; 0: off (reports/reenter_along_rule.txt)."))
     reenter_resident: int = param(0, ge=0, le=10_000, doc=(
         "With reenter_border: a target coming back entered the view since it left. A candidate of the exit strip "
         "traced back (the central part of its box found again frame by frame) over the frames since the search "

@@ -94,21 +94,26 @@ class VetoMixin:
         frame)?  Its motion is its patch's shift since the previous frame (normalised correlation within three
         exit speeds, at least 8 px).  When that is unknown (a flat patch, no match, a sliver at the edge), a
         candidate where an object vetoed on the previous frame has moved to is that object; otherwise unknown
-        motion vetoes nothing. Several candidates of one frame may be asked."""
+        motion vetoes nothing. Several candidates of one frame may be asked. With ``reenter_along``, a candidate
+        moving along that edge faster than that many exit speeds, and over twice as fast as across it, is passing
+        by and vetoed too (its patch then searched within its half-width as well)."""
         k = self.params.reenter_outward
         prev = self._search_grays[-1] if self._search_grays else None
         strip = self._exit_strip() if k > 0 and prev is not None else None
         if strip is None or self.frame_index - prev[0] != 1:
             return False
         speed = self._exit_speed()
-        d = patch_shift(prev[1], self._frame_gray(frame), ellipse_to_box(ell), max(8, math.ceil(3.0 * speed)))
+        along_k = self.params.reenter_along
+        radius = max(8, math.ceil(3.0 * speed), math.ceil(float(ell[2])) if along_k > 0 else 0)
+        d = patch_shift(prev[1], self._frame_gray(frame), ellipse_to_box(ell), radius)
         # the objects refused on the previous frame (and those of this one, kept for the next)
         self._vetoed = [v for v in self._vetoed if v[0] >= self.frame_index - 1]
         if d is None:
             return any(v[0] == self.frame_index - 1 and np.all(np.abs(ell[:2] - v[1] - v[2]) <= np.asarray(self.size))
                        for v in self._vetoed)
         outward = (-d[0], d[0], -d[1], d[1])[strip[0]]
-        if outward > k * speed:
+        along = abs(d[1]) if strip[0] < 2 else abs(d[0])  # reenter_along: passing by along the edge
+        if outward > k * speed or (along_k > 0 and along > along_k * speed and along > 2.0 * abs(outward)):
             self._vetoed.append((self.frame_index, np.array(ell[:2], dtype=np.float64), d))
             return True
         return False
