@@ -427,3 +427,36 @@ def test_the_resident_trace_reaches_as_far_as_a_fast_walker_goes():
     assert t._exit_strip() is not None and not t._resident(now, ell)
     t, now, ell = tracker(2.5)
     assert t._resident(now, ell)
+
+
+def test_a_candidate_walking_along_the_exit_edge_is_passing_by():
+    """reenter_along: after an exit through the right edge, a textured object in the exit strip moving down along
+    that edge at 10 px a frame is refused as passing by; one moving into the view at the same speed, or any object
+    with the option off, is not."""
+    rng = np.random.default_rng(3)
+    background = rng.integers(0, 60, (240, 320), dtype=np.uint8)
+    patch = rng.integers(120, 255, (40, 20), dtype=np.uint8)
+
+    def grey(x, y):
+        g = background.copy()
+        g[y:y + 40, x:x + 20] = patch
+        return g
+
+    def leaving(along, before, now):
+        t = pftrack.create_tracker("fusion-pf", seed=0, reenter_along=along)
+        frame = np.zeros((240, 320, 3), np.uint8)
+        frame[100:140, 100:120] = (0, 0, 200)
+        t.init(frame, (100, 100, 20, 40))
+        t._search_since = 10
+        t._lost_at = (6, np.array([310.0, 120.0]), np.zeros(2))
+        t._exit_velocity = (3.0, 0.0)  # out through the right edge at 3 px a frame
+        t._search_grays.append((10, grey(*before)))
+        t.frame_index = 11
+        x, y = now
+        ell = np.array([x + 10.0, y + 20.0, 10.0, 20.0])
+        assert t._exit_strip() is not None
+        return t._leaving(cv2.cvtColor(grey(x, y), cv2.COLOR_GRAY2BGR), ell)
+
+    assert leaving(1.0, (280, 60), (280, 70))       # along the edge, 10 px a frame
+    assert not leaving(0.0, (280, 60), (280, 70))   # off
+    assert not leaving(1.0, (290, 60), (280, 60))   # into the view
