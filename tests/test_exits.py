@@ -369,18 +369,32 @@ def test_trace_back_yields_the_box_on_each_earlier_frame_and_stops_when_lost():
     assert list(trace_back([frames[2], flat, frames[0]], frames[3], box, core, 8))[1:] == [None]
 
 
+def _searching_tracker(since: int, lost_at: tuple[float, float], velocity: tuple[float, float], **params):
+    """fusion-pf searching since frame ``since`` for a target last seen confidently at ``lost_at`` two frames
+    before, moving at ``velocity`` px a frame."""
+    t = pftrack.create_tracker("fusion-pf", seed=0, **params)
+    frame = np.zeros((240, 320, 3), np.uint8)
+    frame[100:140, 100:120] = (0, 0, 200)
+    t.init(frame, (100, 100, 20, 40))
+    t._search_since = t.frame_index = since
+    t._lost_at = (since - 2, np.array(lost_at, dtype=np.float64), np.zeros(2))
+    t._exit_velocity = tuple(velocity)
+    return t
+
+
+def _right_exit_tracker(speed: float, **params):
+    """fusion-pf searching since frame 10 after its target left through the right edge at ``speed`` px a frame."""
+    t = _searching_tracker(10, (310.0, 120.0), (speed, 0.0), **params)
+    t._lost_at = (6, t._lost_at[1], t._lost_at[2])
+    return t
+
+
 def test_a_box_seen_mostly_outside_just_before_the_loss_makes_it_an_exit():
     """reenter_memory: the last confident position, moved on, is inside the view (the tracker slid back onto a
     companion as the target left), so the loss is no exit; a box seen less than half inside on one of the last K
     tracked frames makes it one, through the edge that box was beyond. Older sightings, and 0, change nothing."""
     def tracker(k, seen):
-        t = pftrack.create_tracker("fusion-pf", seed=0, reenter_memory=k)
-        frame = np.zeros((240, 320, 3), np.uint8)
-        frame[100:140, 100:120] = (0, 0, 200)
-        t.init(frame, (100, 100, 20, 40))
-        t._search_since = t.frame_index = 20
-        t._lost_at = (18, np.array([250.0, 120.0]), np.zeros(2))   # inside, still: no exit by the former test
-        t._exit_velocity = (0.0, 0.0)
+        t = _searching_tracker(20, (250.0, 120.0), (0.0, 0.0), reenter_memory=k)  # inside, still: no exit before
         for f, cx, cy in seen:
             t._edge_seen.append((f, cx, cy))
         return t
@@ -395,11 +409,9 @@ def test_a_box_seen_mostly_outside_just_before_the_loss_makes_it_an_exit():
     assert tracker(5, [])._exit_strip() is None
 
 
-def test_the_resident_trace_reaches_as_far_as_a_fast_walker_goes():
-    """reenter_resident_reach: a textured object walking along the exit edge at 20 px a frame, inside the view on
-    every frame, is lost by a trace that searches three exit speeds (18 px here) around it, so nothing is refused;
-    searching at least 2.5 of its half-widths (25 px) follows it back, and it is found resident."""
-    rng = np.random.default_rng(0)
+def _textured_object(seed: int):
+    """``grey(x, y)``: a 320 x 240 dark textured ground with a bright textured 20 x 40 object at ``(x, y)``."""
+    rng = np.random.default_rng(seed)
     background = rng.integers(0, 60, (240, 320), dtype=np.uint8)
     patch = rng.integers(120, 255, (40, 20), dtype=np.uint8)
 
@@ -408,14 +420,17 @@ def test_the_resident_trace_reaches_as_far_as_a_fast_walker_goes():
         g[y:y + 40, x:x + 20] = patch
         return g
 
+    return grey
+
+
+def test_the_resident_trace_reaches_as_far_as_a_fast_walker_goes():
+    """reenter_resident_reach: a textured object walking along the exit edge at 20 px a frame, inside the view on
+    every frame, is lost by a trace that searches three exit speeds (18 px here) around it, so nothing is refused;
+    searching at least 2.5 of its half-widths (25 px) follows it back, and it is found resident."""
+    grey = _textured_object(0)
+
     def tracker(reach):
-        t = pftrack.create_tracker("fusion-pf", seed=0, reenter_resident=30, reenter_resident_reach=reach)
-        frame = np.zeros((240, 320, 3), np.uint8)
-        frame[100:140, 100:120] = (0, 0, 200)
-        t.init(frame, (100, 100, 20, 40))
-        t._search_since = 10
-        t._lost_at = (6, np.array([310.0, 120.0]), np.zeros(2))
-        t._exit_velocity = (6.0, 0.0)  # out through the right edge at 6 px a frame
+        t = _right_exit_tracker(6.0, reenter_resident=30, reenter_resident_reach=reach)
         path = [(260, 10 + 20 * i) for i in range(6)]  # down along the right edge, 20 px a frame
         for i, (x, y) in enumerate(path[:-1]):
             t._search_grays.append((10 + i, grey(x, y)))
@@ -433,23 +448,10 @@ def test_a_candidate_walking_along_the_exit_edge_is_passing_by():
     """reenter_along: after an exit through the right edge, a textured object in the exit strip moving down along
     that edge at 10 px a frame is refused as passing by; one moving into the view at the same speed, or any object
     with the option off, is not."""
-    rng = np.random.default_rng(3)
-    background = rng.integers(0, 60, (240, 320), dtype=np.uint8)
-    patch = rng.integers(120, 255, (40, 20), dtype=np.uint8)
-
-    def grey(x, y):
-        g = background.copy()
-        g[y:y + 40, x:x + 20] = patch
-        return g
+    grey = _textured_object(3)
 
     def leaving(along, before, now):
-        t = pftrack.create_tracker("fusion-pf", seed=0, reenter_along=along)
-        frame = np.zeros((240, 320, 3), np.uint8)
-        frame[100:140, 100:120] = (0, 0, 200)
-        t.init(frame, (100, 100, 20, 40))
-        t._search_since = 10
-        t._lost_at = (6, np.array([310.0, 120.0]), np.zeros(2))
-        t._exit_velocity = (3.0, 0.0)  # out through the right edge at 3 px a frame
+        t = _right_exit_tracker(3.0, reenter_along=along)
         t._search_grays.append((10, grey(*before)))
         t.frame_index = 11
         x, y = now
