@@ -90,7 +90,7 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
             sinks.append(video)
         bar = progress(source.length, "mot", quiet)
         numbered = source.numbered()
-        if getattr(tracker, "bootstrap_frames", 0):  # the first frames read ahead for the detector's background
+        if tracker.bootstrap_frames:  # the first frames read ahead for the detector's background
             ahead = list(itertools.islice(numbered, tracker.bootstrap_frames))
             t0 = _time.perf_counter()
             tracker.prime([f for _, f in ahead])

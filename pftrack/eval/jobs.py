@@ -255,14 +255,18 @@ def _run_mot_job(job: Job, seq) -> dict:
             raise FormatError(f"{path}: frame {t} cannot be decoded")
         return as_bgr_uint8(img, where=str(path))
 
-    if tracker.bootstrap_frames:  # the first frames read ahead for the detector's background (counted as updates)
-        ahead = [decoded(t, path) for t, path in enumerate(seq.frames[:tracker.bootstrap_frames], start=1)]
+    # the first frames read ahead for the detector's background (counted as updates), then tracked without a
+    # second decoding
+    ahead = [decoded(t, path) for t, path in enumerate(seq.frames[:tracker.bootstrap_frames], start=1)]
+    if ahead:
         t0 = time.perf_counter()
         tracker.prime(ahead)
         upd += time.perf_counter() - t0
-        del ahead
     for t, path in enumerate(seq.frames, start=1):
-        frame = decoded(t, path)
+        if t <= len(ahead):
+            frame, ahead[t - 1] = ahead[t - 1], None  # not kept once tracked
+        else:
+            frame = decoded(t, path)
         t0 = time.perf_counter()
         try:
             outs = tracker.update(frame)
