@@ -17,7 +17,9 @@ frame with the flag down is put in the first class that applies:
 
 It also counts the acquisitions made while the person is absent (the flag going down), by whether the search was
 confined to an exit strip (``reenter_border``: the loss taken for an exit) on the frame before, and how many of
-them took another annotated walker.
+them took another annotated walker: one who entered the window within the ``ENTERED`` frames before (less than half
+inside it then, or not yet annotated) or one who stayed in it. Last, the absent frames and the flag's are summed per
+person.
 
 Diagnosis only: it chooses nothing. Each view folder's ``img/`` links to its window's frames, named by the PETS
 frame number, which maps the view's frames onto the PETS annotation.
@@ -42,6 +44,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from make_pets_views import windows  # noqa: E402
 
 CLASSES = ("walker, never up", "walker, taken again", "sliver", "never up", "taken again")
+ENTERED = 20  # an acquired walker less than half inside the window this many frames before had just entered it
 
 
 def view_window(folder: Path, width: int, height: int) -> tuple[int, int, int, int]:
@@ -56,16 +59,32 @@ def pets_frame(path: Path) -> int:
     return int(re.findall(r"(\d+)", Path(os.readlink(path)).stem)[-1])
 
 
-def on_walker(box, others_t, window) -> bool:
-    """Does ``box`` (window coordinates) overlap (IoU >= 0.3) one of the boxes ``others_t`` (frame coordinates),
-    clipped to the window?"""
+def walker_on(box, others_t, window) -> int | None:
+    """The id of the walker whose box, clipped to the window, ``box`` (window coordinates) overlaps most, with IoU
+    >= 0.3; None if none does. ``others_t`` holds rows ``id, x, y, w, h`` in frame coordinates."""
     x0, y0, ww, wh = window
-    for g in others_t:
+    best, who = 0.3, None
+    for pid, *g in others_t:
         gx, gy = max(g[0], x0), max(g[1], y0)
         gw, gh = min(g[0] + g[2], x0 + ww) - gx, min(g[1] + g[3], y0 + wh) - gy
-        if gw > 0 and gh > 0 and iou(box, (gx - x0, gy - y0, gw, gh)) >= 0.3:
-            return True
-    return False
+        if gw > 0 and gh > 0 and (v := iou(box, (gx - x0, gy - y0, gw, gh))) >= best:
+            best, who = v, int(pid)
+    return who
+
+
+def on_walker(box, others_t, window) -> bool:
+    """Does ``box`` (window coordinates) overlap (IoU >= 0.3) one of the walkers ``others_t`` (rows ``id, x, y, w,
+    h``, frame coordinates), clipped to the window?"""
+    return walker_on(box, others_t, window) is not None
+
+
+def share_inside(others_t, pid: int, window) -> float:
+    """The share of walker ``pid``'s box inside the window on one frame (0 when the walker has no box there)."""
+    x0, y0, ww, wh = window
+    for row in others_t:
+        if int(row[0]) == pid:
+            return in_frame_fraction((row[1] - x0, row[2] - y0, row[3], row[4]), ww, wh)
+    return 0.0
 
 
 def classify(seq, boxes, lost, others, window) -> dict[str, int]:
@@ -106,7 +125,9 @@ def main() -> None:
     for name in args.trackers.split(","):
         total = dict.fromkeys(CLASSES, 0)
         absent = up = 0
-        acquired = {True: [0, 0], False: [0, 0]}  # exit strip on the frame before -> [acquisitions, on a walker]
+        # exit strip on the frame before -> [acquisitions, on a walker who had just entered, on one who stayed]
+        acquired = {True: [0, 0, 0], False: [0, 0, 0]}
+        per_person: dict[int, list[int]] = {}  # person -> [absent frames, flag up]
         # every view has its ground truth; only some have a meta.json (the frames left unscored)
         for folder in sorted(p for v in args.views for p in v.iterdir() if (p / "groundtruth_rect.txt").exists()):
             seq = read_sequence(folder)
@@ -115,7 +136,7 @@ def main() -> None:
             pid = int(folder.name.rsplit("_id", 1)[1])
             window = view_window(folder, width, height)
             numbers = [pets_frame(p) for p in seq.frames]
-            others = {t: gt[(gt[:, 0] == n) & (gt[:, 1] != pid), 2:6] for t, n in enumerate(numbers)}
+            others = {t: gt[(gt[:, 0] == n) & (gt[:, 1] != pid), 1:6] for t, n in enumerate(numbers)}
             frames = [cv2.imread(str(p)) for p in seq.frames]
             for seed in seeds:
                 tr = create_tracker(name, seed=seed)
@@ -128,19 +149,28 @@ def main() -> None:
                     lost.append(bool(st.lost))
                     if lost[-2] and not st.lost and seq.absent[t]:
                         acquired[strip][0] += 1
-                        acquired[strip][1] += on_walker(st.box, others.get(t, ()), window)
+                        if (who := walker_on(st.box, others.get(t, ()), window)) is not None:
+                            before = share_inside(others.get(max(t - ENTERED, 0), ()), who, window)
+                            acquired[strip][1 if before < 0.5 else 2] += 1
                 counts = classify(seq, np.asarray(boxes, float), lost, others, window)
                 n_abs = int(seq.absent[1:].sum())
                 absent += n_abs
                 up += n_abs - sum(counts.values())
+                pp = per_person.setdefault(pid, [0, 0])
+                pp[0] += n_abs
+                pp[1] += n_abs - sum(counts.values())
                 for k in CLASSES:
                     total[k] += counts[k]
                 print(f"{name} {folder.name} seed {seed}: absent {n_abs}, flag up {n_abs - sum(counts.values())}, "
                       + ", ".join(f"{k} {v}" for k, v in counts.items()), flush=True)
         print(f"== {name}: {absent} absent frames, flag up on {up} ({up / max(absent, 1):.3f}); down: "
               + ", ".join(f"{k} {v}" for k, v in total.items()), flush=True)
-        print(f"== {name}: acquisitions while absent, with an exit strip {acquired[True][0]} ({acquired[True][1]} "
-              f"on a walker), without {acquired[False][0]} ({acquired[False][1]} on a walker)", flush=True)
+        for strip, label in ((True, "with an exit strip"), (False, "without")):
+            n, entered, stayed = acquired[strip]
+            print(f"== {name}: acquisitions while absent, {label}: {n} ({entered} on a walker who entered the window "
+                  f"within {ENTERED} frames before, {stayed} on one who stayed in it)", flush=True)
+        print(f"== {name}: flag up per person: " + ", ".join(
+            f"{pid} {u} of {a}" for pid, (a, u) in sorted(per_person.items())), flush=True)
 
 
 if __name__ == "__main__":
