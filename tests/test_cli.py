@@ -71,6 +71,9 @@ def test_json_lines_carry_the_trackers_scalar_info(clip, tmp_path):
     (["track", "{empty}", "--box", "1,1,5,5"], "no images"),
     (["track", "{clip}", "--box", "1,1,5,5", "--out", "{blocked}"], "cannot"),
     (["list", "nope"], "unknown tracker"),
+    (["track", "{clip}", "--box", "1,1,5,5", "--seed", "-1"], "a seed is an integer >= 0"),
+    (["mot", "{clip}", "--seed", "x"], "a seed is an integer >= 0"),
+    (["calibrate-sim", "--random-scene", "-3"], "a seed is an integer >= 0"),
 ])
 def test_bad_input_exits_2(args, needle, clip, tmp_path, capsys):
     fake = tmp_path / "fake.mp4"
@@ -82,8 +85,22 @@ def test_bad_input_exits_2(args, needle, clip, tmp_path, capsys):
     args = [a.format(**subs) for a in args]
     if args[0] == "track" and "--out" not in args:
         args += ["--out", str(tmp_path / "o.csv")]
-    assert main(args + (["--quiet"] if args[0] == "track" else [])) == 2
+    try:
+        rc = main(args + (["--quiet"] if args[0] == "track" else []))
+    except SystemExit as exc:  # argparse's own checks (an argument's type) exit from the parser
+        rc = exc.code
+    assert rc == 2
     assert needle in one_line_error(capsys)
+
+
+def test_a_negative_seed_is_refused_by_the_api():
+    from pftrack.errors import ParameterError
+    from pftrack.trackers import create_tracker
+
+    for bad in (-1, 1.5, "3", True):
+        with pytest.raises(ParameterError, match="seed must be an integer"):
+            create_tracker("color-pf", seed=bad)
+    assert create_tracker("color-pf", seed=0) is not None
 
 
 def test_missing_camera_is_one_line_on_the_terminal(tmp_path, capfd):

@@ -6,6 +6,8 @@ import json
 import sys
 from pathlib import Path
 
+from .common import seed_value
+
 
 def add_calibrate_sim(sub) -> None:
     p = sub.add_parser("calibrate-sim", help="calibrate simulated laser scanners and cameras by tracking a robot "
@@ -15,8 +17,9 @@ def add_calibrate_sim(sub) -> None:
                                    "alone: EKF robot path, Kalman-tracked LRF clusters registered by LMedS, DLT + "
                                    "OpenCV camera calibration. Prints the errors against the scene's truth.")
     p.add_argument("--scene", help="scene JSON (room, lrfs, cameras, robot, noise); default: the chapter's room")
-    p.add_argument("--random-scene", type=int, metavar="S", help="instead of --scene: a random room drawn from seed S")
-    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.add_argument("--random-scene", type=seed_value, metavar="S",
+                   help="instead of --scene: a random room drawn from seed S")
+    p.add_argument("--seed", type=seed_value, default=0, help="noise seed (default 0)")
     p.add_argument("--no-refine", action="store_true", help="keep LMedS's best 2-point sample (faithful to the text)")
     p.add_argument("--least-squares", action="store_true", help="plain least squares instead of LMedS (ablation)")
     p.add_argument("--out", help="result JSON (estimated sensors in the scene schema, residuals, errors)")

@@ -14,6 +14,17 @@ class ArgumentParser(argparse.ArgumentParser):
         self.exit(2, f"pftrack: error: {message}\n")
 
 
+def seed_value(text: str) -> int:
+    """An argparse type for a random seed: an integer >= 0 (NumPy's seeds), else a one-line usage error."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a seed is an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"a seed is an integer >= 0, got {text!r}")
+    return value
+
+
 def progress(total: int | None, desc: str, quiet: bool):
     from tqdm import tqdm
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from ..errors import Interrupted
-from .common import close_all, progress
+from .common import close_all, progress, seed_value
 
 
 def add_mot(sub) -> None:
@@ -24,7 +24,7 @@ def add_mot(sub) -> None:
                         "direction and energy; implies --detector mv)")
     p.add_argument("--out", default="tracks.txt", help="MOTChallenge text output (default tracks.txt)")
     p.add_argument("--video-out", help="annotated video output")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed_value, default=0)
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="multi-pf parameter (repeatable)")
     p.add_argument("--mpeg7", help="with --tracker cd: also write an MPEG-7 XML description (a trajectory per label, "
                                     "segments of high motion activity)")

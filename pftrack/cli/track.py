@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import DEFAULT_TRACKER, close_all, progress
+from .common import DEFAULT_TRACKER, close_all, progress, seed_value
 
 
 def add_track(sub) -> None:
@@ -24,7 +24,7 @@ def add_track(sub) -> None:
     p.add_argument("--show-map", action="store_true", help=(
         "with --video-out: put the tracker's confidence map beside each frame (trackers that learn a map, "
         "e.g. cotrain-pf)"))
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=seed_value, default=0, help="random seed (default 0)")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="tracker parameter (repeatable)")
     p.add_argument("--skip-bad-frames", action="store_true", help="skip unreadable frames instead of stopping")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -143,7 +143,7 @@ def add_demo(sub) -> None:
     p = sub.add_parser("demo", help="run the default tracker on the bundled real clip")
     p.add_argument("--out", default="demo_out", help="output folder (default demo_out)")
     p.add_argument("--tracker", default=DEFAULT_TRACKER, help=f"tracker name (default {DEFAULT_TRACKER})")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed_value, default=0)
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_demo)
 

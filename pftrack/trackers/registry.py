@@ -75,6 +75,8 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
     **kwargs : parameter values (validated), or constructor extras such as ``detector``.
     """
     spec = get_spec(name)
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+        raise ParameterError(f"seed must be an integer >= 0 or None, got {seed!r}")
     if not spec.available():
         raise ParameterError(f"tracker '{name}' is not available in this installation")
     extras = {k: kwargs.pop(k) for k in list(kwargs) if k in spec.extra_kwargs}
