@@ -17,6 +17,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pftrack.cli.common import parse_seeds
 from pftrack.eval.points import box_passes, recovery, run_points, run_stereo
 from pftrack.io.datasets import read_sequence
 from pftrack.synth.occluder import occluder_scene, stereo_rail_scene
@@ -36,17 +37,6 @@ VARIANTS = {
     "rls, no appearance check": {"method": "rls", "verify": False},
     "fuzzy, pyramid 0": {"method": "fuzzy", "pyramid": 0},
 }
-
-
-def seeds_of(text: str) -> list[int]:
-    out: list[int] = []
-    for part in text.split(","):
-        if "-" in part:
-            a, b = (int(v) for v in part.split("-"))
-            out += list(range(a, b + 1))
-        elif part.strip():
-            out.append(int(part))
-    return out
 
 
 def fully_inside(scene, win: int = 7) -> np.ndarray:
@@ -321,7 +311,7 @@ def main() -> None:
     ap.add_argument("--figures", default="docs")
     ap.add_argument("--json", default="reports/ch07.json")
     args = ap.parse_args()
-    seeds, sseeds = seeds_of(args.seeds), seeds_of(args.stereo_seeds)
+    seeds, sseeds = parse_seeds(args.seeds), parse_seeds(args.stereo_seeds)
     figs = Path(args.figures)
     figs.mkdir(parents=True, exist_ok=True)
     res: dict = {"seeds": args.seeds, "stereo_seeds": args.stereo_seeds}

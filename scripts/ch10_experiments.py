@@ -30,6 +30,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pftrack.cli.common import parse_seeds
 from pftrack.events.eval import match_events, track_crossings
 from pftrack.events.geometry import parse_polyline
 from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams, estimate_radius
@@ -249,7 +250,7 @@ def main() -> None:
                     help="only PETS at 7 fps on these lines (none given: five lines used for no choice)")
     args = ap.parse_args()
     cv2.setNumThreads(1)
-    seeds = [int(s) for s in args.seeds.split(",")]
+    seeds = parse_seeds(args.seeds)
     out: dict = {}
     data = Path(args.data)
     if args.grey:

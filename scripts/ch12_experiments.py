@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from pftrack.calibration import sim
+from pftrack.cli.common import parse_seeds
 from pftrack.calibration.camcal import calibrate, image_to_ground, nine_points
 from pftrack.calibration.pipeline import (
     EstimateParams,
@@ -59,9 +60,8 @@ def main() -> None:
     ap.add_argument("--seeds", default="100-109")
     ap.add_argument("--json")
     a = ap.parse_args()
-    lo, hi = map(int, a.seeds.split("-"))
     rows = []
-    for seed in range(lo, hi + 1):
+    for seed in parse_seeds(a.seeds):
         scene = random_scene(seed)
         m = simulate(scene, seed)
         row = {"seed": seed}

@@ -173,3 +173,15 @@ def test_demo_runs_on_bundled_clip(tmp_path, capsys):
     assert (tmp_path / "demo" / "track.mp4").stat().st_size > 10_000
     auc = float(out.split("AUC")[1].split()[0])
     assert auc > 0.4  # the bundled clip is tracked, not just processed
+
+
+def test_seed_lists_parse_ranges_and_single_values():
+    from pftrack.cli.common import parse_seeds
+
+    assert parse_seeds("0-3") == [0, 1, 2, 3]
+    assert parse_seeds("1,4,7") == [1, 4, 7]
+    assert parse_seeds("100") == [100]
+    assert parse_seeds("100, 200-202") == [100, 200, 201, 202]
+    for bad in ("", "5-1", "a", "-3", "1-"):
+        with pytest.raises(ValueError):
+            parse_seeds(bad)

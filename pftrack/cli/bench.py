@@ -6,7 +6,7 @@ import os
 import sys
 from pathlib import Path
 
-from .common import reproduce_command
+from .common import parse_seeds, reproduce_command
 
 DEFAULT_PEERS = "opencv-csrt,opencv-kcf,opencv-mil,opencv-medianflow"
 
@@ -191,18 +191,10 @@ def cmd_synth(args) -> int:
     from ..synth import SCENES, export_otb
     from ..synth.varied import DRAWN_NUISANCE_SCENES
 
-    seeds: list[int] = []
     try:
-        for part in args.seeds.split(","):
-            if "-" in part:
-                a, b = (int(v) for v in part.split("-", 1))
-                seeds.extend(range(a, b + 1))
-            elif part.strip():
-                seeds.append(int(part))
+        seeds = parse_seeds(args.seeds)
     except ValueError:
-        raise ParameterError(f"--seeds must look like 0-9 or 1,4,7, got {args.seeds!r}") from None
-    if not seeds:
-        raise ParameterError("no seeds given")
+        raise ParameterError(f"--seeds must look like 0-9 or 1,4,7 (integers >= 0), got {args.seeds!r}") from None
     out = Path(args.out)
     image = None
     draw = {}

@@ -14,6 +14,25 @@ class ArgumentParser(argparse.ArgumentParser):
         self.exit(2, f"pftrack: error: {message}\n")
 
 
+def parse_seeds(text: str) -> list[int]:
+    """Seeds written as ranges and single values, ``0-9``, ``1,4,7`` or ``100,200-202``, in order; ValueError for
+    anything else (a negative seed, a descending range, no seed at all)."""
+    seeds: list[int] = []
+    for part in str(text).split(","):
+        part = part.strip()
+        if not part:
+            continue
+        lo, sep, hi = part.partition("-")
+        a = int(lo)
+        b = int(hi) if sep else a
+        if a < 0 or b < a:
+            raise ValueError(f"bad seed range {part!r}")
+        seeds.extend(range(a, b + 1))
+    if not seeds:
+        raise ValueError("no seeds given")
+    return seeds
+
+
 def seed_value(text: str) -> int:
     """An argparse type for a random seed: an integer >= 0 (NumPy's seeds), else a one-line usage error."""
     try:
