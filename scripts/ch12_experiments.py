@@ -22,7 +22,6 @@ from pathlib import Path
 import numpy as np
 
 from pftrack.calibration import sim
-from pftrack.cli.common import parse_seeds
 from pftrack.calibration.camcal import calibrate, image_to_ground, nine_points
 from pftrack.calibration.pipeline import (
     EstimateParams,
@@ -32,6 +31,7 @@ from pftrack.calibration.pipeline import (
     summary,
 )
 from pftrack.calibration.scene import random_scene
+from pftrack.cli.common import parse_seeds
 
 
 def manual_cameras(scene, rng) -> list[dict]:

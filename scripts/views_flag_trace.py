@@ -18,8 +18,8 @@ frame with the flag down is put in the first class that applies:
 It also counts the acquisitions made while the person is absent (the flag going down), by whether the search was
 confined to an exit strip (``reenter_border``: the loss taken for an exit) on the frame before, and how many of
 them took another annotated walker: one who entered the window within the ``ENTERED`` frames before (less than half
-inside it then, or not yet annotated) or one who stayed in it. Last, the absent frames and the flag's are summed per
-person.
+inside it then, or not yet annotated) or one who stayed in it. Last, it sums per person the absent frames and those
+with the flag up.
 
 Diagnosis only: it chooses nothing. Each view folder's ``img/`` links to its window's frames, named by the PETS
 frame number, which maps the view's frames onto the PETS annotation.
