@@ -45,7 +45,6 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
         from ..errors import ParameterError
 
         raise ParameterError("--mpeg7 needs --tracker cd")
-    import itertools
     import time as _time
 
     from ..io.sinks import MotSink, VideoSink, prepare_output, prepare_video_output
@@ -89,13 +88,8 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
         if video:
             sinks.append(video)
         bar = progress(source.length, "mot", quiet)
-        numbered = source.numbered()
-        if tracker.bootstrap_frames:  # the first frames read ahead for the detector's background
-            ahead = list(itertools.islice(numbered, tracker.bootstrap_frames))
-            t0 = _time.perf_counter()
-            tracker.prime([f for _, f in ahead])
-            upd += _time.perf_counter() - t0
-            numbered = itertools.chain(ahead, numbered)
+        # bootstrap_frames: the first frames read ahead for the detector's background
+        numbered, upd = tracker.read_ahead(source.numbered(), lambda item: item[1])
         with interrupt_on_sigterm() as stop:
             for number, frame in numbered:
                 t0 = _time.perf_counter()

@@ -244,7 +244,6 @@ def _run_mot_job(job: Job, seq) -> dict:
         raise FormatError(f"{job.sequence}: no MOTChallenge ground truth (gt/gt.txt) for protocol mot")
     tracker = create_multi_tracker(job.tracker.name, seed=job.seed, **dict(job.tracker.params))
     rows = []
-    upd = 0.0
     failure: dict = {}
     answered = 0  # frames the tracker answered
     t_all = time.perf_counter()
@@ -255,18 +254,10 @@ def _run_mot_job(job: Job, seq) -> dict:
             raise FormatError(f"{path}: frame {t} cannot be decoded")
         return as_bgr_uint8(img, where=str(path))
 
-    # the first frames read ahead for the detector's background (counted as updates), then tracked without a
-    # second decoding
-    ahead = [decoded(t, path) for t, path in enumerate(seq.frames[:tracker.bootstrap_frames], start=1)]
-    if ahead:
-        t0 = time.perf_counter()
-        tracker.prime(ahead)
-        upd += time.perf_counter() - t0
-    for t, path in enumerate(seq.frames, start=1):
-        if t <= len(ahead):
-            frame, ahead[t - 1] = ahead[t - 1], None  # not kept once tracked
-        else:
-            frame = decoded(t, path)
+    # bootstrap_frames: the first frames read ahead for the detector's background (counted as updates), then
+    # tracked without a second decoding
+    frames, upd = tracker.read_ahead(decoded(t, path) for t, path in enumerate(seq.frames, start=1))
+    for t, frame in enumerate(frames, start=1):
         t0 = time.perf_counter()
         try:
             outs = tracker.update(frame)

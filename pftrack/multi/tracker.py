@@ -40,7 +40,11 @@ Every threshold is a documented parameter (``MultiPFParams``).
 
 from __future__ import annotations
 
+import itertools
 import math
+import time
+from collections import deque
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Callable
 
@@ -194,6 +198,25 @@ class MultiPF:
         by the caller, ``bootstrap_frames`` of them); a detector without a background ignores it."""
         if hasattr(self.detector, "prime") and len(frames):
             self.detector.prime(frames)
+
+    def read_ahead(self, items: Iterator, frame_of: Callable = lambda item: item) -> tuple[Iterator, float]:
+        """``bootstrap_frames``: read that many of ``items`` ahead and :meth:`prime` the detector from their frames
+        (``frame_of(item)``). Returns the items again, those read ahead first (each released once handed on), and
+        the seconds the priming took (counted as update time by the callers)."""
+        if not self.bootstrap_frames:
+            return items, 0.0
+        items = iter(items)
+        ahead = deque(itertools.islice(items, self.bootstrap_frames))
+        t0 = time.perf_counter()
+        self.prime([frame_of(item) for item in ahead])
+        seconds = time.perf_counter() - t0
+
+        def replay():
+            while ahead:
+                yield ahead.popleft()
+            yield from items
+
+        return replay(), seconds
 
     def update(self, frame: np.ndarray) -> list[TrackOutput]:
         """Process one frame; returns the reported targets."""
