@@ -248,6 +248,22 @@ def test_a_detection_covering_two_targets_is_a_group_but_not_a_duplicate():
     assert not a.grouped and not b.grouped
 
 
+def test_a_merged_blob_is_gated_to_its_front_member_or_to_none():
+    from pftrack.geometry import iou_matrix
+    from pftrack.multi.track_state import gate_merged_detections
+
+    pred = np.array([[100.0, 50, 24, 60], [118, 52, 24, 60], [250, 50, 24, 60]])
+    dets = np.array([[98.0, 48, 46, 64], [250, 50, 24, 60]])
+    m = iou_matrix(pred, dets)
+    gate, used = m >= 0.3, np.zeros(2, bool)
+    grouped = gate_merged_detections(pred, dets, m, gate, used, 0.8, 0.3, 0.3)  # target 0 fits the blob alone
+    assert grouped == {0: False, 1: True} and not used.any()
+    assert gate[:, 0].tolist() == [True, False, False] and gate[2, 1]
+    gate, used = m >= 0.3, np.zeros(2, bool)
+    grouped = gate_merged_detections(pred, dets, m, gate, used, 0.8, 0.9, 0.3)  # none fits it alone
+    assert grouped == {0: True, 1: True} and used.tolist() == [True, False] and not gate[:, 0].any()
+
+
 def test_the_mog2_background_started_from_the_first_frames_finds_who_was_there_from_the_start():
     """MOG2 takes its first frame for the background: the two movers, in view from frame 1, are not found on the
     first frames. Started from the first 8 frames with their moving pixels replaced by the median (``prime``),

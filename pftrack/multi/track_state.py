@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..cues.histogram_cue import ColorFeatures
-from ..geometry import intersection_area
+from ..geometry import intersection_area, iou_matrix
 
 
 @dataclass
@@ -69,6 +69,36 @@ def state_boxes(states: np.ndarray) -> np.ndarray:
 def cover_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Fraction of each box of ``a`` (x, y, w, h) that lies inside each box of ``b``."""
     return intersection_area(a[:, None, :], b[None, :, :]) / np.maximum(a[:, None, 2] * a[:, None, 3], 1e-9)
+
+
+def gate_merged_detections(pred_boxes: np.ndarray, dets: np.ndarray, m: np.ndarray, gate: np.ndarray,
+                           used: np.ndarray, group_cover: float, group_fit: float, match_iou: float
+                           ) -> dict[int, bool]:
+    """Occlusion handling for merged blobs (``multi-pf``): a detection (``dets`` ``(M, 4)``) that covers several
+    distinct targets' predicted boxes (``pred_boxes``, ``(L, 4)``; at least ``group_cover`` of each inside it) is
+    gated (``gate``, ``(L, M)``, in place) to the member that fits it alone (in front: IoU ``m`` at least
+    ``group_fit``), if any, and otherwise removed from the assignment and marked ``used`` (in place) so that it
+    starts no track. Returns, for each member of such a blob, whether it is ``grouped`` (behind the blob's front
+    member, or in a blob with none), the last blob deciding for a target in several."""
+    inside = cover_matrix(pred_boxes, dets) >= group_cover
+    grouped: dict[int, bool] = {}
+    if not (inside.sum(axis=0) >= 2).any():
+        return grouped
+    pair_iou = iou_matrix(pred_boxes, pred_boxes)
+    for j in np.flatnonzero(inside.sum(axis=0) >= 2):
+        members = np.flatnonzero(inside[:, j])
+        if pair_iou[np.ix_(members, members)].min() >= 0.5:
+            continue  # one target tracked twice (a duplicate about to die), not a group
+        fit = m[members, j]
+        front = members[int(np.argmax(fit))] if fit.max() >= group_fit else -1
+        if front < 0:
+            used[j] = True  # no member explains the blob alone: the detection of none
+        gate[:, j] = False
+        if front >= 0:
+            gate[front, j] = m[front, j] >= match_iou  # the one in front; the others are behind it
+        for i in members:
+            grouped[int(i)] = bool(i != front)
+    return grouped
 
 
 def ellipses(states: np.ndarray) -> np.ndarray:

@@ -69,9 +69,9 @@ from .multi_params import MultiPFParams
 from .track_state import Candidate as _Candidate
 from .track_state import Track as _Track
 from .track_state import box_to_state as _box_to_state
-from .track_state import cover_matrix as _cover_matrix
 from .track_state import cut_features as _cut
 from .track_state import ellipses as _ellipses
+from .track_state import gate_merged_detections
 from .track_state import mark_occlusions
 from .track_state import state_boxes as _state_boxes
 
@@ -327,7 +327,10 @@ class MultiPF:
         m = iou_matrix(pred_boxes, dets[:, :4])
         gate = m >= p.match_iou
         if p.occlusion and self._group_merges and len(live) > 1:
-            self._merged_detections(pred_boxes, dets, live, gate, used, m)
+            grouped = gate_merged_detections(pred_boxes, dets[:, :4], m, gate, used, p.group_cover, p.group_fit,
+                                             p.match_iou)
+            for i, g in grouped.items():
+                live[i].grouped = g
         if not gate.any():
             return used
         cost = 1.0 - m
@@ -342,29 +345,6 @@ class MultiPF:
                 live[r].det = dets[c]
                 used[c] = True
         return used
-
-    def _merged_detections(self, pred_boxes, dets, live, gate, used, m) -> None:
-        """Occlusion handling for merged blobs: a detection covering several distinct targets' predicted boxes
-        is gated to the member that fits it alone (in front), if any, and otherwise removed from the assignment
-        (``gate``) and from births (``used``); the members without it are ``grouped``."""
-        p = self.params
-        inside = _cover_matrix(pred_boxes, dets[:, :4]) >= p.group_cover
-        if not (inside.sum(axis=0) >= 2).any():
-            return
-        pair_iou = iou_matrix(pred_boxes, pred_boxes)
-        for j in np.flatnonzero(inside.sum(axis=0) >= 2):
-            members = np.flatnonzero(inside[:, j])
-            if pair_iou[np.ix_(members, members)].min() >= 0.5:
-                continue  # one target tracked twice (a duplicate about to die), not a group
-            fit = m[members, j]
-            front = members[int(np.argmax(fit))] if fit.max() >= p.group_fit else -1
-            if front < 0:
-                used[j] = True  # no member explains the blob alone: the detection of none
-            gate[:, j] = False
-            if front >= 0:
-                gate[front, j] = m[front, j] >= p.match_iou  # the one in front; the others are behind it
-            for i in members:
-                live[i].grouped = i != front
 
     def _occlusions(self) -> None:
         mark_occlusions(self.tracks, self.params.occlusion_radius, self.params.occlusion_drop)
