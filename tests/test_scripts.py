@@ -1,0 +1,35 @@
+"""The experiment scripts (``scripts/*.py``) import without running, and those with a command line answer ``--help``:
+a renamed function or module of the package breaks them here rather than when a figure is regenerated."""
+
+from __future__ import annotations
+
+import inspect
+import sys
+
+import pytest
+
+from .conftest import REPO, load_script
+
+SCRIPTS = sorted(p.stem for p in (REPO / "scripts").glob("*.py"))
+
+
+def test_the_scripts_are_found():
+    assert len(SCRIPTS) >= 20 and "pisc_illumination" in SCRIPTS
+
+
+@pytest.mark.parametrize("name", SCRIPTS)
+def test_a_script_imports_without_running_and_answers_help(name, monkeypatch, capsys):
+    source = (REPO / "scripts" / f"{name}.py").read_text()
+    assert 'if __name__ == "__main__":' in source, "the script's work must wait for its main guard"
+    mod = load_script(name)  # runs the top level only: the package names the script uses must exist
+    main = getattr(mod, "main", None)
+    if main is None or "argparse" not in source:
+        return
+    params = inspect.signature(main).parameters
+    if any(p.default is inspect.Parameter.empty for p in params.values()):
+        return  # a main of positional values (split_summary, split_table): its command line is in the guard
+    monkeypatch.setattr(sys, "argv", [f"{name}.py", "--help"])
+    with pytest.raises(SystemExit) as ended:
+        main(*([["--help"]] if "argv" in params else []))
+    assert ended.value.code == 0
+    assert "usage" in capsys.readouterr().out.lower()
