@@ -177,6 +177,33 @@ def test_opencv_tracker_that_refuses_its_box_gives_a_box_error(tmp_path):
                  str(tmp_path / "o.csv")]) == 2
 
 
+@pytest.mark.parametrize("name", ["opencv-mil", "opencv-tld"])
+def test_opencv_mil_and_tld_repeat_a_seeded_run_whatever_ran_before(name):
+    """MIL and TLD draw from OpenCV's random state and the C library's rand(), which carry over from run to run in a
+    process: the adapter seeds both from the tracker's seed, so a seeded run is the same after any other run, and
+    pftrack eval runs them once per seed."""
+    from pftrack.trackers.registry import get_spec
+
+    rng = np.random.default_rng(3)
+    base = rng.integers(60, 200, (120, 160, 3), dtype=np.uint8)
+    frames = []
+    for t in range(12):
+        f = base.copy()
+        f[40:80, 30 + 3 * t:60 + 3 * t] = rng.integers(0, 255, (40, 30, 3), dtype=np.uint8) // 4 + 190
+        frames.append(f)
+
+    def run(seed):
+        tr = pftrack.create_tracker(name, seed=seed)
+        tr.init(frames[0], (30, 40, 30, 40))
+        return [tr.update(f).box for f in frames[1:]]
+
+    first = run(0)
+    run(5)  # another run in between, as in a worker of pftrack eval
+    cv2.setRNGSeed(12345)
+    assert run(0) == first
+    assert get_spec(name).cls.stochastic and not get_spec("opencv-csrt").cls.stochastic
+
+
 @pytest.mark.parametrize("name", ["opencv-csrt", "opencv-kcf", "opencv-mil", "opencv-mosse", "opencv-medianflow",
                                   "opencv-tld", "camshift", "meanshift", "kalman-meanshift"])
 def test_peers_and_baselines_follow_the_protocol(name):

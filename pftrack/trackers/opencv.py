@@ -13,6 +13,9 @@ back-projection in every frame and ``cv2.CamShift`` from the previous window.
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
+import functools
 from dataclasses import dataclass
 
 import cv2
@@ -32,10 +35,33 @@ _FACTORIES = {
     "tld": lambda: cv2.legacy.TrackerTLD_create(),
 }
 _LEGACY = {"mosse", "medianflow", "tld"}
+# MIL and TLD draw random numbers: OpenCV's (cv::theRNG, which MIL's sampler copies when it is built) and the C
+# library's rand() (MIL's Haar features). Neither is reset between runs, so unseeded a run's result depended on what
+# had run before it in the process. Both are seeded from the tracker's own generator before the tracker is built:
+# a seed gives the same run whatever came before, and they count as stochastic (pftrack eval runs them per seed).
+_RANDOM = {"mil", "tld"}
 # OpenCV's MIL never returns from init/update on boxes of 4 x 4, 2 x 10 or 1 x 30 pixels (measured with OpenCV 4.x);
 # 4 x 5, 3 x 8 and 5 x 5 work. Boxes under 25 pixels or 3 pixels a side are refused with a clear error rather than
 # a hang (3 x 8 among them: the rule is kept simple).
 _MIL_MIN_SIDE, _MIL_MIN_AREA = 3, 25
+
+
+@functools.lru_cache(maxsize=1)
+def _libc():
+    """The C library, for ``srand``; None where it is not found by name (then only OpenCV's state is seeded)."""
+    name = ctypes.util.find_library("c")
+    try:
+        return ctypes.CDLL(name) if name else None
+    except OSError:
+        return None
+
+
+def seed_native_random(seed: int) -> None:
+    """Seed the random state OpenCV's MIL and TLD draw from: OpenCV's own (this thread's) and the C library's."""
+    cv2.setRNGSeed(int(seed))
+    libc = _libc()
+    if libc is not None:
+        libc.srand(ctypes.c_uint(int(seed) & 0xFFFFFFFF))
 
 
 def opencv_available(kind: str) -> bool:
@@ -59,6 +85,8 @@ class OpenCVTracker(Tracker):
     kind = "csrt"
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        if self.kind in _RANDOM:  # before the tracker is built (see _RANDOM)
+            seed_native_random(int(self.rng.integers(0, 2**31 - 1)))
         self._cv = _FACTORIES[self.kind]()
         h, w = frame.shape[:2]
         bx = clip_box(np.asarray(box), w, h)
@@ -92,7 +120,8 @@ class OpenCVTracker(Tracker):
 
 
 def _make(kind: str, label: str) -> type[OpenCVTracker]:
-    return type(f"OpenCV{kind.upper()}", (OpenCVTracker,), {"kind": kind, "name": label})
+    return type(f"OpenCV{kind.upper()}", (OpenCVTracker,), {"kind": kind, "name": label,
+                                                           "stochastic": kind in _RANDOM})
 
 
 OPENCV_TRACKERS = {f"opencv-{k}": _make(k, f"opencv-{k}") for k in _FACTORIES}
