@@ -157,6 +157,23 @@ def test_registry_and_box_init():
 
 
 
+def test_the_first_mask_from_a_box_does_not_depend_on_what_ran_before():
+    """GrabCut starts its colour models by k-means++ on OpenCV's random state, which carries over in the thread: the
+    box start seeds it, so the same box gives the same first mask after other random draws."""
+    from pftrack.segmentation.tracker import grabcut_init
+
+    rng = np.random.default_rng(7)
+    frame = np.repeat(np.repeat(rng.integers(0, 255, (24, 32, 3), dtype=np.uint8), 8, 0), 8, 1)
+    frame[60:140, 90:170] = (rng.integers(0, 60, (80, 80, 3)) + (40, 160, 200)).astype(np.uint8)
+    box = (80, 50, 100, 100)
+    first = grabcut_init(frame, box)
+    samples = rng.random((200, 3)).astype(np.float32)
+    for seed in (1, 99):  # other draws from OpenCV's random state in between
+        cv2.setRNGSeed(seed)
+        cv2.kmeans(samples, 4, None, (cv2.TERM_CRITERIA_MAX_ITER, 3, 0), 1, cv2.KMEANS_PP_CENTERS)
+        assert np.array_equal(grabcut_init(frame, box), first)
+
+
 def test_box_init_covering_the_whole_frame():
     """GrabCut has no background to learn outside such a box (OpenCV asserts): the box is the first mask."""
     import pftrack

@@ -75,6 +75,10 @@ def largest_component(mask: np.ndarray) -> np.ndarray:
     return lab == k
 
 
+#: the seed of OpenCV's random state before the first mask's GrabCut (its k-means++ start)
+GRABCUT_SEED = 0
+
+
 def grabcut_init(frame: np.ndarray, box) -> np.ndarray:
     """The first mask: GrabCut in the box (5 iterations), as ch09.md §1.4 proposes; the box itself where GrabCut
     finds less than 4 foreground pixels or has no background to learn from (a box covering the whole frame)."""
@@ -85,6 +89,9 @@ def grabcut_init(frame: np.ndarray, box) -> np.ndarray:
     mask = np.zeros((h, w), np.uint8)
     bgd, fgd = np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64)
     if bw * bh < w * h:  # GrabCut learns its background model outside the box: none when the box is the frame
+        # its colour models start from k-means++ on OpenCV's random state, which carries over from whatever ran
+        # before in the thread: seeded, the same box gives the same first mask
+        cv2.setRNGSeed(GRABCUT_SEED)
         cv2.grabCut(frame, mask, (x, y, bw, bh), bgd, fgd, 5, cv2.GC_INIT_WITH_RECT)
     m = (mask == cv2.GC_FGD) | (mask == cv2.GC_PR_FGD)
     if m.sum() < 4:
