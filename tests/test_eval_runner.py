@@ -316,3 +316,33 @@ def test_a_tracker_that_fails_from_the_first_frame_is_a_failed_run(dataset, monk
     rec = run_job(Job(parse_tracker_list("meanshift")[0], str(seq.path), seq.name, 0, "ope"))
     assert rec["error"] == "ValueError: cannot start" and rec["error_frame"] == 1
     assert rec["auc"] == 0.0 and rec["updates"] == 0 and rec["fps"] is None
+
+
+def test_runs_reused_from_other_code_are_counted_and_fresh_computes_them_again(dataset, tmp_path, capsys):
+    """Each cached run records the fingerprint of the code that made it: a report folder reused after the code
+    changed says how many of its reused runs came from other code, and --fresh computes every run again."""
+    import json
+
+    from pftrack.cli import main
+    from pftrack.eval.runner import code_fingerprint
+
+    rdir = tmp_path / "r"
+    argv = ["eval", str(dataset), "--trackers", "meanshift", "--workers", "1", "--quiet", "--report", str(rdir)]
+    assert main(argv) == 0
+    runs = sorted((rdir / "runs").glob("*.json"))
+    assert len(runs) == 2 and all(json.loads(f.read_text())["code"] == code_fingerprint() for f in runs)
+    capsys.readouterr()
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "0 runs computed, 2 reused" in err and "warning" not in err
+    rec = json.loads(runs[0].read_text())
+    rec["code"] = "0123456789ab"  # as if made before a change of the code
+    runs[0].write_text(json.dumps(rec))
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "warning: 1 of the 2 reused runs were made by other pftrack code than this; --fresh" in err
+    assert main(argv + ["--fresh"]) == 0
+    assert "2 runs computed, 0 reused" in capsys.readouterr().err
+    assert json.loads(runs[0].read_text())["code"] == code_fingerprint()
+    assert main(argv) == 0
+    assert "warning" not in capsys.readouterr().err

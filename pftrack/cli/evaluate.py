@@ -33,6 +33,9 @@ def add_eval(sub) -> None:
                         "while the evaluation goes on (not with --scheduler)")
     p.add_argument("--report", help="report folder: results.csv, summary.md, plots, index.html; runs are cached "
                                     "there so an interrupted evaluation resumes")
+    p.add_argument("--fresh", action="store_true",
+                   help="compute every run again instead of reusing the runs cached in --report (which may have been "
+                        "made by other code: the command says how many)")
     p.add_argument("--doc", help="also write the Markdown summary (with the command) to this file")
     p.add_argument("--title", default="pftrack evaluation", help="title of the report")
     p.add_argument("--quiet", action="store_true")
@@ -76,7 +79,7 @@ def cmd_eval(args) -> int:
         prepare_output(report_dir / "results.csv")
     jobs = build_jobs(seqs, trackers, seeds=args.seeds, protocol=args.protocol, threads=args.threads)
     runner = Runner(report_dir=report_dir, workers=args.workers or 1, scheduler=args.scheduler,
-                    progress=not args.quiet, timeout=args.timeout)
+                    progress=not args.quiet, timeout=args.timeout, fresh=args.fresh)
     try:
         records = runner.run(jobs)
     except KeyboardInterrupt:
@@ -90,6 +93,9 @@ def cmd_eval(args) -> int:
                      title=args.title)
         print(f"report: {report_dir / 'index.html'} ({runner.ran} runs computed, {runner.reused} reused)",
               file=sys.stderr)
+        if runner.reused_other_code:
+            print(f"pftrack: warning: {runner.reused_other_code} of the {runner.reused} reused runs were made by other "
+                  f"pftrack code than this; --fresh computes them again", file=sys.stderr)
     if args.doc:
         Path(args.doc).write_text(md, encoding="utf-8")
     bad = [r for r in records if failed(r)]

@@ -5,7 +5,9 @@ sequence, decodes frames, times only ``update`` (decode excluded), scores the
 trajectory and returns a plain dict (JSON-serialisable).  With a report folder
 every finished run is written atomically to ``DIR/runs/<key>.json``; a later
 call finds it and skips the run, so an interrupted evaluation resumes where it
-stopped.
+stopped.  Each cached run records the fingerprint of the package code that made it (:func:`code_fingerprint`);
+runs reused from other code are counted (``Runner.reused_other_code``) so that the caller can say so, and
+``fresh=True`` ignores the cache.
 
 Executors: in-process (``workers=1``), local processes (``workers>1``,
 ``concurrent.futures``) or a Dask distributed cluster (``scheduler=ADDRESS`` or
@@ -19,6 +21,8 @@ brackets), e.g. ``local-motion-pf[motion=false]``; the whole spec is the label.
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import json
 import os
 import re
@@ -148,6 +152,19 @@ def _atomic_write_json(path: Path, obj: dict) -> None:
     os.replace(tmp, path)
 
 
+@functools.lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """A short hash of the package's Python source (every ``pftrack/**/*.py``, by relative path and content): two
+    runs with the same fingerprint were made by the same code."""
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha1()
+    for f in sorted(root.rglob("*.py")):
+        h.update(f.relative_to(root).as_posix().encode())
+        h.update(b"\0")
+        h.update(f.read_bytes())
+    return h.hexdigest()[:12]
+
+
 def _load_cached(path: Path, job: Job) -> dict | None:
     try:
         with open(path, encoding="utf-8") as fh:
@@ -176,8 +193,12 @@ class Runner:
     #: seconds a run may take; set, every run has a process of its own and one that takes longer, or whose process
     #: dies, is recorded as failed (:mod:`.isolate`); None: runs share the worker processes, without a limit
     timeout: float | None = None
+    #: compute every run again, ignoring (and replacing) the runs cached in ``report_dir``
+    fresh: bool = False
     ran: int = field(default=0, init=False)
     reused: int = field(default=0, init=False)
+    #: of the reused runs, those made by other code than this (another :func:`code_fingerprint`, or none recorded)
+    reused_other_code: int = field(default=0, init=False)
 
     def _cache_path(self, job: Job) -> Path | None:
         if self.report_dir is None:
@@ -192,18 +213,21 @@ class Runner:
 
         results: dict[int, dict] = {}
         todo: list[int] = []
+        code = code_fingerprint()
         for i, job in enumerate(jobs):
-            p = self._cache_path(job)
+            p = None if self.fresh else self._cache_path(job)
             rec = _load_cached(p, job) if p is not None and p.exists() else None
             if rec is not None:
                 results[i] = rec
                 self.reused += 1
+                self.reused_other_code += rec.get("code") != code
             else:
                 todo.append(i)
         bar = tqdm(total=len(jobs), initial=len(results), desc="eval", unit="run", file=sys.stderr,
                    disable=not self.progress or None, leave=False)
 
         def done(i: int, rec: dict) -> None:
+            rec["code"] = code
             results[i] = rec
             p = self._cache_path(jobs[i])
             if p is not None:  # a failed run is kept apart, with its traceback, and run again next time
