@@ -34,15 +34,16 @@ def auc_of(name: str, frames, gt: np.ndarray, seed: int) -> float:
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=parse_seeds, default=parse_seeds("100-111"), help="scene seeds (100-111)")
+    ap.add_argument("--seeds", default="100-111", help="scene seeds, e.g. 100-111 or 100,105")
     ap.add_argument("--trackers", default="pisc,color-pf,template,fusion-pf")
     args = ap.parse_args(argv)
     names = args.trackers.split(",")
     for n in names:
         warm_up(n)
-    seeds = list(args.seeds)
-    span = f"seeds {seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) else "seeds " + ",".join(
-        map(str, seeds))
+    try:
+        seeds = parse_seeds(args.seeds)
+    except ValueError as exc:
+        ap.error(str(exc))
     for label, make in KINDS:
         res: dict[str, list[float]] = {n: [] for n in names}
         for seed in seeds:
@@ -50,7 +51,7 @@ def main(argv: list[str] | None = None) -> None:
             frames, gt = scene.frames(), scene.groundtruth(0)
             for n in names:
                 res[n].append(auc_of(n, frames, gt, seed))
-        print(f"{label} ({span})", " ".join(f"{n} {np.mean(v):.3f}" for n, v in res.items()))
+        print(f"{label} (seeds {args.seeds})", " ".join(f"{n} {np.mean(v):.3f}" for n, v in res.items()))
 
 
 if __name__ == "__main__":
