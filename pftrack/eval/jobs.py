@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import FormatError, ParameterError
 from .metrics import lost_detection, ope_scores, valid_gt
 
-RESULT_VERSION = 3  # 2: lost-flag detection metrics; 3: identification rate (MOT)
+RESULT_VERSION = 4  # 2: lost-flag detection metrics; 3: identification rate (MOT); 4: IoU within the frame
 
 #: OTB's spatial robustness evaluation (Wu, Lim & Yang, CVPR 2013, §4.2): the first box shifted by 10 % of its
 #: size in 8 directions (4 centre shifts, 4 corner shifts) and scaled by 0.8, 0.9, 1.1 and 1.2 about its centre;
@@ -176,7 +176,9 @@ def run_job(job: Job) -> dict:
         upd_s = 0.0
         times = []
         end = len(seq.frames)  # the frames the tracker answered (all but after a failure)
+        bounds = None  # the frame's (width, height): boxes are scored within it (metrics.ope_scores)
         for t, frame in enumerate(frames()):
+            bounds = bounds or (frame.shape[1], frame.shape[0])
             if t < start:
                 continue
             try:
@@ -199,11 +201,11 @@ def run_job(job: Job) -> dict:
             boxes[t] = box
             lost_flags[t] = lost
         # a failed run keeps no box from its failure on: those frames score IoU 0
-        scores = ope_scores(boxes[start:], gt[start:])
+        scores = ope_scores(boxes[start:], gt[start:], bounds=bounds)
         # the init frame is given, not detected: the flag is scored from the first update on, up to a failure
-        absent = seq.absent if seq.absent is not None else ~valid_gt(gt)
+        absent = seq.absent if seq.absent is not None else ~valid_gt(within_frame(gt, bounds))
         ld = lost_detection(lost_flags[start + 1:end], boxes[start + 1:end], gt[start + 1:end],
-                            absent[start + 1:end])
+                            absent[start + 1:end], bounds=bounds)
         rec.update(auc=scores.auc, precision=scores.precision, mean_iou=scores.mean_iou, failures=None,
                    accuracy=None, lost_frames=int(lost_flags.sum()), lost_recall=ld.recall,
                    false_lost=ld.false_rate, absent_frames=ld.absent_frames, covered_frames=ld.covered_frames,

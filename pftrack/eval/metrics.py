@@ -8,6 +8,11 @@ OTB one-pass evaluation (Wu, Lim & Yang):
 * the **precision**: the fraction of frames whose centre error is <= 20 px.
 
 Frames whose ground truth is missing (NaN) or has zero size are skipped.
+
+With ``bounds`` (the frame's ``(width, height)``), both boxes are first cut to the frame, as the VOT toolkit
+computes its overlaps: datasets disagree on a target at the image's edge (OTB-style annotations box the
+visible part, MOTChallenge boxes the whole body beyond the edge), and a box's part outside the image cannot
+be checked against it.  A ground-truth box wholly outside the frame then counts as missing.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import center_error, iou
+from ..geometry import center_error, clip_box, iou
 
 THRESHOLDS = np.linspace(0.0, 1.0, 21)
 PRECISION_THRESHOLDS = np.arange(0, 51, dtype=np.float64)
@@ -26,6 +31,15 @@ def valid_gt(gt: np.ndarray) -> np.ndarray:
     """Mask of frames whose ground truth is usable (finite, positive size)."""
     gt = np.asarray(gt, dtype=np.float64).reshape(-1, 4)
     return np.all(np.isfinite(gt), axis=1) & (gt[:, 2] > 0) & (gt[:, 3] > 0)
+
+
+def within_frame(boxes: np.ndarray, bounds: tuple[float, float] | None) -> np.ndarray:
+    """``boxes`` ``(n, 4)`` cut to the frame ``bounds = (width, height)`` (NaN rows stay NaN, a box wholly
+    outside gets zero size); unchanged (as float64) when ``bounds`` is None."""
+    b = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    if bounds is None:
+        return b
+    return clip_box(b, float(bounds[0]), float(bounds[1])).reshape(-1, 4)
 
 
 def _clean_pred(pred: np.ndarray) -> np.ndarray:
@@ -98,8 +112,10 @@ class OPEResult:
     n_frames: int
 
 
-def ope_scores(pred: np.ndarray, gt: np.ndarray) -> OPEResult:
-    """OTB one-pass scores of a predicted trajectory against the ground truth."""
+def ope_scores(pred: np.ndarray, gt: np.ndarray, *, bounds: tuple[float, float] | None = None) -> OPEResult:
+    """OTB one-pass scores of a predicted trajectory against the ground truth (both cut to ``bounds``, the
+    frame's ``(width, height)``, when given)."""
+    pred, gt = within_frame(pred, bounds), within_frame(gt, bounds)
     ious = frame_ious(pred, gt)
     errs = frame_center_errors(pred, gt)
     succ = success_curve(ious)
@@ -144,19 +160,20 @@ class LostResult:
 
 
 def lost_detection(lost: np.ndarray, pred: np.ndarray, gt: np.ndarray, absent: np.ndarray, *,
-                   within: int = REACQUIRE_WITHIN) -> LostResult:
+                   within: int = REACQUIRE_WITHIN, bounds: tuple[float, float] | None = None) -> LostResult:
     """Score a per-frame ``lost`` flag against the frames where the target is absent.
 
     ``lost``, ``pred`` (boxes), ``gt`` (boxes, NaN allowed) and ``absent`` (bool) are
     aligned per frame.  Frames that are neither absent nor covered (the estimate is
     off the visible target) count in neither rate: there the flag may go either way.
+    With ``bounds`` both boxes are cut to the frame before their IoU (:func:`ope_scores`).
     """
     lost = np.asarray(lost, dtype=bool).ravel()
     absent = np.asarray(absent, dtype=bool).ravel()
     n = min(lost.size, absent.size, len(pred), len(gt))
     lost, absent = lost[:n], absent[:n]
-    pred = _clean_pred(np.asarray(pred, dtype=np.float64).reshape(-1, 4)[:n])
-    gt = np.asarray(gt, dtype=np.float64).reshape(-1, 4)[:n]
+    pred = _clean_pred(within_frame(np.asarray(pred, dtype=np.float64).reshape(-1, 4)[:n], bounds))
+    gt = within_frame(np.asarray(gt, dtype=np.float64).reshape(-1, 4)[:n], bounds)
     ok = valid_gt(gt) & ~absent
     ious = np.zeros(n)
     if ok.any():

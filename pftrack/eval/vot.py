@@ -9,6 +9,8 @@
   ``burn_in = 10`` frames after each (re)initialisation (the initialisation frame
   included in those 10).
 * **Robustness** is the number of failures.
+
+Overlaps are computed within the frame (both boxes cut to the image), as the VOT toolkit does.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from typing import Callable, Iterable
 import numpy as np
 
 from ..geometry import iou
-from .metrics import valid_gt
+from .metrics import valid_gt, within_frame
 
 
 @dataclass
@@ -81,7 +83,12 @@ def run_vot(tracker, frames: Iterable[np.ndarray], gt: np.ndarray, *, skip: int 
         since_init += 1
         boxes[t] = state.box
         if ok_gt[t]:
-            ov = float(iou(np.asarray(state.box, dtype=np.float64), gt[t]))
+            shape = getattr(frame, "shape", None)
+            size = (shape[1], shape[0]) if shape is not None else None
+            g = within_frame(gt[t], size)
+            if not valid_gt(g)[0]:  # the target wholly outside the frame: nothing to fail on
+                continue
+            ov = float(iou(within_frame(state.box, size), g)[0])
             ious[t] = ov
             if ov <= 0.0:
                 fails.append(t)

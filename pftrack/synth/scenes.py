@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ..geometry import clip_box
 from ..io.datasets import write_groundtruth
 
 Color = tuple[int, int, int]
@@ -402,7 +403,8 @@ HIDDEN_BELOW = 0.1
 def export_otb(spec: SceneSpec, folder, *, target: int = 0, ext: str = ".png") -> None:
     """Write a scene as an OTB sequence folder.
 
-    ``img/``, ``groundtruth_rect.txt`` (NaN rows where the target is out of the frame),
+    ``img/``, ``groundtruth_rect.txt`` (the part of the target's box inside the frame; NaN rows where the
+    target is out of the frame),
     ``attrs.txt`` and ``meta.json``: the generator, seed and nuisances, the target's
     visible fraction per frame and its ``hidden`` frames (numbers from 1: out of the
     frame, or less than :data:`HIDDEN_BELOW` visible), which ``pftrack eval`` uses to
@@ -424,8 +426,11 @@ def export_otb(spec: SceneSpec, folder, *, target: int = 0, ext: str = ".png") -
             "nuisances": {k: v for k, v in spec.nuisances}, "hidden_below": HIDDEN_BELOW,
             "hidden": hidden, "visible": [round(v, 4) for v in visible]}
     (folder / "meta.json").write_text(json.dumps(meta, default=_jsonable) + "\n", encoding="utf-8")
-    gt = scene.groundtruth(target)
-    gt[np.asarray(visible) <= 0.0] = np.nan  # out of the frame (hidden behind an occluder keeps its box)
+    # the box's part inside the frame, as single-object benchmarks annotate a target at the image's edge (the
+    # whole box, beyond the edge, is the scene's own ``groundtruth``); NaN when it is out of the frame. A target
+    # hidden behind an occluder keeps its box
+    gt = clip_box(scene.groundtruth(target), frame.shape[1], frame.shape[0])
+    gt[np.asarray(visible) <= 0.0] = np.nan
     write_groundtruth(folder / "groundtruth_rect.txt", gt, decimals=3)
     (folder / "attrs.txt").write_text(f"synthetic, seed {spec.seed}\n", encoding="utf-8")
 

@@ -13,7 +13,7 @@ are ``(x, y, w, h)`` floats with a top-left origin.
 from __future__ import annotations
 
 import abc
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -33,7 +33,10 @@ class TrackState:
     box : ``(x, y, w, h)``; while ``lost`` it is the last confident box for the particle
         filters (or the best candidate before the first acquisition), and the current local
         estimate for the deterministic mean-shift and keypoint trackers, which keep following
-        their mode.  Always finite.
+        their mode.  Always finite.  It is the part of the estimate inside the frame (at least
+        one pixel wide and high), as single-object benchmarks annotate a target at the image's
+        edge: where the estimate reaches beyond the frame, ``info["box_full"]`` holds all of it
+        (the particles keep the full state).
     score : confidence in ``[0, 1]``. For the colour particle filters it is the loss
         test's posterior P(target | rho) (:mod:`pftrack.filtering.loss`): ``lost`` is raised
         when it stays below 0.5 for ``lost_frames`` frames; the Bhattacharyya coefficient of
@@ -53,6 +56,21 @@ class TrackState:
     weights: np.ndarray | None = None
     state_names: tuple[str, ...] = ()
     info: dict[str, Any] = field(default_factory=dict)
+
+
+def visible_box(box, width: int, height: int) -> tuple[float, float, float, float] | None:
+    """The part of ``box`` inside the ``width x height`` frame, at least one pixel wide and high (a box wholly
+    outside becomes a one-pixel box at the nearest edge); None when the box lies inside already (on Python floats:
+    it runs on every tracked frame)."""
+    x, y, bw, bh = box
+    x1, y1 = x + bw, y + bh
+    if x >= 0.0 and y >= 0.0 and x1 <= width and y1 <= height:
+        return None
+    x0 = min(max(float(x), 0.0), width - 1.0)
+    y0 = min(max(float(y), 0.0), height - 1.0)
+    x1 = min(max(float(x1), x0 + 1.0), float(width))
+    y1 = min(max(float(y1), y0 + 1.0), float(height))
+    return x0, y0, x1 - x0, y1 - y0
 
 
 class Tracker(abc.ABC):
@@ -79,7 +97,7 @@ class Tracker(abc.ABC):
         box = validate_box(box, w, h)
         self._shape = (h, w)
         self.frame_index = 0
-        return self._init(self._transform_input(frame, first=True), box)
+        return self._visible(self._init(self._transform_input(frame, first=True), box))
 
     def update(self, frame: np.ndarray) -> TrackState:
         """Track into the next frame."""
@@ -87,7 +105,7 @@ class Tracker(abc.ABC):
             raise RuntimeError(f"{self.name}: call init(frame, box) before update(frame)")
         frame = self._check_frame(frame)
         self.frame_index += 1
-        return self._update(self._transform_input(frame, first=False))
+        return self._visible(self._update(self._transform_input(frame, first=False)))
 
     # -- helpers ------------------------------------------------------------------
     def _check_frame(self, frame: np.ndarray) -> np.ndarray:
@@ -97,6 +115,15 @@ class Tracker(abc.ABC):
                 f"frame {self.frame_index + 2}: size {frame.shape[1]}x{frame.shape[0]} differs from the "
                 f"first frame's {self._shape[1]}x{self._shape[0]}", index=self.frame_index + 1)
         return frame
+
+    def _visible(self, state: TrackState) -> TrackState:
+        """``state`` with its box cut to the frame (:func:`visible_box`), the whole box in ``info["box_full"]``."""
+        h, w = self._shape
+        box = state.box
+        cut = visible_box(box, w, h)
+        if cut is None:
+            return state
+        return replace(state, box=cut, info={**state.info, "box_full": tuple(float(v) for v in box)})
 
     def _transform_input(self, frame: np.ndarray, *, first: bool) -> np.ndarray:
         """Per-frame input transform applied before ``_init`` (``first``) and ``_update`` (default: none)."""
