@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 
+import cv2
+
 import numpy as np
 import pytest
 
@@ -105,3 +107,23 @@ def test_synthetic_ground_truth_boxes_the_visible_part(tmp_path):
     np.testing.assert_allclose(gt[cut, 2], w - whole[cut, 0], atol=1e-3)
     vis = np.array(meta["visible"])
     assert np.isnan(gt[vis <= 0]).all()
+
+
+def test_eval_scores_a_whole_body_annotation_within_the_frame(tmp_path):
+    """`pftrack eval` on an OTB folder whose boxes run past the edge (MOTChallenge style): scored within the frame,
+    and a box wholly outside the frame is an absent frame."""
+    from pftrack.eval.runner import Job, TrackerConfig, run_job
+
+    scene = Scene(_leaving_scene(0))
+    frames = scene.frames()
+    whole = scene.groundtruth()
+    h, w = frames[0].shape[:2]
+    (tmp_path / "s" / "img").mkdir(parents=True)
+    for t, f in enumerate(frames):
+        cv2.imwrite(str(tmp_path / "s" / "img" / f"{t + 1:04d}.png"), f)
+    np.savetxt(tmp_path / "s" / "groundtruth_rect.txt", whole, delimiter=",", fmt="%.3f")
+    rec = run_job(Job(TrackerConfig("fusion-pf", "fusion-pf"), str(tmp_path / "s"), "s", 0, "ope"))
+    outside = whole[:, 0] >= w
+    assert outside[1:].any() and rec["absent_frames"] == int(outside[1:].sum())
+    boxes = np.array(rec["boxes"], float).reshape(-1, 4)
+    assert rec["mean_iou"] == pytest.approx(ope_scores(boxes, whole, bounds=(w, h)).mean_iou)

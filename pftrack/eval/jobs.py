@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FormatError, ParameterError
-from .metrics import lost_detection, ope_scores, valid_gt
+from .metrics import lost_detection, ope_scores, valid_gt, within_frame
 
 RESULT_VERSION = 4  # 2: lost-flag detection metrics; 3: identification rate (MOT); 4: IoU within the frame
 
@@ -203,7 +203,8 @@ def run_job(job: Job) -> dict:
         # a failed run keeps no box from its failure on: those frames score IoU 0
         scores = ope_scores(boxes[start:], gt[start:], bounds=bounds)
         # the init frame is given, not detected: the flag is scored from the first update on, up to a failure
-        absent = seq.absent if seq.absent is not None else ~valid_gt(within_frame(gt, bounds))
+        absent = seq.absent if seq.absent is not None else ~valid_gt(gt)
+        absent = absent | (valid_gt(gt) & ~valid_gt(within_frame(gt, bounds)))  # a box wholly outside the frame
         ld = lost_detection(lost_flags[start + 1:end], boxes[start + 1:end], gt[start + 1:end],
                             absent[start + 1:end], bounds=bounds)
         rec.update(auc=scores.auc, precision=scores.precision, mean_iou=scores.mean_iou, failures=None,
