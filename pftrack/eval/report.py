@@ -235,6 +235,9 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         lines += ["SRE (OTB's spatial robustness evaluation): every tracker runs once from each of 12 perturbed first "
                   "boxes (shifted by 10 % of the size in 8 directions, scaled by 0.8, 0.9, 1.1, 1.2); the seed is the "
                   "perturbation, and the figures are means over the 12 runs, scored against the ground truth.", ""]
+    if _one_pass(protocols) or "vot" in protocols:
+        lines += ["Single-object boxes are scored within the frame (both cut to the image, as the VOT toolkit does).",
+                  ""]
     if _one_pass(protocols):
         lines += ["The lost flag as a detector: *lost recall* = fraction of the frames with the target absent or "
                   "fully hidden on which `lost` is raised; *false-lost rate* = fraction of the frames with IoU >= 0.5 "
