@@ -138,7 +138,8 @@ def acquisitions(frames, truth, init_box, tracker, bins: int) -> list[dict]:
             lost_at, box_before = t, last_box
         if was_lost and not st.lost and (lab := label(st.box, truth[t])) is not None:
             fh, fw = frames[t].shape[:2]
-            rec = {"t": t, "label": lab, "in_frame": in_frame_fraction(tuple(st.box), fw, fh), "delay": t - lost_at,
+            whole = tuple(st.info.get("box_full", st.box))  # the whole estimate (st.box is its part in the frame)
+            rec = {"t": t, "label": lab, "in_frame": in_frame_fraction(whole, fw, fh), "delay": t - lost_at,
                    "exit_strip": strip, "rival": rivals.get("rival"), "margin": rivals.get("margin"),
                    "two_in_loss": any(lost_at <= f < t for f in rivals.get("two", ()))}
             for ms in MIN_SCORES:

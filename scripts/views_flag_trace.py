@@ -145,11 +145,12 @@ def main() -> None:
                 for t, f in enumerate(frames[1:], start=1):
                     strip = tr._exit_strip() is not None
                     st = tr.update(f)
-                    boxes.append(st.box)
+                    est = st.info.get("box_full", st.box)  # the whole estimate (st.box is its part in the frame)
+                    boxes.append(est)
                     lost.append(bool(st.lost))
                     if lost[-2] and not st.lost and seq.absent[t]:
                         acquired[strip][0] += 1
-                        if (who := walker_on(st.box, others.get(t, ()), window)) is not None:
+                        if (who := walker_on(est, others.get(t, ()), window)) is not None:
                             before = share_inside(others.get(max(t - ENTERED, 0), ()), who, window)
                             acquired[strip][1 if before < 0.5 else 2] += 1
                 counts = classify(seq, np.asarray(boxes, float), lost, others, window)
