@@ -38,12 +38,15 @@ class _Host(VetoMixin):
     """Three candidates 100 px apart; the ones at ``refused`` x positions are vetoed."""
 
     def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3), *, width=320, acquire_in_frame=0.0,
-                 acquire_unique=False, hold=0, margin=0.0):
+                 acquire_unique=False, hold=0, margin=0.0, early_frames=0, exit_strip=None, searching_for=0):
         self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
                                       n_particles=30, acquire_in_frame=acquire_in_frame,
+                                      acquire_early_frames=early_frames, acquire_in_frame_early=0.25,
                                       acquire_unique=acquire_unique, acquire_unique_hold=hold,
                                       acquire_unique_refine=False, acquire_unique_margin=margin)
-        self.frame_index, self._ambiguous_until = 0, -1
+        self.frame_index, self._ambiguous_until = searching_for, -1
+        self._search_since = 0
+        self._strip = exit_strip
         self._shape = (120, width)
         self.loss = _Loss()
         self.size = (10.0, 10.0)
@@ -55,6 +58,9 @@ class _Host(VetoMixin):
         self.states[:, 1] = 60.0
         self.states[:, 4:6] = 10.0
         self.score = dict(zip((50.0, 150.0, 250.0), scores))
+
+    def _exit_strip(self):
+        return self._strip
 
     def _vetoed_by(self, frame, ell, llr=float("inf")):
         self.asked.append(float(ell[0]))
@@ -127,6 +133,18 @@ def test_a_best_candidate_mostly_outside_the_frame_ends_the_choice(width, found)
     assert a.found == found and host.states[a.best, 0] == 250.0
     assert host.asked == ([250.0] if found else [])
     assert host.loss.unseen == 1 and host.loss.lost != found  # the loss test moved one frame either way
+
+
+@pytest.mark.parametrize("searching_for, strip, found", [(5, (1, 40.0), True), (15, (1, 40.0), False),
+                                                       (5, None, False)])
+def test_right_after_an_exit_a_candidate_needs_less_of_its_box_inside(searching_for, strip, found):
+    """acquire_early_frames = 10: the best candidate's box is 40 % inside (a frame 248 px wide); 5 frames into a
+    search after an exit it is taken at the lower bar (0.25), 15 frames in it is not, nor after a loss that was
+    not an exit."""
+    host = _Host(2, refused=(), scores=(0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, early_frames=10,
+                 exit_strip=strip, searching_for=searching_for)
+    a = _choose(host)
+    assert a.found == found and host.states[a.best, 0] == 250.0
 
 
 def test_a_candidate_with_a_passing_rival_elsewhere_is_not_taken():

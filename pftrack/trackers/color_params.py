@@ -160,6 +160,12 @@ class ColorModelParams(Params):
         "At the view's edge a sliver of a box can match the legs or shadow of someone walking along the edge, or "
         "ground the model was learned with; a target coming back is taken once half of it is in. "
         "0: off (default here; 0.5 for color-pf and fusion-pf)."))
+    acquire_early_frames: int = param(0, ge=0, doc=(
+        "With acquire_in_frame, after an exit (reenter_border): for this many frames after the search began, a "
+        "candidate needs only acquire_in_frame_early of its box inside the frame. A target that has just left "
+        "through an edge is the likeliest thing to show there again, part of it first. 0: off (default)."))
+    acquire_in_frame_early: float = param(0.25, ge=0, le=1, doc=(
+        "The in-frame share asked of a candidate in the first acquire_early_frames frames after an exit."))
     acquire_unique: bool = param(False, doc=(
         "With loss_test='likelihood', while lost: a candidate is not acquired while another one elsewhere in the frame "
         "(beyond two half-axes each way, not the still scene) passes the acquisition test too: two look-alikes, and "

@@ -244,15 +244,26 @@ class VetoMixin:
         finally:
             c.rho[:], c.tot[:] = kept
 
+    def _in_frame_enough(self, ell: np.ndarray, g: float) -> bool:
+        """Does at least ``g`` (``acquire_in_frame``) of the box of candidate ellipse ``ell`` lie inside the frame, or,
+        in the first ``acquire_early_frames`` frames of a search after an exit, ``acquire_in_frame_early``?"""
+        p = self.params
+        share = in_frame_fraction(tuple(ellipse_to_box(ell)), self._shape[1], self._shape[0])
+        if share >= g:
+            return True
+        return bool(share >= p.acquire_in_frame_early and p.acquire_early_frames > 0
+                    and self.frame_index - self._search_since <= p.acquire_early_frames
+                    and self._exit_strip() is not None)
+
     def _choose(self, frame: np.ndarray, c, supporters: np.ndarray) -> Acquisition:
         """The candidate of search ``c`` (:class:`~.color_search.SearchCandidates`) to acquire, if any.
 
         ``supporters``: the samples whose appearance passes (and that have pixels). A candidate is tested by
         the loss test (:meth:`loss.would_acquire`) when enough supporters lie near it, then by the vetoes; a
         refused candidate gives way to the next best, ``search_retries`` times; one with less than
-        ``acquire_in_frame`` of its box inside the frame ends the choice for this frame. The loss test is then run once
-        (:meth:`loss.acquire`) on the candidate chosen, or on the first when none would end the loss, so the
-        loss's state moves exactly one frame."""
+        ``acquire_in_frame`` of its box inside the frame (:meth:`_in_frame_enough`) ends the choice for this frame.
+        The loss test is then run once (:meth:`loss.acquire`) on the candidate chosen, or on the first when none
+        would end the loss, so the loss's state moves exactly one frame."""
         p = self.params
         need = min(p.acquire_samples, p.kickoff_fraction * p.n_particles + 1)
         best, s_best, lp, near = c.best, c.s_best, c.lp, c.near
@@ -268,7 +279,7 @@ class VetoMixin:
             ok, llr = self.loss.would_acquire(s_best, lp)
             if not ok:
                 break
-            if g > 0 and in_frame_fraction(tuple(ellipse_to_box(c.ell[best])), self._shape[1], self._shape[0]) < g:
+            if g > 0 and not self._in_frame_enough(c.ell[best], g):
                 break
             if p.acquire_unique and (self.frame_index <= self._ambiguous_until or self._rival(frame, c, best, llr)):
                 # two look-alikes (on this frame, or within acquire_unique_hold frames): no candidate is taken (the
