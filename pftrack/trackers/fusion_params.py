@@ -32,6 +32,10 @@ class FusionPFParams(ColorPFParams):
         "0.188 and 0.913; 0.7: mean AUC 0.6906). Report split, run once: lost recall on its five real sequences with "
         "absences 0.804 against 0.681 (mean over the five), real AUC 0.578 against 0.566, re-acquired 74 against 77 "
         "of 96. color-pf's tune gain was smaller and its report run lost (0.632 against 0.750): off there."))
+    acquire_early_frames: int = param(0, ge=0, doc=(
+        "See ColorModelParams.acquire_early_frames. Off for fusion-pf (10 for color-pf): on the tune data it took "
+        "12 more of the windows' 60 returns, but the PETS tune views' pooled lost recall fell to 0.511 against "
+        "0.575, outside its rule (reports/acquire_early_rule.txt, docs/robustness.md)."))
     reenter_resident: int = param(15, ge=0, le=10_000, doc=(
         "See ColorModelParams.reenter_resident (off there and for color-pf). 15 for fusion-pf, chosen on the tune "
         "data under a rule stated before the runs (reports/resident_rule.txt, docs/robustness.md): PETS tune views' "
