@@ -113,6 +113,21 @@ def in_frame_fraction(box, width: float, height: float) -> float:
     return iw * ih / max(bw * bh, 1e-9)
 
 
+def visible_box(box, width: int, height: int) -> tuple[float, float, float, float] | None:
+    """The part of ``box`` inside the ``width x height`` frame, at least one pixel wide and high (a box wholly
+    outside becomes a one-pixel box at the nearest edge); None when the box lies inside already (on Python floats:
+    it runs on every tracked frame)."""
+    x, y, bw, bh = box
+    x1, y1 = x + bw, y + bh
+    if x >= 0.0 and y >= 0.0 and x1 <= width and y1 <= height:
+        return None
+    x0 = min(max(float(x), 0.0), width - 1.0)
+    y0 = min(max(float(y), 0.0), height - 1.0)
+    x1 = min(max(float(x1), x0 + 1.0), float(width))
+    y1 = min(max(float(y1), y0 + 1.0), float(height))
+    return x0, y0, x1 - x0, y1 - y0
+
+
 def displacement_rate(track) -> tuple[float, float]:
     """Mean displacement per frame of a short track of ``(frame index, x, y)`` points, from its first point to its
     last (a target's observed velocity; a filter's velocity state lags behind it); ``(0, 0)`` with fewer than two

@@ -6,16 +6,15 @@ from __future__ import annotations
 import json
 
 import cv2
-
 import numpy as np
 import pytest
 
 import pftrack
 from pftrack.eval.metrics import lost_detection, ope_scores, within_frame
 from pftrack.eval.vot import run_vot
+from pftrack.geometry import visible_box
 from pftrack.synth import Scene
 from pftrack.synth.scenes import SceneSpec, Target, export_otb
-from pftrack.trackers.base import visible_box
 
 
 def test_visible_box_cuts_to_the_frame_and_keeps_a_pixel():

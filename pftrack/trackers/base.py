@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import FrameError
 from ..frames import as_bgr_uint8
-from ..geometry import Box, validate_box
+from ..geometry import Box, validate_box, visible_box
 from ..params import Params
 
 
@@ -56,21 +56,6 @@ class TrackState:
     weights: np.ndarray | None = None
     state_names: tuple[str, ...] = ()
     info: dict[str, Any] = field(default_factory=dict)
-
-
-def visible_box(box, width: int, height: int) -> tuple[float, float, float, float] | None:
-    """The part of ``box`` inside the ``width x height`` frame, at least one pixel wide and high (a box wholly
-    outside becomes a one-pixel box at the nearest edge); None when the box lies inside already (on Python floats:
-    it runs on every tracked frame)."""
-    x, y, bw, bh = box
-    x1, y1 = x + bw, y + bh
-    if x >= 0.0 and y >= 0.0 and x1 <= width and y1 <= height:
-        return None
-    x0 = min(max(float(x), 0.0), width - 1.0)
-    y0 = min(max(float(y), 0.0), height - 1.0)
-    x1 = min(max(float(x1), x0 + 1.0), float(width))
-    y1 = min(max(float(y1), y0 + 1.0), float(height))
-    return x0, y0, x1 - x0, y1 - y0
 
 
 class Tracker(abc.ABC):
