@@ -126,3 +126,17 @@ def test_eval_scores_a_whole_body_annotation_within_the_frame(tmp_path):
     assert outside[1:].any() and rec["absent_frames"] == int(outside[1:].sum())
     boxes = np.array(rec["boxes"], float).reshape(-1, 4)
     assert rec["mean_iou"] == pytest.approx(ope_scores(boxes, whole, bounds=(w, h)).mean_iou)
+
+
+def test_track_writes_the_whole_box_beside_the_visible_part(tmp_path):
+    """`pftrack track --json-out`: a frame whose estimate reaches past the edge carries `box_full` beside `box`."""
+    from pftrack.cli import main
+
+    export_otb(_leaving_scene(0), tmp_path / "s")
+    out = tmp_path / "t.jsonl"
+    assert main(["track", str(tmp_path / "s"), "--tracker", "fusion-pf", "--out", str(tmp_path / "t.csv"),
+                 "--json-out", str(out), "--quiet"]) == 0
+    recs = [json.loads(line) for line in out.read_text().splitlines()]
+    cut = [r for r in recs if "box_full" in r]
+    assert cut and all(r["box"][0] + r["box"][2] <= 320 + 1e-9 for r in recs)
+    assert all(visible_box(r["box_full"], 320, 240) == tuple(r["box"]) for r in cut)

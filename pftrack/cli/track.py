@@ -81,6 +81,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     drawer = TrackDrawer()
     bar = None
     lost = 0
+    size = None
     try:
         csv = CsvTrackSink(out)
         sinks.append(csv)
@@ -94,10 +95,13 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
         gt = source.groundtruth if gt_overlay else None
         with interrupt_on_sigterm() as stop:
             for number, frame, state in track_source(source, tracker, init_box, run=run):
+                size = (frame.shape[1], frame.shape[0])
                 csv.write_state(number, state)
                 lost += int(state.lost)
                 if jsonl:
                     rec = {"frame": number, "box": list(state.box), "score": state.score, "lost": state.lost}
+                    if "box_full" in state.info:  # the whole estimate where it reaches past the frame's edge
+                        rec["box_full"] = list(state.info["box_full"])
                     if state.particles is not None and state.weights is not None:
                         rec["n_particles"] = len(state.particles)
                     info = scalar_info(state.info)
@@ -118,7 +122,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     finally:
         close_all(bar, sinks, source)
     return {"frames": run.frames, "warmup_seconds": warm_seconds, "update_fps": run.update_fps, "end_to_end_fps": run.end_to_end_fps,
-            "lost_frames": lost, "skipped": list(source.skipped), "source": source}
+            "lost_frames": lost, "skipped": list(source.skipped), "source": source, "frame_size": size}
 
 
 def cmd_track(args) -> int:
@@ -170,7 +174,7 @@ def cmd_demo(args) -> int:
     res = run_track(str(clip), box=tuple(gt[0]), tracker_name=args.tracker, out=csv_path, video_out=video_path,
                     seed=args.seed, quiet=args.quiet)
     rows = read_track_csv(csv_path)
-    scores = ope_scores(rows[:, 1:5], gt)
+    scores = ope_scores(rows[:, 1:5], gt, bounds=res["frame_size"])
     print(f"pftrack demo: {res['frames']} frames of the bundled clip 'Crossing' (OTB) with {args.tracker}")
     if res["warmup_seconds"] > 1.0:
         print(f"  compiled kernels {res['warmup_seconds']:.1f} s before timing (first run; cached on disk for the next)")
