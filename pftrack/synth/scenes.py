@@ -429,7 +429,7 @@ def export_otb(spec: SceneSpec, folder, *, target: int = 0, ext: str = ".png") -
     # the box's part inside the frame, as single-object benchmarks annotate a target at the image's edge (the
     # whole box, beyond the edge, is the scene's own ``groundtruth``); NaN when it is out of the frame. A target
     # hidden behind an occluder keeps its box
-    gt = clip_box(scene.groundtruth(target), frame.shape[1], frame.shape[0])
+    gt = clip_box(scene.groundtruth(target), spec.width, spec.height)
     gt[np.asarray(visible) <= 0.0] = np.nan
     write_groundtruth(folder / "groundtruth_rect.txt", gt, decimals=3)
     (folder / "attrs.txt").write_text(f"synthetic, seed {spec.seed}\n", encoding="utf-8")
