@@ -2,7 +2,8 @@
 
 Everything that enters a tracker passes :func:`as_bgr_uint8`:
 
-* ``(H, W)`` or ``(H, W, 1)`` grayscale → converted to BGR;
+* ``(H, W)`` or ``(H, W, 1)`` grayscale → converted to BGR; the BGR frame remembers the grey image it was made
+  from (:func:`grey_origin`), so that a tracker's grey features need not convert it back;
 * ``(H, W, 4)`` BGRA → alpha dropped;
 * ``uint16`` → scaled to 8 bits (``v >> 8``), as OpenCV does when it saves 16-bit
   data to 8-bit formats;
@@ -11,10 +12,36 @@ Everything that enters a tracker passes :func:`as_bgr_uint8`:
 
 from __future__ import annotations
 
+import weakref
+
 import cv2
 import numpy as np
 
 from .errors import FrameError
+
+
+#: id of a BGR frame made from a grey image -> (weak reference to that frame, the grey image)
+_GREY_ORIGINS: dict[int, tuple[weakref.ReferenceType, np.ndarray]] = {}
+
+
+def _from_grey(gray: np.ndarray, fresh: bool) -> np.ndarray:
+    """BGR of the contiguous uint8 grey image ``gray``, remembering a copy of ``gray`` (``gray`` itself when
+    ``fresh``: made here, so nobody else can change it) as its origin.  Exact both ways: OpenCV's fixed-point grey
+    weights sum to one, so the grey of a BGR pixel ``(v, v, v)`` is ``v``."""
+    bgr = cv2.cvtColor(gray, cv2.COLOR_GRAY2BGR)
+    key = id(bgr)
+    _GREY_ORIGINS[key] = (weakref.ref(bgr, lambda _ref, key=key: _GREY_ORIGINS.pop(key, None)),
+                          gray if fresh else gray.copy())
+    return bgr
+
+
+def grey_origin(frame: np.ndarray) -> np.ndarray | None:
+    """The uint8 grey image that :func:`as_bgr_uint8` made the BGR ``frame`` from, or None (a colour source, or
+    any other array).  Valid while ``frame`` is unchanged: a frame drawn into in place no longer matches it."""
+    entry = _GREY_ORIGINS.get(id(frame))
+    if entry is None or entry[0]() is not frame:
+        return None
+    return entry[1]
 
 
 def as_bgr_uint8(frame, *, where: str = "frame") -> np.ndarray:
@@ -23,6 +50,7 @@ def as_bgr_uint8(frame, *, where: str = "frame") -> np.ndarray:
         raise FrameError(f"{where}: expected a NumPy image array, got {type(frame).__name__}")
     if frame.size == 0 or frame.ndim not in (2, 3) or frame.shape[0] == 0 or frame.shape[1] == 0:
         raise FrameError(f"{where}: empty or malformed image of shape {frame.shape}")
+    fresh = frame.dtype != np.uint8  # converted here: no other holder
     if frame.dtype == np.uint16:
         frame = (frame >> 8).astype(np.uint8)
     elif frame.dtype == np.bool_:
@@ -30,12 +58,14 @@ def as_bgr_uint8(frame, *, where: str = "frame") -> np.ndarray:
     elif frame.dtype != np.uint8:
         raise FrameError(f"{where}: unsupported pixel type {frame.dtype} (expected uint8 or uint16)")
     if frame.ndim == 2:
-        return cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+        gray = np.ascontiguousarray(frame)
+        return _from_grey(gray, fresh or gray is not frame)
     channels = frame.shape[2]
     if channels == 3:
         return np.ascontiguousarray(frame)
     if channels == 1:
-        return cv2.cvtColor(np.ascontiguousarray(frame[:, :, 0]), cv2.COLOR_GRAY2BGR)
+        gray = np.ascontiguousarray(frame[:, :, 0])
+        return _from_grey(gray, fresh or not np.shares_memory(gray, frame))
     if channels == 4:
         return cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_BGRA2BGR)
     raise FrameError(f"{where}: unsupported number of channels {channels} (expected 1, 3 or 4)")

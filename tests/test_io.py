@@ -95,6 +95,39 @@ def test_grayscale_16bit_and_alpha_frames_are_converted(tmp_path):
     assert frames[2][0, 0].tolist() == [50, 50, 50]
 
 
+def test_a_frame_made_from_grey_remembers_its_grey_image_exactly():
+    from pftrack.cues.lk import gray_of
+    from pftrack.frames import as_bgr_uint8, grey_origin
+
+    rng = np.random.default_rng(3)
+    g = rng.integers(0, 256, (37, 53), dtype=np.uint8)
+    for src in (g, g[:, :, None], (g.astype(np.uint16) << 8) | 77):
+        bgr = as_bgr_uint8(src)
+        origin = grey_origin(bgr)
+        assert origin is not None and origin is not src
+        np.testing.assert_array_equal(origin, g)
+        # the grey features read the origin: the same levels as converting the BGR frame back
+        assert gray_of(bgr) is origin
+        np.testing.assert_array_equal(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY), g)
+    # the caller's grey buffer is copied: refilling it does not change the remembered image
+    buf = g.copy()
+    bgr = as_bgr_uint8(buf)
+    buf[:] = 0
+    np.testing.assert_array_equal(grey_origin(bgr), g)
+    # colour frames and arrays derived from a remembered frame have no origin
+    colour = rng.integers(0, 256, (5, 6, 3), dtype=np.uint8)
+    assert grey_origin(as_bgr_uint8(colour)) is None
+    assert grey_origin(bgr.copy()) is None and grey_origin(bgr[1:, 1:]) is None
+    # the record goes with the frame
+    from pftrack import frames as frames_module
+
+    n = len(frames_module._GREY_ORIGINS)
+    tmp = as_bgr_uint8(g)
+    assert len(frames_module._GREY_ORIGINS) == n + 1
+    del tmp
+    assert len(frames_module._GREY_ORIGINS) == n
+
+
 def test_corrupt_frame_stops_or_is_skipped(tmp_path):
     d = tmp_path / "seq"
     write_frames(d, 4)

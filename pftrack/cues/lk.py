@@ -15,17 +15,22 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from ..frames import grey_origin
 from ..geometry import parabola_peak
 
 __all__ = ["LKConfig", "gray_of", "lk_flow", "ncc", "patches_at", "reanchor"]
 
 
 def gray_of(frame: np.ndarray) -> np.ndarray:
-    """A uint8 grey image of a BGR or grey frame."""
+    """A uint8 grey image of a BGR or grey frame (not to be changed in place: for a BGR frame made from a grey
+    image it is that image, :func:`pftrack.frames.grey_origin`)."""
     if frame.ndim == 2:
         return frame if frame.dtype == np.uint8 else np.clip(frame, 0, 255).astype(np.uint8)
     if frame.shape[2] == 1:
         return frame[:, :, 0]
+    origin = grey_origin(frame)
+    if origin is not None:
+        return origin
     return cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
 
 
