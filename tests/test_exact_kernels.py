@@ -128,6 +128,31 @@ def test_equalisation_table_counts_as_numpy_does(rng):
         assert np.array_equal(equalization_lut(f), expected), shape
 
 
+def test_compiled_equalisation_table_is_the_numpy_paths(rng):
+    import cv2
+
+    from pftrack.cues.intensity import equalization_lut
+
+    for trial in range(300):
+        h, w = (int(v) for v in rng.integers(1, 200, 2))
+        kind = trial % 4
+        if kind == 0:
+            g = rng.integers(0, 256, (h, w)).astype(np.uint8)
+        elif kind == 1:  # one level: the middle of the table
+            g = np.full((h, w), int(rng.integers(0, 256)), np.uint8)
+        elif kind == 2:  # a narrow range: many ties at the table's halves
+            g = rng.integers(0, int(rng.integers(1, 8)), (h, w)).astype(np.uint8)
+        else:
+            g = rng.normal(128, rng.uniform(1, 60), (h, w)).clip(0, 255).astype(np.uint8)
+        if trial % 5 == 0:
+            g = g[:, ::2]  # a strided view
+        stride = int(rng.integers(1, 9))
+        bgr = cv2.cvtColor(np.ascontiguousarray(g), cv2.COLOR_GRAY2BGR)
+        compiled, reference = both_paths(lambda: (equalization_lut(bgr, stride=stride, gray=g),
+                                                  equalization_lut(np.ascontiguousarray(g), stride=stride)))
+        assert np.array_equal(compiled[0], reference[0]) and np.array_equal(compiled[1], reference[1]), trial
+
+
 def test_compiled_grey_features_are_the_opencv_paths_numbers(rng):
     """quantize_gray: the compiled lattice levels and gradients (pitch >= 3) and the compiled binning give the bins of
     the OpenCV and NumPy path, over frames of three layouts, regions reaching past the frame, pitches and thresholds."""

@@ -60,6 +60,10 @@ def equalization_lut(frame: np.ndarray, *, stride: int = 4, gray: np.ndarray | N
     histogram), scaled to ``[0, 255]``; it is monotonic, so structure is kept.
     ``gray``: the frame's grey image, when it is at hand (the same table, from its lattice).
     """
+    if gray is None and frame.ndim == 2:
+        gray = frame
+    if gray is not None and gray.dtype == np.uint8 and gray.size and numba_enabled():
+        return _equalization_lut_compiled(gray, int(stride))
     sub = to_gray(_lattice(frame, stride)) if gray is None else np.ascontiguousarray(gray[::stride, ::stride])
     if sub.dtype == np.uint8 and sub.size:  # OpenCV's histogram: the same counts, 3x faster than np.bincount
         hist = cv2.calcHist([sub], [0], None, [256], [0, 256]).ravel().astype(np.float64)
@@ -72,6 +76,32 @@ def equalization_lut(frame: np.ndarray, *, stride: int = 4, gray: np.ndarray | N
     # mid-rank of each level, so a flat frame maps to the middle grey rather than to 255
     mid = (cdf - 0.5 * hist) / total
     return np.clip(np.round(mid * 255.0), 0, 255).astype(np.uint8)
+
+
+@njit(cache=True)
+def _equalization_lut_compiled(gray, stride):
+    """:func:`equalization_lut` of a 2-D uint8 image in one pass: the histogram of its ``stride`` lattice, read
+    in place, and the mid-rank table, with the NumPy path's float64 operations in its order (the same table)."""
+    hist = np.zeros(256, np.float64)
+    for y in range(0, gray.shape[0], stride):
+        row = gray[y]
+        for x in range(0, gray.shape[1], stride):
+            hist[row[x]] += 1.0
+    cdf = np.empty(256, np.float64)
+    acc = 0.0
+    for v in range(256):
+        acc += hist[v]
+        cdf[v] = acc
+    out = np.empty(256, np.uint8)
+    total = cdf[255]
+    if total <= 0:
+        for v in range(256):
+            out[v] = v
+        return out
+    for v in range(256):
+        r = np.rint((cdf[v] - 0.5 * hist[v]) / total * 255.0)
+        out[v] = np.uint8(min(max(r, 0.0), 255.0))
+    return out
 
 
 #: From this lattice pitch on, the grey features are computed on the 3x3 neighbourhoods of the lattice points only
