@@ -117,3 +117,21 @@ def test_synth_gray_option_greys_each_seed_and_keeps_its_other_nuisances(tmp_pat
     assert changed >= 1  # at least one seed was in colour by default
     assert main(["synth", "camouflage", "--gray", "1", "--out", str(tmp_path / "c")]) == 2
     assert main(["synth", "vanish", "--gray", "1.5", "--out", str(tmp_path / "c")]) == 2
+
+
+def test_grey_frames_given_as_one_channel_or_three_give_the_same_track():
+    """A one-channel grey source is kept as such inside (pftrack.frames.grey_origin): the same levels and the same
+    track as its three-channel copy, for both colour trackers, through a loss and a search."""
+    import pftrack
+
+    spec = vanish_scene(2, gray=1.0, n_frames=45)
+    pairs = [(f, tr.boxes[0]) for f, tr in Scene(spec)]
+    grey = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f, _ in pairs]
+    for name in ("color-pf", "fusion-pf"):
+        runs = []
+        for frames in (grey, [cv2.cvtColor(g, cv2.COLOR_GRAY2BGR) for g in grey]):
+            t = pftrack.create_tracker(name, seed=4)
+            states = [t.init(frames[0], pairs[0][1])] + [t.update(f) for f in frames[1:]]
+            runs.append([(s.box, s.score, s.lost) for s in states])
+        assert runs[0] == runs[1], name
+        assert any(lost for _, _, lost in runs[0])  # the hidden frames were searched through
