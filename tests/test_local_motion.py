@@ -145,3 +145,20 @@ def test_lattice_eigenvalues_match_the_map(rng, pitch):
             set_numba_enabled(prev)
         assert xs.min() >= 2 and ys.min() >= 5 and np.all(xs % pitch == 0) and np.all(ys % pitch == 0)
         assert np.allclose(lam, full[ys, xs], rtol=1e-4, atol=1e-9)
+
+
+@pytest.mark.parametrize("motion", [True, False])
+def test_local_motion_pf_searches_with_its_own_dynamics(motion):
+    """search=true gives local-motion-pf color-pf's loss test and search; the search spreads the samples it keeps
+    by the tracker's own one-step noise (Eq. 10), not color-pf's dynamics parameters, which it does not have."""
+    from pftrack.synth import Scene, vanish_scene
+
+    spec = vanish_scene(1, n_frames=70)
+    pairs = [(f, tr.boxes[0]) for f, tr in Scene(spec)]
+    t = pftrack.create_tracker("local-motion-pf", seed=0, search=True, motion=motion)
+    assert t._position_step_std(20.0, 30.0) == 0.5 * t.params.sigma_xy
+    t.init(pairs[0][0], pairs[0][1])
+    lost = [t.update(f).lost for f, _ in pairs[1:]]
+    assert any(lost)  # the target walked behind the occluder: the flag went up and the search ran
+    c = pftrack.create_tracker("color-pf")
+    assert c._position_step_std(20.0, 30.0) == max(c.params.position_noise * 25.0, c.params.min_noise_px)

@@ -337,6 +337,13 @@ class SearchMixin:
         return (np.concatenate([states, extra]), np.concatenate([ell, e_ell]), np.concatenate([rho, e_rho]),
                 np.concatenate([tot, e_tot]), np.concatenate([loglik, e_ll]), both, box)
 
+    def _position_step_std(self, hx: float, hy: float) -> float:
+        """The dynamic model's one-step std of the centre for a target of half-axes ``(hx, hy)`` (each tracker's
+        own: :meth:`_step_std`), the spread of the search samples kept from the last search."""
+        est = np.zeros(self.dim)
+        est[HX], est[HY] = hx, hy
+        return float(self._step_std(est)[X])
+
     def _search_candidates(self, frame: np.ndarray, exclude: np.ndarray | None = None) -> SearchCandidates:
         """One search layer (or two, ``search_refine``) over the frame and its best candidate.  ``exclude``: an
         ellipse whose neighbourhood (two half-axes each way) is left out of the ranking, and look-alikes are not
@@ -353,7 +360,7 @@ class SearchMixin:
             if idx.size < n_keep:
                 idx = idx[self.rng.integers(0, idx.size, n_keep)]
             states[:n_keep] = self._search_states[idx]
-            spread = max(p.position_noise * 0.5 * (hx + hy), p.min_noise_px) * 2.0
+            spread = 2.0 * self._position_step_std(hx, hy)
             states[:n_keep, X:Y + 1] += self.rng.normal(0.0, spread, (n_keep, 2))
             # sizes are drawn afresh around the searched size (a random walk would let them drift)
             states[:n_keep, HX:HY + 1] = np.array([hx, hy]) * np.exp(self.rng.normal(0.0, 0.1, (n_keep, 1)))
