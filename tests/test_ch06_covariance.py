@@ -245,3 +245,11 @@ def test_covariance_tracker_follows_a_grey_target_by_refining_around_the_last_bo
             boxes = np.array([gt[0]] + [t.update(f).box for f in grey[1:]], float)
             auc[refine_last] = ope_scores(boxes, gt).auc
         assert auc[True] > 0.6 and auc[False] < 0.2, (seed, auc)
+
+
+def test_a_zero_floor_of_the_distance_spread_is_refused():
+    import pftrack
+    from pftrack.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="threshold_floor"):
+        pftrack.create_tracker("covariance", threshold_floor=0.0)

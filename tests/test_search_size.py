@@ -45,3 +45,16 @@ def test_the_search_looks_for_the_size_seen_before_the_occlusion(tracker):
         assert hx * hy >= 0.9 * full, (hx, hy)
         assert hx0 * hy0 < hx * hy, (hx0, hy0, hx, hy)
         assert 1.5 <= hy / hx <= 2.5  # one box of the window, not a mix of axes
+
+
+def test_a_search_of_one_or_two_samples_runs():
+    """search_particles = 1 or 2 leaves no sample for the refined layer (half of one rounds to none): the search
+    then scores its first layer alone instead of failing."""
+    from pftrack.synth import vanish_scene
+
+    pairs = [(f, tr.boxes[0]) for f, tr in Scene(vanish_scene(1, n_frames=40))]
+    for name in ("color-pf", "fusion-pf"):
+        for n in (1, 2):
+            t = pftrack.create_tracker(name, seed=0, search_particles=n, search_refine=0.5)
+            t.init(pairs[0][0], pairs[0][1])
+            assert any(t.update(f).lost for f, _ in pairs[1:])

@@ -311,8 +311,10 @@ class SearchMixin:
         rank = search_rank(loglik, prior, tot)
         if not np.isfinite(rank).any():
             return states, ell, rho, tot, loglik, prior, roi
-        rho, tot = rho.copy(), tot.copy()  # the cue's result buffers are reused by the next call
         m = int(round(self._search_refine() * len(states)))
+        if m < 1:  # a search of one or two samples: no second layer
+            return states, ell, rho, tot, loglik, prior, roi
+        rho, tot = rho.copy(), tot.copy()  # the cue's result buffers are reused by the next call
         w = np.exp(rank - rank.max())
         idx = self.rng.choice(len(w), size=m, p=w / w.sum())
         extra = states[idx].copy()

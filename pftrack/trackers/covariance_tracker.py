@@ -53,7 +53,8 @@ class CovarianceParams(Params):
         "Also refine around the last box, besides the best coarse windows (proposed): the coarse level's "
         "covariances differ from the model's, and on grey input their ranking can miss the target."))
     threshold_sigma: float = param(3.0, gt=0, doc="Lost when the best distance exceeds mu + this x sigma.")
-    threshold_floor: float = param(0.05, ge=0, doc="Floor on sigma of the confident distances.")
+    threshold_floor: float = param(0.05, gt=0, doc=(
+        "Floor on sigma of the confident distances (> 0: the score divides by it)."))
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive frames above the threshold before lost is raised.")
 
 
