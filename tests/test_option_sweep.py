@@ -1,0 +1,47 @@
+"""Every switch of the colour trackers runs: each boolean option flipped and each choice of an option with a fixed
+set of values, on a short colour and grey scene whose target hides and comes back (so the loss test, the search and
+the re-acquisition run too).  An option that crashed only when switched on (local-motion-pf's ``search``) went
+unnoticed until such a sweep."""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+
+import pytest
+
+import pftrack
+from pftrack.synth import Scene, vanish_scene
+from pftrack.trackers.registry import get_spec
+
+
+def _variants(name: str) -> list[dict]:
+    params_cls = get_spec(name).params_cls
+    hints = typing.get_type_hints(params_cls)
+    out: list[dict] = [{}]  # the defaults first
+    for f in dataclasses.fields(params_cls):
+        tp = hints[f.name]
+        if tp is bool:
+            out.append({f.name: not f.default})
+        elif typing.get_origin(tp) is typing.Literal:
+            out += [{f.name: c} for c in typing.get_args(tp) if c != f.default]
+    return out
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return {gray: [(f, tr.boxes[0]) for f, tr in Scene(vanish_scene(1, n_frames=40, gray=gray))]
+            for gray in (0.0, 1.0)}
+
+
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf", "local-motion-pf"])
+def test_every_switch_of_the_colour_trackers_runs(name, scenes):
+    variants = _variants(name)
+    assert len(variants) >= 5
+    for v in variants:
+        for gray, pairs in scenes.items():
+            t = pftrack.create_tracker(name, seed=0, **v)
+            t.init(pairs[0][0], pairs[0][1])
+            for f, _ in pairs[1:]:
+                st = t.update(f)
+            assert st.box[2] > 0 and st.box[3] > 0, (v, gray)
