@@ -1,0 +1,60 @@
+"""The lost flag of every registered tracker, measured as a detector on synthetic vanish scenes.
+
+    python scripts/lost_flag_registry.py [--seeds 100-105] [--frames 90] [--trackers A,B,...]
+
+Each tracker (its defaults, tracker seed 0) follows the target of ``pftrack synth vanish`` scenes: it walks fully
+behind a wide textured occluder among look-alike distractors and comes out again. Printed per tracker: *lost recall*,
+the frames with the target hidden on which ``lost`` is raised, and *false-lost*, the frames with IoU >= 0.5 on which
+it is raised (the definitions of ``pftrack eval``, pooled over the scenes' frames). Results: docs/evaluation.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import pftrack
+from pftrack.geometry import iou
+from pftrack.synth import Scene, hidden_frames, vanish_scene
+from pftrack.trackers.registry import list_trackers
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", default="100-105")
+    ap.add_argument("--frames", type=int, default=90)
+    ap.add_argument("--trackers", default="", help="comma-separated names (default: every available tracker)")
+    args = ap.parse_args()
+    a, b = (int(v) for v in args.seeds.split("-"))
+    scenes = []
+    for seed in range(a, b + 1):
+        spec = vanish_scene(seed, n_frames=args.frames)
+        scenes.append(([(f, tr.boxes[0]) for f, tr in Scene(spec)], hidden_frames(spec)))
+    names = [s for s in args.trackers.split(",") if s]
+    print(f"| tracker | family | lost recall (hidden frames) | false-lost (IoU >= 0.5) | seconds |")
+    print("|---|---|---|---|---|")
+    for spec in list_trackers():
+        if (names and spec.name not in names) or not spec.available():
+            continue
+        hid = absent = fl = covered = 0
+        t0 = time.perf_counter()
+        for pairs, hidden in scenes:
+            t = pftrack.create_tracker(spec.name, seed=0)
+            t.init(pairs[0][0], pairs[0][1])
+            for i, (frame, gt) in enumerate(pairs[1:], 1):
+                st = t.update(frame)
+                if hidden[i]:
+                    absent += 1
+                    hid += bool(st.lost)
+                elif np.all(np.isfinite(gt)) and iou(np.array([st.box]), np.array([gt]))[0] >= 0.5:
+                    covered += 1
+                    fl += bool(st.lost)
+        rec = f"{hid / absent:.2f} ({hid} of {absent})" if absent else "-"
+        fls = f"{fl / covered:.3f} ({fl} of {covered})" if covered else "-"
+        print(f"| `{spec.name}` | {spec.family} | {rec} | {fls} | {time.perf_counter() - t0:.1f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
