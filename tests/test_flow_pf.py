@@ -218,3 +218,26 @@ def test_grey_input_compares_finer_value_histograms():
     new = lost_flag_run(vanish_scene(8, gray=1.0), "flow-pf")
     old = lost_flag_run(vanish_scene(8, gray=1.0), "flow-pf", grey_bins=0)
     assert new.covered_frames >= old.covered_frames + 15, (new, old)
+
+
+def test_the_likelihood_loss_test_changes_the_flag_not_the_track():
+    """loss_test='likelihood' (the colour PFs' two-class test on 1 / (1 + d)): the same boxes as the distance test,
+    since its background boxes come from a fixed grid; the flag rises while the target hides and drops when the
+    score is target-like again, and the score is the test's confidence."""
+    from pftrack.synth import Scene, hidden_frames, vanish_scene
+
+    spec = vanish_scene(100, n_frames=90)
+    hidden = hidden_frames(spec)
+    pairs = [(f, tr.boxes[0]) for f, tr in Scene(spec)]
+    runs = {}
+    for test in ("distance", "likelihood"):
+        t = pftrack.create_tracker("flow-pf", seed=0, loss_test=test)
+        t.init(pairs[0][0], pairs[0][1])
+        runs[test] = [t.update(f) for f, _ in pairs[1:]]
+    assert [s.box for s in runs["distance"]] == [s.box for s in runs["likelihood"]]
+    lik = runs["likelihood"]
+    on_hidden = {k: sum(s.lost for s, h in zip(v, hidden[1:]) if h) for k, v in runs.items()}
+    assert on_hidden["likelihood"] >= 0.9 * hidden.sum() > on_hidden["distance"]
+    assert not any(s.lost for s in lik[:3])  # the target in view at the start: no alarm
+    assert all(0.0 <= s.score <= 1.0 for s in lik)
+    assert all(s.score < 0.5 for s in lik if s.lost)

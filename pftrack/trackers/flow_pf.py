@@ -57,10 +57,11 @@ from ..cues.hsv import HSVHistogramCue
 from ..cues.intensity import is_gray
 from ..cues.motion import to_gray
 from ..errors import ParameterError
+from ..filtering.loss import LossDetector, confidence
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..frames import as_bgr_uint8
-from ..geometry import Box, iou, validate_box
+from ..geometry import Box, background_grid, iou, validate_box
 from ..params import Params, param
 from .base import Tracker, TrackState
 
@@ -138,7 +139,16 @@ class FlowPFParams(Params):
         "so that a drifting estimate does not teach the subspace the background. The paper adds every frame's "
         "(set a large value); 0.3 was selected on the dev sequences plus synthetic scenes (docs/flow-pf.md)."))
     lost_distance: float = param(1.5, gt=0, doc=(
-        "Report lost when the colour distance of the estimate to the nearest template exceeds this (bins for EMD)."))
+        "Report lost when the colour distance of the estimate to the nearest template exceeds this (bins for EMD; "
+        "loss_test 'distance')."))
+    loss_test: Literal["distance", "likelihood"] = param("distance", doc=(
+        "'distance': lost while the estimate's colour distance d exceeds lost_distance, state.score = 1 / (1 + d). "
+        "'likelihood': the colour PFs' two-class test (pftrack.filtering.loss) of the score 1 / (1 + d) against the "
+        "target's own score history and the upper tail of the scores of background boxes of its size, on a grid "
+        "away from the estimate, every background_every frames; lost after 3 frames below, found again above a "
+        "margin, state.score its confidence. The tracks are the same either way (the grid is fixed)."))
+    background_every: int = param(10, ge=1, le=1000, doc=(
+        "Frames between two background statistics of the 'likelihood' loss test."))
     detector_min_iou: float = param(0.0, ge=0, le=1, doc=(
         "A detection replaces the response only if it overlaps the estimate by more than this (any overlap by "
         "default), so a detector does not jump between objects."))
@@ -241,7 +251,36 @@ class FlowPF(Tracker):
         self.subspace: deque = deque(maxlen=max(p.templates - (1 if p.anchor else 0), 1))
         self.subspace.append(self.first)
         self._prev_gray = to_gray(frame)
+        self.loss: LossDetector | None = None
+        if p.loss_test == "likelihood":
+            self.loss = LossDetector()
+            self.loss.reset(1.0)
+            self._background(frame)
         return self._state(box, 1.0, False)
+
+    # ------------------------------------------------------------------ loss test ("likelihood")
+    def _background(self, frame: np.ndarray) -> None:
+        """Scores ``1 / (1 + d)`` of boxes of the target's size on a fixed grid over the frame, away from the
+        estimate (Nummiaro et al.'s Eqs. 13-14 samples, as the colour PFs take them), into the loss test."""
+        fh, fw = frame.shape[:2]
+        w, h = self.size
+        ell = background_grid(fw, fh, w / 2, h / 2, 100, np.array([self.estimate[0], self.estimate[1], w / 2, h / 2]))
+        if ell.shape[0] < 2:
+            return  # nothing left that is background: keep the previous statistics
+        boxes = np.column_stack([ell[:, 0] - w / 2, ell[:, 1] - h / 2, np.full(len(ell), w), np.full(len(ell), h)])
+        hist, npx = self._histograms(self.cue.prepare(frame, (0, 0, fw, fh)), boxes)
+        d = self._colour_energy(hist)[1][npx > 0]
+        if d.size >= 2:
+            self.loss.set_background(1.0 / (1.0 + d))
+
+    def _loss_step(self, frame: np.ndarray, d_est: float, ok: bool) -> tuple[bool, float]:
+        """``(lost, score)`` of this frame from the two-class test, with hysteresis."""
+        if self.frame_index % self.params.background_every == 0:
+            self._background(frame)
+        s = 1.0 / (1.0 + d_est) if ok else 0.0
+        if not self.loss.lost:
+            return self.loss.step(s)
+        return not self.loss.acquire(s), confidence(self.loss.llr)
 
     def _boxes(self, states: np.ndarray) -> np.ndarray:
         w, h = self.size
@@ -350,6 +389,9 @@ class FlowPF(Tracker):
         # resample for the next frame
         ps.resample(self.resampler(ps.w, self.rng))
         self._prev_gray = gray
+        if self.loss is not None:
+            lost, score = self._loss_step(frame, d_est, ok)
+            return self._state(box, score, lost, det=det_box is not None)
         lost = (not ok) or d_est > p.lost_distance
         return self._state(box, 1.0 / (1.0 + d_est), lost, det=det_box is not None)
 
