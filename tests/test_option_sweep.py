@@ -1,6 +1,6 @@
-"""Every switch of the colour trackers runs: each boolean option flipped and each choice of an option with a fixed
-set of values, on a short colour and grey scene whose target hides and comes back (so the loss test, the search and
-the re-acquisition run too).  An option that crashed only when switched on (local-motion-pf's ``search``) went
+"""Every switch of the trackers runs: each boolean option flipped and each choice of an option with a fixed set of
+values, on a short colour and grey scene whose target hides and comes back (so the loss test, the search and the
+re-acquisition run too). The slowest trackers (covariance, switching, graph cuts, the mesh) are left out.  An option that crashed only when switched on (local-motion-pf's ``search``) went
 unnoticed until such a sweep."""
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import typing
 import pytest
 
 import pftrack
+from pftrack.errors import ParameterError
 from pftrack.synth import Scene, vanish_scene
 from pftrack.trackers.registry import get_spec
 
@@ -34,14 +35,23 @@ def scenes():
             for gray in (0.0, 1.0)}
 
 
-@pytest.mark.parametrize("name", ["color-pf", "fusion-pf", "local-motion-pf"])
-def test_every_switch_of_the_colour_trackers_runs(name, scenes):
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf", "local-motion-pf", "flow-pf", "cotrain-pf", "ssim-pf",
+                                  "hybrid-ssim-pf", "template", "fs-meanshift", "anisotropic-meanshift",
+                                  "sift-ransac", "lk-rls", "lk-rls-fuzzy", "meanshift", "kalman-meanshift"])
+def test_every_switch_of_a_tracker_runs(name, scenes):
     variants = _variants(name)
-    assert len(variants) >= 5
+    assert len(variants) >= 2
+    ran = 0
     for v in variants:
         for gray, pairs in scenes.items():
-            t = pftrack.create_tracker(name, seed=0, **v)
+            try:
+                t = pftrack.create_tracker(name, seed=0, **v)
+            except ParameterError:  # a choice this tracker refuses, with a one-line reason (exit code 2 in the CLI)
+                assert v, "the defaults must be accepted"
+                continue
+            ran += 1
             t.init(pairs[0][0], pairs[0][1])
             for f, _ in pairs[1:]:
                 st = t.update(f)
             assert st.box[2] > 0 and st.box[3] > 0, (v, gray)
+    assert ran >= 4
