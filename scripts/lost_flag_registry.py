@@ -5,7 +5,8 @@
 Each tracker (its defaults, tracker seed 0) follows the target of ``pftrack synth vanish`` scenes: it walks fully
 behind a wide textured occluder among look-alike distractors and comes out again. Printed per tracker: *lost recall*,
 the frames with the target hidden on which ``lost`` is raised, and *false-lost*, the frames with IoU >= 0.5 on which
-it is raised (the definitions of ``pftrack eval``, pooled over the scenes' frames). Results: docs/evaluation.md.
+it is raised (:func:`pftrack.eval.metrics.lost_detection`, as ``pftrack eval`` scores them, pooled over the scenes'
+frames). Results: docs/evaluation.md.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import time
 import numpy as np
 
 import pftrack
-from pftrack.geometry import iou
+from pftrack.eval.metrics import lost_detection
 from pftrack.synth import Scene, hidden_frames, vanish_scene
 from pftrack.trackers.registry import list_trackers
 
@@ -43,14 +44,14 @@ def main() -> None:
         for pairs, hidden in scenes:
             t = pftrack.create_tracker(spec.name, seed=0)
             t.init(pairs[0][0], pairs[0][1])
-            for i, (frame, gt) in enumerate(pairs[1:], 1):
-                st = t.update(frame)
-                if hidden[i]:
-                    absent += 1
-                    hid += bool(st.lost)
-                elif np.all(np.isfinite(gt)) and iou(np.array([st.box]), np.array([gt]))[0] >= 0.5:
-                    covered += 1
-                    fl += bool(st.lost)
+            states = [t.update(frame) for frame, _ in pairs[1:]]  # the init frame is given, not detected
+            h, w = pairs[0][0].shape[:2]
+            ld = lost_detection([s.lost for s in states], np.array([s.box for s in states]),
+                                np.array([gt for _, gt in pairs[1:]]), hidden[1:], bounds=(w, h))
+            absent += ld.absent_frames
+            covered += ld.covered_frames
+            hid += round(ld.recall * ld.absent_frames) if ld.absent_frames else 0
+            fl += round(ld.false_rate * ld.covered_frames) if ld.covered_frames else 0
         rec = f"{hid / absent:.2f} ({hid} of {absent})" if absent else "-"
         fls = f"{fl / covered:.3f} ({fl} of {covered})" if covered else "-"
         print(f"| `{spec.name}` | {spec.family} | {rec} | {fls} | {time.perf_counter() - t0:.1f} |", flush=True)
