@@ -267,8 +267,7 @@ class FlowPF(Tracker):
         ell = background_grid(fw, fh, w / 2, h / 2, 100, np.array([self.estimate[0], self.estimate[1], w / 2, h / 2]))
         if ell.shape[0] < 2:
             return  # nothing left that is background: keep the previous statistics
-        boxes = np.column_stack([ell[:, 0] - w / 2, ell[:, 1] - h / 2, np.full(len(ell), w), np.full(len(ell), h)])
-        hist, npx = self._histograms(self.cue.prepare(frame, (0, 0, fw, fh)), boxes)
+        hist, npx = self._histograms(self.cue.prepare(frame, (0, 0, fw, fh)), self._boxes(ell))
         d = self._colour_energy(hist)[1][npx > 0]
         if d.size >= 2:
             self.loss.set_background(1.0 / (1.0 + d))
