@@ -33,7 +33,8 @@ from ..cues.contrast import (
     probability_integral,
 )
 from ..cues.intensity import channel_levels, gain_maps, is_gray
-from ..cues.motion import LocalMotionCue, local_motion, to_gray
+from ..cues.grey_patch import grey_patch
+from ..cues.motion import LocalMotionCue, local_motion
 from ..cues.scale_search import aspect_factor, size_factor
 from ..cues.structure import StructureCue
 from ..cues.structure_hog import BestStructure, HogStructure
@@ -132,7 +133,7 @@ class FusionPF(ColorPF):
                                               pitch=pitch)
             self._lut = foreground_lut(self._obj, self._sur).astype(np.float64)  # exact: the integral's type
         self.v_ref = None
-        self._prev_gray = to_gray(frame) if p.motion else None
+        self._prev_gray = grey_patch(frame) if p.motion else None
         # the background statistics reduced this frame for the structural cue: the next frame must not reuse it
         self.structure.new_frame()
         return st
@@ -181,8 +182,9 @@ class FusionPF(ColorPF):
         p = self.params
         log_lik = self._fused_log_lik(frame, self._ellipses(states), log_lik, roi, feats)
         if p.motion:
-            self._gray = to_gray(frame)
-            self._flow = self.motion_cue.prepare(self._prev_gray, self._gray, roi)
+            if self._flow is None:  # once a frame: the grey levels where the flow reads them (cues.grey_patch)
+                self._gray = self.motion_cue.frame_patch(frame, roi)
+                self._flow = self.motion_cue.prepare(self._prev_gray, self._gray, roi)
             if self.v_ref is not None:
                 log_lik = log_lik + self.motion_cue.log_likelihood(self._flow, self._ellipses(states), self.v_ref)
         return log_lik
@@ -284,6 +286,6 @@ class FusionPF(ColorPF):
     def _on_frame(self, frame):
         self.structure.new_frame()
         if self.params.motion:
-            self._prev_gray = self._gray if self._gray is not None else to_gray(frame)
+            self._prev_gray = self._gray if self._gray is not None else grey_patch(frame)
             self._gray = None
             self._flow = None

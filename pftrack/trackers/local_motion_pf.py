@@ -27,7 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cues.motion import LocalMotionCue, local_motion, to_gray
+from ..cues.grey_patch import GreyPatch, grey_patch
+from ..cues.motion import LocalMotionCue, local_motion
 from ..filtering.dynamics import HX, HY, VX, VY, X, Y, NCVRandomWalk
 from ..params import param
 from .color_pf import _ELL_COLS, ColorModelParams, ColorParticleFilter
@@ -82,15 +83,16 @@ class LocalMotionPF(ColorParticleFilter):
         self.motion = LocalMotionCue(lambda_th=p.lambda_th, window=p.lk_window, levels=p.lk_levels,
                                      max_features=p.max_features, eps=p.eps_th, sigma_theta=p.sigma_theta,
                                      sigma_r=p.sigma_r, w_noise=p.w_noise)
-        self._prev_gray: np.ndarray | None = None
-        self._gray: np.ndarray | None = None
+        # the grey levels of the previous and the current frame, where the flow reads them (cues.grey_patch)
+        self._prev_gray: GreyPatch | None = None
+        self._gray: GreyPatch | None = None
         self._flow = None
         self.v_ref: np.ndarray | None = None
 
     def _init(self, frame, box):
         st = super()._init(frame, box)
         self.v_ref = None
-        self._prev_gray = to_gray(frame) if self.params.motion else None
+        self._prev_gray = grey_patch(frame) if self.params.motion else None
         return st
 
     # ------------------------------------------------------------------ dynamics
@@ -112,8 +114,9 @@ class LocalMotionPF(ColorParticleFilter):
         log_lik = super()._extra_log_lik(frame, states, log_lik, roi, feats)  # grey_check="fused" on grey input
         if not self.params.motion:
             return log_lik
-        self._gray = to_gray(frame)
-        self._flow = self.motion.prepare(self._prev_gray, self._gray, roi)
+        if self._flow is None:  # once a frame (SEIR's resampling loop scores again on the same region)
+            self._gray = self.motion.frame_patch(frame, roi)
+            self._flow = self.motion.prepare(self._prev_gray, self._gray, roi)
         if self.v_ref is None:
             return log_lik  # no reference motion yet: the first frame pair only initialises it
         return log_lik + self.motion.log_likelihood(self._flow, self._ellipses(states), self.v_ref)
@@ -132,6 +135,6 @@ class LocalMotionPF(ColorParticleFilter):
 
     def _on_frame(self, frame):
         if self.params.motion:
-            self._prev_gray = self._gray if self._gray is not None else to_gray(frame)
+            self._prev_gray = self._gray if self._gray is not None else grey_patch(frame)
             self._gray = None
             self._flow = None
