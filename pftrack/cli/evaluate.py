@@ -118,6 +118,7 @@ def add_list(sub) -> None:
 def cmd_list(args) -> int:
     import textwrap
 
+    from ..trackers.monitor import WrapperOptions
     from ..trackers.registry import get_spec, list_trackers
 
     specs = [get_spec(args.name)] if args.name else list_trackers()
@@ -126,10 +127,11 @@ def cmd_list(args) -> int:
         plugin = f"  (plugin: {spec.cls.__module__})" if spec.family == "plugin" else ""
         print(f"{spec.name:20s} {spec.summary}{avail}{plugin}")
         if args.name:
-            for name, typ, default, doc in spec.params_cls.describe():
+            for name, typ, default, doc in [*spec.params_cls.describe(), *WrapperOptions.describe()]:
                 print(f"  {name} ({typ}, default {default!r})")
                 for line in textwrap.wrap(doc, 88):
                     print(f"      {line}")
     if not args.name:
-        print("\n'pftrack list NAME' shows a tracker's parameters; set them with --param KEY=VALUE.")
+        print("\n'pftrack list NAME' shows a tracker's parameters; set them with --param KEY=VALUE. Every tracker "
+              "also takes monitor=true: a calibrated lost flag on its boxes.")
     return 0

@@ -66,6 +66,7 @@ def parse_tracker_list(text: str, *, protocol: str = "ope") -> list[TrackerConfi
     available registered trackers of those families.  With ``protocol="mot"`` the
     names are multi-target trackers (``multi-pf[detector=motion;occlusion=false]``).
     """
+    from ..trackers.monitor import split_wrapper_options
     from ..trackers.registry import get_spec, list_trackers
 
     if protocol == "mot":
@@ -109,7 +110,7 @@ def parse_tracker_list(text: str, *, protocol: str = "ope") -> list[TrackerConfi
                     raise ParameterError(f"tracker spec {item!r}: expected key=value, got {kv!r}")
                 k, v = kv.split("=", 1)
                 params.append((k.strip(), v.strip()))
-        spec.params_cls.from_mapping(dict(params))  # validate now, not in a worker
+        spec.params_cls.from_mapping(split_wrapper_options(dict(params))[1])  # validate now, not in a worker
         if not spec.available():
             raise ParameterError(f"tracker '{name}' is not available in this installation")
         configs.append(TrackerConfig(item, name, tuple(params)))

@@ -73,21 +73,30 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
     seed, rng : the randomness source; the same seed gives bit-identical results.
     params : a Params instance or a mapping of parameter values.
     **kwargs : parameter values (validated), or constructor extras such as ``detector``.
+
+    Every tracker also takes ``monitor=True`` (in ``params`` too): its boxes are judged by the colour PFs' loss
+    test, which raises ``lost`` (:class:`~pftrack.trackers.monitor.Monitored`).
     """
     spec = get_spec(name)
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
         raise ParameterError(f"seed must be an integer >= 0 or None, got {seed!r}")
     if not spec.available():
         raise ParameterError(f"tracker '{name}' is not available in this installation")
+    from .monitor import Monitored, split_wrapper_options
+
     extras = {k: kwargs.pop(k) for k in list(kwargs) if k in spec.extra_kwargs}
+    wrap, kwargs = split_wrapper_options(kwargs)
     if isinstance(params, Params):
         if kwargs:
             params = params.replace(**kwargs)
     else:
-        params = spec.params_cls.from_mapping(dict(params or {}), **kwargs)
+        wrap_m, mapping = split_wrapper_options(dict(params or {}))
+        wrap = wrap_m if wrap_m.monitor else wrap
+        params = spec.params_cls.from_mapping(mapping, **kwargs)
     if not isinstance(params, spec.params_cls):
         raise ParameterError(f"tracker '{name}' takes {spec.params_cls.__name__}, got {type(params).__name__}")
-    return spec.cls(params, seed=seed, rng=rng, **extras)
+    tracker = spec.cls(params, seed=seed, rng=rng, **extras)
+    return Monitored(tracker) if wrap.monitor else tracker
 
 
 _loaded = False

@@ -1,0 +1,191 @@
+"""A calibrated lost flag for any tracker: the colour particle filters' loss test on the boxes it reports.
+
+Many trackers have no test of the target's absence: on six vanish scenes OpenCV's MIL, MedianFlow and TLD, the
+mean-shift baselines, ``pisc`` and ``dssim`` never raise ``lost``, and CSRT raises it on 16 % of the hidden frames
+(docs/evaluation.md).  :class:`Monitored` wraps any tracker and judges each box the tracker reports with the two-class
+test of :mod:`pftrack.filtering.loss`, which keeps Nummiaro et al.'s appearance condition (Eqs. 13–15) as its
+background half:
+
+* **the target model** is the kernel-weighted histogram of the first box's ellipse (Eqs. 3–5; grey features on grey
+  input, as the cue chooses its features from the input), updated by Eq. 12 at rate ``alpha`` on the frames where the
+  test is confident;
+* **the score** of a frame is the best Bhattacharyya coefficient (Eq. 6) with the model among the reported box's
+  ellipse and a few neighbours (shifted by a quarter of the half-axes, scaled by ±10 %): a particle filter's estimate
+  is the best match near the target, and the absent hypothesis below is the best clutter;
+* **the absent hypothesis** is the upper tail of the scores of ``background_positions`` ellipses of the target's
+  size on a fixed grid away from the box (Eqs. 13–14), refreshed every ``background_interval`` confident frames
+  (as in ``color-pf``: a target the colours cannot tell from its surroundings leaves the test abstaining);
+* **hysteresis**: ``lost`` after ``lost_frames`` consecutive frames whose likelihood ratio is negative, and down
+  again only when the ratio exceeds ``reacquire_margin``.
+
+The tracker itself is not changed: its boxes, particles and information pass through, and the grid is fixed, so the
+tracks are the same with or without the monitor.  ``lost`` is raised when the tracker or the test raises it;
+``score`` is the test's posterior P(target | rho) (the tracker's own score is ``info["tracker_score"]``).
+
+    tracker = pftrack.create_tracker("opencv-csrt", monitor=True)      # or Monitored(create_tracker(...))
+    pftrack eval SEQ --trackers "opencv-csrt,opencv-csrt[monitor=true]"
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+
+from ..cues.color import blend_model, model_rho, normalized_model, reachable_roi
+from ..cues.histogram_cue import ColorCue
+from ..filtering.loss import LossDetector, confidence
+from ..geometry import Box, background_grid, box_to_ellipse
+from ..params import Params, param
+from .base import Tracker, TrackState
+
+__all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class MonitorParams(Params):
+    """The loss test's parameters: those of ``color-pf``'s test, whose defaults were chosen on the tune split."""
+
+    alpha: float = param(0.05, ge=0, le=1, doc=(
+        "Rate of the target model's update (Nummiaro et al. Eq. 12) on frames where the test is confident "
+        "(0: the first box's histogram throughout)."))
+    lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive frames with a negative ratio before lost is raised.")
+    reacquire_margin: float = param(1.0, ge=0, le=20, doc=(
+        "The ratio (log odds) a frame must exceed to end a loss, and to count as confident (hysteresis)."))
+    history_rate: float = param(0.05, gt=0, le=1, doc="Weight of a confident score in the target's score history.")
+    score_sd_floor: float = param(0.03, gt=0, le=1, doc="Floor on both classes' score spreads.")
+    background_positions: int = param(100, ge=4, le=100_000, doc=(
+        "Background ellipses of the target's size on a fixed grid (Eqs. 13-14)."))
+    background_interval: int = param(10, ge=1, le=100_000, doc=(
+        "Confident frames between refreshes of the background scores."))
+    color_space: Literal["auto", "rgb", "hsv", "gray"] = param("auto", doc=(
+        "Features of the histograms: 'auto' takes intensity x gradient orientation on grey input, RGB otherwise."))
+    shift: float = param(0.25, ge=0, le=2, doc=(
+        "The score is the best coefficient among the box's ellipse and its neighbours shifted by this many "
+        "half-axes (as a particle filter's estimate is the best match near the target, and the absent hypothesis "
+        "the best clutter); 0: the box's ellipse alone."))
+    scale: float = param(0.1, ge=0, lt=1, doc="... and its neighbours scaled by 1 ± this.")
+    max_pixels: int = param(1500, ge=0, le=10_000_000, doc=(
+        "Pixels sampled per ellipse at most (a regular lattice on larger ones; 0: every pixel)."))
+
+
+def neighbourhood(ell: np.ndarray, shift: float, scale: float) -> np.ndarray:
+    """The ellipse ``(cx, cy, hx, hy)`` and its neighbours: shifted by ``shift`` half-axes in the 8 directions, and
+    scaled by ``1 ± scale`` (11 ellipses; only the ellipse itself when both are 0)."""
+    cx, cy, hx, hy = (float(v) for v in np.asarray(ell).reshape(4))
+    out = [(cx, cy, hx, hy)]
+    if shift > 0:
+        out += [(cx + i * shift * hx, cy + j * shift * hy, hx, hy) for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j]
+    if scale > 0:
+        out += [(cx, cy, hx * (1 + k * scale), hy * (1 + k * scale)) for k in (-1, 1)]
+    return np.array(out)
+
+
+class LossMonitor:
+    """The test on its own: :meth:`start` on the first frame and box, then :meth:`check` each reported box."""
+
+    def __init__(self, params: MonitorParams | None = None):
+        self.params = p = params if params is not None else MonitorParams()
+        self.cue = ColorCue(p.color_space, None, "nummiaro", p.max_pixels)
+        self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
+                                 history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
+                                 sd_floor_background=p.score_sd_floor)
+        self.q: np.ndarray | None = None
+        self._sqrt_q: np.ndarray | None = None
+        self._half: tuple[float, float] = (1.0, 1.0)
+        self._since_bg = 0
+
+    def start(self, frame: np.ndarray, box: Box) -> None:
+        self.cue.adapt_to(frame)
+        self.cue.new_frame(frame)
+        ell = box_to_ellipse(box)
+        self._half = (float(ell[2]), float(ell[3]))
+        self.q, self._sqrt_q = normalized_model(self.cue.histogram(frame, ell))
+        self.loss.reset(1.0)
+        self._background(frame, ell)
+
+    def _background(self, frame: np.ndarray, ell: np.ndarray) -> None:
+        h, w = frame.shape[:2]
+        grid = background_grid(w, h, *self._half, self.params.background_positions, ell)
+        self._since_bg = 0
+        if grid.shape[0] < 2:
+            return  # nothing left that is background: keep the previous statistics
+        feats = self.cue.prepare(frame, (0, 0, w, h), self.cue.step_for(grid))
+        rho, tot = self.cue.rho(feats, grid, self._sqrt_q, reuse=False)
+        if np.count_nonzero(tot > 0) >= 2:
+            self.loss.set_background(rho[tot > 0])
+
+    def check(self, frame: np.ndarray, box: Box) -> tuple[bool, float, float]:
+        """``(lost, score, rho)`` of the box reported on this frame (the test's state advances)."""
+        if self.q is None:
+            raise RuntimeError("LossMonitor: call start(frame, box) first")
+        self.cue.new_frame(frame)
+        ell = box_to_ellipse(box)
+        e = neighbourhood(ell, self.params.shift, self.params.scale)
+        h, w = frame.shape[:2]
+        feats = self.cue.prepare(frame, reachable_roi(e, w, h), self.cue.step_for(e))
+        rhos, tots = self.cue.rho(feats, e, self._sqrt_q, reuse=False)
+        rhos = np.where(tots > 0, rhos, 0.0)
+        best = int(np.argmax(rhos))
+        hist, tot = self.cue.histograms(feats, e[best:best + 1], reuse=False)
+        rho = model_rho(hist[0], self._sqrt_q) if tot[0] > 0 else 0.0
+        if self.loss.lost:
+            lost = not self.loss.acquire(rho)
+            score = confidence(self.loss.llr)
+        else:
+            lost, score = self.loss.step(rho)
+        if not lost and tot[0] > 0 and self.loss.confident(rho):
+            # as color-pf: the model and the background statistics follow the confident frames only, so a target
+            # the colours cannot tell from its surroundings leaves the test abstaining (no evidence either way)
+            if self.params.alpha > 0:
+                self.q, self._sqrt_q = blend_model(self.q, hist[0], self.params.alpha)
+            self._since_bg += 1
+            if self._since_bg >= self.params.background_interval:
+                self._half = (float(e[best, 2]), float(e[best, 3]))
+                self._background(frame, e[best])
+        return lost, float(score), float(rho)
+
+
+class Monitored(Tracker):
+    """Any tracker with :class:`LossMonitor`'s lost flag (see the module docstring)."""
+
+    Params = MonitorParams
+
+    def __init__(self, inner: Tracker, params: MonitorParams | None = None):
+        super().__init__(params if params is not None else MonitorParams())
+        self.inner = inner
+        self.name = f"{inner.name}+monitor"
+        self.stochastic = inner.stochastic
+        self.state_names = getattr(inner, "state_names", ())
+        self.monitor = LossMonitor(self.params)
+
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        st = self.inner.init(frame, box)
+        self.monitor.start(frame, box)
+        return replace(st, info={**st.info, "tracker_score": st.score, "tracker_lost": st.lost})
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        st = self.inner.update(frame)
+        box = st.info.get("box_full", st.box)
+        lost, score, rho = self.monitor.check(frame, box)
+        return replace(st, lost=bool(st.lost or lost), score=score,
+                       info={**st.info, "tracker_score": st.score, "tracker_lost": st.lost, "monitor_rho": rho,
+                             "monitor_llr": self.monitor.loss.llr})
+
+
+@dataclass(frozen=True, kw_only=True)
+class WrapperOptions(Params):
+    """Options every registered tracker takes beside its own parameters (``create_tracker``, ``--param``, and eval's
+    ``NAME[key=value]``)."""
+
+    monitor: bool = param(False, doc=(
+        "Judge the tracker's boxes with the colour PFs' loss test (pftrack.trackers.monitor): a calibrated lost flag "
+        "for a tracker that has none of its own."))
+
+
+def split_wrapper_options(values: dict[str, Any]) -> tuple[WrapperOptions, dict[str, Any]]:
+    """The wrapper options of a parameter mapping, and the rest (for the tracker's own parameters)."""
+    names = {f for f in WrapperOptions.__dataclass_fields__}
+    own = {k: v for k, v in values.items() if k not in names}
+    return WrapperOptions.from_mapping({k: v for k, v in values.items() if k in names}), own
