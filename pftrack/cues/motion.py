@@ -182,8 +182,8 @@ def shi_tomasi_features(gray, roi: tuple[int, int, int, int], *, lambda_th: floa
 
 #: The flow reads the previous frame's grey levels around this frame's features, so each frame's grey patch
 #: holds the particles' region grown by the flow's reach and by this much more, for the region's move to the next
-#: frame.  With 32 px, 3 of 153,312 features on the dev sequences found no levels in the previous patch, and so no
-#: flow (16 px: 157 features; 8 px: 2,751).
+#: frame.  With 32 px, 3 of 153,312 features of 25 tune and report sequences found no levels in the previous patch,
+#: and so no flow (16 px: 157 features; 8 px: 2,751).
 PATCH_SLACK = 32
 
 
@@ -198,8 +198,9 @@ def lucas_kanade_flow(prev_gray, gray, points: np.ndarray, *, window: int = 9, l
 
     ``prev_gray`` and ``gray`` are grey frames or :class:`GreyPatch` es of them, ``points`` frame coordinates.
     The flow is computed on the one rectangle that holds every point's reach (:func:`lk_reach`), on a grid
-    aligned to the coarsest level, so the result is the whole frames' as long as no point travels further.  A
-    point whose reach a patch lacks (the previous frame's patch, after a jump of the particles) gets no flow.
+    aligned to the coarsest level, so the result is the whole frames' as long as no point travels further, up to
+    single-precision rounding (LK iterates in float32, and other coordinates round differently: 1e-4 to 3e-2 px).
+    A point whose reach a patch lacks (the previous frame's patch, after a jump of the particles) gets no flow.
     """
     if points.shape[0] == 0:
         return FlowField.empty()
