@@ -1,10 +1,12 @@
 """The lost flag as a detector, on seeded synthetic scenes where the target walks behind an occluder.
 
-    python examples/lost_flag.py [--tracker NAME] [--seeds 0-4]
+    python examples/lost_flag.py [--tracker NAME] [--seeds 0-4] [--monitor]
 
 Each scene is drawn from its seed (occluder texture, look-alike distractors, light, size and speed) and knows
 the frames where its target is hidden.  For every seed the flag's recall on those frames, its false-alarm rate
-on the frames where the estimate covers the target, and the reappearances re-acquired are printed.
+on the frames where the estimate covers the target, and the reappearances re-acquired are printed.  With
+``--monitor`` the tracker's boxes are judged by the colour PFs' loss test (``monitor=true``), which gives a tracker
+without a test of its own (``--tracker opencv-medianflow``, ``meanshift``) a calibrated flag.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tracker", default="fusion-pf")
     ap.add_argument("--seeds", default="0-4", help="scene seeds, e.g. 0-4")
+    ap.add_argument("--monitor", action="store_true", help="judge the boxes with the colour PFs' loss test")
     args = ap.parse_args(argv)
 
     print("seed  hidden  lost recall  false-lost  re-acquired")
@@ -36,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
         frames = list(scene.frames())
         gt = scene.groundtruth(0)
         hidden = hidden_frames(spec)
-        tracker = pftrack.create_tracker(args.tracker, seed=0)
+        tracker = pftrack.create_tracker(args.tracker, seed=0, monitor=args.monitor)
         boxes, lost = [], []
         for t, frame in enumerate(frames):
             state = tracker.init(frame, tuple(gt[0])) if t == 0 else tracker.update(frame)

@@ -30,6 +30,13 @@ def test_lost_flag_prints_one_row_per_seed(tmp_path):
     assert all(0.5 <= v <= 1.0 for v in recall)
 
 
+def test_lost_flag_with_the_monitor(tmp_path):
+    """meanshift has no loss test of its own; with --monitor its flag is raised behind the occluder."""
+    for monitor, bounds in (((), (0.0, 0.0)), (("--monitor",), (0.6, 1.0))):
+        rows = _run("lost_flag.py", "--tracker", "meanshift", "--seeds", "0-1", *monitor, cwd=tmp_path).splitlines()[1:]
+        assert all(bounds[0] <= float(r.split()[2]) <= bounds[1] for r in rows), rows
+
+
 def test_multi_target_writes_and_scores_tracks(tmp_path):
     text = _run("multi_target.py", "--frames", "100", "--out", "t.txt", cwd=tmp_path)
     assert "MOTA" in text and (tmp_path / "t.txt").read_text().count("\n") > 20
