@@ -177,6 +177,19 @@ def test_opencv_tracker_that_refuses_its_box_gives_a_box_error(tmp_path):
                  str(tmp_path / "o.csv")]) == 2
 
 
+def test_an_opencv_tracker_that_fails_on_a_frame_reports_the_target_lost():
+    """CSRT on a 2 x 2 box in the frame's corner moves it half out of the frame, then fails an OpenCV assertion (its
+    window is empty): the adapter reports the target lost with the last box instead of raising."""
+    rng = np.random.default_rng(0)
+    frames = [rng.integers(0, 255, (60, 80, 3), dtype=np.uint8) for _ in range(5)]
+    t = pftrack.create_tracker("opencv-csrt")
+    t.init(frames[0], (78, 58, 2, 2))
+    states = [t.update(f) for f in frames[1:]]
+    failed = [s for s in states if "error" in s.info]
+    assert failed and all(s.lost and s.score == 0.0 and s.box == states[0].box for s in failed)
+    assert "resize" in failed[0].info["error"]
+
+
 @pytest.mark.parametrize("name", ["opencv-mil", "opencv-tld"])
 def test_opencv_mil_and_tld_repeat_a_seeded_run_whatever_ran_before(name):
     """MIL and TLD draw from OpenCV's random state and the C library's rand(), which carry over from run to run in a

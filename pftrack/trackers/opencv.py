@@ -111,7 +111,11 @@ class OpenCVTracker(Tracker):
         return TrackState(box=self._last, score=1.0, lost=False)
 
     def _update(self, frame: np.ndarray) -> TrackState:
-        ok, rect = self._cv.update(frame)
+        try:
+            ok, rect = self._cv.update(frame)
+        except cv2.error as exc:  # e.g. CSRT on a box of a few pixels at the frame's corner: its window is empty
+            reason = " ".join(str(exc).split()).split("error: ", 1)[-1].split(") ", 1)[-1] or "cv2.error"
+            return TrackState(box=self._last, score=0.0, lost=True, info={"error": reason})
         rect = tuple(float(v) for v in rect)
         if ok and rect[2] > 0 and rect[3] > 0 and all(np.isfinite(rect)):
             self._last = rect
