@@ -177,6 +177,20 @@ def test_opencv_tracker_that_refuses_its_box_gives_a_box_error(tmp_path):
                  str(tmp_path / "o.csv")]) == 2
 
 
+def test_opencv_tld_refuses_a_box_it_would_crash_on():
+    """OpenCV's legacy TLD ends the process with a segmentation fault on a box that spans the frame one way and is
+    20 px or less the other: the adapter refuses it with a BoxError, and takes the box a pixel shorter."""
+    from pftrack.errors import BoxError
+
+    frame = np.random.default_rng(0).integers(0, 255, (60, 80, 3), dtype=np.uint8)
+    for box in [(70, 0, 10, 60), (0, 0, 20, 60), (0, 50, 80, 10)]:
+        with pytest.raises(BoxError, match="TLD crashes"):
+            pftrack.create_tracker("opencv-tld", seed=0).init(frame, box)
+    t = pftrack.create_tracker("opencv-tld", seed=0)
+    t.init(frame, (70, 0, 10, 59))
+    assert np.all(np.isfinite(t.update(frame).box))
+
+
 def test_an_opencv_tracker_that_fails_on_a_frame_reports_the_target_lost():
     """CSRT on a 2 x 2 box in the frame's corner moves it half out of the frame, then fails an OpenCV assertion (its
     window is empty): the adapter reports the target lost with the last box instead of raising."""

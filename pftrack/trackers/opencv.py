@@ -98,6 +98,11 @@ class OpenCVTracker(Tracker):
             if self.kind == "mil" and (min(rect[2:]) < _MIL_MIN_SIDE or rect[2] * rect[3] < _MIL_MIN_AREA):
                 raise BoxError(f"{self.name}: box {rect[2]}x{rect[3]} is too small for OpenCV's MIL tracker, which "
                                f"hangs on boxes under about 5x5 pixels; give a box of at least 5x5")
+        if self.kind == "tld" and min(rect[2:]) < 21 and (rect[2] >= w - 0.5 or rect[3] >= h - 0.5):
+            # OpenCV's legacy TLD crashes the process (a segmentation fault) on such a box: refuse it instead
+            raise BoxError(f"{self.name}: OpenCV's TLD crashes on a box that spans the whole frame one way and is "
+                           f"20 px or less the other ({rect[2]:g}x{rect[3]:g} in a {w}x{h} frame); shrink it by a "
+                           f"pixel or widen it")
         try:
             res = self._cv.init(frame, rect)
         except cv2.error as exc:  # e.g. MIL on a box that fills the frame: no room for its samples
