@@ -189,6 +189,9 @@ def test_opencv_tld_refuses_a_box_it_would_crash_on():
     t = pftrack.create_tracker("opencv-tld", seed=0)
     t.init(frame, (70, 0, 10, 59))
     assert np.all(np.isfinite(t.update(frame).box))
+    # on frames under 50 px it crashes or hangs even on boxes inside the frame
+    with pytest.raises(BoxError, match="under 50 px"):
+        pftrack.create_tracker("opencv-tld", seed=0).init(frame[:30, :40], (5, 5, 30, 20))
 
 
 def test_an_opencv_tracker_that_fails_on_a_frame_reports_the_target_lost():

@@ -98,6 +98,11 @@ class OpenCVTracker(Tracker):
             if self.kind == "mil" and (min(rect[2:]) < _MIL_MIN_SIDE or rect[2] * rect[3] < _MIL_MIN_AREA):
                 raise BoxError(f"{self.name}: box {rect[2]}x{rect[3]} is too small for OpenCV's MIL tracker, which "
                                f"hangs on boxes under about 5x5 pixels; give a box of at least 5x5")
+        if self.kind == "tld" and min(w, h) < 50:
+            # OpenCV's legacy TLD crashes the process (a segmentation fault) or never returns on small frames (seen on
+            # 40 x 30 with a 30 x 20 box, and on frames under 50 px with a box that fills them): refuse it instead
+            raise BoxError(f"{self.name}: OpenCV's TLD crashes or hangs on frames under 50 px on a side (this one is "
+                           f"{w}x{h}); use another tracker")
         if self.kind == "tld" and min(rect[2:]) < 21 and (rect[2] >= w - 0.5 or rect[3] >= h - 0.5):
             # OpenCV's legacy TLD crashes the process (a segmentation fault) on such a box: refuse it instead
             raise BoxError(f"{self.name}: OpenCV's TLD crashes on a box that spans the whole frame one way and is "
