@@ -1,6 +1,7 @@
 """``warm_up`` compiles every kernel the tracking uses, so that no compilation is timed (the first run of a fresh
 install reports the speed of the later ones)."""
 
+import json
 import subprocess
 import sys
 import textwrap
@@ -11,6 +12,8 @@ from pftrack._numba import NUMBA_INSTALLED, numba_enabled
 
 SCRIPT = textwrap.dedent("""
     import gc
+    import json
+    import sys
     from numba.core.registry import CPUDispatcher
     from pftrack.synth import Scene, SceneSpec, Target, occlusion_scene
     from pftrack.trackers.registry import create_tracker
@@ -27,12 +30,13 @@ SCRIPT = textwrap.dedent("""
                for size in ((160.0, 200.0), (70.0, 90.0)) for g in (False, True)]
     clips = [Scene(s) for s in scenes]
     frames = [[c.render(t)[0] for t in range(s.n_frames)] for c, s in zip(clips, scenes)]
-    for name in ("fusion-pf", "color-pf"):
-        warm_up(name)
+    runs = json.loads(sys.argv[1])
+    for name, params in runs:
+        warm_up(name, params)
     before = signatures()
-    for name in ("fusion-pf", "color-pf"):
+    for name, params in runs:
         for c, fr in zip(clips, frames):
-            tr = create_tracker(name, seed=0)
+            tr = create_tracker(name, seed=0, params=params)
             tr.init(fr[0], c.groundtruth(0)[0])
             for f in fr[1:]:
                 tr.update(f)
@@ -42,7 +46,10 @@ SCRIPT = textwrap.dedent("""
 
 
 @pytest.mark.skipif(not (NUMBA_INSTALLED and numba_enabled()), reason="compiled kernels are off")
-def test_warm_up_leaves_nothing_to_compile_while_tracking():
-    out = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True, timeout=600)
+@pytest.mark.parametrize("runs", [[["fusion-pf", {}], ["color-pf", {}]],
+                                  [["opencv-medianflow", {"monitor": "true"}]]])  # alone: the loss monitor's kernels
+def test_warm_up_leaves_nothing_to_compile_while_tracking(runs):
+    out = subprocess.run([sys.executable, "-c", SCRIPT, json.dumps(runs)], capture_output=True, text=True,
+                         timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().splitlines()[-1] == "{}", out.stdout

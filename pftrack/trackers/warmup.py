@@ -16,6 +16,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .monitor import split_wrapper_options
 from .registry import create_tracker, get_spec
 
 _WARMED: set[tuple[str, tuple]] = set()
@@ -43,11 +44,12 @@ def _frames(n: int, shape: tuple[int, int] = (96, 128), size: tuple[int, int] = 
 def warm_up(name: str, params: Mapping[str, Any] | None = None, *, frames: int = 6, force: bool = False) -> float:
     """Run tracker ``name`` on small synthetic clips once per process; returns the seconds spent (0 if done).
 
-    Only pftrack's own trackers are warmed (OpenCV's need no compilation).  ``frames``: length of the first
-    (small-target) clip.
+    Only pftrack's own trackers are warmed (OpenCV's need no compilation, unless ``monitor=true`` wraps them).
+    ``frames``: length of the first (small-target) clip.
     """
     key = (name, tuple(sorted((k, repr(v)) for k, v in (params or {}).items())))
-    if (key in _WARMED and not force) or get_spec(name).family == "opencv":
+    monitored = split_wrapper_options(dict(params or {}))[0].monitor  # the loss monitor's kernels need warming too
+    if (key in _WARMED and not force) or (get_spec(name).family == "opencv" and not monitored):
         return 0.0
     t0 = time.perf_counter()
     for i, (n, shape, size) in enumerate(_CLIPS):
