@@ -1,8 +1,8 @@
 """A calibrated lost flag for any tracker: the colour particle filters' loss test on the boxes it reports.
 
 Many trackers have no test of the target's absence: on six vanish scenes OpenCV's MIL, MedianFlow and TLD, the
-mean-shift baselines, ``pisc`` and ``dssim`` never raise ``lost``, and CSRT raises it on 16 % of the hidden frames
-(docs/evaluation.md).  :class:`Monitored` wraps any tracker and judges each box the tracker reports with the two-class
+mean-shift baselines and ``pisc`` never raise ``lost``, ``dssim`` raises it on 1 % of the hidden frames and CSRT on
+16 % (docs/evaluation.md).  :class:`Monitored` wraps any tracker and judges each box the tracker reports with the two-class
 test of :mod:`pftrack.filtering.loss`, which keeps Nummiaro et al.'s appearance condition (Eqs. 13–15) as its
 background half:
 
