@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 
 from ..frames import grey_origin
+from .lk import gray_of
 
 __all__ = ["GreyPatch", "as_patch", "grey_patch"]
 
@@ -55,9 +56,8 @@ def grey_patch(frame: np.ndarray, roi: tuple[int, int, int, int] | None = None, 
         x0, y0 = max(int(roi[0]) - margin, 0), max(int(roi[1]) - margin, 0)
         x1, y1 = min(int(roi[2]) + margin, fw), min(int(roi[3]) + margin, fh)
         x1, y1 = max(x1, x0), max(y1, y0)
-    if frame.ndim == 2:
-        img = frame[y0:y1, x0:x1]
+    if frame.ndim == 3 and frame.shape[2] == 3 and grey_origin(frame) is None:
+        img = cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY)  # a colour frame: only the rectangle
     else:
-        origin = grey_origin(frame)  # a BGR frame made from a grey image: its grey levels are that image
-        img = origin[y0:y1, x0:x1] if origin is not None else cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY)
+        img = gray_of(frame)[y0:y1, x0:x1]  # grey levels at hand (a grey frame, or a BGR frame made from one)
     return GreyPatch(img, x0, y0, fw, fh)

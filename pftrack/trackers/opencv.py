@@ -111,8 +111,7 @@ class OpenCVTracker(Tracker):
         try:
             res = self._cv.init(frame, rect)
         except cv2.error as exc:  # e.g. MIL on a box that fills the frame: no room for its samples
-            text = " ".join(str(exc).split())
-            reason = text.split("error: ", 1)[-1].split(") ", 1)[-1] or "cv2.error"  # the failed check, no path
+            reason = _cv_reason(exc)
             raise BoxError(f"{self.name}: OpenCV's tracker cannot start on box {rect} in a {w}x{h} frame "
                            f"({reason})") from None
         if res is False:  # legacy API returns a bool
@@ -124,13 +123,17 @@ class OpenCVTracker(Tracker):
         try:
             ok, rect = self._cv.update(frame)
         except cv2.error as exc:  # e.g. CSRT on a box of a few pixels at the frame's corner: its window is empty
-            reason = " ".join(str(exc).split()).split("error: ", 1)[-1].split(") ", 1)[-1] or "cv2.error"
-            return TrackState(box=self._last, score=0.0, lost=True, info={"error": reason})
+            return TrackState(box=self._last, score=0.0, lost=True, info={"error": _cv_reason(exc)})
         rect = tuple(float(v) for v in rect)
         if ok and rect[2] > 0 and rect[3] > 0 and all(np.isfinite(rect)):
             self._last = rect
             return TrackState(box=rect, score=1.0, lost=False)
         return TrackState(box=self._last, score=0.0, lost=True)
+
+
+def _cv_reason(exc: cv2.error) -> str:
+    """The check an OpenCV error reports as failed, on one line, without OpenCV's source path."""
+    return " ".join(str(exc).split()).split("error: ", 1)[-1].split(") ", 1)[-1] or "cv2.error"
 
 
 def _make(kind: str, label: str) -> type[OpenCVTracker]:

@@ -90,8 +90,8 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
         if kwargs:
             params = params.replace(**kwargs)
     else:
-        wrap_m, mapping = split_wrapper_options(dict(params or {}))
-        wrap = wrap_m if wrap_m.monitor else wrap
+        in_params, mapping = split_wrapper_options(dict(params or {}))
+        wrap = wrap.replace(monitor=wrap.monitor or in_params.monitor)
         params = spec.params_cls.from_mapping(mapping, **kwargs)
     if not isinstance(params, spec.params_cls):
         raise ParameterError(f"tracker '{name}' takes {spec.params_cls.__name__}, got {type(params).__name__}")
