@@ -132,6 +132,9 @@ def add_synth(sub) -> None:
     p.add_argument("--turn", type=float, default=0.0, metavar="DEGREES",
                    help="face: the face turns back and forth up to this angle (a rough stand-in; default 0: it "
                         "does not turn)")
+    p.add_argument("--live", action="store_true",
+                   help="face: the head moves in front of a still room (another photograph), seen by a camera whose "
+                        "automatic gain amplifies the noise of the dark frames (pftrack.synth.face_live)")
     p.add_argument("--portrait", choices=["astronaut", "camera"], default="astronaut",
                    help="face: scikit-image's portrait to build the scene from (default astronaut; camera: the "
                         "cameraman, a face in profile beside a dark coat)")
@@ -255,8 +258,11 @@ def cmd_synth(args) -> int:
             export_deform(deform_scene(sd), out / f"deform-{sd:03d}")
         elif args.kind == "face":
             from ..synth.face import export_face, face_scene
+            from ..synth.face_live import live_face_scene
 
-            export_face(*face_scene(sd, image=face_image, face=face_box, turn=args.turn), out / f"face-{sd:03d}")
+            scene = live_face_scene if args.live else face_scene
+            export_face(*scene(sd, image=face_image, face=face_box, turn=args.turn),
+                        out / f"{'live-face' if args.live else 'face'}-{sd:03d}")
         elif args.kind == "stereo-rail":
             from ..synth.occluder import export_stereo_scene, stereo_rail_scene
 
