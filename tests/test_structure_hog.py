@@ -205,6 +205,36 @@ def test_color_pf_builds_its_grey_check_on_gradients_when_asked():
     assert t._structure_check is None
 
 
+def test_color_pf_grey_check_on_both_features_scores_the_better():
+    from pftrack.filtering.loss import LossDetector
+    from pftrack.trackers.structure_check import StructureCheck
+
+    check = StructureCheck(LossDetector(), fused=True, features="both")
+    assert type(check.cue) is BestStructure
+    assert type(check.cue.primary) is LitStructure and type(check.cue.cues[1]) is HogStructure
+    g = _bgr(_texture(7))
+    ell = np.array([[160.0, 120.0, 40.0, 40.0]])
+    check.init(g, ell)
+    moved = _bgr(np.roll(_texture(7), 6, axis=1))
+    boxes = np.array([[166.0, 120.0, 40.0, 40.0], [100.0, 60.0, 40.0, 40.0]])
+    check.new_frame()
+    both = check.scores(moved, boxes)
+    each = [StructureCheck(LossDetector(), fused=True, features=f) for f in ("ncc", "hog")]
+    for c in each:
+        c.init(g, ell)
+        c.new_frame()
+    ncc, hog = (c.scores(moved, boxes) for c in each)
+    assert np.allclose(both, np.maximum(ncc, hog))
+    assert not np.allclose(ncc, hog)
+    t = pftrack.create_tracker("color-pf", seed=0, grey_check_features="both")
+    box = (120.0, 80.0, 80.0, 80.0)
+    t.init(g, box)
+    for dx in range(3, 16, 3):
+        st = t.update(_bgr(np.roll(_texture(7), dx, axis=1)))
+        assert not st.lost
+    assert frame_ious(np.array([st.box]), np.array([[box[0] + 15, box[1], box[2], box[3]]]))[0] > 0.7
+
+
 def test_fusion_pf_passes_its_cell_count_to_the_gradient_cue():
     t = pftrack.create_tracker("fusion-pf", seed=0, hog_cells=36)
     t.init(_bgr(_texture(8)), (120.0, 80.0, 80.0, 80.0))

@@ -73,10 +73,12 @@ class ColorModelParams(Params):
         "also weighs every particle (exp(10 r), fusion-pf's structural likelihood) and joins the loss test "
         "(fusion-pf's fused test on the coefficient and the NCC). 'off': the histogram alone decides "
         "(ColorModelParams' default)."))
-    grey_check_features: Literal["ncc", "hog"] = param("ncc", doc=(
+    grey_check_features: Literal["ncc", "hog", "both"] = param("ncc", doc=(
         "With grey_check='fused': what the check's references describe. 'ncc': grey patches of the grey levels and "
         "of their self-quotient image; 'hog': histograms of oriented gradients, each cell normalised by its own "
-        "contrast (pftrack.cues.structure_hog, fusion-pf's structural cue on grey input)."))
+        "contrast (pftrack.cues.structure_hog, fusion-pf's structural cue on grey input); 'both': each kept, a box "
+        "scored by the better of the two. 'ncc' for color-pf: 'hog' and 'both' failed their rules on the tune data "
+        "(docs/robustness.md)."))
     grey_scale_search: float = param(0.0, ge=0, le=0.5, doc=(
         "Grey input with grey_check='fused': after each estimate its box is scored by the structural cue at the "
         "sizes 1/(1+s), 1 and 1+s, and the estimate and every particle move a quarter of the way toward the vertex "

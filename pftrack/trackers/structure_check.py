@@ -43,7 +43,7 @@ import numpy as np
 
 from ..cues.scale_search import scale_candidates, size_factor
 from ..cues.structure import StructureCue
-from ..cues.structure_hog import HogStructure
+from ..cues.structure_hog import BestStructure, HogStructure
 from ..cues.structure_light import LitStructure
 from ..filtering.loss import FusedLoss, LossDetector
 
@@ -97,11 +97,15 @@ class StructureCheck:
         # fused: the patches of the grey levels and of their self-quotient image (scale sigma), the better of the
         # two (fusion-pf's grey_structure="both"): a lamp or a shadow across a face lowered the grey levels' NCC
         # alone until the fused test declared the face lost (docs/robustness.md); or (features="hog") histograms
-        # of oriented gradients, fusion-pf's structural cue on grey input
-        if features not in ("ncc", "hog"):
-            raise ValueError(f"features must be 'ncc' or 'hog', got {features!r}")
+        # of oriented gradients, fusion-pf's structural cue on grey input; or (features="both") the better of the two
+        if features not in ("ncc", "hog", "both"):
+            raise ValueError(f"features must be 'ncc', 'hog' or 'both', got {features!r}")
         if fused and features == "hog":
             self.cue = HogStructure()
+        elif fused and features == "both":
+            self.cue = BestStructure(
+                LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both", gray_of=gray_of),
+                HogStructure())
         elif fused:
             self.cue = LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both", gray_of=gray_of)
         else:
