@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..cues.illumination import QuotientImage
+from ..cues.structure_hog import BestStructure
 from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, X, Y
 from ..filtering.particles import ParticleSet
@@ -53,9 +54,8 @@ class ColorHooks:
         equalisation table then shares); none under ``illumination="quotient"``."""
         if self._quotient is not None:
             return None
-        check = self._fused_check
-        cue = check.cue if check is not None else None
-        if isinstance(cue, LitStructure) and cue.sigma == self.params.illumination_sigma:
+        cue = self._check_lit()
+        if cue is not None and cue.sigma == self.params.illumination_sigma:
             return cue._qf
         q = QuotientImage(self.params.illumination_sigma, bgr=False)
         self._own_quotient = True
@@ -161,12 +161,20 @@ class ColorHooks:
             self._raw_check.new_frame()
         return self._quotient(frame)
 
+    def _check_lit(self) -> LitStructure | None:
+        """The grey-patch cue (levels and quotient image) of the fused structural check, alone or as the first of
+        ``grey_check_features="both"``; None without one."""
+        check = self._fused_check
+        cue = check.cue if check is not None else None
+        if isinstance(cue, BestStructure):
+            cue = cue.primary
+        return cue if isinstance(cue, LitStructure) else None
+
     def _grey_shared(self) -> bool:
         """Grey input whose self-quotient image starts from the tracker's grey conversion of each frame
         (``_frame_gray``): the equalisation table then starts from it too."""
-        check = self._fused_check
-        return self.cue.color_space == "gray" and (self._own_quotient or (
-            check is not None and isinstance(check.cue, LitStructure) and check.cue.shares_gray))
+        lit = self._check_lit()
+        return self.cue.color_space == "gray" and (self._own_quotient or (lit is not None and lit.shares_gray))
 
     def _wants_grey_check(self) -> bool:
         """Does this input get the structural check at re-acquisition (``grey_check`` on grey input)?"""
