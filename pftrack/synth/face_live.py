@@ -79,6 +79,7 @@ def live_face_scene(seed: int = 0, n_frames: int = 150, *, image: np.ndarray | N
     lo, hi = float(along.min()), float(along.max())
     bx_max, by_max = back.shape[1] - OUT_W, back.shape[0] - OUT_H
     agc = 1.0
+    still = None if turn else _head(base0, (fx, fy, fw, fh))  # a head that does not turn is cut out once
     frames, boxes = [], []
     for k in range(n_frames):
         t = k / max(n_frames - 1, 1)
@@ -86,8 +87,11 @@ def live_face_scene(seed: int = 0, n_frames: int = 150, *, image: np.ndarray | N
         bx = int(round(bx_max / 2 + min(20, bx_max / 2) * np.sin(2 * np.pi * f4 * t + p4)))
         by = int(round(by_max / 2 + min(10, by_max / 2) * np.sin(2 * np.pi * f5 * t + p5)))
         scene = back[by:by + OUT_H, bx:bx + OUT_W].copy()
-        src = turned_face(base0, face, np.radians(turn) * np.sin(2 * np.pi * tf * t + tp)) if turn else base0
-        head, alpha, (ox, oy) = _head(src, (fx, fy, fw, fh))
+        if still is None:
+            src = turned_face(base0, face, np.radians(turn) * np.sin(2 * np.pi * tf * t + tp))
+            head, alpha, (ox, oy) = _head(src, (fx, fy, fw, fh))
+        else:
+            head, alpha, (ox, oy) = still
         s = s0 * (1.0 + 0.25 * np.sin(2 * np.pi * f3 * t + p3))
         cx = OUT_W / 2 + ax * np.sin(2 * np.pi * f1 * t + p1)
         cy = OUT_H / 2 + ay * np.sin(2 * np.pi * f2 * t + p2)
