@@ -102,12 +102,10 @@ class StructureCheck:
             raise ValueError(f"features must be 'ncc', 'hog' or 'both', got {features!r}")
         if fused and features == "hog":
             self.cue = HogStructure()
-        elif fused and features == "both":
-            self.cue = BestStructure(
-                LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both", gray_of=gray_of),
-                HogStructure())
         elif fused:
             self.cue = LitStructure(template_pixels, weighting="uniform", sigma=sigma, mode="both", gray_of=gray_of)
+            if features == "both":
+                self.cue = BestStructure(self.cue, HogStructure())
         else:
             self.cue = StructureCue(template_pixels, anchor=True, weighting="uniform")
         self.detector = detector
