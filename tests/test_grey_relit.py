@@ -43,3 +43,26 @@ def test_fusion_pf_reacquires_a_grey_target_relit_while_away(seed):
     assert off.reappearances == on.reappearances == 1
     assert off.reacquired == 0 and on.reacquired == 1
     assert lost_flag_run(spec, "fusion-pf", seed=seed).reacquired == 1
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_relit_search_leaves_grey_input_alone(seed):
+    """The relit search undoes a change of the light on colour input only. On grey input (and on colour frames
+    whose light did not move) the refined search layer is scored on the first layer's features as without it, so
+    every box, score and flag is the same as with ``relit_search="off"`` (the grey tune scene leave-004 once
+    differed: the refined layer was quantised afresh whenever the option was on)."""
+    from pftrack.synth import leave_scene
+
+    from .conftest import render_scene
+
+    import pftrack
+
+    scene, frames, _ = render_scene(leave_scene(seed, gray=1.0))
+    gt = scene.groundtruth(0)
+    runs = []
+    for mode in ("off", "max"):
+        t = pftrack.create_tracker("color-pf", seed=seed, relit_search=mode)
+        t.init(frames[0], tuple(gt[0]))
+        runs.append([(s.box, s.score, s.lost) for s in (t.update(f) for f in frames[1:])])
+    assert any(lost for _, _, lost in runs[0])  # the search ran
+    assert runs[0] == runs[1]

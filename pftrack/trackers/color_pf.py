@@ -140,6 +140,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
         self._confident_track: deque = deque(maxlen=6)  # (frame index, x, y) of the last confident estimates
         self._exit_velocity = (0.0, 0.0)  # their mean displacement per frame when the loss was declared
         self._seen_levels: np.ndarray | None = None  # channel levels while the target was seen (relit_search)
+        self._relit_at = -1  # the frame whose search was scored on the relit frame (relit_search)
         self.regions: np.ndarray | None = None
         self._search_states: np.ndarray | None = None
         self._search_loglik: np.ndarray | None = None

@@ -284,6 +284,7 @@ class SearchMixin:
                 lut = self.cue.mapped_lut(gain_maps(ref, levels))
                 relit = self.cue.prepare(frame, roi, self.cue.step_for(ell), lut=lut)
                 rho, tot = self.cue.rho(relit, ell, self._sqrt_q, reuse=False)
+                self._relit_at = self.frame_index  # a refined layer must be scored the same way (_refine_layer)
                 if self.params.relit_search == "max":
                     raw, _, feats = self._rho(frame, ell)
                     return np.maximum(rho, raw), tot, feats
@@ -323,9 +324,10 @@ class SearchMixin:
         e_ell = self._ellipses(extra)
         fh, fw = self._shape
         x0, y0, x1, y1 = reachable_roi(e_ell, fw, fh)
-        if (p.relit_search == "off" and not (p.grey_relit_shift > 0 and self.cue.color_space == "gray")
+        if (self._relit_at != self.frame_index and not (p.grey_relit_shift > 0 and self.cue.color_space == "gray")
                 and roi[0] <= x0 and roi[1] <= y0 and x1 <= roi[2] and y1 <= roi[3]):
-            # inside the first layer's quantised region (the usual case): scored on the same features
+            # inside the first layer's quantised region (the usual case), and that layer was not scored on the
+            # relit frame: scored on the same features
             e_rho, e_tot = self._cue_rho(feats, e_ell)
             e_feats = feats
         else:
