@@ -200,8 +200,10 @@ class FusionPFParams(ColorPFParams):
         "split (0.845 -> 0.882) but cost its real sequences 0.019 AUC (docs/fusion-pf.md)."))
     relit_search: Literal["off", "replace", "max"] = param("off", doc=(
         "color-pf's relit search (every search sample rescored under the undone light; ColorModelParams). Off: "
-        "on the tune split ('max', before its 5 % dead zone) it re-acquired 0.69 against 0.67 but cost the real "
-        "sequences 0.006 AUC; relit_colour above does the same for the one candidate the structure backs."))
+        "'max' re-acquired 387 against 377 of 432 tune reappearances in colour scenes, but after real exits (tune "
+        "views and windows) the flag's pooled recall fell 0.625 -> 0.598, since a window's channel medians move "
+        "with what passes through it (docs/robustness.md); relit_colour above does the same for the one candidate "
+        "the structure backs."))
     probation_llr: float = param(15.0, ge=0, le=50, doc=(
         "See ColorModelParams.probation_llr (0, off, there; 15 for color-pf). 15 for fusion-pf, with probation_frames "
         "60, chosen on the tune data (docs/robustness.md, 'fusion-pf doubts a weak re-acquisition'): on the 568 tune "
