@@ -66,3 +66,25 @@ def test_relit_search_leaves_grey_input_alone(seed):
         runs.append([(s.box, s.score, s.lost) for s in (t.update(f) for f in frames[1:])])
     assert any(lost for _, _, lost in runs[0])  # the search ran
     assert runs[0] == runs[1]
+
+
+def test_light_gain_of_blocks_takes_a_change_of_the_whole_view_only():
+    """``light_gain``: a gain over the whole frame is read back from the 3 x 3 blocks; two blocks changed by
+    something passing leave the light as it was; half of the view changed is not a change of the light."""
+    from pftrack.cues.intensity import light_gain, light_levels
+
+    rng = np.random.default_rng(0)
+    f = rng.integers(40, 200, (240, 330, 3)).astype(np.uint8)
+    ref = light_levels(f, "blocks")
+    assert ref.shape == (9, 3)
+    g = light_gain(ref, light_levels((f * np.array([0.5, 0.6, 0.7])).astype(np.uint8), "blocks"))
+    np.testing.assert_allclose(g, [2.0, 1 / 0.6, 1 / 0.7], rtol=0.03)
+    passing = f.copy()
+    passing[:80, :110] = 255  # two whole blocks (a bus in one corner, a shadow in the middle)
+    passing[80:160, 110:220] = 0
+    np.testing.assert_allclose(light_gain(ref, light_levels(passing, "blocks")), 1.0)
+    half = f.copy()
+    half[:, :165] //= 2
+    assert light_gain(ref, light_levels(half, "blocks")) is None
+    whole = light_gain(light_levels(f), light_levels(half))  # the whole frame's medians read it as light
+    assert whole.shape == (3,) and np.all(whole > 1.05)

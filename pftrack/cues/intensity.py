@@ -234,6 +234,32 @@ def channel_levels(frame: np.ndarray, *, stride: int = 4) -> np.ndarray:
     return np.maximum(out, 1.0)
 
 
+def light_levels(frame: np.ndarray, mode: str = "frame") -> np.ndarray:
+    """The light of a BGR frame as the relit search reads it: the frame's channel levels (``"frame"``, ``(3,)``), or
+    those of each block of a 3 x 3 grid (``"blocks"``, ``(9, 3)``; :func:`light_gain`)."""
+    if mode == "frame":
+        return channel_levels(frame, stride=16)
+    h, w = frame.shape[:2]
+    return np.stack([channel_levels(frame[i * h // 3:(i + 1) * h // 3, j * w // 3:(j + 1) * w // 3], stride=8)
+                     for i in range(3) for j in range(3)])
+
+
+def light_gain(reference: np.ndarray, current: np.ndarray, *, tol: float = 0.05, share: float = 2 / 3
+               ) -> np.ndarray | None:
+    """Per-channel gain ``(3,)`` that brings the light ``current`` back to ``reference`` (:func:`light_levels`).
+
+    For whole-frame levels, their ratio. For blocks, the median of the blocks' ratios, and only when at least
+    ``share`` of the blocks agree with it within ``tol`` in every channel: a change of the light moves the whole
+    view alike, while something passing through one part of it (a car, a walker) moves that part alone, and is
+    not a change of the light (None)."""
+    r = np.asarray(reference, np.float64) / np.asarray(current, np.float64)
+    if r.ndim == 1:
+        return r
+    g = np.median(r, axis=0)
+    agree = np.all(np.abs(r / g - 1.0) <= tol, axis=1)
+    return g if float(agree.mean()) >= share else None
+
+
 def gain_maps(reference: np.ndarray, current: np.ndarray) -> np.ndarray:
     """``(3, 256)`` uint8 maps that undo a per-channel gain (von Kries adaptation to a reference frame).
 

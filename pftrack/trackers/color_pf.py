@@ -49,7 +49,7 @@ from ..cues.color import blend_model, model_rho, normalized_model, reachable_roi
 from ..cues.histogram_cue import ColorCue
 from ..cues.illumination import QuotientImage
 from ..cues.lit_histogram import LitHistogram
-from ..cues.intensity import channel_levels
+from ..cues.intensity import light_levels
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
 from ..filtering.loss import LossDetector, toward_background
@@ -233,7 +233,7 @@ class ColorParticleFilter(SearchMixin, VetoMixin, ProbationMixin, PersistenceMix
             self.bg_sd = self.loss.app_sd
         self._since_bg = 0
         if self.params.relit_search != "off" and frame.ndim == 3 and self.cue.color_space == "rgb":
-            self._seen_levels = channel_levels(frame, stride=16)  # the light while the target is seen
+            self._seen_levels = light_levels(frame, self.params.relit_gain)  # the light while the target is seen
 
     # ------------------------------------------------------------------ input
     # ------------------------------------------------------------------ init

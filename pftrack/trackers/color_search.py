@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..cues.color import reachable_roi
-from ..cues.intensity import channel_levels, gain_maps, shifted_rho
+from ..cues.intensity import gain_maps, light_gain, light_levels, shifted_rho
 from ..cues.lk import gray_of
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, X, Y, lost_prediction, reappearance_log_prior
@@ -277,11 +277,11 @@ class SearchMixin:
         is still recognised."""
         ref = self._seen_levels
         if self.params.relit_search != "off" and ref is not None and frame.ndim == 3 and self.cue.color_space == "rgb":
-            levels = channel_levels(frame, stride=16)
-            if np.any(np.abs(ref / levels - 1.0) >= 0.05):  # the light changed (5 % dead zone)
+            g = light_gain(ref, light_levels(frame, self.params.relit_gain))
+            if g is not None and np.any(np.abs(g - 1.0) >= 0.05):  # the light changed (5 % dead zone)
                 h, w = self._shape
                 roi = reachable_roi(ell, w, h)
-                lut = self.cue.mapped_lut(gain_maps(ref, levels))
+                lut = self.cue.mapped_lut(gain_maps(g, np.ones(3)))
                 relit = self.cue.prepare(frame, roi, self.cue.step_for(ell), lut=lut)
                 rho, tot = self.cue.rho(relit, ell, self._sqrt_q, reuse=False)
                 self._relit_at = self.frame_index  # a refined layer must be scored the same way (_refine_layer)
