@@ -51,11 +51,10 @@ def test_relit_search_leaves_grey_input_alone(seed):
     whose light did not move) the refined search layer is scored on the first layer's features as without it, so
     every box, score and flag is the same as with ``relit_search="off"`` (the grey tune scene leave-004 once
     differed: the refined layer was quantised afresh whenever the option was on)."""
+    import pftrack
     from pftrack.synth import leave_scene
 
     from .conftest import render_scene
-
-    import pftrack
 
     scene, frames, _ = render_scene(leave_scene(seed, gray=1.0))
     gt = scene.groundtruth(0)
