@@ -239,3 +239,10 @@ def background_grid(width: float, height: float, hx: float, hy: float, cap: int,
         far = (np.abs(ell[:, 0] - ex[0]) >= hx + ex[2]) | (np.abs(ell[:, 1] - ex[1]) >= hy + ex[3])
         ell = ell[far]
     return ell
+
+
+def inside_cells(lo: float, hi: float, n: int, limit: float) -> np.ndarray:
+    """``(n,)`` bool: which of the ``n`` equal cells of the interval ``[lo, hi]`` lie within ``[0, limit]`` (the
+    columns or rows of a box's patch that are inside the frame)."""
+    e = lo + (hi - lo) * np.arange(n + 1) / n
+    return (e[:-1] >= 0.0) & (e[1:] <= limit)

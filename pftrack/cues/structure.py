@@ -36,6 +36,7 @@ import cv2
 import numpy as np
 
 from .._numba import numba_enabled
+from ..geometry import inside_cells
 from .ncc_kernels import _ncc_boxes, _ncc_one
 from .reduced_region import Reduced, box_bounds, gray_region, reduce_region, reduced_for, reduction_factor
 from .structure_search import propose_centres
@@ -260,6 +261,26 @@ class StructureCue:
         if ell.shape[0] == 1 and numba_enabled():
             return np.array([self._one(red, ell)[0]])
         return ncc_reduced(red, ell, self.shape, self._templates, weights=self.weights, prepared=self._prepared)
+
+    def visible_score(self, frame: np.ndarray, ellipse) -> float | None:
+        """NCC of the part of one ellipse's box inside the frame with the same part of the references (the best of
+        anchor and running mean), or None when the box is inside the frame or less than 2 x 2 of its patch's pixels
+        are: outside the frame a patch repeats the frame's border, which the references do not."""
+        cx, cy, hx, hy = (float(x) for x in np.asarray(ellipse, dtype=np.float64).reshape(4))
+        fh, fw = frame.shape[:2]
+        ph, pw = self.shape
+        cols, rows = inside_cells(cx - hx, cx + hx, pw, fw), inside_cells(cy - hy, cy + hy, ph, fh)
+        if (cols.all() and rows.all()) or cols.sum() < 2 or rows.sum() < 2:
+            return None
+        part = np.ix_(rows, cols)
+        w = self.weights.reshape(ph, pw)[part].ravel()
+        if w.sum() <= 0:
+            return None
+        w = w * (w.size / w.sum())
+        refs = [self._run] + ([self._first] if self.anchor else [])
+        t = standardize(np.stack([r.reshape(ph, pw)[part].ravel() for r in refs]), weights=w)
+        return float(ncc_scores(self.patch(frame, (cx, cy, hx, hy)).reshape(ph, pw)[part].ravel()[None, :], t,
+                                weights=w)[0])
 
     def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
         """NCC of the box of ``ellipse`` ``(cx, cy, hx, hy)`` at each of the half-axis ``ratios`` (same centre) with

@@ -33,6 +33,7 @@ import math
 import numpy as np
 
 from .._numba import njit, numba_enabled
+from ..geometry import inside_cells
 from .reduced_region import Reduced, reduced_for
 
 __all__ = ["BestStructure", "HogStructure", "cell_grid", "hog_descriptors", "hog_ncc", "orientation_integrals",
@@ -364,6 +365,22 @@ class HogStructure:
         """NCC in [-1, 1] of every ellipse's box descriptor with the references (the better of the two)."""
         return self._correlate(frame, roi, ellipses)[0]
 
+    def visible_score(self, frame: np.ndarray, ellipse) -> float | None:
+        """NCC of the descriptor's cells inside the frame with the same cells of the references (the better of the
+        two), or None when every cell is inside or fewer than two are: cells outside the frame are empty, which the
+        references' are not."""
+        cx, cy, hx, hy = (float(x) for x in np.asarray(ellipse, dtype=np.float64).reshape(4))
+        fh, fw = frame.shape[:2]
+        nx, ny = self.grid
+        cols, rows = inside_cells(cx - hx, cx + hx, nx, fw), inside_cells(cy - hy, cy + hy, ny, fh)
+        if (cols.all() and rows.all()) or cols.sum() * rows.sum() < 2:
+            return None
+        def part(d):
+            return d.reshape(ny, nx, -1)[np.ix_(rows, cols)].ravel()
+        refs = standardize_descriptors(np.stack([part(self._run), part(self._first)]))
+        d = standardize_descriptors(part(self._describe(frame, (cx, cy, hx, hy)))[None, :])
+        return float(np.max(d @ refs.T))
+
     def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
         """:meth:`scores` of the box at each half-axis ratio (a number, or a pair ``(rx, ry)``), same centre."""
         cx, cy, hx, hy = (float(x) for x in np.asarray(ellipse, dtype=np.float64).reshape(4))
@@ -442,3 +459,9 @@ class BestStructure:
 
     def proposals(self, frame: np.ndarray, half_axes, k: int) -> tuple[np.ndarray, np.ndarray]:
         return self.cues[0].proposals(frame, half_axes, k)
+
+    def visible_score(self, frame: np.ndarray, ellipse) -> float | None:
+        """The best of the cues' :meth:`visible_score` (None when none of them gives one)."""
+        found = [c.visible_score(frame, ellipse) for c in self.cues if hasattr(c, "visible_score")]
+        found = [v for v in found if v is not None]
+        return max(found) if found else None

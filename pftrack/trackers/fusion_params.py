@@ -189,6 +189,11 @@ class FusionPFParams(ColorPFParams):
         "only, and the report split's lost recall after an exit (a look-alike met at its exact peak)."))
     grey_search_refine: float | None = param(None, ge=0, le=4, doc=(
         "See ColorModelParams.grey_search_refine; None: search_refine on every input (fusion-pf)."))
+    visible_structure: bool = param(False, doc=(
+        "While searching, the loss test of the candidate to acquire takes its structural score over the part of "
+        "its box inside the frame, against the same part of the references, when that is higher (a box partly "
+        "outside the frame samples the frame's border there, or empty gradient cells, which the references do not "
+        "hold): a target that comes back and stays at the edge is not refused by the structure for that."))
     relit_colour: bool = param(True, doc=(
         "While searching, when the colour cue would veto the best candidate that the structural cue alone could "
         "acquire, its colour score is retaken after undoing a global per-channel gain (von Kries: the frame's "

@@ -213,6 +213,12 @@ class FusionPF(ColorPF):
         if not self.structure.ready:  # started from a histogram (init_auto): no reference patch, no evidence
             return np.column_stack([rho, np.full(len(rho), np.nan)])
         s = self.structure.scores(frame, roi, ellipses)
+        if self.mode == "searching" and len(rho) == 1 and self.params.visible_structure:
+            # a candidate partly outside the frame: its visible part against the same part of the references
+            visible = getattr(self.structure, "visible_score", None)  # not every structural cue has one
+            v = visible(frame, ellipses[0]) if visible is not None else None
+            if v is not None and v > s[0]:
+                s[0] = v
         s += 1.0
         s *= 0.5
         if (self.mode == "searching" and len(rho) == 1 and self.params.relit_colour and self._ref_levels is not None
