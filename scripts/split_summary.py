@@ -7,7 +7,8 @@ the fraction of reappearances re-acquired within 15 frames; the median update fp
 A second table gives the tracking percentage (the fraction of frames with IoU > 0.5, book ch. 6 Table 1's
 measure, read from the ``runs/`` records beside results.csv).  With ``--scenes DIR`` (the folder the synthetic
 scenes were written to by ``pftrack synth``), a third table splits the re-acquisitions by the scenes' drawn
-nuisance ``gray`` (``meta.json``): grey scenes, colour scenes, and the rest (real and PETS sequences).
+nuisance ``gray`` (``meta.json``): grey scenes, colour scenes, and the rest (real and PETS sequences); a fourth by
+the scenes' light as well: no change, a drift of the whole frame's light, or a drift on the objects alone.
 """
 
 from __future__ import annotations
@@ -38,18 +39,34 @@ def _mean(vals: list[float]) -> float:
     return sum(vals) / len(vals) if vals else float("nan")
 
 
-def scene_colours(roots: list[str]) -> dict[str, str]:
-    """``sequence -> "grey" | "colour"`` from the ``meta.json`` of the synthetic scenes under ``roots``."""
+def _scene_nuisances(roots: list[str]) -> dict[str, dict]:
+    """``sequence -> nuisances`` from the ``meta.json`` of the synthetic scenes under ``roots``."""
     out = {}
     for root in roots:
         for meta in sorted(Path(root).glob("**/meta.json")):
-            nuisances = json.loads(meta.read_text()).get("nuisances") or {}
-            out[meta.parent.name] = "grey" if nuisances.get("gray") else "colour"
+            out[meta.parent.name] = json.loads(meta.read_text()).get("nuisances") or {}
     return out
 
 
-def reacquired_by_colour(rows: list[dict], kinds: dict[str, str]) -> None:
-    """Re-acquired / reappearances per tracker in grey scenes, colour scenes and the other sequences."""
+def scene_colours(roots: list[str]) -> dict[str, str]:
+    """``sequence -> "grey" | "colour"`` from the ``meta.json`` of the synthetic scenes under ``roots``."""
+    return {s: "grey" if nz.get("gray") else "colour" for s, nz in _scene_nuisances(roots).items()}
+
+
+def scene_lights(roots: list[str]) -> dict[str, str]:
+    """``sequence -> "<colour> <light>"``: the scene's colour and its drawn light (``none``, ``frame``: the whole
+    frame's light drifts, ``objects``: the light drifts on the target and look-alikes alone)."""
+    out = {}
+    for s, nz in _scene_nuisances(roots).items():
+        light = "none" if nz.get("illumination") is None else (
+            "objects" if nz.get("illumination_target_only") else "frame")
+        out[s] = f"{'grey' if nz.get('gray') else 'colour'} {light}"
+    return out
+
+
+def reacquired_by(rows: list[dict], kinds: dict[str, str], columns: list[str], title: str) -> None:
+    """Re-acquired / reappearances per tracker in each of ``columns`` of ``kinds`` (sequences not in ``kinds``:
+    ``"other"``)."""
     counts: dict[tuple[str, str], list[float]] = defaultdict(lambda: [0.0, 0.0])
     for r in rows:
         if r.get("reappearances") in ("", None):
@@ -57,11 +74,16 @@ def reacquired_by_colour(rows: list[dict], kinds: dict[str, str]) -> None:
         c = counts[(r["tracker"], kinds.get(r["sequence"], "other"))]
         c[0] += float(r["reacquired"] or 0)
         c[1] += float(r["reappearances"])
-    print("\nre-acquired / reappearances, by the scenes' colour")
-    print(f"{'tracker':40s} {'grey':>12s} {'colour':>12s} {'other':>12s}")
+    print(f"\nre-acquired / reappearances, {title}")
+    print(f"{'tracker':40s} " + " ".join(f"{k:>14s}" for k in columns))
     for t in sorted({t for t, _ in counts}):
-        cells = [counts.get((t, k), [0.0, 0.0]) for k in ("grey", "colour", "other")]
-        print(f"{t:40s} " + " ".join(f"{int(a):>5d} / {int(b):<4d}" for a, b in cells))
+        cells = [counts.get((t, k), [0.0, 0.0]) for k in columns]
+        print(f"{t:40s} " + " ".join(f"{int(a):>7d} / {int(b):<4d}" for a, b in cells))
+
+
+def reacquired_by_colour(rows: list[dict], kinds: dict[str, str]) -> None:
+    """Re-acquired / reappearances per tracker in grey scenes, colour scenes and the other sequences."""
+    reacquired_by(rows, kinds, ["grey", "colour", "other"], "by the scenes' colour")
 
 
 def main(path: str, scenes: list[str] | None = None) -> None:
@@ -101,6 +123,8 @@ def main(path: str, scenes: list[str] | None = None) -> None:
             print(f"{t:40s} " + " ".join(f"{100 * _mean(v):10.1f}" for v in vals) + f" {100 * _mean(allv):10.1f}")
     if scenes:
         reacquired_by_colour(rows, scene_colours(scenes))
+        lights = [f"{c} {li}" for c in ("colour", "grey") for li in ("none", "frame", "objects")]
+        reacquired_by(rows, scene_lights(scenes), lights, "by the scenes' colour and light")
 
 
 if __name__ == "__main__":

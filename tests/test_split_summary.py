@@ -44,3 +44,29 @@ def test_reacquisitions_are_split_by_scene_colour(tmp_path):
     plain = subprocess.run([sys.executable, str(SCRIPT), str(results)], capture_output=True, text=True,
                            check=True).stdout
     assert "by the scenes' colour" not in plain
+
+
+def test_reacquisitions_are_split_by_scene_light(tmp_path):
+    scenes = tmp_path / "synth"
+    for name, nz in [("vanish-000", {"gray": False, "illumination": None}),
+                     ("vanish-001", {"gray": False, "illumination": [0.5, 0.5, 0.5], "illumination_target_only": False}),
+                     ("vanish-002", {"gray": True, "illumination": [1.4, 1.3, 1.5], "illumination_target_only": True})]:
+        d = scenes / "vanish" / name
+        d.mkdir(parents=True)
+        (d / "meta.json").write_text(json.dumps({"kind": "vanish", "nuisances": nz}))
+    results = tmp_path / "results.csv"
+    with results.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(FIELDS)
+        for seq, reacq in [("vanish-000", 1), ("vanish-001", 0), ("vanish-002", 1)]:
+            w.writerow(["fusion-pf", seq, 0, 0.5, "", "", 100, 1, reacq])
+    out = subprocess.run([sys.executable, str(SCRIPT), str(results), "--scenes", str(scenes)],
+                         capture_output=True, text=True, check=True).stdout
+    table = out.split("by the scenes' colour and light")[1]
+    header = next(ln for ln in table.splitlines() if ln.startswith("tracker"))
+    assert header.split()[1:] == ["colour", "none", "colour", "frame", "colour", "objects", "grey", "none", "grey",
+                                  "frame", "grey", "objects"]
+    line = next(ln for ln in table.splitlines() if ln.startswith("fusion-pf"))
+    # colour none 1 of 1, colour frame 0 of 1, grey objects 1 of 1, the rest empty
+    assert line.split()[1:] == ["1", "/", "1", "0", "/", "1", "0", "/", "0", "0", "/", "0", "0", "/", "0", "1", "/",
+                                "1"]
