@@ -64,5 +64,6 @@ def _row(spec, scenes, monitor: bool) -> None:
     label = f"{spec.name}[monitor=true]" if monitor else spec.name
     print(f"| `{label}` | {spec.family} | {rec} | {fls} | {time.perf_counter() - t0:.1f} |", flush=True)
 
+
 if __name__ == "__main__":
     main()

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -13,8 +14,6 @@ from pftrack.geometry import inside_cells
 
 def _textured(seed: int = 0, shape=(120, 160)) -> np.ndarray:
     rng = np.random.default_rng(seed)
-    import cv2
-
     g = cv2.GaussianBlur(rng.uniform(0, 255, shape).astype(np.float32), (0, 0), 2.0)
     g = (g - g.min()) / (g.max() - g.min()) * 200 + 20
     return np.repeat(g.astype(np.uint8)[..., None], 3, axis=2)

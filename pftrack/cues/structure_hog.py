@@ -375,11 +375,10 @@ class HogStructure:
         cols, rows = inside_cells(cx - hx, cx + hx, nx, fw), inside_cells(cy - hy, cy + hy, ny, fh)
         if (cols.all() and rows.all()) or cols.sum() * rows.sum() < 2:
             return None
-        def part(d):
-            return d.reshape(ny, nx, -1)[np.ix_(rows, cols)].ravel()
-        refs = standardize_descriptors(np.stack([part(self._run), part(self._first)]))
-        d = standardize_descriptors(part(self._describe(frame, (cx, cy, hx, hy)))[None, :])
-        return float(np.max(d @ refs.T))
+        cells = np.ix_(rows, cols)
+        descs = np.stack([self._run, self._first, self._describe(frame, (cx, cy, hx, hy))])
+        z = standardize_descriptors(descs.reshape(3, ny, nx, -1)[:, cells[0], cells[1]].reshape(3, -1))
+        return float(np.max(z[:2] @ z[2]))
 
     def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
         """:meth:`scores` of the box at each half-axis ratio (a number, or a pair ``(rx, ry)``), same centre."""
