@@ -65,6 +65,36 @@ def test_orientation_integrals_put_each_edge_in_its_bins_and_both_backends_agree
         orientation_integrals(np.zeros((4, 4, 3)))
 
 
+
+def _integrals_every_pixel(gray: np.ndarray, bins: int) -> np.ndarray:
+    """The compiled kernel's sums written out pixel by pixel, flat pixels included (their shares are zeros)."""
+    from pftrack.cues.structure_hog import _unsigned_angle
+
+    h, w = gray.shape
+    out = np.zeros((h + 1, w + 1, bins))
+    for j in range(h):
+        row = np.zeros(bins)
+        for i in range(w):
+            gx = float(gray[j, i + 1]) - float(gray[j, i - 1]) if 0 < i < w - 1 else 0.0
+            gy = float(gray[j + 1, i]) - float(gray[j - 1, i]) if 0 < j < h - 1 else 0.0
+            mag = math.sqrt(gx * gx + gy * gy)
+            t = getattr(_unsigned_angle, "py_func", _unsigned_angle)(gy, gx) * (bins / math.pi) - 0.5
+            b0 = math.floor(t)
+            f = t - b0
+            i0 = int(b0) % bins
+            row[i0] += mag * (1.0 - f)
+            row[(i0 + 1) % bins] += mag * f
+            out[j + 1, i + 1] = row + out[j, i + 1]
+    return out
+
+
+def test_orientation_integrals_skip_flat_pixels_without_changing_a_bit():
+    g = _texture(3, (23, 31)).astype(np.uint8)
+    g[:8] = 90  # a flat band: pixels without gradient, skipped by the compiled kernel
+    g[12:, 20:] = 150
+    ref = _integrals_every_pixel(g, 9)
+    assert np.array_equal(orientation_integrals(g, 9, backend="numba"), ref)
+
 def test_descriptors_and_ncc_agree_between_backends_and_a_box_matches_itself():
     rng = np.random.default_rng(2)
     ii = orientation_integrals(_texture(2, (60, 80)).astype(np.uint8), 9)

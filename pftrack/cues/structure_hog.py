@@ -101,31 +101,38 @@ def _unsigned_angle(y, x):
 
 @njit(cache=True)
 def _orientation_integrals_numba(gray, bins, out):
+    """The integrals of :func:`orientation_integrals`, row by row: each row's running sums per bin, added to the
+    integral of the row above.  A pixel without gradient (flat, or on the region's border) adds nothing; it is
+    skipped, which leaves every sum as it was bit for bit, since its two shares are exact zeros added to sums that
+    are never negative zero."""
     h, w = gray.shape
-    for i in range(w + 1):
-        for b in range(bins):
-            out[0, i, b] = 0.0
+    out[0, :, :] = 0.0
     row = np.zeros(bins)
     scale = bins / math.pi
     for j in range(h):
-        for b in range(bins):
-            out[j + 1, 0, b] = 0.0
-            row[b] = 0.0
+        out[j + 1, 0, :] = 0.0
+        row[:] = 0.0
+        above = out[j]
+        here = out[j + 1]
+        inner_row = 0 < j < h - 1
         for i in range(w):
             gx = float(gray[j, i + 1]) - float(gray[j, i - 1]) if 0 < i < w - 1 else 0.0
-            gy = float(gray[j + 1, i]) - float(gray[j - 1, i]) if 0 < j < h - 1 else 0.0
-            mag = math.sqrt(gx * gx + gy * gy)
-            t = _unsigned_angle(gy, gx) * scale - 0.5
-            b0 = math.floor(t)
-            f = t - b0
-            i0 = int(b0)  # -1 .. bins - 1 (t in [-0.5, bins - 0.5]): the bins wrap without an integer division
-            if i0 < 0:
-                i0 += bins
-            i1 = i0 + 1 if i0 + 1 < bins else 0
-            row[i0] += mag * (1.0 - f)
-            row[i1] += mag * f
+            gy = float(gray[j + 1, i]) - float(gray[j - 1, i]) if inner_row else 0.0
+            if gx != 0.0 or gy != 0.0:
+                mag = math.sqrt(gx * gx + gy * gy)
+                t = _unsigned_angle(gy, gx) * scale - 0.5
+                b0 = math.floor(t)
+                f = t - b0
+                i0 = int(b0)  # -1 .. bins - 1 (t in [-0.5, bins - 0.5]): the bins wrap without an integer division
+                if i0 < 0:
+                    i0 += bins
+                i1 = i0 + 1 if i0 + 1 < bins else 0
+                row[i0] += mag * (1.0 - f)
+                row[i1] += mag * f
+            a = above[i + 1]
+            c = here[i + 1]
             for b in range(bins):
-                out[j + 1, i + 1, b] = row[b] + out[j, i + 1, b]
+                c[b] = row[b] + a[b]
     return out
 
 
