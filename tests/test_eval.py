@@ -421,3 +421,34 @@ def test_per_frame_iou_keeps_the_frames_aligned():
     got = per_frame_iou(pred, gt)
     assert got[0] == 1.0 and np.isnan(got[1]) and got[2] == pytest.approx(50 / 150) and got[3] == 0.0
     assert _runs(np.array([0, 1, 1, 0, 1], bool)) == [(1, 3), (4, 5)] and _runs(np.zeros(3, bool)) == []
+
+
+def test_the_lost_flag_rates_pooled_over_frames_weigh_each_frame_once(tmp_path):
+    """The summary's rates are means over sequences; the pooled ones count every absent and every covered frame
+    once, so a run with few covered frames weighs no more than its frames."""
+    from pftrack.eval.notes import pooled_lost_rates
+    from pftrack.eval.report import aggregate, summary_markdown, write_report
+
+    def rec(seq, recall, absent, false, covered, **kw):
+        return dict(tracker="fusion-pf", sequence=seq, seed=0, protocol="ope", auc=0.5, fps=100.0,
+                    lost_recall=recall, absent_frames=absent, false_lost=false, covered_frames=covered, **kw)
+
+    records = [rec("short", 0.5, 2, 0.5, 2), rec("long", 1.0, 98, 0.0, 198)]
+    agg = aggregate(records)
+    assert agg["overall"]["fusion-pf"]["false_lost"] == pytest.approx(0.25)  # the mean over the two sequences
+    p = pooled_lost_rates(records)["fusion-pf"]
+    assert p["false"] == pytest.approx(1 / 200) and p["covered"] == 200
+    assert p["recall"] == pytest.approx(99 / 100) and p["absent"] == 100
+    md = summary_markdown(records)
+    assert "`fusion-pf` 0.990 of 100 / 0.005 of 200" in md
+    write_report(records, tmp_path / "r")
+    assert "0.990 of 100 / 0.005 of 200" in (tmp_path / "r" / "index.html").read_text()
+    assert "covered_frames" in (tmp_path / "r" / "results.csv").read_text().splitlines()[0]
+    # a record that gives a rate without its frame count leaves the pooled rate unknown, not biased
+    old = dict(records[0])
+    del old["covered_frames"]
+    q = pooled_lost_rates([old, records[1]])["fusion-pf"]
+    assert np.isnan(q["false"]) and q["recall"] == pytest.approx(0.99)
+    # no absent or covered frame at all (a tracker without the flag's frames): no sentence
+    assert "Pooled over" not in summary_markdown([dict(tracker="kcf", sequence="s", seed=0, protocol="ope", auc=0.4,
+                                                       fps=300.0)])

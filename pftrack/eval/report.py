@@ -29,19 +29,18 @@ import numpy as np
 
 from ..io.sinks import prepare_output
 from .jobs import ONE_PASS, failed
+from .notes import (_num, _ratio, lost_notes, sequence_speed_ratios, speed_notes,  # noqa: F401
+                    speed_peer, strict_speed_ratios)
 from .paired import paired_html, paired_markdown, paired_reference
 from .timeline import timelines
 
 CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "mean_iou", "failures", "accuracy",
                "fps", "frames", "lost_frames", "lost_recall", "false_lost", "absent_frames", "reappearances",
                "reacquired", "mota", "motp", "idf1", "id_rate", "num_switches", "num_fragmentations",
-               "mostly_tracked", "mostly_lost", "num_false_positives", "num_misses", "e2e_fps", "error"]
+               "mostly_tracked", "mostly_lost", "num_false_positives", "num_misses", "e2e_fps", "covered_frames",
+               "error"]
 MOT_FIELDS = ["mota", "motp", "idf1", "id_rate", "num_switches", "num_fragmentations", "mostly_tracked", "mostly_lost",
               "num_false_positives", "num_misses", "e2e_fps"]
-
-
-def _num(v) -> float:
-    return float("nan") if v is None else float(v)
 
 
 def _mean(vals) -> float:
@@ -139,62 +138,6 @@ def _mot_markdown(records: list[dict], agg: dict, lines: list[str]) -> str:
     return "\n".join(lines)
 
 
-def speed_peer(trackers: list[str]) -> str | None:
-    """The OpenCV tracker that speed ratios are taken against: CSRT when it is in the run, else the first OpenCV
-    tracker; None without one (or without another tracker to compare)."""
-    opencv = [t for t in trackers if t.startswith("opencv-")]
-    if not opencv or len(opencv) == len(trackers):
-        return None
-    return "opencv-csrt" if "opencv-csrt" in opencv else opencv[0]
-
-
-def _upper_median(values: list[float]) -> float:
-    v = sorted(x for x in values if math.isfinite(x))
-    return v[len(v) // 2] if v else float("nan")
-
-
-def strict_speed_ratios(records: list[dict], peer: str) -> dict[str, float]:
-    """Each tracker's upper median update rate over all its (sequence, seed) runs, divided by the peer's: a
-    reading that no single slow or fast sequence moves, and that never averages two middle values."""
-    rates: dict[str, list[float]] = defaultdict(list)
-    for r in records:
-        rates[r["tracker"]].append(_num(r.get("fps")))
-    ref = _upper_median(rates.get(peer, []))
-    return {t: _ratio(_upper_median(v), ref) for t, v in rates.items()}
-
-
-def sequence_speed_ratios(agg: dict, peer: str) -> dict[str, tuple[float, float, float]]:
-    """Each tracker's ratio to the peer sequence by sequence (the median fps over seeds of each, on the sequences both
-    ran): ``(lowest, median, highest)``, NaN where no sequence has both rates.  The peer's cost may depend on the
-    target (CSRT's on its size) while the tracker's does not, and then the ratio of the two medians hides a spread
-    that this reading shows."""
-    out = {}
-    for t in agg["trackers"]:
-        r = [_ratio(agg["cell"][(t, s)]["fps"], agg["cell"][(peer, s)]["fps"]) for s in agg["sequences"]
-             if (t, s) in agg["cell"] and (peer, s) in agg["cell"]]
-        r = [x for x in r if math.isfinite(x)]
-        out[t] = (min(r), float(np.median(r)), max(r)) if r else (float("nan"),) * 3
-    return out
-
-
-def speed_notes(records: list[dict], agg: dict, peer: str, order: list[str]) -> list[str]:
-    """The two sentences under a table with a ``× peer`` column: the strict reading and the ratio sequence by
-    sequence, for the trackers of ``order`` other than the peer (summary.md and index.html alike)."""
-    strict = strict_speed_ratios(records, peer)
-    per = sequence_speed_ratios(agg, peer)
-    others = [t for t in order if t != peer]
-    return [f"× {peer}: the ratio of the median fps in this run. The strictest reading, the upper median of all "
-            "(sequence, seed) update rates of each tracker against the same of the peer's: "
-            + ", ".join(f"`{t}` {strict[t]:.1f}×" for t in others) + ".",
-            "Sequence by sequence (each tracker's median fps over the peer's on the same sequence), lowest, median "
-            "and highest: " + ", ".join(f"`{t}` {per[t][0]:.1f}×, {per[t][1]:.1f}×, {per[t][2]:.1f}×"
-                                        for t in others) + "."]
-
-
-def _ratio(a: float, b: float) -> float:
-    return a / b if math.isfinite(b) and b > 0 else float("nan")
-
-
 def _one_pass(protocols) -> bool:
     """Are any of these protocols scored by the OTB curves (one pass from a first box: OPE, SRE)?"""
     return any(p in ONE_PASS for p in protocols)
@@ -269,6 +212,8 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
             row += [_fmt(_ratio(o["fps"], agg["overall"][peer]["fps"]), 1)]
         lines.append("| " + " | ".join(row) + " |")
     lines.append("")
+    if ope and (pooled := lost_notes(records, order)):
+        lines += pooled + [""]
     if peer is not None:
         lines += speed_notes(records, agg, peer, order) + [""]
     reference = paired_reference(agg["trackers"], peer) if ope else None
@@ -469,9 +414,9 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
         "<a href='summary.md'>summary.md</a>.</p>",
         "<table><tr>" + "".join(f"<th>{e(h)}</th>" for h in head) + "</tr>" + "".join(rows) + "</table>",
     ]
-    if peer is not None:
-        parts += ["<p>" + re.sub(r"`([^`]+)`", r"<code>\1</code>", e(line)) + "</p>"
-                  for line in speed_notes(records, agg, peer, agg["trackers"])]
+    notes = (lost_notes(records, agg["trackers"]) if ope else []) + (
+        speed_notes(records, agg, peer, agg["trackers"]) if peer is not None else [])
+    parts += ["<p>" + re.sub(r"`([^`]+)`", r"<code>\1</code>", e(line)) + "</p>" for line in notes]
     reference = paired_reference(agg["trackers"], peer) if ope else None
     if reference is not None:
         parts.append(paired_html(agg, reference, agg["trackers"]))
