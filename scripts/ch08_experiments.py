@@ -24,7 +24,7 @@ import numpy as np
 from pftrack.cli import main as cli
 from pftrack.eval.mot import mot_scores
 from pftrack.io.motion_vectors import encode_h264, iter_mv_frames
-from pftrack.multi.compressed import intensity_level, motion_sigma
+from pftrack.multi.motion_activity import intensity_level, motion_sigma
 
 
 def encode_pets(data: Path, lo: int, hi: int, path: Path) -> np.ndarray:

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from pftrack.multi import compressed as C
+from pftrack.multi import motion_activity as A
 
 av = pytest.importorskip("av")
 needs_x264 = pytest.mark.skipif("libx264" not in av.codecs_available, reason="PyAV without libx264")
@@ -125,11 +126,11 @@ def test_statuses_entering_and_leaving():
 
 
 def test_activity_levels_and_weights():
-    assert C.intensity_level([0.5, 3.9, 10.0, 17.0, 20.0, 40.0]).tolist() == [1, 2, 2, 3, 4, 5]
-    w = C.partition_weights([16, 8, 16, 8], [16, 8, 8, 4], np.arange(4), n_mb=300, penalty=False)
+    assert A.intensity_level([0.5, 3.9, 10.0, 17.0, 20.0, 40.0]).tolist() == [1, 2, 2, 3, 4, 5]
+    w = A.partition_weights([16, 8, 16, 8], [16, 8, 8, 4], np.arange(4), n_mb=300, penalty=False)
     assert np.allclose(w, [1.0, 4.0, np.sqrt(2.0), np.sqrt(8.0)])
     # the penalty damps the n-th partition of a class more than the first
-    wp = C.partition_weights([8] * 5, [8] * 5, np.arange(5), n_mb=20, penalty=True)
+    wp = A.partition_weights([8] * 5, [8] * 5, np.arange(5), n_mb=20, penalty=True)
     assert np.all(np.diff(wp) < 0)
     dt = np.dtype([("source", "i4"), ("w", "u1"), ("h", "u1"), ("src_x", "i2"), ("src_y", "i2"), ("dst_x", "i2"),
                    ("dst_y", "i2"), ("flags", "u8"), ("motion_x", "i4"), ("motion_y", "i4"), ("motion_scale", "u2")])
@@ -141,9 +142,9 @@ def test_activity_levels_and_weights():
     small["source"], small["w"], small["h"], small["motion_scale"] = -1, 8, 8, 4
     small["motion_x"] = -24          # 6 px
     m = np.concatenate([mvs, small])
-    s0 = C.motion_sigma(m, 320, 240, weighted=False, mv_scale=1.0)
-    s1 = C.motion_sigma(m, 320, 240, weighted=True, penalty=False, mv_scale=1.0)
-    assert s1 > s0 and C.intensity_level(s0) == 1 and C.intensity_level(s1) > 1
+    s0 = A.motion_sigma(m, 320, 240, weighted=False, mv_scale=1.0)
+    s1 = A.motion_sigma(m, 320, 240, weighted=True, penalty=False, mv_scale=1.0)
+    assert s1 > s0 and A.intensity_level(s0) == 1 and A.intensity_level(s1) > 1
 
 
 def test_missing_pyav_names_the_extra(monkeypatch):

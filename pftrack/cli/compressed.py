@@ -30,7 +30,7 @@ def add_activity(sub) -> None:
 def cmd_activity(args) -> int:
     from ..io.motion_vectors import MVSource, iter_mv_frames, mv_field
     from ..io.sinks import _TextSink, prepare_output
-    from ..multi.compressed import intensity_level, motion_sigma
+    from ..multi.motion_activity import intensity_level, motion_sigma
 
     length = MVSource(args.source).length  # checks the file, its stream and codec before any output exists
     prepare_output(args.out)

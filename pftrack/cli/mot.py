@@ -127,14 +127,8 @@ def run_cd(source_spec, *, out, video_out=None, params=None, quiet=False, mpeg7:
 
     from ..io.motion_vectors import iter_mv_frames
     from ..io.sinks import MotSink, VideoSink, prepare_output, prepare_video_output
-    from ..multi.compressed import (
-        BlockAnalyser,
-        CDParams,
-        CDTracker,
-        TemporalRefiner,
-        intensity_level,
-        motion_sigma,
-    )
+    from ..multi.compressed import BlockAnalyser, CDParams, CDTracker, TemporalRefiner
+    from ..multi.motion_activity import intensity_level, motion_sigma
     from ..pipeline import interrupt_on_sigterm
     from ..viz.draw import color_for, draw_box
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..multi.compressed import THRESHOLDS
+from ..multi.motion_activity import THRESHOLDS
 
 
 def plot_activity(series, path, title: str = "motion activity") -> None:
