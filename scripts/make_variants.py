@@ -9,6 +9,10 @@ For each sequence two folders are written next to each other in ``--out``:
   falls from 1.0 to 0.4 and back over the sequence, times a bright spot that drifts across the
   frame (a lamp), seeded by the sequence name.
 
+With ``--light-seeds A-B`` only grey + illumination copies are written, one per seed K, named
+``NAME-gray-light-sK``: the same kind of light with a lamp drawn afresh from the sequence name and K (fresh
+draws of the lighting that no choice was made on; without the option the lamp is drawn from the name alone).
+
 With ``--h264 CRF`` a third folder, ``NAME-h264``, holds the colour frames encoded as H.264 at that constant rate
 factor (libx264, in memory) and decoded again, saved as PNG: a recorder's file instead of clean frames (needs
 PyAV, the ``mv`` extra).
@@ -28,6 +32,7 @@ import numpy as np
 
 from pftrack.io.codec import h264_round_trip
 from pftrack.io.datasets import read_sequence, write_groundtruth
+from pftrack.cli.common import parse_seeds
 
 
 def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
@@ -63,7 +68,10 @@ def main() -> None:
     ap.add_argument("sequences", nargs="+")
     ap.add_argument("--out", required=True)
     ap.add_argument("--h264", type=int, metavar="CRF", help="only the H.264 copies (NAME-h264), at this CRF")
+    ap.add_argument("--light-seeds", metavar="A-B", help="only grey + illumination copies, one per seed "
+                    "(NAME-gray-light-sK, the lamp drawn afresh)")
     args = ap.parse_args()
+    light_seeds = parse_seeds(args.light_seeds) if args.light_seeds else None
     out = Path(args.out)
     for spec in args.sequences:
         seq = read_sequence(spec)
@@ -73,17 +81,19 @@ def main() -> None:
             write_h264(seq, out / f"{seq.name}-h264", args.h264)
             print(f"{seq.name}: {n} frames -> {out}/{seq.name}-h264 (crf {args.h264})")
             continue
-        for variant in ("gray", "gray-light"):
+        variants = ([("gray", None), ("gray-light", seed)] if light_seeds is None else
+                    [(f"gray-light-s{k}", zlib.crc32(f"{seq.name}#{k}".encode())) for k in light_seeds])
+        for variant, lamp in variants:
             dest = out / f"{seq.name}-{variant}"
             (dest / "img").mkdir(parents=True, exist_ok=True)
             for i, path in enumerate(seq.frames):
                 img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-                if variant == "gray-light":
-                    f = light_field(i / max(n - 1, 1), img.shape[0], img.shape[1], seed)
+                if lamp is not None:
+                    f = light_field(i / max(n - 1, 1), img.shape[0], img.shape[1], lamp)
                     img = np.clip(img.astype(np.float32) * f, 0, 255).astype(np.uint8)
                 cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
             copy_truth(seq, dest)
-        print(f"{seq.name}: {n} frames -> {out}/{seq.name}-gray, -gray-light")
+        print(f"{seq.name}: {n} frames -> " + ", ".join(f"{out}/{seq.name}-{v}" for v, _ in variants))
 
 
 if __name__ == "__main__":

@@ -1,0 +1,54 @@
+"""scripts/make_variants.py: grey and grey + illumination copies, and fresh draws of the lamp (--light-seeds)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from pftrack.io.datasets import read_sequence, write_groundtruth
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "make_variants.py"
+
+
+def _otb(root: Path, n: int = 6) -> Path:
+    """A tiny OTB folder: textured colour frames and a box per frame."""
+    rng = np.random.default_rng(0)
+    seq = root / "tiny"
+    (seq / "img").mkdir(parents=True)
+    for i in range(n):
+        cv2.imwrite(str(seq / "img" / f"{i + 1:04d}.png"), rng.integers(60, 200, (48, 64, 3), dtype=np.uint8))
+    write_groundtruth(seq / "groundtruth_rect.txt", np.tile([10.0, 12.0, 20.0, 16.0], (n, 1)))
+    return seq
+
+
+def _run(*args: str) -> None:
+    subprocess.run([sys.executable, str(SCRIPT), *args], check=True, capture_output=True, text=True)
+
+
+def _frames(path: Path) -> np.ndarray:
+    return np.stack([cv2.imread(str(p), cv2.IMREAD_GRAYSCALE) for p in read_sequence(path).frames]).astype(float)
+
+
+def test_light_seeds_write_only_fresh_lamps_each_its_own(tmp_path):
+    seq = _otb(tmp_path)
+    _run(str(seq), "--out", str(tmp_path / "a"))
+    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["tiny-gray", "tiny-gray-light"]
+    _run(str(seq), "--light-seeds", "1-2", "--out", str(tmp_path / "b"))
+    b = tmp_path / "b"
+    assert sorted(p.name for p in b.iterdir()) == ["tiny-gray-light-s1", "tiny-gray-light-s2"]
+    s1, s2, base = _frames(b / "tiny-gray-light-s1"), _frames(b / "tiny-gray-light-s2"), _frames(tmp_path / "a" /
+                                                                                                   "tiny-gray-light")
+    grey = _frames(tmp_path / "a" / "tiny-gray")
+    # the lamps differ between seeds and from the name's own lamp; the first frame has the full gain (1) everywhere
+    # but under the spot, so each copy is the grey frame times a field in [0.55, 1.45]
+    assert np.abs(s1 - s2).mean() > 2 and np.abs(s1 - base).mean() > 2
+    assert np.array_equal(read_sequence(b / "tiny-gray-light-s1").groundtruth, read_sequence(seq).groundtruth)
+    ratio = (s1[0] + 1) / (grey[0] + 1)
+    assert 0.45 < np.median(ratio) < 1.55
+    # the same seed gives the same copy again
+    _run(str(seq), "--light-seeds", "1", "--out", str(tmp_path / "c"))
+    assert np.array_equal(_frames(tmp_path / "c" / "tiny-gray-light-s1"), s1)
