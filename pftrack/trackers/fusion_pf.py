@@ -32,7 +32,7 @@ from ..cues.contrast import (
     foreground_lut,
     probability_integral,
 )
-from ..cues.intensity import channel_levels, gain_maps, is_gray
+from ..cues.intensity import gain_maps, is_gray, light_levels
 from ..cues.grey_patch import grey_patch
 from ..cues.motion import LocalMotionCue, local_motion
 from ..cues.scale_search import aspect_factor, size_factor
@@ -192,12 +192,12 @@ class FusionPF(ColorPF):
     def _background_stats(self, frame, exclude):
         super()._background_stats(frame, exclude)
         if self.params.relit_colour and self.cue.color_space == "rgb" and frame.ndim == 3 and self.mode == "tracking":
-            self._ref_levels = channel_levels(frame, stride=16)  # the light while the target is seen
+            self._ref_levels = light_levels(frame)  # the light while the target is seen (as the relit search reads it)
 
     def _relit_rho(self, frame: np.ndarray, ellipse: np.ndarray) -> float:
         """Colour rho of one ellipse with the frame's per-channel gain against ``_ref_levels`` undone."""
         if self._levels is None or self._levels[0] != self.frame_index:
-            self._levels = (self.frame_index, channel_levels(frame, stride=16))
+            self._levels = (self.frame_index, light_levels(frame))
         e = np.asarray(ellipse, dtype=np.float64).reshape(1, 4)
         fh, fw = self._shape
         roi = (max(int(e[0, 0] - e[0, 2]) - 1, 0), max(int(e[0, 1] - e[0, 3]) - 1, 0),
