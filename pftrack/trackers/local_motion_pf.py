@@ -18,12 +18,16 @@ model for visual tracking", Pattern Recognition 42 (2009) — ``shared/seeds/000
 
 By default the tracker also detects the target's loss with ``color-pf``'s loss test and searches the frame to
 re-acquire it (``search``, chosen on the tune split); ``search=false`` is the paper's Algorithm 1 as written, which
-always tracks and never raises ``lost``.
+always tracks and never raises ``lost``. On grey input it takes ``color-pf``'s grey model (the grey levels' and
+the quotient image's histograms, the fused structural check and its size search) and grey search, with
+``color-pf``'s loss counts (``lost_frames = 2``, ``persist_frames = 3``), chosen on the tune data
+(docs/local-motion.md); ``grey_check=off grey_histogram=levels`` gives the paper's grey-level histogram.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -66,6 +70,26 @@ class LocalMotionPFParams(ColorModelParams):
     sigma_r: float = param(0.3, gt=0, doc="sigma_r of Eq. 7 (§5: 0.3); larger than sigma_theta, so the "
                                           "amplitude weighs less than the direction.")
     w_noise: float = param(0.01, ge=0, lt=1, doc="Weight of the uniform component of Eq. 7 (§5: 0.01).")
+    # color-pf's grey model and grey search, and its loss and persistence counts: chosen on the tune data under a
+    # rule stated beforehand (reports/lm_grey_rule2.txt; docs/local-motion.md, "Grey input")
+    grey_check: Literal["off", "structure", "fused"] = param("fused", doc=(
+        "See ColorModelParams.grey_check. 'fused', color-pf's value, chosen on the tune data with the five settings "
+        "below (docs/local-motion.md): grey tune set mean AUC 0.534 against 0.376, tune split 0.456 against 0.404."))
+    grey_histogram: Literal["levels", "both"] = param("both", doc=(
+        "See ColorModelParams.grey_histogram. 'both', color-pf's value (with grey_check)."))
+    grey_scale_search: float = param(0.03, ge=0, le=0.5, doc=(
+        "See ColorModelParams.grey_scale_search. 0.03, color-pf's value (with grey_check)."))
+    grey_search_refine: float | None = param(0.5, ge=0, le=4, doc=(
+        "See ColorModelParams.grey_search_refine. 0.5, color-pf's value (with grey_check)."))
+    grey_search_structure: bool = param(True, doc=(
+        "See ColorModelParams.grey_search_structure. On, color-pf's value (with grey_check): without it the search "
+        "of grey otb_dragonbaby never re-acquired, and the tune split's false-lost rate rose beyond its rule."))
+    lost_frames: int = param(2, ge=1, le=1000, doc=(
+        "See ColorModelParams.lost_frames. 2, color-pf's value (with grey_check; acts on colour input as well): tune "
+        "split false-lost 0.029 against 0.034 (mean over sequences)."))
+    persist_frames: int = param(3, ge=0, le=1000, doc=(
+        "See ColorModelParams.persist_frames (0 there). 3, color-pf's value (with grey_check; acts on colour input "
+        "as well)."))
 
 
 class LocalMotionPF(ColorParticleFilter):
