@@ -1,6 +1,6 @@
 """Book ch. 13 experiments (docs/surfaces.md): deformable-surface tracking with and without the photometric warp.
 
-    python scripts/ch13_experiments.py [--part select,t1,t2,real,lcurve,speed] [--json reports/ch13.json]
+    python scripts/ch13_experiments.py [--part select,t1,t2,real,lcurve,t4,speed] [--json reports/ch13.json]
 
 Synthetic deforming sheets (`pftrack synth deform`): smooth warps up to ~12 px, shading 0.6-1.3, noise 0.01.
 * select: lambda chosen on the tune seeds 0-4 (mean vertex RMSE);
@@ -10,6 +10,7 @@ Synthetic deforming sheets (`pftrack synth deform`): smooth warps up to ~12 px, 
 * real: the same on textures cut from frames of the real dev sequences, JPEG quality 85 (what ch13.md §5.3
   proposes while no real deforming-surface clip is bundled);
 * lcurve: E_D and E_S over the chapter's lambda values (Fig. 7) on tune seed 0;
+* t4: 300 frames, analysis by synthesis against frame-to-frame chaining (report seeds 100-104);
 * speed: frames per second at 480x360 with a 7x7 mesh, and at 768x1024 with a 300x300 region and 20 px spacing.
 """
 
@@ -149,6 +150,40 @@ def part_lcurve(out):
     out["lcurve"] = {"rows": rows, "corner": rows[k]["lam"]}
 
 
+def part_t4(out):
+    """ch13.md T4: 300 frames, analysis by synthesis (reference I_0) against frame-to-frame chaining (reference: the
+    previous real frame in model coordinates). Mean vertex error at frames 10 and 300, and over frames 6-15 and
+    291-300 (a single frame's error is noisy)."""
+    rows = []
+    for seed in range(100, 105):
+        sc = deform_scene(seed, n_frames=301)
+        row = {"seed": seed}
+        for ref in ("model", "previous"):
+            tr = DeformableMesh(MeshParams(reference=ref))
+            tr.init(sc.frames[0], sc.box)
+            e, lost = [np.nan], 0
+            for n in range(1, len(sc.frames)):
+                st = tr.update(sc.frames[n])
+                lost += st.lost
+                e.append(float(np.mean(np.linalg.norm(st.info["mesh"] - sc.truth(n, tr.V0)[0], axis=1))))
+            e = np.array(e)
+            row[ref] = {"err10": e[10], "err300": e[300], "ratio": e[300] / e[10],
+                        "win_early": float(np.mean(e[6:16])), "win_late": float(np.mean(e[291:301])),
+                        "win_ratio": float(np.mean(e[291:301]) / np.mean(e[6:16])), "mean": float(np.nanmean(e)),
+                        "lost": int(lost)}
+            r = row[ref]
+            print(f"t4 seed {seed} {ref:8s}: error at 10 {r['err10']:.3f} px, at 300 {r['err300']:.3f} px "
+                  f"(x{r['ratio']:.2f}); frames 6-15 {r['win_early']:.3f}, 291-300 {r['win_late']:.3f} "
+                  f"(x{r['win_ratio']:.2f}); mean {r['mean']:.3f}; lost {lost}", flush=True)
+        rows.append(row)
+    for ref in ("model", "previous"):
+        ratios = [r[ref]["ratio"] for r in rows]
+        print(f"t4 {ref}: ratio 300/10 {min(ratios):.2f}-{max(ratios):.2f} (median {np.median(ratios):.2f}); "
+              f"window ratio median {np.median([r[ref]['win_ratio'] for r in rows]):.2f}; mean error "
+              f"{np.mean([r[ref]['mean'] for r in rows]):.3f} px", flush=True)
+    out["t4"] = rows
+
+
 def part_speed(out):
     sc = deform_scene(101, n_frames=31)
     r = run_sequence(sc)
@@ -169,12 +204,12 @@ def part_speed(out):
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", default="select,t1,t2,real,lcurve,speed")
+    ap.add_argument("--part", default="select,t1,t2,real,lcurve,t4,speed")
     ap.add_argument("--json")
     a = ap.parse_args()
     out: dict = {}
     parts = {"select": part_select, "t1": part_t1, "t2": part_t2, "real": part_real, "lcurve": part_lcurve,
-             "speed": part_speed}
+             "t4": part_t4, "speed": part_speed}
     for p in a.part.split(","):
         parts[p](out)
     if a.json:

@@ -43,6 +43,23 @@ def frame_to_model(V0: np.ndarray, V: np.ndarray, tris: np.ndarray, shape: tuple
     return mx, my, inside.reshape(xs.shape), (int(lo[0]), int(lo[1]))
 
 
+def to_model(frame_gray: np.ndarray, grid: Grid, d: np.ndarray, model: str = "affine") -> np.ndarray:
+    """The frame seen in model coordinates: ``R(x) = I_n(x + D(x))`` for every pixel ``x`` of the model image, with
+    ``D`` the mesh's displacement field (Eq. 5) from vertex displacements ``d`` (K, 2).  Outside the mesh the border
+    cells' displacement is carried on unchanged (the points are clamped to the mesh before interpolation).  This is
+    the reference of frame-to-frame chaining (ch13.md T4): the previous real frame registered onto the model."""
+    h, w = frame_gray.shape[:2]
+    ys, xs = np.mgrid[0:h, 0:w]
+    pts = np.stack([xs.ravel(), ys.ravel()], 1).astype(np.float64)
+    x1, y1 = grid.x0 + grid.sx * (grid.cols - 1), grid.y0 + grid.sy * (grid.rows - 1)
+    inner = np.c_[np.clip(pts[:, 0], grid.x0, x1), np.clip(pts[:, 1], grid.y0, y1)]
+    idx, wts = interp_weights(grid, inner, model)
+    D = np.einsum("pm,pmc->pc", wts, np.asarray(d, np.float64)[idx])
+    mx = (pts[:, 0] + D[:, 0]).reshape(h, w).astype(np.float32)
+    my = (pts[:, 1] + D[:, 1]).reshape(h, w).astype(np.float32)
+    return cv2.remap(frame_gray.astype(np.float32), mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
 def synthesize(I0: np.ndarray, V0, V, tris, rho=None, pgrid: Grid | None = None, model: str = "affine"):
     """``I_hat_n`` on the deformed mesh's bounding box: ``rho * I_0`` sampled at the model points.
     Returns ``(image, mask, (x0, y0))`` or ``None``."""

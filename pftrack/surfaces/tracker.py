@@ -8,6 +8,9 @@ starts from ``I_0`` it is the chapter's analysis by synthesis: errors do not acc
 frame.  The box reported is the bounding box of the deformed mesh; ``info["mesh"]`` holds the vertices
 (row-major) and ``info["shading"]`` the photometric ratios.
 
+``reference="previous"`` registers each frame onto the previous one instead (frame-to-frame chaining, the variant
+the chapter argues against; ch13.md T4).
+
 ``lost`` is raised while the robust residual RMS stays above ``lost_rms`` (occlusion, the surface left
 the frame) or a mesh triangle folds; the last good mesh is kept meanwhile.
 """
@@ -24,6 +27,7 @@ from ..geometry import Box
 from ..params import Params, param
 from ..trackers.base import Tracker, TrackState
 from .mesh import Grid
+from .render import to_model
 from .solver import MeshSolver, SolverSettings
 
 
@@ -49,6 +53,11 @@ class MeshParams(Params):
     lost_rms: float = param(0.12, gt=0, le=1, doc=(
         "Residual RMS (intensities in [0, 1]) above which the frame is judged not to show the surface."))
     velocity: bool = param(False, doc="Start each frame from a constant-velocity prediction of d instead of the last d.")
+    reference: Literal["model", "previous"] = param("model", doc=(
+        "'model': every frame is registered onto the first frame's model image I_0, the chapter's analysis by "
+        "synthesis (§5.5), so errors do not accumulate. 'previous': frame-to-frame chaining, the variant the chapter "
+        "argues against (ch13.md T4): each frame is registered onto the previous real frame seen in model "
+        "coordinates, and the shading ratios are relative to that frame."))
     max_pixels: int = param(60000, ge=0, le=100_000_000, doc=(
         "Speed bound: on a pyramid level whose region has more pixels, a regular subset of about this many is used "
         "(0: every pixel). The 480x360 sheets of docs/surfaces.md (about 48 000 pixels) stay under it."))
@@ -86,11 +95,16 @@ class DeformableMesh(Tracker):
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
         start = self.d + (self.d - self.d_prev) if p.velocity else self.d
-        d, rho, info = self.solver.solve(gray01(frame), start, self.rho)
+        g = gray01(frame)
+        d, rho, info = self.solver.solve(g, start, self.rho)
         lost = bool(info["folded"] or info["rms"] > p.lost_rms or info["valid_fraction"] < 0.3
                     or not np.all(np.isfinite(d)))
         if not lost:
             self.d_prev, self.d, self.rho = self.d, d, rho
+            if p.reference == "previous":       # chaining: the next frame is registered onto this one
+                self.solver = MeshSolver(to_model(g, self.grid, d, p.model), self.grid, self.pgrid,
+                                         self.solver.s)
+                self.rho = np.ones(self.pgrid.K)
         self.last = info
         return self._state(lost)
 
