@@ -109,7 +109,7 @@ def add_synth(sub) -> None:
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
     p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse",
-                                                             "twocam", "walkers", "xray", "deform", "face"],
+                                                             "twocam", "walkers", "xray", "deform", "kymo", "face"],
                    help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
                         "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
                         "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7; 'traffic-sparse' and "
@@ -118,7 +118,9 @@ def add_synth(sub) -> None:
                         "cuts the MOTChallenge sequence given with --source into two cameras with disjoint views "
                         "and a seeded colour response (cam_a/, cam_b/, identity.csv; book ch. 11); 'deform' is a deforming "
                         "textured sheet under changing shading (img/, mesh_gt.csv of a 7x7 mesh, shading_gt.csv, "
-                        "box.txt; book ch. 13); 'face' is a grey face under a dimming light, a drifting lamp and a "
+                        "box.txt; book ch. 13); 'kymo' is a sheet under camera jitter with a patch vibrating inside it "
+                        "(img/, box.txt, roi.txt, scanline.txt, truth.json; the stabilised kymogram of book ch. 13); "
+                        "'face' is a grey face under a dimming light, a drifting lamp and a "
                         "sweeping shadow, seen by a panning and zooming camera (built from scikit-image's portrait)")
     p.add_argument("--source", help="xray: the grey image to warp (an angiography frame); twocam: a MOTChallenge "
                                     "sequence folder")
@@ -256,6 +258,10 @@ def cmd_synth(args) -> int:
             from ..synth.deform import deform_scene, export_deform
 
             export_deform(deform_scene(sd), out / f"deform-{sd:03d}")
+        elif args.kind == "kymo":
+            from ..synth.deform import export_kymo, kymo_scene
+
+            export_kymo(kymo_scene(sd), out / f"kymo-{sd:03d}")
         elif args.kind == "face":
             from ..synth.face import export_face, face_scene
             from ..synth.face_live import live_face_scene

@@ -26,6 +26,11 @@ def add_surface(sub) -> None:
     p.add_argument("--out", default="mesh.csv", help="CSV output (default mesh.csv)")
     p.add_argument("--video-out", help="video with the mesh drawn (red while lost)")
     p.add_argument("--texture", help="with --video-out: an image painted onto the surface, shaded (virtual mirror)")
+    p.add_argument("--kymogram", help="PNG: a stabilised kymogram, the --scanline of every frame warped back by the "
+                                      "rigid motion of --roi (book ch. 13, kymography; use a stiff --lambda, e.g. 0.5)")
+    p.add_argument("--scanline", help="with --kymogram: the scan line X1,Y1;X2,Y2 in first-frame pixels")
+    p.add_argument("--roi", help="with --kymogram: X,Y,W,H of the region whose motion is undone (default: --box)")
+    p.add_argument("--kymogram-raw", help="with --kymogram: also the kymogram of the frames as they are (PNG)")
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_surface)
 
@@ -38,6 +43,7 @@ def cmd_surface(args) -> int:
     from ..io.sources import open_source
     from ..surfaces.mesh import parse_mesh
     from ..surfaces.render import draw_mesh, retexture
+    from ..surfaces.kymograph import Kymograph, stabilising_transform
     from ..surfaces.tracker import DeformableMesh, MeshParams
 
     try:
@@ -50,6 +56,7 @@ def cmd_surface(args) -> int:
         kw["lam"] = args.lam
     params = MeshParams.from_mapping(kw)
     texture = image_file(args.texture) if args.texture else None
+    kymo = _kymogram_options(args, box)
     prepare_output(args.out)
     if args.video_out:
         prepare_video_output(args.video_out)
@@ -61,6 +68,9 @@ def cmd_surface(args) -> int:
         source.close()
         raise BoxError(f"box {args.box} is not inside the {W}x{H} image with at least 8x8 pixels")
     tracker = DeformableMesh(params)
+    if kymo is not None:
+        (p0, p1), roi = kymo
+        stab, raw = Kymograph(p0, p1), Kymograph(p0, p1)
     sinks: list = []
     bar = None
     done = lost_frames = 0
@@ -76,6 +86,9 @@ def cmd_surface(args) -> int:
 
         def emit(num, img, state) -> None:
             V = state.info["mesh"]
+            if kymo is not None:
+                stab.add(img, stabilising_transform(tracker.grid, V - tracker.V0, roi, params.model))
+                raw.add(img)
             out._write(f"{num}," + ",".join(f"{v:.3f}" for v in V.ravel()))
             if video:
                 canvas = img
@@ -90,8 +103,48 @@ def cmd_surface(args) -> int:
         raise Interrupted(f"interrupted; rows so far are in {args.out}") from None
     finally:
         close_all(bar, sinks, source)
+        if kymo is not None:      # what was computed, also after an interruption
+            _write_png(args.kymogram, stab.image())
+            if args.kymogram_raw:
+                _write_png(args.kymogram_raw, raw.image())
     print(f"mesh {cols}x{rows} through {done} frames ({lost_frames} lost) -> {args.out}", file=sys.stderr)
+    if kymo is not None:
+        print(f"kymogram of {done} frames -> {args.kymogram}", file=sys.stderr)
     return 0
+
+
+def _kymogram_options(args, box):
+    """``((p0, p1), roi)`` of the kymogram options, checked (one-line errors), or None without ``--kymogram``."""
+    from ..errors import ParameterError
+    from ..events.geometry import parse_polyline
+    from ..geometry import parse_box
+    from ..io.sinks import prepare_output
+
+    if not args.kymogram:
+        for opt in ("scanline", "roi", "kymogram_raw"):
+            if getattr(args, opt):
+                raise ParameterError(f"--{opt.replace('_', '-')} needs --kymogram")
+        return None
+    if not args.scanline:
+        raise ParameterError("--kymogram needs --scanline X1,Y1;X2,Y2")
+    try:
+        line = parse_polyline(args.scanline)
+    except ValueError as exc:
+        raise ParameterError(f"--scanline: {exc}") from None
+    if len(line) != 2:
+        raise ParameterError("--scanline: one segment X1,Y1;X2,Y2")
+    roi = parse_box(args.roi) if args.roi else box
+    prepare_output(args.kymogram)
+    if args.kymogram_raw:
+        prepare_output(args.kymogram_raw)
+    return (line[0], line[1]), roi
+
+
+def _write_png(path, image) -> None:
+    import cv2
+
+    if image.size:
+        cv2.imwrite(str(path), image)
 
 
 def read_mesh_csv(path) -> tuple[np.ndarray, np.ndarray]:

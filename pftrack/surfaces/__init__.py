@@ -3,9 +3,11 @@ Gauss-Newton with Laplacian smoothness, coarse to fine; rendering for analysis b
 
 - :mod:`.mesh` — regular meshes, barycentric/bilinear weights, Laplacians (Eqs. 8-11, 22-24);
 - :mod:`.solver` — Huber IRLS normal equations (Eqs. 25-38), coarse-to-fine solve, fold check;
-- :mod:`.render` — frame-coordinate synthesis, RMSE, re-texturing, mesh drawing.
+- :mod:`.render` — frame-coordinate synthesis, RMSE, re-texturing, mesh drawing, a frame seen in model
+  coordinates (the reference of frame-to-frame chaining);
+- :mod:`.kymograph` — stabilised kymograms: the rigid motion of a region from the mesh, scan lines.
 
-The tracker on top is ``deformable-mesh`` (:mod:`pftrack.trackers.deformable_mesh`).
+The tracker on top is ``deformable-mesh`` (:mod:`.tracker`, registered by :mod:`pftrack.trackers.registry`).
 """
 
 from .mesh import (

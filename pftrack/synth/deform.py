@@ -91,6 +91,51 @@ def deform_scene(seed: int, n_frames: int = 60, size=(360, 480), amplitude: floa
     return sc
 
 
+@dataclass
+class KymoScene:
+    """A deforming-sheet scene for a stabilised kymogram (ch13.md T6): the scene, the mesh's box, the region of
+    interest, the oscillating patch's centre, the oscillation's amplitude (px, along x) and period (frames)."""
+
+    scene: DeformScene
+    box: tuple[float, float, float, float]
+    roi: tuple[float, float, float, float]
+    centre: np.ndarray
+    amplitude: float
+    period: float
+
+
+def kymo_scene(seed: int, n_frames: int = 100, size=(360, 480), jitter: float = 5.0, amplitude: float = 3.0,
+               noise: float = 0.01) -> KymoScene:
+    """ch13.md T6: a textured sheet under global camera jitter (a translation of at most ``jitter`` px: a slow
+    sway with a per-frame shake) with a local oscillation of ``amplitude`` px along x in a 40 x 40 patch (a
+    Gaussian bump, sigma 10 px, so 3 px at its centre and 0.4 px at the patch's edge), period 5-9 frames, no
+    shading change. The vocal folds of the chapter's kymography vibrate inside a view that the camera shakes."""
+    rng = np.random.default_rng(seed)
+    h, w = size
+    tex = band_limited_texture(rng, size)
+    box = (w * 0.125, h * 0.14, w * 0.75, h * 0.72)
+    roi = (w * 0.25, h * 0.25, w * 0.5, h * 0.5)
+    centre = np.array([rng.uniform(roi[0] + 0.3 * roi[2], roi[0] + 0.7 * roi[2]),
+                       rng.uniform(roi[1] + 0.3 * roi[3], roi[1] + 0.7 * roi[3])])
+    period = rng.uniform(5.0, 9.0)
+    t = np.arange(n_frames)
+    sway = np.zeros((n_frames, 2))
+    for _ in range(3):
+        f = rng.uniform(1 / 60, 1 / 15, 2)
+        sway += np.sin(2 * np.pi * f * t[:, None] + rng.uniform(0, 2 * np.pi, 2))
+    sway -= sway[0]
+    drift = sway + rng.uniform(-1, 1, (n_frames, 2))
+    drift[0] = 0.0
+    peak = np.max(np.linalg.norm(drift, axis=1))
+    drift *= jitter / peak if peak > jitter else 1.0
+    amps = np.zeros((n_frames, 1, 2))
+    amps[:, 0, 0] = amplitude * np.sin(2 * np.pi * t / period)
+    shade = [(0.0, 0.0, 0.0)] * n_frames
+    sc = DeformScene([], box, centre[None], np.array([10.0]), amps, drift, shade, size, tex)
+    sc.frames = render_frames(sc, rng, noise=noise)
+    return KymoScene(sc, box, roi, centre, amplitude, period)
+
+
 def render_frames(sc: DeformScene, rng, noise: float = 0.01, jpeg: int | None = None) -> list[np.ndarray]:
     """Render every frame of ``sc`` from its texture: invert ``y = x + D_n(x)`` by fixed-point iteration on a
     2-px grid (D is smooth), sample the texture there, multiply by the shading, add noise."""
@@ -146,3 +191,23 @@ def export_deform(sc: DeformScene, out, mesh: tuple[int, int] = (7, 7)) -> None:
     (out / "shading_gt.csv").write_text("\n".join(shades) + "\n", encoding="utf-8")
     (out / "groundtruth_rect.txt").write_text("\n".join(boxes) + "\n", encoding="utf-8")
     (out / "box.txt").write_text(",".join(f"{v:.2f}" for v in sc.box) + "\n", encoding="utf-8")
+
+
+def export_kymo(ks: KymoScene, out) -> None:
+    """A frame folder for ``pftrack surface --kymogram``: ``img/0001.png``..., ``box.txt`` (the mesh's box),
+    ``roi.txt``, ``scanline.txt`` (a horizontal line through the vibrating patch, 80 px long) and ``truth.json``
+    (the patch's centre, the vibration's amplitude and period, and the camera's translation per frame)."""
+    import json
+    from pathlib import Path
+
+    out = Path(out)
+    (out / "img").mkdir(parents=True, exist_ok=True)
+    for n, frame in enumerate(ks.scene.frames):
+        cv2.imwrite(str(out / "img" / f"{n + 1:04d}.png"), frame)
+    cx, cy = ks.centre
+    (out / "box.txt").write_text(",".join(f"{v:.2f}" for v in ks.box) + "\n", encoding="utf-8")
+    (out / "roi.txt").write_text(",".join(f"{v:.2f}" for v in ks.roi) + "\n", encoding="utf-8")
+    (out / "scanline.txt").write_text(f"{cx - 40:.2f},{cy:.2f};{cx + 40:.2f},{cy:.2f}\n", encoding="utf-8")
+    truth = {"centre": [float(cx), float(cy)], "amplitude": ks.amplitude, "period": ks.period,
+             "camera": ks.scene.drift.round(4).tolist()}
+    (out / "truth.json").write_text(json.dumps(truth) + "\n", encoding="utf-8")
