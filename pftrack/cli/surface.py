@@ -41,9 +41,9 @@ def cmd_surface(args) -> int:
     from ..geometry import parse_box
     from ..io.sinks import VideoSink, _TextSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
+    from ..surfaces.kymograph import Kymograph, stabilising_transform
     from ..surfaces.mesh import parse_mesh
     from ..surfaces.render import draw_mesh, retexture
-    from ..surfaces.kymograph import Kymograph, stabilising_transform
     from ..surfaces.tracker import DeformableMesh, MeshParams
 
     try:

@@ -13,6 +13,7 @@ The tracker on top is ``deformable-mesh`` (:mod:`.tracker`, registered by :mod:`
 from .mesh import (
            Grid,
            directional_laplacian,
+           displacement_at,
            interp_weights,
            parse_mesh,
            umbrella_laplacian,
@@ -20,5 +21,6 @@ from .mesh import (
 )
 from .solver import MeshSolver, SolverSettings, huber_rho, huber_weights
 
-__all__ = ["Grid", "MeshSolver", "SolverSettings", "directional_laplacian", "huber_rho", "huber_weights",
+__all__ = ["Grid", "MeshSolver", "SolverSettings", "directional_laplacian", "displacement_at", "huber_rho",
+           "huber_weights",
            "interp_weights", "parse_mesh", "umbrella_laplacian", "weights_matrix"]

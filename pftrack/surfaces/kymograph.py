@@ -15,7 +15,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from .mesh import Grid, interp_weights
+from .mesh import Grid, displacement_at
 
 
 def roi_points(roi, step: float = 4.0) -> np.ndarray:
@@ -48,11 +48,7 @@ def stabilising_transform(grid: Grid, d: np.ndarray, roi, model: str = "affine",
     ``D(x)`` (Eq. 5, vertex displacements ``d`` (K, 2)) are fitted back onto ``x``. Points outside the mesh take
     the border cells' displacement."""
     pts = roi_points(roi, step)
-    x1, y1 = grid.x0 + grid.sx * (grid.cols - 1), grid.y0 + grid.sy * (grid.rows - 1)
-    inner = np.c_[np.clip(pts[:, 0], grid.x0, x1), np.clip(pts[:, 1], grid.y0, y1)]
-    idx, w = interp_weights(grid, inner, model)
-    moved = pts + np.einsum("pm,pmc->pc", w, np.asarray(d, np.float64)[idx])
-    return rigid_fit(moved, pts)
+    return rigid_fit(pts + displacement_at(grid, pts, d, model), pts)
 
 
 def scan_line(image: np.ndarray, p0, p1, n: int | None = None) -> np.ndarray:

@@ -86,6 +86,17 @@ def interp_weights(grid: Grid, pts: np.ndarray, model: str = "affine") -> tuple[
     return idx, w
 
 
+def displacement_at(grid: Grid, pts: np.ndarray, d: np.ndarray, model: str = "affine") -> np.ndarray:
+    """The mesh's displacement field ``D`` (Eq. 5) at points (P, 2), from vertex displacements ``d`` (K, 2). Points
+    outside the mesh are clamped onto it first, so they take the border's displacement unchanged (no linear
+    extrapolation)."""
+    pts = np.asarray(pts, np.float64)
+    x1, y1 = grid.x0 + grid.sx * (grid.cols - 1), grid.y0 + grid.sy * (grid.rows - 1)
+    inner = np.c_[np.clip(pts[:, 0], grid.x0, x1), np.clip(pts[:, 1], grid.y0, y1)]
+    idx, w = interp_weights(grid, inner, model)
+    return np.einsum("pm,pmc->pc", w, np.asarray(d, np.float64)[idx])
+
+
 def weights_matrix(idx: np.ndarray, w: np.ndarray, K: int) -> sp.csr_matrix:
     """The sparse ``p x K`` interpolation matrix B (Eq. 5's M rows)."""
     p, m = idx.shape

@@ -8,7 +8,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from .mesh import Grid, interp_weights
+from .mesh import Grid, displacement_at, interp_weights
 
 
 def frame_to_model(V0: np.ndarray, V: np.ndarray, tris: np.ndarray, shape: tuple[int, int]):
@@ -51,10 +51,7 @@ def to_model(frame_gray: np.ndarray, grid: Grid, d: np.ndarray, model: str = "af
     h, w = frame_gray.shape[:2]
     ys, xs = np.mgrid[0:h, 0:w]
     pts = np.stack([xs.ravel(), ys.ravel()], 1).astype(np.float64)
-    x1, y1 = grid.x0 + grid.sx * (grid.cols - 1), grid.y0 + grid.sy * (grid.rows - 1)
-    inner = np.c_[np.clip(pts[:, 0], grid.x0, x1), np.clip(pts[:, 1], grid.y0, y1)]
-    idx, wts = interp_weights(grid, inner, model)
-    D = np.einsum("pm,pmc->pc", wts, np.asarray(d, np.float64)[idx])
+    D = displacement_at(grid, pts, d, model)
     mx = (pts[:, 0] + D[:, 0]).reshape(h, w).astype(np.float32)
     my = (pts[:, 1] + D[:, 1]).reshape(h, w).astype(np.float32)
     return cv2.remap(frame_gray.astype(np.float32), mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
