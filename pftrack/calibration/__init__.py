@@ -6,6 +6,7 @@
 - :mod:`.ekf` — the robot's EKF (Eqs. 7-13);
 - :mod:`.rigid2d` — Eqs. (2)-(6) and LMedS;
 - :mod:`.camcal` — DLT + OpenCV refinement standing in for Tsai; ground-plane back-projection;
+- :mod:`.markers` — the robot's three colour markers: rendering, histograms, detection in the foreground;
 - :mod:`.pipeline` — simulate, estimate, score.
 """
 
