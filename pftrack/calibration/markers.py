@@ -16,8 +16,6 @@ Pure functions:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import product
-
 import cv2
 import numpy as np
 
@@ -146,19 +144,20 @@ def detect_markers(frame: np.ndarray, fg_mask: np.ndarray | None, hists: list[np
         blobs.append(_blobs(prob, fg_mask, threshold, min_area, min_side))
     if any(len(b) == 0 for b in blobs):
         return []
-    cands = []
-    for i, j, k in product(*(range(len(b)) for b in blobs)):
-        p = np.stack([blobs[0][i], blobs[1][j], blobs[2][k]])
-        d = [np.hypot(*(p[a] - p[b])) for a, b in ((0, 1), (1, 2), (0, 2))]
-        if max(d) <= max_spread:
-            cands.append((sum(d), (i, j, k), p))
-    cands.sort(key=lambda c: c[0])
+    def dist(a, b):
+        return np.linalg.norm(a[:, None] - b[None], axis=2)
+
+    d01, d12, d02 = dist(blobs[0], blobs[1]), dist(blobs[1], blobs[2]), dist(blobs[0], blobs[2])
+    perimeter = d01[:, :, None] + d12[None] + d02[:, None, :]
+    ok = (d01[:, :, None] <= max_spread) & (d12[None] <= max_spread) & (d02[:, None, :] <= max_spread)
+    idx = np.argwhere(ok)
+    idx = idx[np.argsort(perimeter[ok], kind="stable")]          # tightest triplets first
     used: list[set] = [set(), set(), set()]
     tops = []
-    for _, ids, p in cands:
-        if any(ids[c] in used[c] for c in range(3)):
+    for i, j, k in idx:
+        if i in used[0] or j in used[1] or k in used[2]:
             continue
-        for c in range(3):
-            used[c].add(ids[c])
+        used[0].add(i), used[1].add(j), used[2].add(k)
+        p = np.stack([blobs[0][i], blobs[1][j], blobs[2][k]])
         tops.append(RobotTop(p.mean(0), p))
     return tops
