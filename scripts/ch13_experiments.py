@@ -186,39 +186,25 @@ def part_t4(out):
 
 
 def kymo_measure(ks, roi=None, **kw):
-    """T6's two figures for one scene, from the scene's exact motion: the residual global motion of the region's
-    background points (more than 30 px from the vibrating patch) after stabilisation, mean and worst frame, and the
-    share of the vibration's amplitude that survives at the patch's centre (a sine of the scene's period fitted to
-    the stabilised x positions). ``raw``: the background's mean motion without stabilisation."""
-    from pftrack.surfaces.kymograph import roi_points, stabilising_transform
+    """T6's figures for one scene (``synth.deform.kymo_scores``) with ``deformable-mesh`` of parameters ``kw``
+    stabilising the region ``roi`` (default: the scene's)."""
+    from pftrack.surfaces.kymograph import stabilising_transform
+    from pftrack.synth.deform import kymo_scores
 
     sc, roi = ks.scene, roi or ks.roi
     tr = DeformableMesh(MeshParams(**kw))
     tr.init(sc.frames[0], ks.box)
-    pts = roi_points(roi, 4.0)
-    bg = pts[np.linalg.norm(pts - ks.centre, axis=1) > 30]
-    res, raw, xs = [], [], []
+    transforms = []
     for n in range(1, len(sc.frames)):
         tr.update(sc.frames[n])
-        M = stabilising_transform(tr.grid, tr.d, roi, tr.params.model)
-        y = bg + sc.displacement(n, bg)
-        res.append(float(np.mean(np.linalg.norm(y @ M[:, :2].T + M[:, 2] - bg, axis=1))))
-        raw.append(float(np.mean(np.linalg.norm(y - bg, axis=1))))
-        c = ks.centre[None] + sc.displacement(n, ks.centre[None])
-        xs.append(float((c @ M[:, :2].T + M[:, 2])[0, 0] - ks.centre[0]))
-    t = np.arange(1, len(sc.frames))
-    A = np.c_[np.sin(2 * np.pi * t / ks.period), np.cos(2 * np.pi * t / ks.period), np.ones(len(t))]
-    coef = np.linalg.lstsq(A, np.array(xs), rcond=None)[0]
-    return {"residual": float(np.mean(res)), "residual_max": float(np.max(res)), "raw": float(np.mean(raw)),
-            "survival": float(np.hypot(coef[0], coef[1]) / ks.amplitude)}
+        transforms.append(stabilising_transform(tr.grid, tr.d, roi, tr.params.model))
+    return kymo_scores(ks, transforms, roi)
 
 
 def part_t6(out):
     """ch13.md T6 (kymography-like stiffness): camera jitter of at most 5 px and a 3 px vibration in a 40 x 40 patch
     (`pftrack synth kymo`, report seeds 100-104, 100 frames). The region of the scene (240 x 180 px) with the default
     7 x 7 mesh, and a tight 80 x 80 region around the patch with a dense 16 x 16 mesh, over the stiffness."""
-    from dataclasses import replace
-
     from pftrack.synth.deform import kymo_scene
 
     cases = [("scene region, 7x7", None, 7, lam) for lam in (0.005, 0.5)]
@@ -229,8 +215,8 @@ def part_t6(out):
         rs = []
         for ks in scenes:
             c = ks.centre
-            kk = replace(ks, roi=(c[0] - 40, c[1] - 40, 80, 80)) if roi == "tight" else ks
-            rs.append(kymo_measure(kk, rows=mesh, cols=mesh, lam=lam))
+            rs.append(kymo_measure(ks, (c[0] - 40, c[1] - 40, 80, 80) if roi == "tight" else None, rows=mesh,
+                                   cols=mesh, lam=lam))
         row = {"case": label, "lam": lam, "residual": float(np.mean([r["residual"] for r in rs])),
                "residual_max": float(np.max([r["residual_max"] for r in rs])),
                "raw": float(np.mean([r["raw"] for r in rs])),

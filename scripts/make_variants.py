@@ -30,9 +30,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pftrack.cli.common import parse_seeds
 from pftrack.io.codec import h264_round_trip
 from pftrack.io.datasets import read_sequence, write_groundtruth
-from pftrack.cli.common import parse_seeds
 
 
 def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:

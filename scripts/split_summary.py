@@ -48,16 +48,19 @@ def _scene_nuisances(roots: list[str]) -> dict[str, dict]:
     return out
 
 
-def scene_colours(roots: list[str]) -> dict[str, str]:
-    """``sequence -> "grey" | "colour"`` from the ``meta.json`` of the synthetic scenes under ``roots``."""
-    return {s: "grey" if nz.get("gray") else "colour" for s, nz in _scene_nuisances(roots).items()}
+def scene_colours(roots: list[str], nuisances: dict[str, dict] | None = None) -> dict[str, str]:
+    """``sequence -> "grey" | "colour"`` from the ``meta.json`` of the synthetic scenes under ``roots`` (or from
+    their ``nuisances``, already read)."""
+    nuisances = _scene_nuisances(roots) if nuisances is None else nuisances
+    return {s: "grey" if nz.get("gray") else "colour" for s, nz in nuisances.items()}
 
 
-def scene_lights(roots: list[str]) -> dict[str, str]:
+def scene_lights(roots: list[str], nuisances: dict[str, dict] | None = None) -> dict[str, str]:
     """``sequence -> "<colour> <light>"``: the scene's colour and its drawn light (``none``, ``frame``: the whole
     frame's light drifts, ``objects``: the light drifts on the target and look-alikes alone)."""
     out = {}
-    for s, nz in _scene_nuisances(roots).items():
+    nuisances = _scene_nuisances(roots) if nuisances is None else nuisances
+    for s, nz in nuisances.items():
         light = "none" if nz.get("illumination") is None else (
             "objects" if nz.get("illumination_target_only") else "frame")
         out[s] = f"{'grey' if nz.get('gray') else 'colour'} {light}"
@@ -122,9 +125,10 @@ def main(path: str, scenes: list[str] | None = None) -> None:
             allv = [v for vs in vals for v in vs]
             print(f"{t:40s} " + " ".join(f"{100 * _mean(v):10.1f}" for v in vals) + f" {100 * _mean(allv):10.1f}")
     if scenes:
-        reacquired_by_colour(rows, scene_colours(scenes))
+        nuisances = _scene_nuisances(scenes)      # every meta.json read once
+        reacquired_by_colour(rows, scene_colours(scenes, nuisances))
         lights = [f"{c} {li}" for c in ("colour", "grey") for li in ("none", "frame", "objects")]
-        reacquired_by(rows, scene_lights(scenes), lights, "by the scenes' colour and light")
+        reacquired_by(rows, scene_lights(scenes, nuisances), lights, "by the scenes' colour and light")
 
 
 if __name__ == "__main__":

@@ -136,6 +136,31 @@ def kymo_scene(seed: int, n_frames: int = 100, size=(360, 480), jitter: float = 
     return KymoScene(sc, box, roi, centre, amplitude, period)
 
 
+def kymo_scores(ks: KymoScene, transforms, roi=None) -> dict:
+    """ch13.md T6's figures from the scene's exact motion, for the stabilising transforms (2 x 3, frame -> first
+    frame) of frames 1, 2, ...: ``residual`` (mean over frames) and ``residual_max`` (worst frame), the distance of
+    the region's background points (more than 30 px from the vibrating patch) from where they were in frame 0;
+    ``raw``, the same without stabilisation; ``survival``, the amplitude of a sine of the scene's period fitted to
+    the stabilised x position of the patch's centre, over the vibration's amplitude."""
+    from ..surfaces.kymograph import roi_points
+
+    sc = ks.scene
+    pts = roi_points(ks.roi if roi is None else roi)
+    bg = pts[np.linalg.norm(pts - ks.centre, axis=1) > 30]
+    res, raw, xs = [], [], []
+    for n, M in enumerate(transforms, start=1):
+        y = bg + sc.displacement(n, bg)
+        res.append(float(np.mean(np.linalg.norm(y @ M[:, :2].T + M[:, 2] - bg, axis=1))))
+        raw.append(float(np.mean(np.linalg.norm(y - bg, axis=1))))
+        c = ks.centre + sc.displacement(n, ks.centre[None])[0]
+        xs.append(float((M[:, :2] @ c + M[:, 2])[0] - ks.centre[0]))
+    t = np.arange(1, len(xs) + 1)
+    A = np.c_[np.sin(2 * np.pi * t / ks.period), np.cos(2 * np.pi * t / ks.period), np.ones(len(t))]
+    coef = np.linalg.lstsq(A, np.array(xs), rcond=None)[0]
+    return {"residual": float(np.mean(res)), "residual_max": float(np.max(res)), "raw": float(np.mean(raw)),
+            "survival": float(np.hypot(coef[0], coef[1]) / ks.amplitude)}
+
+
 def render_frames(sc: DeformScene, rng, noise: float = 0.01, jpeg: int | None = None) -> list[np.ndarray]:
     """Render every frame of ``sc`` from its texture: invert ``y = x + D_n(x)`` by fixed-point iteration on a
     2-px grid (D is smooth), sample the texture there, multiply by the shading, add noise."""
