@@ -21,8 +21,11 @@ def add_surface(sub) -> None:
     p.add_argument("--box", required=True, help="X,Y,W,H of the surface in the first frame")
     p.add_argument("--mesh", default="7x7", help="vertices COLSxROWS spanning the box (default 7x7; at least 2x2)")
     p.add_argument("--no-photometric", action="store_true", help="no shading warp (classical optical flow)")
-    p.add_argument("--lambda", dest="lam", type=float, help="smoothness weight (default 0.005, see docs/surfaces.md)")
-    p.add_argument("--model", choices=["affine", "bilinear"], default="affine", help="warp per mesh cell")
+    p.add_argument("--lambda", dest="lam", type=float,
+                   help="smoothness weight (default 0.005 for the meshes, 1.0 for --model dense; see docs/surfaces.md)")
+    p.add_argument("--model", choices=["affine", "bilinear", "dense"], default="affine",
+                   help="warp per mesh cell, or 'dense': one displacement per pixel (multigrid; seconds per frame), "
+                        "the CSV then holds that field at the --mesh vertices")
     p.add_argument("--out", default="mesh.csv", help="CSV output (default mesh.csv)")
     p.add_argument("--video-out", help="video with the mesh drawn (red while lost)")
     p.add_argument("--texture", help="with --video-out: an image painted onto the surface, shaded (virtual mirror)")
@@ -53,7 +56,7 @@ def cmd_surface(args) -> int:
     box = parse_box(args.box)
     kw = {"rows": rows, "cols": cols, "photometric": not args.no_photometric, "model": args.model}
     if args.lam is not None:
-        kw["lam"] = args.lam
+        kw["dense_lam" if args.model == "dense" else "lam"] = args.lam
     params = MeshParams.from_mapping(kw)
     texture = image_file(args.texture) if args.texture else None
     kymo = _kymogram_options(args, box)
@@ -87,14 +90,14 @@ def cmd_surface(args) -> int:
         def emit(num, img, state) -> None:
             V = state.info["mesh"]
             if kymo is not None:
-                stab.add(img, stabilising_transform(tracker.grid, V - tracker.V0, roi, params.model))
+                stab.add(img, stabilising_transform(tracker.grid, V - tracker.V0, roi, tracker.mesh_model))
                 raw.add(img)
             out._write(f"{num}," + ",".join(f"{v:.3f}" for v in V.ravel()))
             if video:
                 canvas = img
                 if texture is not None and not state.lost:
-                    canvas = retexture(img, texture, box, tracker.V0, V, tracker.grid.triangles(),
-                                       tracker.rho, tracker.pgrid, params.model)
+                    grid, V0, Vs, rho, pgrid, model = tracker.surface_mesh()
+                    canvas = retexture(img, texture, box, V0, Vs, grid.triangles(), rho, pgrid, model)
                 video.write(draw_mesh(canvas, V, tracker.grid, lost=state.lost))
             bar.update(1)
 

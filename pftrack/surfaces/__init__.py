@@ -3,6 +3,8 @@ Gauss-Newton with Laplacian smoothness, coarse to fine; rendering for analysis b
 
 - :mod:`.mesh` — regular meshes, barycentric/bilinear weights, Laplacians (Eqs. 8-11, 22-24);
 - :mod:`.solver` — Huber IRLS normal equations (Eqs. 25-38), coarse-to-fine solve, fold check;
+- :mod:`.dense` — the dense (per-pixel) model (Eq. 7): sparse normal equations solved by conjugate gradients
+  preconditioned by multigrid (PyAMG) or sparse LU factors;
 - :mod:`.render` — frame-coordinate synthesis, RMSE, re-texturing, mesh drawing, a frame seen in model
   coordinates (the reference of frame-to-frame chaining);
 - :mod:`.kymograph` — stabilised kymograms: the rigid motion of a region from the mesh, scan lines.
@@ -19,8 +21,9 @@ from .mesh import (
            umbrella_laplacian,
            weights_matrix,
 )
+from .dense import DenseSettings, DenseSolver
 from .solver import MeshSolver, SolverSettings, huber_rho, huber_weights
 
-__all__ = ["Grid", "MeshSolver", "SolverSettings", "directional_laplacian", "displacement_at", "huber_rho",
+__all__ = ["DenseSettings", "DenseSolver", "Grid", "MeshSolver", "SolverSettings", "directional_laplacian", "displacement_at", "huber_rho",
            "huber_weights",
            "interp_weights", "parse_mesh", "umbrella_laplacian", "weights_matrix"]

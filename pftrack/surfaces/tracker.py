@@ -8,6 +8,10 @@ starts from ``I_0`` it is the chapter's analysis by synthesis: errors do not acc
 frame.  The box reported is the bounding box of the deformed mesh; ``info["mesh"]`` holds the vertices
 (row-major) and ``info["shading"]`` the photometric ratios.
 
+``model="dense"`` is the chapter's dense (per-pixel) model (Eq. 7): a displacement and a shading ratio for every
+pixel of the box, solved with algebraic multigrid (:mod:`.dense`); the reported mesh is that field sampled at the
+``rows x cols`` vertices, and :meth:`DeformableMesh.surface_mesh` gives a finer one for rendering.
+
 ``reference="previous"`` registers each frame onto the previous one instead (frame-to-frame chaining, the variant
 the chapter argues against; ch13.md T4).
 
@@ -26,7 +30,8 @@ import numpy as np
 from ..geometry import Box
 from ..params import Params, param
 from ..trackers.base import Tracker, TrackState
-from .mesh import Grid
+from .dense import DenseSettings, DenseSolver
+from .mesh import Grid, displacement_at
 from .render import to_model
 from .solver import MeshSolver, SolverSettings
 
@@ -40,7 +45,10 @@ class MeshParams(Params):
     rows: int = param(7, ge=2, le=64, doc="Mesh vertices down the box.")
     photo_cols: int = param(4, ge=2, le=64, doc="Vertices across of the coarser photometric mesh (Eq. 4).")
     photo_rows: int = param(4, ge=2, le=64, doc="Vertices down of the photometric mesh.")
-    model: Literal["affine", "bilinear"] = param("affine", doc="Warp per cell: affine triangles (Eqs. 8-10) or bilinear quads (Eq. 11).")
+    model: Literal["affine", "bilinear", "dense"] = param("affine", doc=(
+        "Warp per cell: affine triangles (Eqs. 8-10) or bilinear quads (Eq. 11); 'dense': one displacement and one "
+        "shading ratio per pixel (Eq. 7), solved by preconditioned conjugate gradients (dense_solver), with rows x "
+        "cols only the reported mesh."))
     photometric: bool = param(True, doc="Estimate the multiplicative photometric warp (Eq. 2); off = classical optical flow.")
     lam: float = param(0.005, ge=0, le=1e4, doc=(
         "Smoothness weight lambda of Eq. (25), with E_D the mean Huber residual on [0, 1] intensities and E_S the mean "
@@ -52,6 +60,14 @@ class MeshParams(Params):
     huber_k: float = param(1.345, gt=0, le=100, doc="Huber threshold v_H = k * 1.4826 MAD(r) (Eq. 29-30).")
     lost_rms: float = param(0.12, gt=0, le=1, doc=(
         "Residual RMS (intensities in [0, 1]) above which the frame is judged not to show the surface."))
+    dense_lam: float = param(1.0, ge=0, le=1e4, doc=(
+        "The smoothness weight lambda of the dense model (Eq. 25, normalised as lam, with Laplacian rows "
+        "between neighbouring pixels of each pyramid level)."))
+    dense_solver: Literal["auto", "amg", "lu", "direct"] = param("auto", doc=(
+        "The dense model's linear solver: conjugate gradients preconditioned by smoothed-aggregation multigrid "
+        "('amg', needs PyAMG: the [dense] extra) or by sparse LU factors ('lu'); 'direct': sparse LU of every step "
+        "(exact, slow); 'auto': lu up to 120 000 pixels per pyramid level, where it was measured faster, amg "
+        "above when PyAMG is installed."))
     velocity: bool = param(False, doc="Start each frame from a constant-velocity prediction of d instead of the last d.")
     reference: Literal["model", "previous"] = param("model", doc=(
         "'model': every frame is registered onto the first frame's model image I_0, the chapter's analysis by "
@@ -82,20 +98,33 @@ class DeformableMesh(Tracker):
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         p = self.params
         self.I0 = gray01(frame)
+        self.box0 = tuple(map(float, box))
         self.grid = Grid.for_box(box, p.rows, p.cols)
         self.pgrid = Grid.for_box(box, p.photo_rows, p.photo_cols)
-        self.solver = MeshSolver(self.I0, self.grid, self.pgrid, self._settings(box))
         self.V0 = self.grid.vertices()
         self.d = np.zeros_like(self.V0)
         self.d_prev = self.d.copy()
         self.rho = np.ones(self.pgrid.K)
+        self.dense = self.solver = None
+        if p.model == "dense":
+            s = self._settings(box)
+            self.dense = DenseSolver(self.I0, box, DenseSettings(
+                lam=p.dense_lam, lam_p=p.lam_p, levels=s.levels, max_iter=p.max_iter, tol=p.tol, huber_k=p.huber_k,
+                photometric=p.photometric, solver=p.dense_solver))
+            self.D = np.zeros((self.dense.K, 2))      # the per-pixel field (full-resolution pixels of the box)
+            self.D_prev = self.D.copy()
+            self.R = np.ones(self.dense.K)
+        else:
+            self.solver = MeshSolver(self.I0, self.grid, self.pgrid, self._settings(box))
         self.last = {"rms": 0.0, "iterations": 0, "folded": False, "valid_fraction": 1.0}
         return self._state(False)
 
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
-        start = self.d + (self.d - self.d_prev) if p.velocity else self.d
         g = gray01(frame)
+        if self.dense is not None:
+            return self._update_dense(g)
+        start = self.d + (self.d - self.d_prev) if p.velocity else self.d
         d, rho, info = self.solver.solve(g, start, self.rho)
         lost = bool(info["folded"] or info["rms"] > p.lost_rms or info["valid_fraction"] < 0.3
                     or not np.all(np.isfinite(d)))
@@ -107,6 +136,41 @@ class DeformableMesh(Tracker):
                 self.rho = np.ones(self.pgrid.K)
         self.last = info
         return self._state(lost)
+
+    def _update_dense(self, g: np.ndarray) -> TrackState:
+        p = self.params
+        start = self.D + (self.D - self.D_prev) if p.velocity else self.D
+        D, R, info = self.dense.solve(g, start, self.R)
+        lost = bool(info["folded"] or info["rms"] > p.lost_rms or info["valid_fraction"] < 0.3
+                    or not np.all(np.isfinite(D)))
+        if not lost:
+            self.D_prev, self.D, self.R = self.D, D, R
+            if p.reference == "previous":
+                self.dense.rebase(to_model(g, self.dense.grid, D, "bilinear"))
+                self.R = np.ones(self.dense.K)
+            self.d = displacement_at(self.dense.grid, self.V0, self.D, "bilinear")
+            self.rho = self._field_at(self.pgrid.vertices(), self.R)
+        self.last = info
+        return self._state(lost)
+
+    def _field_at(self, pts: np.ndarray, values: np.ndarray) -> np.ndarray:
+        return displacement_at(self.dense.grid, pts, np.c_[values, values], "bilinear")[:, 0]
+
+    @property
+    def mesh_model(self) -> str:
+        """How the reported mesh interpolates between its vertices ('affine' for the dense model's sampled mesh)."""
+        return "affine" if self.params.model == "dense" else self.params.model
+
+    def surface_mesh(self, step: float = 4.0):
+        """``(grid, V0, V, rho, pgrid, model)`` for rendering the current surface: the tracker's own meshes, or for the
+        dense model a mesh every ``step`` pixels sampled from its field (shading on the same vertices)."""
+        if self.dense is None:
+            return self.grid, self.V0, self.mesh(), self.rho, self.pgrid, self.params.model
+        b = self.box0
+        grid = Grid.for_box(b, max(int(round(b[3] / step)) + 1, 2), max(int(round(b[2] / step)) + 1, 2))
+        V0 = grid.vertices()
+        V = V0 + displacement_at(self.dense.grid, V0, self.D, "bilinear")
+        return grid, V0, V, self._field_at(V0, self.R), grid, "affine"
 
     def mesh(self) -> np.ndarray:
         """Current vertex positions (K, 2), row-major."""

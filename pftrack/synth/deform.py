@@ -66,16 +66,18 @@ class DeformScene:
 
 
 def deform_scene(seed: int, n_frames: int = 60, size=(360, 480), amplitude: float = 12.0, shading: bool = True,
-                 noise: float = 0.01, texture: np.ndarray | None = None, jpeg: int | None = None) -> DeformScene:
+                 noise: float = 0.01, texture: np.ndarray | None = None, jpeg: int | None = None,
+                 bump_scale: float = 1.0) -> DeformScene:
     """A sequence of ``n_frames`` (the first is the model) of a sheet deforming by up to ~``amplitude`` px
-    with shading in [0.6, 1.3] (``shading=False``: constant brightness)."""
+    with shading in [0.6, 1.3] (``shading=False``: constant brightness).  The four Gaussian bumps have widths of
+    0.18-0.3 of the box's shorter side times ``bump_scale`` (below 1: deformations finer than a 7 x 7 mesh)."""
     rng = np.random.default_rng(seed)
     h, w = size
     tex = band_limited_texture(rng, size) if texture is None else cv2.resize(texture.astype(np.float64), (w, h))
     box = (w * 0.25, h * 0.22, w * 0.5, h * 0.56)
     B = 4
     centers = np.c_[rng.uniform(box[0], box[0] + box[2], B), rng.uniform(box[1], box[1] + box[3], B)]
-    sigmas = rng.uniform(0.18, 0.3, B) * min(box[2], box[3])
+    sigmas = rng.uniform(0.18, 0.3, B) * min(box[2], box[3]) * bump_scale
     t = np.arange(n_frames)
     omega = rng.uniform(2 * np.pi / 80, 2 * np.pi / 30, (B, 2))
     phase = rng.uniform(0, 2 * np.pi, (B, 2))
