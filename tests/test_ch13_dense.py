@@ -183,3 +183,17 @@ def test_surface_cli_dense(tmp_path):
     g = Grid.for_box(sc.box, 3, 4)
     Vt, _ = sc.truth(2, g.vertices())
     assert np.mean(np.linalg.norm(last - Vt, axis=1)) < 0.3
+
+
+def test_energies_vanish_where_they_should():
+    """E_S is zero on any affine field (directional Laplacian) and E_D is zero when the frame is the model."""
+    tex = _texture(2)
+    S = DenseSolver(tex, (30, 20, 60, 50), DenseSettings(levels=1))
+    V = S.grid.vertices()
+    D_aff = V @ np.array([[0.02, -0.01], [0.03, 0.01]]).T + [1.5, -0.5]
+    e_d, e_s = S.energies(np.zeros((S.K, 2)), np.ones(S.K), tex)
+    assert e_d < 1e-12 and e_s == 0.0
+    _, e_s = S.energies(D_aff, np.ones(S.K), tex)
+    assert e_s < 1e-20
+    _, e_s = S.energies(np.random.default_rng(0).normal(0, 0.5, (S.K, 2)), np.ones(S.K), tex)
+    assert e_s > 1e-3
