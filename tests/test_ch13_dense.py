@@ -131,16 +131,17 @@ def _field_error(tr, sc, n) -> float:
 
 @pytest.mark.parametrize("seed", [7, 8])
 def test_dense_model_follows_deformations_finer_than_the_mesh(seed):
-    """Bumps 14-24 px wide, finer than the 7 x 7 mesh's 27 px cells, frame 12 registered onto the model directly."""
+    """Bumps 14-24 px wide, finer than the 7 x 7 mesh's 27 px cells, frame 12 registered onto the model directly.
+    The default smoothness (chosen on sequences, where frames move little) and a softer one resolve finer."""
     sc = deform_scene(seed, n_frames=13, size=(240, 320), bump_scale=0.4, amplitude=6.0)
     errs = {}
-    for name, kw in (("dense", {"model": "dense"}), ("mesh", {})):
+    for name, kw in (("dense", {"model": "dense"}), ("soft", {"model": "dense", "dense_lam": 1.0}), ("mesh", {})):
         tr = pftrack.create_tracker("deformable-mesh", **kw)
         tr.init(sc.frames[0], sc.box)
         assert not tr.update(sc.frames[12]).lost
         errs[name] = _field_error(tr, sc, 12)
-    assert errs["dense"] < 0.15                         # measured 0.10 and 0.11
-    assert errs["dense"] < 0.7 * errs["mesh"]           # measured 0.44x and 0.40x
+    assert errs["dense"] < 0.25 and errs["dense"] < 0.85 * errs["mesh"]     # measured 0.17, 0.18 px; 0.74x, 0.67x
+    assert errs["soft"] < 0.15 and errs["soft"] < 0.6 * errs["mesh"]        # measured 0.10, 0.11 px; 0.44x, 0.40x
 
 
 def test_dense_tracker_reports_a_mesh_flags_noise_and_chains():

@@ -22,7 +22,7 @@ def add_surface(sub) -> None:
     p.add_argument("--mesh", default="7x7", help="vertices COLSxROWS spanning the box (default 7x7; at least 2x2)")
     p.add_argument("--no-photometric", action="store_true", help="no shading warp (classical optical flow)")
     p.add_argument("--lambda", dest="lam", type=float,
-                   help="smoothness weight (default 0.005 for the meshes, 1.0 for --model dense; see docs/surfaces.md)")
+                   help="smoothness weight (default 0.005 for the meshes, 3.0 for --model dense; see docs/surfaces.md)")
     p.add_argument("--model", choices=["affine", "bilinear", "dense"], default="affine",
                    help="warp per mesh cell, or 'dense': one displacement per pixel (multigrid; seconds per frame), "
                         "the CSV then holds that field at the --mesh vertices")

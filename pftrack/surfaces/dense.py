@@ -61,7 +61,7 @@ def amg_available() -> bool:
 
 @dataclass(frozen=True)
 class DenseSettings:
-    lam: float = 0.02
+    lam: float = 3.0                 # the dense_lam default of deformable-mesh, chosen on tune seeds
     lam_p: float = 10.0
     levels: int = 4
     max_iter: int = 10

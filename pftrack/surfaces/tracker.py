@@ -60,7 +60,7 @@ class MeshParams(Params):
     huber_k: float = param(1.345, gt=0, le=100, doc="Huber threshold v_H = k * 1.4826 MAD(r) (Eq. 29-30).")
     lost_rms: float = param(0.12, gt=0, le=1, doc=(
         "Residual RMS (intensities in [0, 1]) above which the frame is judged not to show the surface."))
-    dense_lam: float = param(1.0, ge=0, le=1e4, doc=(
+    dense_lam: float = param(3.0, ge=0, le=1e4, doc=(
         "The smoothness weight lambda of the dense model (Eq. 25, normalised as lam, with Laplacian rows "
         "between neighbouring pixels of each pyramid level)."))
     dense_solver: Literal["auto", "amg", "lu", "direct"] = param("auto", doc=(
