@@ -56,7 +56,9 @@ class MeshParams(Params):
     lam_p: float = param(10.0, ge=0, le=1e6, doc="Relative smoothness of the shading ratios, lambda_p of Eq. (38).")
     levels: int = param(4, ge=1, le=8, doc="Pyramid levels (the chapter: 4); fewer when the box is small.")
     max_iter: int = param(10, ge=1, le=100, doc="IRLS iterations per level at most.")
-    tol: float = param(0.01, gt=0, le=10, doc="Stop a level when no vertex moves more than this (pixels of that level).")
+    tol: float = param(0.01, gt=0, le=10, doc=(
+        "Stop a level when no vertex moves more than this (pixels of that level); the dense model stops on the "
+        "RMS move of its pixels."))
     huber_k: float = param(1.345, gt=0, le=100, doc="Huber threshold v_H = k * 1.4826 MAD(r) (Eq. 29-30).")
     lost_rms: float = param(0.12, gt=0, le=1, doc=(
         "Residual RMS (intensities in [0, 1]) above which the frame is judged not to show the surface."))
