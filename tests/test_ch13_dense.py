@@ -171,7 +171,7 @@ def test_surface_cli_dense(tmp_path):
     d = tmp_path / "frames"
     d.mkdir()
     for i, f in enumerate(sc.frames):
-        cv2.imwrite(str(d / f"{i + 1:04d}.png"), f)
+        cv2.imwrite(str(d / f"{i + 1:04d}.png"), cv2.cvtColor(f, cv2.COLOR_BGR2GRAY))      # grey input
     box = ",".join(f"{v:.1f}" for v in sc.box)
     out = tmp_path / "mesh.csv"
     tex = tmp_path / "tex.png"
@@ -198,3 +198,10 @@ def test_energies_vanish_where_they_should():
     assert e_s < 1e-20
     _, e_s = S.energies(np.random.default_rng(0).normal(0, 0.5, (S.K, 2)), np.ones(S.K), tex)
     assert e_s > 1e-3
+
+
+def test_synth_deform_fine(tmp_path):
+    assert main(["synth", "deform", "--fine", "--seeds", "3", "--out", str(tmp_path)]) == 0
+    scene = tmp_path / "deform-fine-003"
+    assert (scene / "mesh_gt.csv").is_file() and len(list((scene / "img").iterdir())) == 60
+    assert main(["synth", "kymo", "--fine", "--seeds", "3", "--out", str(tmp_path)]) == 2

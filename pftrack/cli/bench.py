@@ -140,6 +140,9 @@ def add_synth(sub) -> None:
     p.add_argument("--portrait", choices=["astronaut", "camera"], default="astronaut",
                    help="face: scikit-image's portrait to build the scene from (default astronaut; camera: the "
                         "cameraman, a face in profile beside a dark coat)")
+    p.add_argument("--fine", action="store_true",
+                   help="deform: bumps 0.4 times as wide and up to ~6 px, finer than a 7x7 mesh's cells (the scenes "
+                        "of the dense model's comparison, docs/surfaces.md)")
     p.add_argument("--seeds", default="0-9", help="seeds, e.g. 0-9 or 1,4,7 (default 0-9)")
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.add_argument("--gray", type=float, default=None, metavar="P",
@@ -218,6 +221,8 @@ def cmd_synth(args) -> int:
         if detect_layout(Path(args.source)) != "mot":
             raise SourceError(f"{args.source}: not a MOTChallenge folder")
     numbers, split = _twocam_ranges(args)
+    if args.fine and args.kind != "deform":
+        raise ParameterError("--fine applies to deform scenes")
     if args.kind == "xray":
         from .common import image_file
 
@@ -257,7 +262,8 @@ def cmd_synth(args) -> int:
         elif args.kind == "deform":
             from ..synth.deform import deform_scene, export_deform
 
-            export_deform(deform_scene(sd), out / f"deform-{sd:03d}")
+            fine = {"bump_scale": 0.4, "amplitude": 6.0} if args.fine else {}      # scripts/ch13_dense.py's "fine"
+            export_deform(deform_scene(sd, **fine), out / f"deform-{'fine-' if args.fine else ''}{sd:03d}")
         elif args.kind == "kymo":
             from ..synth.deform import export_kymo, kymo_scene
 

@@ -24,7 +24,7 @@ def add_surface(sub) -> None:
     p.add_argument("--lambda", dest="lam", type=float,
                    help="smoothness weight (default 0.005 for the meshes, 3.0 for --model dense; see docs/surfaces.md)")
     p.add_argument("--model", choices=["affine", "bilinear", "dense"], default="affine",
-                   help="warp per mesh cell, or 'dense': one displacement per pixel (multigrid; seconds per frame), "
+                   help="warp per mesh cell, or 'dense': one displacement per pixel (seconds per frame), "
                         "the CSV then holds that field at the --mesh vertices")
     p.add_argument("--out", default="mesh.csv", help="CSV output (default mesh.csv)")
     p.add_argument("--video-out", help="video with the mesh drawn (red while lost)")

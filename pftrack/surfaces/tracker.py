@@ -9,7 +9,8 @@ frame.  The box reported is the bounding box of the deformed mesh; ``info["mesh"
 (row-major) and ``info["shading"]`` the photometric ratios.
 
 ``model="dense"`` is the chapter's dense (per-pixel) model (Eq. 7): a displacement and a shading ratio for every
-pixel of the box, solved with algebraic multigrid (:mod:`.dense`); the reported mesh is that field sampled at the
+pixel of the box, solved by conjugate gradients preconditioned by multigrid or sparse LU factors (:mod:`.dense`); the
+reported mesh is that field sampled at the
 ``rows x cols`` vertices, and :meth:`DeformableMesh.surface_mesh` gives a finer one for rendering.
 
 ``reference="previous"`` registers each frame onto the previous one instead (frame-to-frame chaining, the variant
