@@ -32,7 +32,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .mesh import Grid, directional_laplacian, displacement_at, signed_areas
-from .solver import _sample, gradients, huber_rho, huber_scale, huber_weights, pyramid
+from .solver import _sample, gradients, huber_rho, huber_scale, pyramid, robust_terms
 
 
 _CONTROLLER = None
@@ -224,14 +224,7 @@ class DenseSolver:
     def normal_equations(self, lv: DenseLevel, img, gx, gy, D, rho, vH=None):
         """``(A, b, r, ok, vH)`` of one IRLS step at a level (``A`` sparse, unknowns interleaved per pixel)."""
         r, warped = self.residual(lv, img, D, rho)
-        ok = np.isfinite(r)                               # pitfall 9: no data outside I_n
-        r = np.where(ok, r, 0.0)
-        if vH is None:
-            vH = huber_scale(r[ok], self.s.huber_k)
-        w = huber_weights(r, vH) * ok
-        Gx = np.nan_to_num(_sample(gx, warped)) * (-lv.f)
-        Gy = np.nan_to_num(_sample(gy, warped)) * (-lv.f)
-        N = max(int(ok.sum()), 1)
+        r, ok, w, Gx, Gy, N, vH = robust_terms(r, warped, gx, gy, lv.f, self.s.huber_k, vH)
         A, b = data_blocks(Gx, Gy, lv.I0, r, w, N, self.s.photometric)
         theta = np.c_[D, rho] if self.s.photometric else D
         A = (A + lv.S).tocsr()

@@ -92,6 +92,22 @@ def huber_scale(r: np.ndarray, k: float = 1.345, floor: float = 1 / 255) -> floa
     return max(k * 1.4826 * float(np.median(np.abs(r - np.median(r)))), floor)
 
 
+def robust_terms(r: np.ndarray, warped: np.ndarray, gx: np.ndarray, gy: np.ndarray, f: float, huber_k: float,
+                 vH: float | None = None):
+    """The robust data terms of one IRLS step, shared by the mesh and the dense model: residuals with the pixels that
+    fell outside ``I_n`` zeroed (pitfall 9), Huber weights (Eqs. 29-30, MAD scale unless ``vH`` is given), the frame
+    gradients at the warped points times ``-f`` (Eq. 36 with displacements in full-resolution pixels), and the count
+    of valid pixels.  Returns ``(r, ok, w, Gx, Gy, N, vH)``."""
+    ok = np.isfinite(r)
+    r = np.where(ok, r, 0.0)
+    if vH is None:
+        vH = huber_scale(r[ok], huber_k)
+    w = huber_weights(r, vH) * ok
+    Gx = np.nan_to_num(_sample(gx, warped)) * (-f)
+    Gy = np.nan_to_num(_sample(gy, warped)) * (-f)
+    return r, ok, w, Gx, Gy, max(int(ok.sum()), 1), vH
+
+
 @dataclass(frozen=True)
 class SolverSettings:
     lam: float = 0.5
@@ -246,14 +262,7 @@ class MeshSolver:
 
     def normal_equations(self, lv: LevelModel, img, gx, gy, d, rho, vH=None):
         r, warped = self.residual(lv, img, d, rho)
-        ok = np.isfinite(r)                                  # pitfall 9: no data outside I_n
-        r = np.where(ok, r, 0.0)
-        if vH is None:
-            vH = huber_scale(r[ok], self.s.huber_k)
-        w = huber_weights(r, vH) * ok
-        Gx = np.nan_to_num(_sample(gx, warped, lv.shape)) * (-lv.f)
-        Gy = np.nan_to_num(_sample(gy, warped, lv.shape)) * (-lv.f)
-        N = max(int(ok.sum()), 1)
+        r, ok, w, Gx, Gy, N, vH = robust_terms(r, warped, gx, gy, lv.f, self.s.huber_k, vH)
         Kg, Kp = self.Kg, self.Kp
         n = 2 * Kg + (Kp if self.s.photometric else 0)
         A = np.zeros((n, n))
