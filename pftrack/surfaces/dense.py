@@ -109,9 +109,10 @@ def data_blocks(Gx: np.ndarray, Gy: np.ndarray, I0: np.ndarray, r: np.ndarray, w
     return A, (wJ * r[:, None]).ravel()
 
 
-#: Up to this many pixels on a level, ``"auto"`` preconditions with sparse LU factors: measured faster than the
-#: multigrid V-cycle there (docs/surfaces.md, 1.6x at 48 000 and 109 000 pixels) at about twice the memory.
-LU_PIXELS = 120_000
+#: Up to this many pixels on a level, ``"auto"`` preconditions with sparse LU factors: measured 2.2x faster than the
+#: multigrid V-cycle at 48 000, 109 000 and 221 000 pixels (docs/surfaces.md), but their memory grows faster than the
+#: region (about 1.7 GB more at 221 000 pixels), so larger regions use multigrid.
+LU_PIXELS = 250_000
 
 
 def choose_method(setting: str, pixels: int) -> str:
