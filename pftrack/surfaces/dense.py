@@ -31,6 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..errors import ParameterError
 from .mesh import Grid, directional_laplacian, displacement_at, signed_areas
 from .solver import _sample, gradients, huber_rho, huber_scale, pyramid, robust_terms
 
@@ -195,9 +196,10 @@ class DenseSolver:
 
     def __init__(self, I0: np.ndarray, box, settings: DenseSettings = DenseSettings()):
         if settings.solver not in ("auto", "amg", "lu", "direct"):
-            raise ValueError(f"unknown solver {settings.solver!r} (auto, amg, lu or direct)")
+            raise ParameterError(f"unknown solver {settings.solver!r} (auto, amg, lu or direct)")
         if settings.solver == "amg" and not amg_available():
-            raise ImportError("the dense model's multigrid solver needs PyAMG: pip install 'pftrack[dense]'")
+            raise ParameterError("the dense model's multigrid solver needs PyAMG: pip install 'pftrack[dense]' "
+                                 "(or dense_solver=lu)")
         self.s = settings
         self.method = settings.solver
         self.box = tuple(map(float, box))
