@@ -89,13 +89,14 @@ def level_grid(box, level: int, shape: tuple[int, int]) -> Grid:
     return Grid(c0 * s, r0 * s, s, s, r1 - r0 + 1, c1 - c0 + 1)
 
 
-def smoothness_matrix(grid: Grid, lam: float, lam_p: float, photometric: bool) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-    """``(lam^2/n_G) G^T G`` in interleaved order, and ``L^T L`` of the grid's directional Laplacian (Eqs. 37-38)."""
+def smoothness_matrix(grid: Grid, lam: float, lam_p: float, photometric: bool):
+    """``(lam^2/n_G) G^T G`` in interleaved order, ``L^T L`` of the grid's directional Laplacian and the number of
+    rows ``n_G`` of ``Gamma = blockdiag(L, L[, lam_p L])`` (Eqs. 37-38)."""
     L = directional_laplacian(grid.rows, grid.cols)
     LtL = (L.T @ L).tocsr()
     c = [1.0, 1.0] + ([lam_p ** 2] if photometric else [])
     n_gamma = L.shape[0] * len(c)
-    return (lam ** 2 / max(n_gamma, 1)) * sp.kron(LtL, sp.diags(c), format="csr"), LtL
+    return (lam ** 2 / max(n_gamma, 1)) * sp.kron(LtL, sp.diags(c), format="csr"), LtL, n_gamma
 
 
 def data_blocks(Gx: np.ndarray, Gy: np.ndarray, I0: np.ndarray, r: np.ndarray, w: np.ndarray, N: int,
@@ -184,8 +185,7 @@ class DenseLevel:
         self.pts = self.V * self.f                      # their level coordinates (integers)
         ij = np.rint(self.pts).astype(np.int64)
         self.I0 = I0_level[ij[:, 1], ij[:, 0]].astype(np.float64)
-        self.S, self.LtL = smoothness_matrix(self.grid, s.lam, s.lam_p, s.photometric)
-        self.n_gamma = directional_laplacian(self.grid.rows, self.grid.cols).shape[0] * (3 if s.photometric else 2)
+        self.S, self.LtL, self.n_gamma = smoothness_matrix(self.grid, s.lam, s.lam_p, s.photometric)
         self.tris = self.grid.triangles()
         self.area0 = signed_areas(self.V, self.tris)
         self.M = None                                   # the preconditioner, built on the first step, then kept
