@@ -30,9 +30,9 @@ import numpy as np
 from pftrack.surfaces.mesh import Grid, displacement_at
 from pftrack.surfaces.render import frame_rmse
 from pftrack.surfaces.tracker import DeformableMesh, MeshParams, gray01
-from pftrack.synth.deform import deform_scene
+from pftrack.synth.deform import FINE, deform_scene
 
-KINDS = {"smooth": {}, "fine": {"bump_scale": 0.4, "amplitude": 6.0}}
+KINDS = {"smooth": {}, "fine": FINE}
 
 
 def scene(kind: str, seed: int, frames: int):

@@ -23,7 +23,7 @@ from pftrack.surfaces.dense import (
 )
 from pftrack.surfaces.mesh import Grid, directional_laplacian, displacement_at
 from pftrack.surfaces.solver import gradients
-from pftrack.synth.deform import band_limited_texture, deform_scene
+from pftrack.synth.deform import FINE, band_limited_texture, deform_scene
 
 
 def _texture(seed=0, size=(120, 160)):
@@ -134,7 +134,7 @@ def _field_error(tr, sc, n) -> float:
 def test_dense_model_follows_deformations_finer_than_the_mesh(seed):
     """Bumps 14-24 px wide, finer than the 7 x 7 mesh's 27 px cells, frame 12 registered onto the model directly.
     The default smoothness (chosen on sequences, where frames move little) and a softer one resolve finer."""
-    sc = deform_scene(seed, n_frames=13, size=(240, 320), bump_scale=0.4, amplitude=6.0)
+    sc = deform_scene(seed, n_frames=13, size=(240, 320), **FINE)
     errs = {}
     for name, kw in (("dense", {"model": "dense"}), ("soft", {"model": "dense", "dense_lam": 1.0}), ("mesh", {})):
         tr = pftrack.create_tracker("deformable-mesh", **kw)

@@ -260,10 +260,10 @@ def cmd_synth(args) -> int:
 
             export_traffic(traffic_scene(sd, kind=args.kind.split("-", 1)[1]), out / f"{args.kind}-{sd:03d}")
         elif args.kind == "deform":
-            from ..synth.deform import deform_scene, export_deform
+            from ..synth.deform import FINE, deform_scene, export_deform
 
-            fine = {"bump_scale": 0.4, "amplitude": 6.0} if args.fine else {}      # scripts/ch13_dense.py's "fine"
-            export_deform(deform_scene(sd, **fine), out / f"deform-{'fine-' if args.fine else ''}{sd:03d}")
+            export_deform(deform_scene(sd, **(FINE if args.fine else {})),
+                          out / f"deform-{'fine-' if args.fine else ''}{sd:03d}")
         elif args.kind == "kymo":
             from ..synth.deform import export_kymo, kymo_scene
 
