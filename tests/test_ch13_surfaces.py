@@ -331,3 +331,19 @@ def test_frame_to_frame_chaining_drifts_where_analysis_by_synthesis_does_not():
         last[ref] = float(np.mean(errs[-5:]))
     assert last["model"] < 0.6
     assert last["previous"] > 2 * last["model"]
+
+
+def test_fold_safe_step_halves_until_no_triangle_flips():
+    from pftrack.surfaces.mesh import fold_safe_step, keeps_orientation
+
+    g = Grid.for_box((0, 0, 20, 20), 3, 3)
+    V, tris = g.vertices(), g.triangles()
+    area0 = signed_areas(V, tris)
+    dd = np.zeros_like(V)
+    assert fold_safe_step(V, dd, tris, area0) == (1.0, 0)
+    dd[4] = (15.0, 0.0)                # the centre vertex 15 px right: past its neighbours at 10 px, folds
+    assert not keeps_orientation(V + dd, tris, area0)
+    step, halvings = fold_safe_step(V, dd, tris, area0)
+    assert (step, halvings) == (0.5, 1) and keeps_orientation(V + step * dd, tris, area0)
+    dd[4] = (400.0, 0.0)               # folds at every step tried: four halvings, the last one unchecked
+    assert fold_safe_step(V, dd, tris, area0) == (1 / 16, 4)

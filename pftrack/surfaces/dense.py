@@ -32,7 +32,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import ParameterError
-from .mesh import Grid, directional_laplacian, displacement_at, signed_areas
+from .mesh import Grid, directional_laplacian, displacement_at, fold_safe_step, keeps_orientation, signed_areas
 from .solver import _sample, gradients, huber_rho, huber_scale, pyramid, robust_terms
 
 
@@ -302,13 +302,8 @@ class DenseSolver:
                     break
                 delta = delta.reshape(-1, self.m)
                 dd, dr = delta[:, :2], (delta[:, 2] if self.s.photometric else 0.0)
-                step = 1.0
-                for _ in range(4):                        # fold check: every pixel triangle keeps its orientation
-                    area = signed_areas(lv.V + D + step * dd, lv.tris)
-                    if np.all(np.sign(area) == np.sign(lv.area0)):
-                        break
-                    step *= 0.5
-                    folds += 1
+                step, halvings = fold_safe_step(lv.V + D, dd, lv.tris, lv.area0)    # every pixel triangle
+                folds += halvings
                 D = D + step * dd
                 if self.s.photometric:
                     rho = np.clip(rho + step * dr, self.s.rho_min, self.s.rho_max)
@@ -321,7 +316,7 @@ class DenseSolver:
         ok = np.isfinite(r)
         rms = float(np.sqrt(np.mean(r[ok] ** 2))) if ok.any() else float("inf")
         lv0 = self.levels[0]
-        folded = not np.all(np.sign(signed_areas(lv0.V + D, lv0.tris)) == np.sign(lv0.area0))
+        folded = not keeps_orientation(lv0.V + D, lv0.tris, lv0.area0)
         return D, rho, {"rms": rms, "iterations": iters, "fold_halvings": folds, "folded": folded,
                         "valid_fraction": float(ok.mean()),
                         "solver": choose_method(self.method, self.K)}

@@ -147,6 +147,23 @@ def signed_areas(V: np.ndarray, tris: np.ndarray) -> np.ndarray:
     return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
 
 
+def keeps_orientation(V: np.ndarray, tris: np.ndarray, area0: np.ndarray) -> bool:
+    """True when every triangle of the deformed mesh ``V`` has the sign of area it had (no fold)."""
+    return bool(np.all(np.sign(signed_areas(V, tris)) == np.sign(area0)))
+
+
+def fold_safe_step(V: np.ndarray, dd: np.ndarray, tris: np.ndarray, area0: np.ndarray, halvings: int = 4):
+    """The fold check of ch13.md §4: the step along ``dd`` from vertex positions ``V``, halved until no triangle flips,
+    at most ``halvings`` times (the last halving is not checked again).  Returns ``(step, halvings done)``."""
+    step, done = 1.0, 0
+    for _ in range(halvings):
+        if keeps_orientation(V + step * dd, tris, area0):
+            break
+        step *= 0.5
+        done += 1
+    return step, done
+
+
 def parse_mesh(text: str) -> tuple[int, int]:
     """``"7x7"`` -> (rows, cols) = (7, 7); ``"9x5"`` is 9 columns by 5 rows (width x height)."""
     try:

@@ -29,7 +29,9 @@ from .._numba import njit, numba_enabled
 from .mesh import (
     Grid,
     directional_laplacian,
+    fold_safe_step,
     interp_weights,
+    keeps_orientation,
     signed_areas,
     weights_matrix,
 )
@@ -336,13 +338,8 @@ class MeshSolver:
                         break
                 dd = np.stack([delta[:Kg], delta[Kg:2 * Kg]], 1)
                 dr = delta[2 * Kg:] if self.s.photometric else 0.0
-                step = 1.0
-                for _ in range(4):                               # fold check (ch13.md §4)
-                    area = signed_areas(self.V0 + d + step * dd, self.tris)
-                    if np.all(np.sign(area) == np.sign(self.area0)):
-                        break
-                    step *= 0.5
-                    folds += 1
+                step, halvings = fold_safe_step(self.V0 + d, dd, self.tris, self.area0)
+                folds += halvings
                 d = d + step * dd
                 if self.s.photometric:
                     rho = np.clip(rho + step * dr, self.s.rho_min, self.s.rho_max)
@@ -352,7 +349,7 @@ class MeshSolver:
         r, _ = self.residual(self.levels[0], pyr[0], d, rho)
         ok = np.isfinite(r)
         rms = float(np.sqrt(np.mean(r[ok] ** 2))) if ok.any() else float("inf")
-        folded = not np.all(np.sign(signed_areas(self.V0 + d, self.tris)) == np.sign(self.area0))
+        folded = not keeps_orientation(self.V0 + d, self.tris, self.area0)
         return d, rho, {"rms": rms, "iterations": iters, "fold_halvings": folds, "folded": folded,
                         "valid_fraction": float(ok.mean())}
 
