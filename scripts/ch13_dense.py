@@ -1,6 +1,6 @@
 """Book ch. 13's dense (per-pixel) model against the mesh models (docs/surfaces.md, "The dense model").
 
-    python scripts/ch13_dense.py [--part select,compare,speed] [--frames 30] [--json reports/ch13_dense.json]
+    python scripts/ch13_dense.py [--part select,compare,real,speed] [--frames 30] [--json reports/ch13_dense.json]
 
 Synthetic deforming sheets (`pftrack synth deform`), two kinds:
 * smooth: the default scenes, four bumps of 0.18-0.3 of the box's shorter side, up to ~12 px;
@@ -13,6 +13,8 @@ the box (the field, not only the vertices), over every frame.
 * compare: report seeds 100-104 of both kinds, run once with the selected default: dense against the 7 x 7 and
   13 x 13 affine meshes, and dense without its photometric warp (field error, frame RMSE of the chapter's Fig. 5 metric
   with a mesh every 4 px, seconds per frame);
+* real: the same comparison on textures cut from the first frames of the four report sequences, JPEG quality 85
+  (report seeds 100-103; skipped without ../shared/data);
 * speed: seconds per frame of the dense model with each preconditioner at three region sizes (the last is
   T5's 768 x 1024 frame, with the scene's 512 x 430 region).
 """
@@ -97,6 +99,30 @@ def part_compare(out, frames):
     out["compare"] = {"rows": table, "summary": summary}
 
 
+def part_real(out, frames):
+    """The comparison on textures cut from the report sequences' first frames, JPEG quality 85 (the same scenes as
+    ch13_experiments.py's real part, 30 frames)."""
+    from ch13_experiments import real_textures          # the sibling script (scripts/ is on the path when run)
+
+    textures = real_textures()
+    if not textures:
+        print("real: ../shared/data not found; skipped")
+        return
+    table = {}
+    for i, (name, tex) in enumerate(textures):
+        sc = deform_scene(100 + i, n_frames=frames, texture=tex, jpeg=85)
+        for cname, kw in CONFIGS.items():
+            r = run(sc, **kw)
+            table.setdefault(name, {})[cname] = r
+            print(f"real {name} {cname}: field error {r['field_error']:.3f} px, frame RMSE {r['frame_rmse']:.4f}, "
+                  f"{r['s_per_frame']:.2f} s/frame, lost {r['lost']}", flush=True)
+    for cname in CONFIGS:
+        fe = np.mean([table[n][cname]["field_error"] for n in table])
+        fr = np.mean([table[n][cname]["frame_rmse"] for n in table])
+        print(f"real mean {cname:22s}: field error {fe:.3f} px, frame RMSE {fr:.4f}", flush=True)
+    out["real"] = table
+
+
 def part_speed(out, frames):
     rows = []
     for size in ((360, 480), (540, 720), (768, 1024)):
@@ -119,7 +145,7 @@ def part_speed(out, frames):
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--part", default="select,compare,speed")
+    ap.add_argument("--part", default="select,compare,real,speed")
     ap.add_argument("--frames", type=int, default=30)
     ap.add_argument("--json", default="reports/ch13_dense.json")
     a = ap.parse_args()
@@ -128,7 +154,7 @@ def main() -> None:
     if path.exists():
         out = json.loads(path.read_text())
     for part in a.part.split(","):
-        {"select": part_select, "compare": part_compare, "speed": part_speed}[part](out, a.frames)
+        {"select": part_select, "compare": part_compare, "real": part_real, "speed": part_speed}[part](out, a.frames)
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(out, indent=1))
 

@@ -109,7 +109,8 @@ def part_t2(out):
     _compare([(f"seed{s}", deform_scene(s)) for s in range(100, 108)], "t2", out)
 
 
-def part_real(out):
+def real_textures() -> list:
+    """``(sequence, texture in [0.1, 0.9])`` from the first frame of each report sequence of ../shared/data."""
     textures = []
     for seq in ("otb_motorrolling", "tld_pedestrian2", "davis16_blackswan", "davis16_car-shadow"):
         d = DATA / seq
@@ -119,6 +120,11 @@ def part_real(out):
             continue
         g = cv2.imread(str(imgs[0]), cv2.IMREAD_GRAYSCALE).astype(np.float64) / 255.0
         textures.append((seq, 0.1 + 0.8 * g))
+    return textures
+
+
+def part_real(out):
+    textures = real_textures()
     if not textures:
         print("real: ../shared/data not found; skipped")
         return
