@@ -117,6 +117,7 @@ class DeformableMesh(Tracker):
             self.D = np.zeros((self.dense.K, 2))      # the per-pixel field (full-resolution pixels of the box)
             self.D_prev = self.D.copy()
             self.R = np.ones(self.dense.K)
+            self.P0 = self.pgrid.vertices()          # where the shading field is reported, every frame
         else:
             self.solver = MeshSolver(self.I0, self.grid, self.pgrid, self._settings(box))
         self.last = {"rms": 0.0, "iterations": 0, "folded": False, "valid_fraction": 1.0}
@@ -129,8 +130,7 @@ class DeformableMesh(Tracker):
             return self._update_dense(g)
         start = self.d + (self.d - self.d_prev) if p.velocity else self.d
         d, rho, info = self.solver.solve(g, start, self.rho)
-        lost = bool(info["folded"] or info["rms"] > p.lost_rms or info["valid_fraction"] < 0.3
-                    or not np.all(np.isfinite(d)))
+        lost = self._judged_lost(info, d)
         if not lost:
             self.d_prev, self.d, self.rho = self.d, d, rho
             if p.reference == "previous":       # chaining: the next frame is registered onto this one
@@ -144,17 +144,22 @@ class DeformableMesh(Tracker):
         p = self.params
         start = self.D + (self.D - self.D_prev) if p.velocity else self.D
         D, R, info = self.dense.solve(g, start, self.R)
-        lost = bool(info["folded"] or info["rms"] > p.lost_rms or info["valid_fraction"] < 0.3
-                    or not np.all(np.isfinite(D)))
+        lost = self._judged_lost(info, D)
         if not lost:
             self.D_prev, self.D, self.R = self.D, D, R
             if p.reference == "previous":
                 self.dense.rebase(to_model(g, self.dense.grid, D, "bilinear"))
                 self.R = np.ones(self.dense.K)
             self.d = displacement_at(self.dense.grid, self.V0, self.D, "bilinear")
-            self.rho = self._field_at(self.pgrid.vertices(), self.R)
+            self.rho = self._field_at(self.P0, self.R)
         self.last = info
         return self._state(lost)
+
+    def _judged_lost(self, info: dict, displacements: np.ndarray) -> bool:
+        """The frame does not show the surface: the registration folded, its residual RMS exceeds ``lost_rms``, less
+        than 30 % of the model fell inside the frame, or the solve diverged."""
+        return bool(info["folded"] or info["rms"] > self.params.lost_rms or info["valid_fraction"] < 0.3
+                    or not np.all(np.isfinite(displacements)))
 
     def _field_at(self, pts: np.ndarray, values: np.ndarray) -> np.ndarray:
         return displacement_at(self.dense.grid, pts, np.c_[values, values], "bilinear")[:, 0]
