@@ -33,9 +33,9 @@ def _run(name, scenes, **kw):
         t.init(pairs[0][0], pairs[0][1])
         states = [t.update(f) for f, _ in pairs[1:]]
         boxes.append(np.array([s.box for s in states]))
-        for s in states:  # the flag and the score agree: a loss the test raises has a score below one half
+        for s in states:  # the flag and the score agree: a loss the test raises has a score of one half or less
             if kw.get("monitor") and s.lost and not s.info["tracker_lost"]:
-                assert s.score < 0.5
+                assert s.score <= 0.5
         h, w = pairs[0][0].shape[:2]
         ld = lost_detection([s.lost for s in states], boxes[-1], np.array([gt for _, gt in pairs[1:]]), hidden[1:],
                             bounds=(w, h))
@@ -46,15 +46,16 @@ def _run(name, scenes, **kw):
     return hid / absent, fl / max(covered, 1), boxes
 
 
+@pytest.mark.parametrize("cues", ["color", "fused"])
 @pytest.mark.parametrize("name", ["meanshift", "opencv-medianflow"])
-def test_a_tracker_without_a_loss_test_gets_a_calibrated_flag(vanish, name):
+def test_a_tracker_without_a_loss_test_gets_a_calibrated_flag(vanish, name, cues):
     """Neither tracker ever raises lost behind the occluders; with the monitor the flag is raised on most hidden
     frames and stays down while the box covers the target.  The boxes are the tracker's own either way."""
     rec0, fl0, boxes0 = _run(name, vanish)
-    rec1, fl1, boxes1 = _run(name, vanish, monitor=True)
+    rec1, fl1, boxes1 = _run(name, vanish, monitor=True, monitor_cues=cues)
     assert rec0 == 0.0
-    assert rec1 >= 0.6, rec1  # measured 0.78 (meanshift) and 0.91 (medianflow) on these seeds
-    assert fl1 <= 0.05, fl1  # measured 0.000 and 0.000
+    assert rec1 >= 0.6, rec1  # measured 0.78 / 0.80 (meanshift, colour / fused) and 0.92 / 0.89 (medianflow)
+    assert fl1 <= 0.05, fl1  # measured 0.000 for all four
     for a, b in zip(boxes0, boxes1):
         assert np.array_equal(a, b)
 
@@ -83,6 +84,24 @@ def test_the_monitor_follows_the_input(vanish):
     assert kinds <= {(True, "gray"), (False, "rgb")} and len(kinds) == 2  # both kinds among the seeds
 
 
+def test_the_fused_monitor_keeps_a_grey_face_under_changing_light():
+    """Given the exact boxes of a grey face whose light falls to a third and comes back, with a lamp and a shadow
+    edge (the face proxy of docs/robustness.md), the histogram alone calls the face lost on many frames; with the
+    structural score beside it (cues="fused") the test keeps it."""
+    from pftrack.synth.face import face_scene
+    from pftrack.trackers.monitor import MonitorParams
+
+    raised = {"color": 0, "fused": 0}
+    for seed in range(4):
+        frames, boxes = face_scene(seed, n_frames=150)
+        for cues in raised:
+            m = LossMonitor(MonitorParams(cues=cues))
+            m.start(frames[0], tuple(boxes[0]))
+            raised[cues] += sum(m.check(f, tuple(b))[0] for f, b in zip(frames[1:], boxes[1:]))
+    assert raised["color"] >= 40, raised  # measured 107 of 596 frames (3, 45, 3 and 56)
+    assert raised["fused"] <= 5, raised  # measured 0
+
+
 def test_the_flag_comes_down_when_the_box_is_on_the_target_again():
     spec = simple_scene(0, n_frames=40)
     frames = [f for f, _ in Scene(spec)]
@@ -106,6 +125,17 @@ def test_options_reach_every_tracker(tmp_path):
         pftrack.create_tracker("meanshift", monitor="maybe")
     cfg = parse_tracker_list("meanshift[monitor=true],color-pf[n_particles=50;monitor=true]")
     assert [c.param_dict.get("monitor") for c in cfg] == ["true", "true"]
+    # the monitor's cues, as a keyword or a parameter; a keyword overrides a parameter
+    for kw, cues in ((dict(monitor=True, monitor_cues="fused"), "fused"),
+                     (dict(params={"monitor": "true", "monitor_cues": "fused"}), "fused"),
+                     (dict(monitor_cues="color", params={"monitor": "true", "monitor_cues": "fused"}), "color")):
+        t = pftrack.create_tracker("meanshift", **kw)
+        assert isinstance(t, Monitored) and t.monitor.params.cues == cues
+    assert not isinstance(pftrack.create_tracker("meanshift", monitor=False, params={"monitor": "true"}), Monitored)
+    with pytest.raises(ParameterError, match="monitor_cues"):
+        pftrack.create_tracker("meanshift", monitor=True, monitor_cues="hog")
+    with pytest.raises(ParameterError, match="monitor_cues"):
+        parse_tracker_list("meanshift[monitor=true;monitor_cues=hog]")
     with pytest.raises(ParameterError):
         parse_tracker_list("meanshift[monitr=true]")
     # the command line
@@ -120,3 +150,17 @@ def test_options_reach_every_tracker(tmp_path):
     assert main(["track", str(tmp_path / "img"), "--tracker", "meanshift", "--box", box, "--param", "monitor=true",
                  "--out", str(out), "--quiet"]) == 0
     assert len(out.read_text().splitlines()) >= 12
+
+
+def test_a_monitored_run_is_cached_by_its_monitor_settings():
+    """pftrack eval reuses a cached run only when every setting is the same: a monitored run's settings include the
+    monitor's, so a changed monitor default is not served from the cache; an unmonitored run's are as before."""
+    from pftrack.eval.jobs import _effective_params
+
+    plain, colour, fused = parse_tracker_list("meanshift,meanshift[monitor=true],meanshift[monitor=true;"
+                                              "monitor_cues=fused]")
+    assert "monitor" not in _effective_params(plain, "ope")
+    assert _effective_params(colour, "ope")["monitor"]["cues"] == "color"
+    assert _effective_params(fused, "ope")["monitor"]["cues"] == "fused"
+    assert {k: v for k, v in _effective_params(colour, "ope").items() if k != "monitor"} == \
+        _effective_params(plain, "ope")

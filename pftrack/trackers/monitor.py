@@ -18,9 +18,18 @@ background half:
 * **hysteresis**: ``lost`` after ``lost_frames`` consecutive frames whose likelihood ratio is negative, and down
   again only when the ratio exceeds ``reacquire_margin``.
 
+With ``cues="fused"`` (``monitor_cues=fused``) the test is ``fusion-pf``'s: the box neighbourhood's best structural
+score (the NCC of grey patches, the better of the grey levels' and of their self-quotient image's, against a first
+and a running reference, :class:`~pftrack.trackers.structure_check.StructureCheck`) joins the colour coefficient in
+:class:`~pftrack.filtering.loss.FusedLoss`, with ``fusion-pf``'s clip, floor and acquisition bounds. It cuts the
+false alarms under light changes on grey input and on targets coloured like their surroundings, and misses more
+hidden frames behind trackers that match grey structure themselves (``template``, ``dssim``, ``ssim-pf``): their
+box on an occluder is the best structural match there (docs/evaluation.md).
+
 The tracker itself is not changed: its boxes, particles and information pass through, and the grid is fixed, so the
 tracks are the same with or without the monitor.  ``lost`` is raised when the tracker or the test raises it;
-``score`` is the test's posterior P(target | rho) (the tracker's own score is ``info["tracker_score"]``).
+``score`` is the test's posterior P(target | rho), at most one half on a frame the test calls lost (the tracker's
+own score is ``info["tracker_score"]``).
 
     tracker = pftrack.create_tracker("opencv-csrt", monitor=True)      # or Monitored(create_tracker(...))
     pftrack eval SEQ --trackers "opencv-csrt,opencv-csrt[monitor=true]"
@@ -35,10 +44,11 @@ import numpy as np
 
 from ..cues.color import blend_model, model_rho, normalized_model, reachable_roi
 from ..cues.histogram_cue import ColorCue
-from ..filtering.loss import LossDetector, confidence
+from ..filtering.loss import FusedLoss, LossDetector, confidence
 from ..geometry import Box, background_grid, box_to_ellipse
 from ..params import Params, param
 from .base import Tracker, TrackState
+from .structure_check import ACQUIRE_MARGIN, ACQUIRE_Z, ANCHOR_GATE, CUE_CLIP, CUE_FLOOR, RATE, StructureCheck
 
 __all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions"]
 
@@ -68,6 +78,10 @@ class MonitorParams(Params):
     scale: float = param(0.1, ge=0, lt=1, doc="... and its neighbours scaled by 1 ± this.")
     max_pixels: int = param(1500, ge=0, le=10_000_000, doc=(
         "Pixels sampled per ellipse at most (a regular lattice on larger ones; 0: every pixel)."))
+    cues: Literal["color", "fused"] = param("color", doc=(
+        "'color': the histogram's coefficient alone; 'fused': with fusion-pf's structural score beside it (the NCC "
+        "of grey patches, the better of the grey levels' and their self-quotient image's), both in fusion-pf's fused "
+        "two-class test (pftrack.filtering.loss.FusedLoss)."))
 
 
 def neighbourhood(ell: np.ndarray, shift: float, scale: float) -> np.ndarray:
@@ -88,9 +102,18 @@ class LossMonitor:
     def __init__(self, params: MonitorParams | None = None):
         self.params = p = params if params is not None else MonitorParams()
         self.cue = ColorCue(p.color_space, None, "nummiaro", p.max_pixels)
-        self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
-                                 history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
-                                 sd_floor_background=p.score_sd_floor)
+        test = dict(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin, history_rate=p.history_rate,
+                    sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor)
+        self.loss: LossDetector | FusedLoss
+        self.structure: StructureCheck | None = None
+        if p.cues == "fused":
+            # fusion-pf's structural cue and its fused test (clip, floor and acquisition bounds); the check's own
+            # detector is not used: each cue's statistics live in the fused test
+            self.structure = StructureCheck(LossDetector(**test), fused=True)
+            self.loss = FusedLoss(2, cue_clip=CUE_CLIP, cue_floor=CUE_FLOOR, acquire_z=ACQUIRE_Z,
+                                  acquire_margin=ACQUIRE_MARGIN, **test)
+        else:
+            self.loss = LossDetector(**test)
         self.q: np.ndarray | None = None
         self._sqrt_q: np.ndarray | None = None
         self._half: tuple[float, float] = (1.0, 1.0)
@@ -103,6 +126,8 @@ class LossMonitor:
         self._half = (float(ell[2]), float(ell[3]))
         self.q, self._sqrt_q = normalized_model(self.cue.histogram(frame, ell))
         self.loss.reset(1.0)
+        if self.structure is not None:
+            self.structure.init(frame, ell)
         self._background(frame, ell)
 
     def _background(self, frame: np.ndarray, ell: np.ndarray) -> None:
@@ -114,7 +139,11 @@ class LossMonitor:
         feats = self.cue.prepare(frame, (0, 0, w, h), self.cue.step_for(grid))
         rho, tot = self.cue.rho(feats, grid, self._sqrt_q, reuse=False)
         if np.count_nonzero(tot > 0) >= 2:
-            self.loss.set_background(rho[tot > 0])
+            if self.structure is None:
+                self.loss.set_background(rho[tot > 0])
+            else:
+                self.loss.set_background(np.column_stack([np.where(tot > 0, rho, np.nan),
+                                                          self.structure.scores(frame, grid)]))
 
     def check(self, frame: np.ndarray, box: Box) -> tuple[bool, float, float]:
         """``(lost, score, rho)`` of the box reported on this frame (the test's state advances)."""
@@ -130,20 +159,31 @@ class LossMonitor:
         best = int(np.argmax(rhos))
         hist, tot = self.cue.histograms(feats, e[best:best + 1], reuse=False)
         rho = model_rho(hist[0], self._sqrt_q) if tot[0] > 0 else 0.0
+        score_in: float | list[float] = rho
+        if self.structure is not None:
+            # the structural score of the box's neighbourhood, its best box (as the colour's)
+            self.structure.new_frame()
+            ncc = self.structure.scores(frame, e)
+            best_s = int(np.nanargmax(ncc)) if np.isfinite(ncc).any() else 0
+            score_in = [rho, float(ncc[best_s])]
         if self.loss.lost:
-            lost = not self.loss.acquire(rho)
+            lost = not self.loss.acquire(score_in)
             score = confidence(self.loss.llr)
         else:
-            lost, score = self.loss.step(rho)
-        if not lost and tot[0] > 0 and self.loss.confident(rho):
+            lost, score = self.loss.step(score_in)
+        if not lost and tot[0] > 0 and self.loss.confident(score_in):
             # as color-pf: the model and the background statistics follow the confident frames only, so a target
             # the colours cannot tell from its surroundings leaves the test abstaining (no evidence either way)
             if self.params.alpha > 0:
                 self.q, self._sqrt_q = blend_model(self.q, hist[0], self.params.alpha)
+            if self.structure is not None:  # fusion-pf's running reference, refreshed on confident frames
+                self.structure.cue.update(frame, e[best_s], RATE, ANCHOR_GATE)
             self._since_bg += 1
             if self._since_bg >= self.params.background_interval:
                 self._half = (float(e[best, 2]), float(e[best, 3]))
                 self._background(frame, e[best])
+        if lost:  # the score and the flag agree (as color-pf's): a loss never reports more than even odds
+            score = min(score, 0.5)
         return lost, float(score), float(rho)
 
 
@@ -182,6 +222,8 @@ class WrapperOptions(Params):
     monitor: bool = param(False, doc=(
         "Judge the tracker's boxes with the colour PFs' loss test (pftrack.trackers.monitor): a calibrated lost flag "
         "for a tracker that has none of its own."))
+    monitor_cues: Literal["color", "fused"] = param("color", doc=(
+        "The monitor's cues (MonitorParams.cues): the histogram alone, or fused with fusion-pf's structural score."))
 
 
 def split_wrapper_options(values: dict[str, Any]) -> tuple[WrapperOptions, dict[str, Any]]:

@@ -75,28 +75,42 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
     **kwargs : parameter values (validated), or constructor extras such as ``detector``.
 
     Every tracker also takes ``monitor=True`` (in ``params`` too): its boxes are judged by the colour PFs' loss
-    test, which raises ``lost`` (:class:`~pftrack.trackers.monitor.Monitored`).
+    test, which raises ``lost`` (:class:`~pftrack.trackers.monitor.Monitored`); ``monitor_cues="fused"`` adds
+    fusion-pf's structural score to that test.
     """
     spec = get_spec(name)
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
         raise ParameterError(f"seed must be an integer >= 0 or None, got {seed!r}")
     if not spec.available():
         raise ParameterError(f"tracker '{name}' is not available in this installation")
-    from .monitor import Monitored, split_wrapper_options
+    from .monitor import Monitored, MonitorParams, split_wrapper_options
 
     extras = {k: kwargs.pop(k) for k in list(kwargs) if k in spec.extra_kwargs}
-    wrap, kwargs = split_wrapper_options(kwargs)
+    wrap = wrapper_options(None if isinstance(params, Params) else params, kwargs)
+    kwargs = split_wrapper_options(kwargs)[1]
     if isinstance(params, Params):
         if kwargs:
             params = params.replace(**kwargs)
     else:
-        in_params, mapping = split_wrapper_options(dict(params or {}))
-        wrap = wrap.replace(monitor=wrap.monitor or in_params.monitor)
-        params = spec.params_cls.from_mapping(mapping, **kwargs)
+        params = spec.params_cls.from_mapping(split_wrapper_options(dict(params or {}))[1], **kwargs)
     if not isinstance(params, spec.params_cls):
         raise ParameterError(f"tracker '{name}' takes {spec.params_cls.__name__}, got {type(params).__name__}")
     tracker = spec.cls(params, seed=seed, rng=rng, **extras)
-    return Monitored(tracker) if wrap.monitor else tracker
+    if not wrap.monitor:
+        return tracker
+    return Monitored(tracker, MonitorParams(cues=wrap.monitor_cues))
+
+
+def wrapper_options(*sources: Mapping[str, Any] | None):
+    """The options every tracker takes (:class:`~pftrack.trackers.monitor.WrapperOptions`) from parameter
+    mappings, a later one overriding an earlier one."""
+    from .monitor import WrapperOptions, split_wrapper_options
+
+    values: dict[str, Any] = {}
+    for source in sources:
+        if source:
+            values.update({k: source[k] for k in WrapperOptions.__dataclass_fields__ if k in source})
+    return split_wrapper_options(values)[0]
 
 
 _loaded = False

@@ -16,8 +16,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .monitor import split_wrapper_options
-from .registry import create_tracker, get_spec
+from .registry import create_tracker, get_spec, wrapper_options
 
 _WARMED: set[tuple[str, tuple]] = set()
 
@@ -48,7 +47,7 @@ def warm_up(name: str, params: Mapping[str, Any] | None = None, *, frames: int =
     ``frames``: length of the first (small-target) clip.
     """
     key = (name, tuple(sorted((k, repr(v)) for k, v in (params or {}).items())))
-    monitored = split_wrapper_options(dict(params or {}))[0].monitor  # the loss monitor's kernels need warming too
+    monitored = wrapper_options(params).monitor  # the loss monitor's kernels need warming too
     if (key in _WARMED and not force) or (get_spec(name).family == "opencv" and not monitored):
         return 0.0
     t0 = time.perf_counter()
