@@ -54,7 +54,7 @@ def test_a_tracker_without_a_loss_test_gets_a_calibrated_flag(vanish, name, cues
     rec0, fl0, boxes0 = _run(name, vanish)
     rec1, fl1, boxes1 = _run(name, vanish, monitor=True, monitor_cues=cues)
     assert rec0 == 0.0
-    assert rec1 >= 0.6, rec1  # measured 0.78 / 0.80 (meanshift, colour / fused) and 0.92 / 0.89 (medianflow)
+    assert rec1 >= 0.6, rec1  # measured 0.78 / 0.80 (meanshift, colour / fused) and 0.92 / 0.90 (medianflow)
     assert fl1 <= 0.05, fl1  # measured 0.000 for all four
     for a, b in zip(boxes0, boxes1):
         assert np.array_equal(a, b)
@@ -74,14 +74,19 @@ def test_the_monitor_follows_the_input(vanish):
     """Grey input: intensity x orientation features (the cue chooses from the input)."""
     from pftrack.cues.intensity import is_gray
 
+    from pftrack.trackers.monitor import MonitorParams
+
     kinds = set()
     for pairs, _ in vanish:
         m = LossMonitor()
         m.start(pairs[0][0], pairs[0][1])
-        kinds.add((is_gray(pairs[0][0]), m.cue.color_space))
+        fused = LossMonitor(MonitorParams(cues="fused"))  # its structural cue: gradients on grey input, NCC on colour
+        fused.start(pairs[0][0], pairs[0][1])
+        kinds.add((is_gray(pairs[0][0]), m.cue.color_space, type(fused.structure.cue).__name__))
         lost, score, rho = m.check(pairs[1][0], pairs[1][1])
         assert not lost and score > 0.5 and rho > 0.5
-    assert kinds <= {(True, "gray"), (False, "rgb")} and len(kinds) == 2  # both kinds among the seeds
+        assert not fused.check(pairs[1][0], pairs[1][1])[0]
+    assert kinds <= {(True, "gray", "HogStructure"), (False, "rgb", "LitStructure")} and len(kinds) == 2
 
 
 def test_the_fused_monitor_keeps_a_grey_face_under_changing_light():
@@ -162,5 +167,10 @@ def test_a_monitored_run_is_cached_by_its_monitor_settings():
     assert "monitor" not in _effective_params(plain, "ope")
     assert _effective_params(colour, "ope")["monitor"]["cues"] == "color"
     assert _effective_params(fused, "ope")["monitor"]["cues"] == "fused"
+    ncc = parse_tracker_list("meanshift[monitor=true;monitor_cues=fused;monitor_structure=ncc]")[0]
+    assert _effective_params(ncc, "ope")["monitor"]["structure_features"] == "ncc"
+    assert _effective_params(fused, "ope")["monitor"]["structure_features"] == "hog-on-grey"
+    t = pftrack.create_tracker("meanshift", monitor=True, monitor_cues="fused", monitor_structure="ncc")
+    assert t.monitor.params.structure_features == "ncc"
     assert {k: v for k, v in _effective_params(colour, "ope").items() if k != "monitor"} == \
         _effective_params(plain, "ope")

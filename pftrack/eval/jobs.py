@@ -109,7 +109,8 @@ def _effective_params(cfg: TrackerConfig, protocol: str) -> dict | None:
             out = spec.cls.Params.from_mapping(split_wrapper_options(dict(cfg.params))[1]).as_dict()
             wrap = wrapper_options(dict(cfg.params))
             if wrap.monitor:  # the loss monitor's settings too (the keys of unmonitored runs are unchanged)
-                out["monitor"] = MonitorParams(cues=wrap.monitor_cues).as_dict()
+                monitor = MonitorParams(cues=wrap.monitor_cues, structure_features=wrap.monitor_structure)
+                out["monitor"] = monitor.as_dict()
             return out
         return cls.from_mapping(dict(cfg.params)).as_dict()
     except Exception:  # noqa: BLE001 - invalid parameters are reported when the run starts

@@ -19,12 +19,15 @@ background half:
   again only when the ratio exceeds ``reacquire_margin``.
 
 With ``cues="fused"`` (``monitor_cues=fused``) the test is ``fusion-pf``'s: the box neighbourhood's best structural
-score (the NCC of grey patches, the better of the grey levels' and of their self-quotient image's, against a first
-and a running reference, :class:`~pftrack.trackers.structure_check.StructureCheck`) joins the colour coefficient in
-:class:`~pftrack.filtering.loss.FusedLoss`, with ``fusion-pf``'s clip, floor and acquisition bounds. It cuts the
-false alarms under light changes on grey input and on targets coloured like their surroundings, and misses more
-hidden frames behind trackers that match grey structure themselves (``template``, ``dssim``, ``ssim-pf``): their
-box on an occluder is the best structural match there (docs/evaluation.md).
+score joins the colour coefficient in :class:`~pftrack.filtering.loss.FusedLoss`, with ``fusion-pf``'s clip, floor
+and acquisition bounds. The structural cue chooses its features from the input, as ``fusion-pf``'s
+(:class:`~pftrack.trackers.structure_check.StructureCheck`, a first and a running reference): on colour input the NCC
+of grey patches (the better of the grey levels' and of their self-quotient image's), on grey input histograms of
+oriented gradients (``structure_features="hog-on-grey"``). It cuts the false alarms on targets coloured like their
+surroundings and under light changes, and misses more hidden frames behind trackers that match grey structure
+themselves (``template``, ``dssim``, ``ssim-pf``): their box on an occluder is the best structural match there
+(docs/evaluation.md). It is an option: on the tune split it lowered the flag's recall more than the rule for a
+default allowed.
 
 The tracker itself is not changed: its boxes, particles and information pass through, and the grid is fixed, so the
 tracks are the same with or without the monitor.  ``lost`` is raised when the tracker or the test raises it;
@@ -82,6 +85,9 @@ class MonitorParams(Params):
         "'color': the histogram's coefficient alone; 'fused': with fusion-pf's structural score beside it (the NCC "
         "of grey patches, the better of the grey levels' and their self-quotient image's), both in fusion-pf's fused "
         "two-class test (pftrack.filtering.loss.FusedLoss)."))
+    structure_features: Literal["ncc", "hog-on-grey"] = param("hog-on-grey", doc=(
+        "With cues='fused', what the structural score correlates: 'ncc' grey patches on every input; 'hog-on-grey' "
+        "histograms of oriented gradients on grey input (fusion-pf's default there), 'ncc' on colour."))
 
 
 def neighbourhood(ell: np.ndarray, shift: float, scale: float) -> np.ndarray:
@@ -107,13 +113,12 @@ class LossMonitor:
         self.loss: LossDetector | FusedLoss
         self.structure: StructureCheck | None = None
         if p.cues == "fused":
-            # fusion-pf's structural cue and its fused test (clip, floor and acquisition bounds); the check's own
-            # detector is not used: each cue's statistics live in the fused test
-            self.structure = StructureCheck(LossDetector(**test), fused=True)
+            # fusion-pf's fused test (clip, floor and acquisition bounds), its structural cue chosen at start()
             self.loss = FusedLoss(2, cue_clip=CUE_CLIP, cue_floor=CUE_FLOOR, acquire_z=ACQUIRE_Z,
                                   acquire_margin=ACQUIRE_MARGIN, **test)
         else:
             self.loss = LossDetector(**test)
+        self._test = test
         self.q: np.ndarray | None = None
         self._sqrt_q: np.ndarray | None = None
         self._half: tuple[float, float] = (1.0, 1.0)
@@ -126,7 +131,11 @@ class LossMonitor:
         self._half = (float(ell[2]), float(ell[3]))
         self.q, self._sqrt_q = normalized_model(self.cue.histogram(frame, ell))
         self.loss.reset(1.0)
-        if self.structure is not None:
+        if self.params.cues == "fused":
+            # the structural cue chooses its features from the input, as fusion-pf's; the check's own detector is
+            # not used (each cue's statistics live in the fused test)
+            hog = self.params.structure_features == "hog-on-grey" and self.cue.color_space == "gray"
+            self.structure = StructureCheck(LossDetector(**self._test), fused=True, features="hog" if hog else "ncc")
             self.structure.init(frame, ell)
         self._background(frame, ell)
 
@@ -224,6 +233,8 @@ class WrapperOptions(Params):
         "for a tracker that has none of its own."))
     monitor_cues: Literal["color", "fused"] = param("color", doc=(
         "The monitor's cues (MonitorParams.cues): the histogram alone, or fused with fusion-pf's structural score."))
+    monitor_structure: Literal["ncc", "hog-on-grey"] = param("hog-on-grey", doc=(
+        "With monitor_cues=fused, the structural score's features (MonitorParams.structure_features)."))
 
 
 def split_wrapper_options(values: dict[str, Any]) -> tuple[WrapperOptions, dict[str, Any]]:

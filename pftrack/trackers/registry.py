@@ -98,7 +98,7 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
     tracker = spec.cls(params, seed=seed, rng=rng, **extras)
     if not wrap.monitor:
         return tracker
-    return Monitored(tracker, MonitorParams(cues=wrap.monitor_cues))
+    return Monitored(tracker, MonitorParams(cues=wrap.monitor_cues, structure_features=wrap.monitor_structure))
 
 
 def wrapper_options(*sources: Mapping[str, Any] | None):
