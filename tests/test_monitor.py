@@ -137,6 +137,8 @@ def test_options_reach_every_tracker(tmp_path):
         t = pftrack.create_tracker("meanshift", **kw)
         assert isinstance(t, Monitored) and t.monitor.params.cues == cues
     assert not isinstance(pftrack.create_tracker("meanshift", monitor=False, params={"monitor": "true"}), Monitored)
+    assert isinstance(pftrack.create_tracker("meanshift", monitor_cues="fused"), Monitored)  # its setting asks for it
+    assert not isinstance(pftrack.create_tracker("meanshift", monitor=False, monitor_cues="fused"), Monitored)
     with pytest.raises(ParameterError, match="monitor_cues"):
         pftrack.create_tracker("meanshift", monitor=True, monitor_cues="hog")
     with pytest.raises(ParameterError, match="monitor_cues"):

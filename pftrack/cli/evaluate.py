@@ -133,5 +133,6 @@ def cmd_list(args) -> int:
                     print(f"      {line}")
     if not args.name:
         print("\n'pftrack list NAME' shows a tracker's parameters; set them with --param KEY=VALUE. Every tracker "
-              "also takes monitor=true: a calibrated lost flag on its boxes.")
+              "also takes monitor=true: a calibrated lost flag on its boxes (monitor_cues=fused: with fusion-pf's "
+              "structural score).")
     return 0

@@ -2,9 +2,9 @@
 
 Many trackers have no test of the target's absence: on six vanish scenes OpenCV's MIL, MedianFlow and TLD, the
 mean-shift baselines and ``pisc`` never raise ``lost``, ``dssim`` raises it on 1 % of the hidden frames and CSRT on
-16 % (docs/evaluation.md).  :class:`Monitored` wraps any tracker and judges each box the tracker reports with the two-class
-test of :mod:`pftrack.filtering.loss`, which keeps Nummiaro et al.'s appearance condition (Eqs. 13–15) as its
-background half:
+16 % (docs/evaluation.md).  :class:`Monitored` wraps any tracker and judges each box the tracker reports with the
+two-class test of :mod:`pftrack.filtering.loss`, which keeps Nummiaro et al.'s appearance condition (Eqs. 13–15) as
+its background half:
 
 * **the target model** is the kernel-weighted histogram of the first box's ellipse (Eqs. 3–5; grey features on grey
   input, as the cue chooses its features from the input), updated by Eq. 12 at rate ``alpha`` on the frames where the
@@ -232,7 +232,8 @@ class WrapperOptions(Params):
         "Judge the tracker's boxes with the colour PFs' loss test (pftrack.trackers.monitor): a calibrated lost flag "
         "for a tracker that has none of its own."))
     monitor_cues: Literal["color", "fused"] = param("color", doc=(
-        "The monitor's cues (MonitorParams.cues): the histogram alone, or fused with fusion-pf's structural score."))
+        "The monitor's cues (MonitorParams.cues): the histogram alone, or fused with fusion-pf's structural score. "
+        "Setting it (or monitor_structure) turns the monitor on unless monitor=false is given."))
     monitor_structure: Literal["ncc", "hog-on-grey"] = param("hog-on-grey", doc=(
         "With monitor_cues=fused, the structural score's features (MonitorParams.structure_features)."))
 

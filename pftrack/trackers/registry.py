@@ -103,13 +103,16 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
 
 def wrapper_options(*sources: Mapping[str, Any] | None):
     """The options every tracker takes (:class:`~pftrack.trackers.monitor.WrapperOptions`) from parameter
-    mappings, a later one overriding an earlier one."""
+    mappings, a later one overriding an earlier one; a setting of the monitor's turns it on unless ``monitor`` is
+    given."""
     from .monitor import WrapperOptions, split_wrapper_options
 
     values: dict[str, Any] = {}
     for source in sources:
         if source:
             values.update({k: source[k] for k in WrapperOptions.__dataclass_fields__ if k in source})
+    if values and "monitor" not in values:
+        values["monitor"] = True  # the monitor's own settings ask for it (monitor=false still turns it off)
     return split_wrapper_options(values)[0]
 
 
