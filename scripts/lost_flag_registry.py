@@ -1,6 +1,7 @@
 """The lost flag of every registered tracker, measured as a detector on synthetic vanish scenes.
 
     python scripts/lost_flag_registry.py [--seeds 100-105] [--frames 90] [--trackers A,B,...] [--monitor]
+                                         [--monitor-cues color,fused]
 
 Each tracker (its defaults, tracker seed 0) follows the target of ``pftrack synth vanish`` scenes: it walks fully
 behind a wide textured occluder among look-alike distractors and comes out again. Printed per tracker: *lost recall*,
@@ -29,6 +30,8 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=90)
     ap.add_argument("--trackers", default="", help="comma-separated names (default: every available tracker)")
     ap.add_argument("--monitor", action="store_true", help="also run each tracker with monitor=true")
+    ap.add_argument("--monitor-cues", default="color", help=(
+        "with --monitor: the monitor's cues to run, comma-separated (color, fused; default color)"))
     args = ap.parse_args()
     a, b = (int(v) for v in args.seeds.split("-"))
     scenes = []
@@ -41,15 +44,18 @@ def main() -> None:
     for spec in list_trackers():
         if (names and spec.name not in names) or not spec.available():
             continue
-        for monitor in ((False, True) if args.monitor else (False,)):
-            _row(spec, scenes, monitor)
+        _row(spec, scenes, None)
+        for cues in (args.monitor_cues.split(",") if args.monitor else ()):
+            _row(spec, scenes, cues)
 
 
-def _row(spec, scenes, monitor: bool) -> None:
+def _row(spec, scenes, monitor: str | None) -> None:
+    """One tracker's flag pooled over the scenes; ``monitor``: None (its own flag) or the monitor's cues."""
     hid = absent = fl = covered = 0
     t0 = time.perf_counter()
     for pairs, hidden in scenes:
-        t = pftrack.create_tracker(spec.name, seed=0, monitor=monitor)
+        wrap = {} if monitor is None else {"monitor": True, "monitor_cues": monitor}
+        t = pftrack.create_tracker(spec.name, seed=0, **wrap)
         t.init(pairs[0][0], pairs[0][1])
         states = [t.update(frame) for frame, _ in pairs[1:]]  # the init frame is given, not detected
         h, w = pairs[0][0].shape[:2]
@@ -61,7 +67,8 @@ def _row(spec, scenes, monitor: bool) -> None:
         fl += round(ld.false_rate * ld.covered_frames) if ld.covered_frames else 0
     rec = f"{hid / absent:.2f} ({hid} of {absent})" if absent else "-"
     fls = f"{fl / covered:.3f} ({fl} of {covered})" if covered else "-"
-    label = f"{spec.name}[monitor=true]" if monitor else spec.name
+    label = spec.name if monitor is None else f"{spec.name}[monitor=true" + (
+        "]" if monitor == "color" else f";monitor_cues={monitor}]")
     print(f"| `{label}` | {spec.family} | {rec} | {fls} | {time.perf_counter() - t0:.1f} |", flush=True)
 
 
