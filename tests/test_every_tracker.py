@@ -62,3 +62,16 @@ def test_tracker_protocol_on_colour_and_grey_frames(name, kind):
         _check(tracker.init(frames[0], BOX))
         for f in frames[1:]:
             _check(tracker.update(f))
+
+
+@pytest.mark.parametrize("kind", ["colour", "grey-3", "grey-1"])
+@pytest.mark.parametrize("cues", ["color", "fused"])
+def test_the_loss_monitor_keeps_the_protocol(cues, kind):
+    """The loss monitor's state (both its cues) on the same frames: the tracker's box, the test's score and flag."""
+    frames = FRAMES[kind]
+    tracker = pftrack.create_tracker("meanshift", monitor=True, monitor_cues=cues)
+    _check(tracker.init(frames[0], BOX))
+    states = [tracker.update(f) for f in frames[1:]]
+    for s in states:
+        _check(s)
+    assert not any(s.lost for s in states)  # the box stays on the target
