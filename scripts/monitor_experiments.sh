@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The loss monitor's experiments (docs/evaluation.md, "The monitor on by default ..." and "... monitor_cues=fused"):
 # the tune split with and without the monitor for the trackers whose own flag is weak, the fused monitor's two
-# variants on seven probes, and the report split of the probes (own flag, colour monitor, fused monitor), 3 seeds.
+# variants and both grey histograms on seven probes, and the report split of the probes (own flag, colour monitor,
+# fused monitor), 3 seeds.
 # Needs the split's inputs: bash scripts/make_split_eval.sh (or its first half) writes them to WORK_DIR.
 #
 # Usage: bash scripts/monitor_experiments.sh [WORK_DIR] [OUT_DIR]   (defaults reports/split, reports)
@@ -23,8 +24,12 @@ WEAK=(flow-pf ssim-pf dssim hybrid-ssim-pf template pisc cotrain-pf switching fs
 PROBES=(opencv-csrt template dssim ssim-pf pisc fs-meanshift flow-pf)
 run tune mondef_tune "$(with "" "${WEAK[@]}"),$(with "[monitor=true]" "${WEAK[@]}")"
 FUSED="[monitor=true;monitor_cues=fused"
+LIT="[monitor=true;monitor_grey_histogram=both"
 run tune monfused_tune "opencv-csrt,opencv-csrt[monitor=true],$(with "$FUSED;monitor_structure=ncc]" "${PROBES[@]}")"
 run tune monhog_tune "$(with "$FUSED;monitor_structure=hog-on-grey]" "${PROBES[@]}")"
+run tune monlit_tune "$(with "$LIT]" "${PROBES[@]}"),$(with "$LIT;monitor_cues=fused]" "${PROBES[@]}")"
 run report monitor_cues_report \
   "$(with "" "${PROBES[@]}"),$(with "[monitor=true]" "${PROBES[@]}"),$(with "$FUSED]" "${PROBES[@]}")"
-for r in mondef_tune monfused_tune monhog_tune monitor_cues_report; do grep '^| `' "$OUT/$r.md" | head -30; done
+for r in mondef_tune monfused_tune monhog_tune monlit_tune monitor_cues_report; do
+  grep '^| `' "$OUT/$r.md" | head -30
+done

@@ -89,22 +89,25 @@ def test_the_monitor_follows_the_input(vanish):
     assert kinds <= {(True, "gray", "HogStructure"), (False, "rgb", "LitStructure")} and len(kinds) == 2
 
 
-def test_the_fused_monitor_keeps_a_grey_face_under_changing_light():
+def test_the_monitor_keeps_a_grey_face_under_changing_light():
     """Given the exact boxes of a grey face whose light falls to a third and comes back, with a lamp and a shadow
-    edge (the face proxy of docs/robustness.md), the histogram alone calls the face lost on many frames; with the
-    structural score beside it (cues="fused") the test keeps it."""
+    edge (the face proxy of docs/robustness.md), the histogram of the grey levels alone calls the face lost on many
+    frames; with the self-quotient image's histogram beside it (grey_histogram="both"), or with the structural score
+    beside it (cues="fused"), the test keeps it."""
     from pftrack.synth.face import face_scene
     from pftrack.trackers.monitor import MonitorParams
 
-    raised = {"color": 0, "fused": 0}
+    variants = {"levels": MonitorParams(grey_histogram="levels"), "both": MonitorParams(grey_histogram="both"),
+                "fused": MonitorParams(cues="fused", grey_histogram="levels")}
+    raised = dict.fromkeys(variants, 0)
     for seed in range(4):
         frames, boxes = face_scene(seed, n_frames=150)
-        for cues in raised:
-            m = LossMonitor(MonitorParams(cues=cues))
+        for name, params in variants.items():
+            m = LossMonitor(params)
             m.start(frames[0], tuple(boxes[0]))
-            raised[cues] += sum(m.check(f, tuple(b))[0] for f, b in zip(frames[1:], boxes[1:]))
-    assert raised["color"] >= 40, raised  # measured 107 of 596 frames (3, 45, 3 and 56)
-    assert raised["fused"] <= 5, raised  # measured 0
+            raised[name] += sum(m.check(f, tuple(b))[0] for f, b in zip(frames[1:], boxes[1:]))
+    assert raised["levels"] >= 40, raised  # measured 107 of 596 frames (3, 45, 3 and 56)
+    assert raised["both"] <= 5 and raised["fused"] <= 5, raised  # measured 0 and 0
 
 
 def test_the_flag_comes_down_when_the_box_is_on_the_target_again():
@@ -174,5 +177,9 @@ def test_a_monitored_run_is_cached_by_its_monitor_settings():
     assert _effective_params(fused, "ope")["monitor"]["structure_features"] == "hog-on-grey"
     t = pftrack.create_tracker("meanshift", monitor=True, monitor_cues="fused", monitor_structure="ncc")
     assert t.monitor.params.structure_features == "ncc"
+    lit = parse_tracker_list("meanshift[monitor_grey_histogram=both]")[0]  # a setting of the monitor's turns it on
+    assert _effective_params(lit, "ope")["monitor"]["grey_histogram"] == "both"
+    t = pftrack.create_tracker("meanshift", params={"monitor_grey_histogram": "both"})
+    assert isinstance(t, Monitored) and t.monitor.params.grey_histogram == "both"
     assert {k: v for k, v in _effective_params(colour, "ope").items() if k != "monitor"} == \
         _effective_params(plain, "ope")

@@ -83,7 +83,7 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
         raise ParameterError(f"seed must be an integer >= 0 or None, got {seed!r}")
     if not spec.available():
         raise ParameterError(f"tracker '{name}' is not available in this installation")
-    from .monitor import Monitored, MonitorParams, split_wrapper_options
+    from .monitor import Monitored, split_wrapper_options
 
     extras = {k: kwargs.pop(k) for k in list(kwargs) if k in spec.extra_kwargs}
     wrap = wrapper_options(None if isinstance(params, Params) else params, kwargs)
@@ -98,7 +98,15 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
     tracker = spec.cls(params, seed=seed, rng=rng, **extras)
     if not wrap.monitor:
         return tracker
-    return Monitored(tracker, MonitorParams(cues=wrap.monitor_cues, structure_features=wrap.monitor_structure))
+    return Monitored(tracker, monitor_params(wrap))
+
+
+def monitor_params(wrap):
+    """The loss monitor's parameters that the wrapper options ``wrap`` set."""
+    from .monitor import MonitorParams
+
+    return MonitorParams(cues=wrap.monitor_cues, structure_features=wrap.monitor_structure,
+                         grey_histogram=wrap.monitor_grey_histogram)
 
 
 def wrapper_options(*sources: Mapping[str, Any] | None):
