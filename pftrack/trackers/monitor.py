@@ -29,6 +29,10 @@ themselves (``template``, ``dssim``, ``ssim-pf``): their box on an occluder is t
 (docs/evaluation.md). It is an option: on the tune split it lowered the flag's recall more than the rule for a
 default allowed.
 
+With ``grey_histogram="both"`` (``monitor_grey_histogram=both``) a box on grey input scores the better of the grey
+levels' histogram and ``color-pf``'s second one, of the self-quotient image (:mod:`pftrack.cues.lit_histogram`),
+each against its own model: an option as well (docs/evaluation.md).
+
 The tracker itself is not changed: its boxes, particles and information pass through, and the grid is fixed, so the
 tracks are the same with or without the monitor.  ``lost`` is raised when the tracker or the test raises it;
 ``score`` is the test's posterior P(target | rho), at most one half on a frame the test calls lost (the tracker's
