@@ -102,14 +102,14 @@ def _effective_params(cfg: TrackerConfig, protocol: str) -> dict | None:
 
             cls = MULTI_TRACKERS[cfg.name].Params
         else:
-            from ..trackers.monitor import split_wrapper_options
-            from ..trackers.registry import get_spec, monitor_params, wrapper_options
+            from ..trackers.monitor import split_wrapper_options, wrapper_options
+            from ..trackers.registry import get_spec
 
             spec = get_spec(cfg.name)
             out = spec.cls.Params.from_mapping(split_wrapper_options(dict(cfg.params))[1]).as_dict()
             wrap = wrapper_options(dict(cfg.params))
             if wrap.monitor:  # the loss monitor's settings too (the keys of unmonitored runs are unchanged)
-                out["monitor"] = monitor_params(wrap).as_dict()
+                out["monitor"] = wrap.monitor_params().as_dict()
             return out
         return cls.from_mapping(dict(cfg.params)).as_dict()
     except Exception:  # noqa: BLE001 - invalid parameters are reported when the run starts

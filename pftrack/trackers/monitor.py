@@ -45,6 +45,7 @@ own score is ``info["tracker_score"]``).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from collections.abc import Mapping
 from typing import Any, Literal
 
 import numpy as np
@@ -58,7 +59,7 @@ from ..params import Params, param
 from .base import Tracker, TrackState
 from .structure_check import ACQUIRE_MARGIN, ACQUIRE_Z, ANCHOR_GATE, CUE_CLIP, CUE_FLOOR, RATE, StructureCheck
 
-__all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions"]
+__all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions", "wrapper_options"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -271,6 +272,24 @@ class WrapperOptions(Params):
         "With monitor_cues=fused, the structural score's features (MonitorParams.structure_features)."))
     monitor_grey_histogram: Literal["levels", "both"] = param("levels", doc=(
         "The monitor's histograms on grey input (MonitorParams.grey_histogram)."))
+
+
+    def monitor_params(self) -> MonitorParams:
+        """The loss monitor's parameters these options set."""
+        return MonitorParams(cues=self.monitor_cues, structure_features=self.monitor_structure,
+                             grey_histogram=self.monitor_grey_histogram)
+
+
+def wrapper_options(*sources: Mapping[str, Any] | None) -> WrapperOptions:
+    """The options every tracker takes from parameter mappings, a later one overriding an earlier one; a setting of
+    the monitor's turns it on unless ``monitor`` is given."""
+    values: dict[str, Any] = {}
+    for source in sources:
+        if source:
+            values.update({k: source[k] for k in WrapperOptions.__dataclass_fields__ if k in source})
+    if values and "monitor" not in values:
+        values["monitor"] = True  # the monitor's own settings ask for it (monitor=false still turns it off)
+    return split_wrapper_options(values)[0]
 
 
 def split_wrapper_options(values: dict[str, Any]) -> tuple[WrapperOptions, dict[str, Any]]:

@@ -83,7 +83,7 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
         raise ParameterError(f"seed must be an integer >= 0 or None, got {seed!r}")
     if not spec.available():
         raise ParameterError(f"tracker '{name}' is not available in this installation")
-    from .monitor import Monitored, split_wrapper_options
+    from .monitor import Monitored, split_wrapper_options, wrapper_options
 
     extras = {k: kwargs.pop(k) for k in list(kwargs) if k in spec.extra_kwargs}
     wrap = wrapper_options(None if isinstance(params, Params) else params, kwargs)
@@ -98,30 +98,7 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
     tracker = spec.cls(params, seed=seed, rng=rng, **extras)
     if not wrap.monitor:
         return tracker
-    return Monitored(tracker, monitor_params(wrap))
-
-
-def monitor_params(wrap):
-    """The loss monitor's parameters that the wrapper options ``wrap`` set."""
-    from .monitor import MonitorParams
-
-    return MonitorParams(cues=wrap.monitor_cues, structure_features=wrap.monitor_structure,
-                         grey_histogram=wrap.monitor_grey_histogram)
-
-
-def wrapper_options(*sources: Mapping[str, Any] | None):
-    """The options every tracker takes (:class:`~pftrack.trackers.monitor.WrapperOptions`) from parameter
-    mappings, a later one overriding an earlier one; a setting of the monitor's turns it on unless ``monitor`` is
-    given."""
-    from .monitor import WrapperOptions, split_wrapper_options
-
-    values: dict[str, Any] = {}
-    for source in sources:
-        if source:
-            values.update({k: source[k] for k in WrapperOptions.__dataclass_fields__ if k in source})
-    if values and "monitor" not in values:
-        values["monitor"] = True  # the monitor's own settings ask for it (monitor=false still turns it off)
-    return split_wrapper_options(values)[0]
+    return Monitored(tracker, wrap.monitor_params())
 
 
 _loaded = False

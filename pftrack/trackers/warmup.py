@@ -16,7 +16,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .registry import create_tracker, get_spec, wrapper_options
+from .monitor import wrapper_options
+from .registry import create_tracker, get_spec
 
 _WARMED: set[tuple[str, tuple]] = set()
 
