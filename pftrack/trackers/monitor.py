@@ -57,7 +57,7 @@ from ..filtering.loss import FusedLoss, LossDetector, confidence
 from ..geometry import Box, background_grid, box_to_ellipse
 from ..params import Params, param
 from .base import Tracker, TrackState
-from .structure_check import ACQUIRE_MARGIN, ACQUIRE_Z, ANCHOR_GATE, CUE_CLIP, CUE_FLOOR, RATE, StructureCheck
+from .structure_check import ANCHOR_GATE, RATE, StructureCheck, fused_test
 
 __all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions", "wrapper_options"]
 
@@ -131,9 +131,7 @@ class LossMonitor:
         self.loss: LossDetector | FusedLoss
         self.structure: StructureCheck | None = None
         if p.cues == "fused":
-            # fusion-pf's fused test (clip, floor and acquisition bounds), its structural cue chosen at start()
-            self.loss = FusedLoss(2, cue_clip=CUE_CLIP, cue_floor=CUE_FLOOR, acquire_z=ACQUIRE_Z,
-                                  acquire_margin=ACQUIRE_MARGIN, **test)
+            self.loss = fused_test(**test)  # fusion-pf's fused test; its structural cue is chosen at start()
         else:
             self.loss = LossDetector(**test)
         self._test = test

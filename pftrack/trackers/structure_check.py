@@ -77,11 +77,17 @@ def neighbourhood(ellipse: np.ndarray, offsets=OFFSETS) -> np.ndarray:
     return scale_candidates(np.asarray(ellipse, dtype=np.float64).ravel()[:4], np.ones(1), shifts)
 
 
-def fused_loss(p) -> FusedLoss:
-    """``fusion-pf``'s two-cue loss test (colour coefficient, NCC score) with the colour PF's parameters ``p``."""
+def fused_test(**members) -> FusedLoss:
+    """``fusion-pf``'s two-cue loss test (colour coefficient, structural score): its clip, floor and acquisition
+    bounds, each cue's :class:`~pftrack.filtering.loss.LossDetector` built with ``members``."""
     return FusedLoss(2, cue_clip=CUE_CLIP, cue_floor=CUE_FLOOR, acquire_z=ACQUIRE_Z, acquire_margin=ACQUIRE_MARGIN,
-                     lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin, history_rate=p.history_rate,
-                     sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
+                     **members)
+
+
+def fused_loss(p) -> FusedLoss:
+    """:func:`fused_test` with the colour PF's parameters ``p``."""
+    return fused_test(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin, history_rate=p.history_rate,
+                      sd_floor_target=p.score_sd_floor, sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
 
 
 class StructureCheck:
