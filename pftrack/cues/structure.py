@@ -204,6 +204,7 @@ class StructureCue:
         self._prepared: tuple[np.ndarray, np.ndarray] | None = None
         self._first_prepared: tuple[np.ndarray, np.ndarray] | None = None
         self._last: tuple | None = None
+        self._consts: tuple | None = None  # the weights' conversions for _refresh
 
     @property
     def ready(self) -> bool:
@@ -224,6 +225,7 @@ class StructureCue:
         self._first = patch
         self._first_std = standardize(patch[None, :], weights=self.weights)  # constant: standardised once
         self._first_prepared = None
+        self._consts = None
         self._run = patch.copy()
         self._refresh()
 
@@ -241,12 +243,32 @@ class StructureCue:
         return sample_reduced(self._region(frame, None, e), e, self.shape)[0]
 
     def _refresh(self) -> None:
-        run = standardize(self._run[None, :], weights=self.weights)
+        """Standardise the running reference and prepare the templates for the compiled NCC: the numbers of
+        :func:`standardize` and :func:`weighted_templates`, with the weights' conversions and the anchor's row
+        (constant after :meth:`init`) computed once."""
+        w = self.weights
+        c = self._consts
+        if c is None or c[0] is not w:
+            w32 = np.asarray(w, dtype=np.float32)
+            uniform = self.weighting == "uniform" or bool(np.all(np.asarray(w) == 1.0))
+            w64 = np.asarray(w, dtype=np.float64)
+            sqrt64 = np.sqrt(w64)
+            first = None
+            if self.anchor and self._first_std is not None:
+                f64 = self._first_std.astype(np.float64)
+                first = f64 if uniform else f64 * sqrt64[None, :]
+            c = self._consts = (w, w32, np.sqrt(w32), uniform, w64, sqrt64, first)
+        _, w32, sqrt32, uniform, w64, sqrt64, first = c
+        p = self._run[None, :] if self._run.dtype == np.float32 else self._run[None, :].astype(np.float32)
+        n = p.shape[1]
+        z = (p - (p @ w32)[:, None] / np.float32(n)) * sqrt32[None, :]  # standardize(p, weights=w)
+        run = z / np.sqrt(np.einsum("ij,ij->i", z, z) + np.float32(n))[:, None]
         self._templates = np.concatenate([run, self._first_std]) if self.anchor else run
-        if self.weighting == "uniform":  # all weights 1: weighted_templates without its checks
-            self._prepared = (self._templates.astype(np.float64), _NO_WEIGHTS)
-        else:
-            self._prepared = weighted_templates(self._templates, self.weights)
+        run64 = run.astype(np.float64)
+        if not uniform:
+            run64 *= sqrt64[None, :]
+        tw = np.concatenate([run64, first]) if self.anchor else run64
+        self._prepared = (tw, _NO_WEIGHTS if uniform else w64)
         self._last = None  # the cached correlations were with the old reference
 
     def scores(self, frame: np.ndarray, roi: tuple[int, int, int, int], ellipses: np.ndarray) -> np.ndarray:

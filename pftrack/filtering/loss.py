@@ -383,26 +383,32 @@ class FusedLoss:
 
     def evaluate(self, s) -> float:
         """Fused ratio of a score vector; a NaN cue (not available) gives no evidence; all NaN is absence."""
-        s = self._vector(s)
-        if not any(math.isfinite(v) for v in s):
-            return -_LOG_CLIP
-        lo, hi = -self.cue_floor, self.cue_clip
-        llr = sum(min(max(m.evaluate(v), lo), hi) for m, v in zip(self.members, s) if math.isfinite(v))
-        return float(min(max(llr, -_LOG_CLIP), _LOG_CLIP))
+        return self._ratios(self._vector(s))[0]
 
-    def _learn(self, s: list[float]) -> None:
+    def _ratios(self, s: list[float]) -> tuple[float, list[float | None]]:
+        """The fused ratio of the score list ``s`` and each cue's own ratio (None for a NaN cue)."""
+        own = [m.evaluate(v) if math.isfinite(v) else None for m, v in zip(self.members, s)]
+        if all(r is None for r in own):
+            return -_LOG_CLIP, own
+        lo, hi = -self.cue_floor, self.cue_clip
+        llr = sum(min(max(r, lo), hi) for r in own if r is not None)
+        return float(min(max(llr, -_LOG_CLIP), _LOG_CLIP)), own
+
+    def _learn(self, s: list[float], own: list[float | None]) -> None:
+        """Each cue learns its score when the fused ratio is confident, the score within ``learn_z`` of its history
+        and its own ratio (``own``, computed on the same statistics) target-like."""
         if self.frozen:
             return
         confident = self.llr > self.reacquire_margin
-        for m, v in zip(self.members, s):
-            m.learn(v, confident and math.isfinite(v) and (v - m.mu_t) / m.sd_t > -m.learn_z and m.evaluate(v) >= 0.0)
+        for m, v, r in zip(self.members, s, own):
+            m.learn(v, confident and r is not None and (v - m.mu_t) / m.sd_t > -m.learn_z and r >= 0.0)
 
     def step(self, s) -> tuple[bool, float]:
         """As :meth:`LossDetector.step`, on the fused ratio of the score vector ``s``."""
         s = self._vector(s)
-        self.llr = self.evaluate(s)
+        self.llr, own = self._ratios(s)
         self.miss = self.miss + 1 if self.llr < 0.0 else 0
-        self._learn(s)
+        self._learn(s, own)
         self.lost = self.miss >= self.lost_frames
         return self.lost, confidence(self.llr)
 
