@@ -44,19 +44,14 @@ def box_counts(bins: np.ndarray, x0: int, y0: int, box, n_bins: int, *, ring: fl
     ignored.  Returns ``(inside, ring_counts)`` as float64 arrays.
     """
     h, w = bins.shape
-    bx, by, bw, bh = (float(v) for v in box)
+    bx, by, bw, bh = box.tolist() if isinstance(box, np.ndarray) and box.shape == (4,) else (float(v) for v in box)
     bx, by, bw, bh = (bx - x0) / pitch, (by - y0) / pitch, bw / pitch, bh / pitch
-    x0 = y0 = 0
-
-    def span(a0, a1, lim, off):
-        return max(int(math.floor(a0)) - off, 0), min(int(math.ceil(a1)) - off, lim)
-
-    ix0, ix1 = span(bx, bx + bw, w, x0)
-    iy0, iy1 = span(by, by + bh, h, y0)
+    ix0, ix1 = _span(bx, bx + bw, w)
+    iy0, iy1 = _span(by, by + bh, h)
     if ring <= 0:
         return _counts(bins, ix0, iy0, ix1, iy1, n_bins), np.zeros(n_bins)
-    ox0, ox1 = span(bx - ring * bw, bx + bw + ring * bw, w, x0)
-    oy0, oy1 = span(by - ring * bh, by + bh + ring * bh, h, y0)
+    ox0, ox1 = _span(bx - ring * bw, bx + bw + ring * bw, w)
+    oy0, oy1 = _span(by - ring * bh, by + bh + ring * bh, h)
     if numba_enabled():
         inside, outer = np.zeros(n_bins), np.zeros(n_bins)
         _ring_counts_numba(bins, ix0, iy0, ix1, iy1, ox0, oy0, ox1, oy1, inside, outer)
@@ -64,6 +59,11 @@ def box_counts(bins: np.ndarray, x0: int, y0: int, box, n_bins: int, *, ring: fl
     inside = _counts(bins, ix0, iy0, ix1, iy1, n_bins)
     outer = _counts(bins, ox0, oy0, ox1, oy1, n_bins)
     return inside, np.maximum(outer - inside, 0.0)
+
+
+def _span(a0: float, a1: float, lim: int) -> tuple[int, int]:
+    """The pixel columns (rows) ``[a0, a1)`` covers, within ``[0, lim)``."""
+    return max(int(math.floor(a0)), 0), min(int(math.ceil(a1)), lim)
 
 
 def _counts(bins: np.ndarray, x0: int, y0: int, x1: int, y1: int, n_bins: int) -> np.ndarray:

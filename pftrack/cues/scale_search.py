@@ -92,7 +92,7 @@ def _vertex_factor(cue, frame: np.ndarray, ellipse, ratios, step: float, rate: f
     the three half-axis ``ratios`` (scalars, or ``(rx, ry)`` pairs); 1 when a box ``1+step`` times as large on both
     axes is not inside the frame (the part of a box beyond the border has no pixels to correlate, and comparing
     boxes there favours the one that fits, docs/robustness.md), or a score is not finite."""
-    cx, cy, hx, hy = (float(v) for v in np.asarray(ellipse, dtype=np.float64).ravel()[:4])
+    cx, cy, hx, hy = np.asarray(ellipse, dtype=np.float64).ravel()[:4].tolist()
     fh, fw = frame.shape[:2]
     ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
     if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:

@@ -141,6 +141,19 @@ def ncc_scores(patches: np.ndarray, templates: np.ndarray, floor: float = 1.0,
     return np.max(z @ t.T, axis=1).astype(np.float64)
 
 
+def ratio_pairs(ratios) -> list[tuple[float, float]]:
+    """Half-axis ratios as ``(rx, ry)`` float pairs: a number ``r`` is ``(r, r)``, a pair is kept."""
+    out = []
+    for r in ratios:
+        if type(r) is float:  # the common case, without np.ndim's cost
+            out.append((r, r))
+        elif np.ndim(r):
+            out.append((float(r[0]), float(r[1])))
+        else:
+            out.append((float(r), float(r)))
+    return out
+
+
 _GRIDS: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
 _NO_WEIGHTS = np.empty(0)
 
@@ -310,11 +323,11 @@ class StructureCue:
         search after the estimate, three sizes a frame, where building a batch cost more than scoring it).  A ratio
         may be a pair ``(rx, ry)``, one per half-axis (a search of the box's shape)."""
         cx, cy, hx, hy = (float(x) for x in ellipse)
-        pairs = [(float(r[0]), float(r[1])) if np.ndim(r) else (float(r), float(r)) for r in ratios]
+        pairs = ratio_pairs(ratios)
         if not numba_enabled():
             e = np.array([[cx, cy, hx * rx, hy * ry] for rx, ry in pairs])
             return self.scores(frame, None, e).tolist()
-        top_x, top_y = max(rx for rx, _ in pairs), max(ry for _, ry in pairs)
+        top_x, top_y = max([rx for rx, _ in pairs]), max([ry for _, ry in pairs])
         red = self._region(frame, None, np.array([[cx, cy, hx * top_x, hy * top_y]]))
         tw, w = self._prepared
         u, v = _grid(self.shape)

@@ -35,6 +35,7 @@ import numpy as np
 from .._numba import njit, numba_enabled
 from ..geometry import inside_cells
 from .reduced_region import Reduced, reduced_for
+from .structure import ratio_pairs
 
 __all__ = ["BestStructure", "HogStructure", "cell_grid", "hog_descriptors", "hog_ncc", "orientation_integrals",
            "standardize_descriptors"]
@@ -390,7 +391,7 @@ class HogStructure:
     def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
         """:meth:`scores` of the box at each half-axis ratio (a number, or a pair ``(rx, ry)``), same centre."""
         cx, cy, hx, hy = (float(x) for x in np.asarray(ellipse, dtype=np.float64).reshape(4))
-        pairs = [(float(r[0]), float(r[1])) if np.ndim(r) else (float(r), float(r)) for r in ratios]
+        pairs = ratio_pairs(ratios)
         e = np.array([[cx, cy, hx * rx, hy * ry] for rx, ry in pairs])
         return self.scores(frame, None, e).tolist()
 

@@ -30,6 +30,10 @@ def effective_sample_size(weights: np.ndarray) -> float:
     return 1.0 / s if s > 0 else 0.0
 
 
+#: ``-log(N)`` (NumPy's) by particle count: the uniform log-weight after resampling
+_NEG_LOG_N: dict[int, np.floating] = {}
+
+
 class ParticleSet:
     """``N`` states of dimension ``D`` with log-weights.
 
@@ -106,7 +110,10 @@ class ParticleSet:
         np.take(self.states, indices, axis=0, out=self._scratch, mode="clip")  # valid indices; "raise" buffers out
         self.states, self._scratch = self._scratch, self.states
         n = self.n
-        self.log_weights.fill(-np.log(n))
+        neg_log = _NEG_LOG_N.get(n)
+        if neg_log is None:
+            neg_log = _NEG_LOG_N[n] = -np.log(n)
+        self.log_weights.fill(neg_log)
         self.w.fill(1.0 / n)
 
     def copy(self) -> "ParticleSet":

@@ -276,7 +276,7 @@ class ColorParticleFilter(LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixi
         rho_e = model_rho(p_e, self._sqrt_q) if tot_e[0] > 0 else 0.0
         if self._lit is not None and tot_e[0] > 0:
             rho_e = max(rho_e, self._lit.estimate_rho(feats.roi, feats.pitch, e_ell))
-        cx, cy, hx, hy = (float(v) for v in e_ell[0])
+        cx, cy, hx, hy = e_ell[0].tolist()
         box = (cx - hx, cy - hy, 2.0 * hx, 2.0 * hy)  # ellipse_to_box
         # appearance condition (Eq. 15) -> lost detection (§6)
         thr = self._threshold()
@@ -406,6 +406,7 @@ class ColorPF(ColorParticleFilter):
 
     def _noise_std(self, hx: float, hy: float) -> np.ndarray:
         p = self.params
+        hx, hy = float(hx), float(hy)  # Python floats: the same numbers without NumPy scalars' cost
         hbar = 0.5 * (hx + hy)
         pos = max(p.position_noise * hbar, p.min_noise_px)
         vel = p.velocity_noise * hbar

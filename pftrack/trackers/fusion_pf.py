@@ -41,7 +41,7 @@ from ..cues.structure_hog import BestStructure, HogStructure
 from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, VX, VY
 from ..filtering.loss import FusedLoss
-from ..geometry import box_to_ellipse, ellipse_to_box
+from ..geometry import box_to_ellipse
 from .color_hooks import fused_supporters
 from .color_pf import _ELL_COLS, ColorPF
 from .fusion_params import FusionPFParams
@@ -143,8 +143,9 @@ class FusionPF(ColorPF):
         x0, y0, x1, y1 = super()._propagate(states)
         if self.params.contrast:  # the rings must be inside the quantised region too
             r = self.params.ring
-            mx = 2.0 * r * float(states[:, HX].max()) + 1.0
-            my = 2.0 * r * float(states[:, HY].max()) + 1.0
+            top_x, top_y = states[:, HX:HY + 1].max(axis=0).tolist()  # HY follows HX
+            mx = 2.0 * r * top_x + 1.0
+            my = 2.0 * r * top_y + 1.0
             return x0 - mx, y0 - my, x1 + mx, y1 + my
         return x0, y0, x1, y1
 
@@ -280,7 +281,8 @@ class FusionPF(ColorPF):
             self.structure.update(frame, estimate[_ELL_COLS], p.structure_rate, p.structure_anchor_gate)
         if not p.contrast or p.contrast_alpha <= 0:
             return
-        box = ellipse_to_box(estimate[_ELL_COLS])
+        cx, cy, hx, hy = estimate[_ELL_COLS].tolist()
+        box = (cx - hx, cy - hy, 2.0 * hx, 2.0 * hy)  # ellipse_to_box, in Python floats
         obj, sur = box_counts(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins, ring=p.ring,
                               pitch=feats.pitch)
         # counts are compared as distributions scaled to the reference areas
