@@ -8,7 +8,7 @@ import pytest
 
 from pftrack._numba import NUMBA_INSTALLED, numba_enabled
 from pftrack.cues.structure import (StructureCue, kernel_weights, ncc_reduced, ncc_scores, patch_shape, reduce_region,
-                                    sample_boxes, standardize)
+                                    sample_boxes, standardize, weighted_templates)
 from pftrack.filtering.loss import FusedLoss, LossDetector
 
 def _texture(seed=0, shape=(120, 160)):
@@ -204,6 +204,20 @@ def test_structure_cue_peaks_at_the_target_and_keeps_its_anchor():
     # a bad update (the reference blended fully into clutter) cannot erase the first frame's patch
     cue.update(img, ell[4], 1.0)
     assert cue.scores(img, (0, 0, 160, 120), ell[:1])[0] == pytest.approx(1.0, abs=0.01)
+
+
+@pytest.mark.parametrize("weighting,anchor", [("kernel", True), ("uniform", True), ("kernel", False)])
+def test_the_prepared_references_are_standardize_and_weighted_templates_to_the_bit(weighting, anchor):
+    img = _texture(3)
+    cue = StructureCue(256, anchor=anchor, weighting=weighting)
+    cue.init(img, np.array([80.0, 60.0, 15.0, 12.0]))
+    for centre in ((84.0, 57.0), (70.0, 66.0)):  # the running reference moves away from the anchor
+        cue.update(img, np.array([*centre, 15.0, 12.0]), 0.3)
+        run = standardize(cue._run[None, :], weights=cue.weights)
+        refs = np.concatenate([run, cue._first_std]) if anchor else run
+        tw, w = weighted_templates(refs, cue.weights)
+        assert np.array_equal(cue._templates, refs)
+        assert np.array_equal(cue._prepared[0], tw) and np.array_equal(cue._prepared[1], w)
 
 
 def test_fused_loss_adds_likelihood_ratios_and_ignores_a_blind_cue():
