@@ -93,8 +93,8 @@ class Reduced:
             lo_y = -math.inf if self.y0 <= 0 else lo_y
             x1 = math.inf if x1 + self.k > fw else x1
             y1 = math.inf if y1 + self.k > fh else y1
-        if ell.shape[0] == 1:  # one box (the estimate's): its bounds in Python, cheaper than a compiled call
-            cx, cy, hx, hy = ell[0].tolist()
+        cx, cy, hx, hy = ell[0].tolist() if ell.shape[0] == 1 else (math.nan,) * 4
+        if math.isfinite(cx + cy + hx + hy):  # one box (the estimate's): its bounds in Python, cheaper than a call
             bx0, by0, bx1, by1 = cx - hx, cy - hy, cx + hx, cy + hy
         else:
             bx0, by0, bx1, by1 = box_bounds(ell)
