@@ -154,6 +154,26 @@ def test_compiled_block_means_equal_opencvs_area_resize(k):
         assert np.array_equal(block_means(img, x0, y0, w, h, k), ref), (k, trial)
 
 
+def test_a_frame_made_from_grey_is_reduced_on_its_one_channel_with_the_bgr_paths_numbers():
+    """A BGR frame that ``as_bgr_uint8`` made from a grey image is reduced on that image: the same levels, block
+    size and origin as the three-channel path, for every kind of block (1, 2, the compiled 3..7, the sampled 8+)."""
+    from pftrack.frames import as_bgr_uint8, grey_origin
+    rng = np.random.default_rng(7)
+    for trial in range(60):
+        hgt, wid = int(rng.integers(30, 300)), int(rng.integers(30, 400))
+        grey = cv2.GaussianBlur(rng.integers(0, 256, (hgt, wid), dtype=np.uint8), (0, 0), float(rng.uniform(0.5, 3)))
+        frame = as_bgr_uint8(grey)
+        plain = frame.copy()  # the same pixels, no grey origin: the three-channel path
+        assert grey_origin(frame) is not None and grey_origin(plain) is None
+        k = int(rng.integers(1, 30))
+        x0, y0 = int(rng.integers(0, wid // 2)), int(rng.integers(0, hgt // 2))
+        roi = (x0, y0, int(rng.integers(x0 + 1, wid + 1)), int(rng.integers(y0 + 1, hgt + 1)))
+        a, b = reduce_region(frame, roi, k), reduce_region(plain, roi, k)
+        assert np.array_equal(a.gray, b.gray) and a.gray.dtype == b.gray.dtype, (trial, k, roi)
+        assert (a.k, a.x0, a.y0, a.frame_size) == (b.k, b.x0, b.y0, b.frame_size)
+        assert not np.shares_memory(a.gray, grey_origin(frame))
+
+
 @pytest.mark.parametrize("k", [4, 8, 12, 16])
 def test_large_block_reduction_is_close_to_the_block_means(k):
     """k >= 8 averages a spread subset of each block's pixels instead of all k x k (exact below)."""

@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
+from ..frames import grey_origin
 
 
 def gray_region(frame: np.ndarray, roi: tuple[int, int, int, int]) -> np.ndarray:
@@ -167,6 +168,10 @@ def reduce_region(frame: np.ndarray, roi: tuple[int, int, int, int], k: int) -> 
     w = max(1, (x1 - x0) // k) * k
     h = max(1, (y1 - y0) // k) * k
     w, h = min(w, frame.shape[1] - x0), min(h, frame.shape[0] - y0)
+    grey = grey_origin(frame)
+    if grey is not None:  # a BGR frame made from a grey image: the same steps on its one channel, the same numbers
+        return Reduced(_reduce_grey(grey[y0:y0 + h, x0:x0 + w], k), x0, y0, k if k > 1 and w >= k and h >= k else 1,
+                       (int(frame.shape[1]), int(frame.shape[0])))
     sub = frame[y0:y0 + h, x0:x0 + w]
     if k >= 8 and w >= k and h >= k:
         # large blocks average a subset of their pixels, so that the cost stays bounded by the patch
@@ -186,6 +191,22 @@ def reduce_region(frame: np.ndarray, roi: tuple[int, int, int, int], k: int) -> 
         k = 1
     return Reduced(gray_region(sub, (0, 0, sub.shape[1], sub.shape[0])), x0, y0, k,
                    (int(frame.shape[1]), int(frame.shape[0])))
+
+
+def _reduce_grey(sub: np.ndarray, k: int) -> np.ndarray:
+    """:func:`reduce_region`'s reduction of a grey region ``sub`` (whole blocks of ``k``): OpenCV's resizes on one
+    channel give each channel's numbers of the BGR path, and the grey of ``(v, v, v)`` is ``v`` (tested)."""
+    h, w = sub.shape
+    if k >= 8 and w >= k and h >= k:
+        levels = max(1, int(math.log2(k)) - 2)
+        ow, oh = w // k, h // k
+        sub = cv2.resize(sub, (ow << levels, oh << levels), interpolation=cv2.INTER_LINEAR)
+        for j in range(levels - 1, -1, -1):
+            sub = cv2.resize(sub, (ow << j, oh << j), interpolation=cv2.INTER_LINEAR)
+        return sub
+    if k > 1 and w >= k and h >= k:
+        return cv2.resize(sub, (w // k, h // k), interpolation=cv2.INTER_AREA)
+    return sub.copy()  # its own array, as the BGR path's conversion makes one
 
 
 def _box_roi(ell: np.ndarray, width: int, height: int) -> tuple[int, int, int, int]:
