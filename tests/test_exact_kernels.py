@@ -178,6 +178,28 @@ def test_compiled_grey_features_are_the_opencv_paths_numbers(rng):
         assert np.array_equal(compiled, reference), (shape, roi, pitch, kw)
 
 
+def test_a_frame_made_from_grey_gives_the_three_channel_paths_grey_features_and_quotient(rng):
+    """quantize_gray and the self-quotient image read the grey image a BGR frame was made from (as_bgr_uint8): the
+    same bins and levels as on a plain copy of the frame, which takes the three-channel paths, at every pitch."""
+    from pftrack.cues.illumination import QuotientImage
+    from pftrack.cues.intensity import equalization_lut, quantize_gray
+    from pftrack.frames import as_bgr_uint8, grey_origin
+
+    for trial in range(120):
+        h, w = (int(v) for v in rng.integers(5, 160, 2))
+        frame = as_bgr_uint8(rng.integers(0, 256, (h, w)).astype(np.uint8))
+        plain = frame.copy()
+        assert grey_origin(frame) is not None and grey_origin(plain) is None
+        pitch = int(rng.integers(1, 12))
+        x0, y0 = int(rng.integers(0, w)) // pitch * pitch, int(rng.integers(0, h)) // pitch * pitch
+        roi = (x0, y0, int(rng.integers(x0 + 1, w + 10)), int(rng.integers(y0 + 1, h + 10)))
+        lut = equalization_lut(plain) if trial % 2 else np.arange(256, dtype=np.uint8)
+        kw = dict(n_intensity=16, n_orientation=8, gradient_threshold=float(rng.choice([40.0, 10.3, 0.0])))
+        assert np.array_equal(quantize_gray(frame, roi, pitch, lut, **kw), quantize_gray(plain, roi, pitch, lut, **kw))
+        if trial % 10 == 0:
+            assert np.array_equal(QuotientImage(0.1, bgr=False)(frame), QuotientImage(0.1, bgr=False)(plain))
+
+
 def test_the_grey_conversion_formula_is_opencvs_for_every_colour():
     import cv2
 

@@ -37,6 +37,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
+from ..frames import grey_origin
 from .intensity import to_gray
 
 __all__ = ["QuotientImage", "block_means_gray", "illumination_quotient"]
@@ -107,7 +108,9 @@ class QuotientImage:
 
     def __call__(self, frame: np.ndarray, *, gray: np.ndarray | None = None) -> np.ndarray:
         """The self-quotient image of ``frame`` (``gray``: its grey image, when the caller has it already)."""
-        gray = to_gray(frame) if gray is None else gray
+        if gray is None:  # a BGR frame made from a grey image: that image (read only here), the same levels
+            gray = grey_origin(frame) if frame.ndim == 3 else None
+            gray = to_gray(frame) if gray is None else gray
         h, w = gray.shape
         k = max(1, min(self.block, w, h))  # a frame smaller than a block is one cell per pixel row or column
         sw, sh = w // k, h // k

@@ -28,6 +28,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
+from ..frames import grey_origin
 from .gray_kernels import exact_gray_available, gray_bins, lattice_levels_gradients
 
 
@@ -188,6 +189,9 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
     """
     x0, y0, x1, y1 = roi
     fh, fw = frame.shape[:2]
+    grey = grey_origin(frame) if frame.ndim == 3 else None
+    if grey is not None:  # a BGR frame made from a grey image: its one channel, the same levels (v, v, v) -> v
+        frame = grey
     if (pitch >= 3 and frame.dtype == np.uint8 and frame.flags.c_contiguous
             and (frame.ndim == 2 or frame.shape[2] in (1, 3)) and exact_gray_available()):
         # compiled, the same numbers: each lattice point converts and filters its own 3x3 neighbourhood
