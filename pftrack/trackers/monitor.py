@@ -44,8 +44,8 @@ own score is ``info["tracker_score"]``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
 from collections.abc import Mapping
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -270,7 +270,6 @@ class WrapperOptions(Params):
         "With monitor_cues=fused, the structural score's features (MonitorParams.structure_features)."))
     monitor_grey_histogram: Literal["levels", "both"] = param("levels", doc=(
         "The monitor's histograms on grey input (MonitorParams.grey_histogram)."))
-
 
     def monitor_params(self) -> MonitorParams:
         """The loss monitor's parameters these options set."""
