@@ -113,6 +113,20 @@ def in_frame_fraction(box, width: float, height: float) -> float:
     return iw * ih / max(bw * bh, 1e-9)
 
 
+def exit_edge(cx: float, cy: float, hx: float, hy: float, width: float, height: float) -> int:
+    """The edge of the ``width x height`` frame (0 left, 1 right, 2 top, 3 bottom) that a centre ``(cx, cy)`` lies
+    furthest beyond, or least inside, in half-axes ``(hx, hy)``: ``np.argmin`` of the four distances (the first
+    smallest, or the first NaN), on Python floats (it runs several times a search frame)."""
+    d = (cx / hx, (width - cx) / hx, cy / hy, (height - cy) / hy)
+    best = 0
+    for i, v in enumerate(d):
+        if v != v:
+            return i
+        if v < d[best]:
+            best = i
+    return best
+
+
 def visible_box(box, width: int, height: int) -> tuple[float, float, float, float] | None:
     """The part of ``box`` inside the ``width x height`` frame, at least one pixel wide and high (a box wholly
     outside becomes a one-pixel box at the nearest edge); None when the box lies inside already (on Python floats:

@@ -49,6 +49,28 @@ def test_multinomial_binary_search_matches_paper():
     assert _search(c, np.array([0.0, 0.1, 0.1000001, 0.3, 0.6, 0.99, 1.0])).tolist() == [0, 0, 1, 1, 2, 3, 3]
 
 
+def test_weighted_choice_draws_what_numpy_choice_draws():
+    """The search's second layer draws with ``weighted_choice`` instead of ``Generator.choice(p=...)``: the same
+    indices and the same generator state afterwards, on weights with zeros, a single mass and ties."""
+    from pftrack.filtering.resampling import weighted_choice
+
+    g = np.random.default_rng(3)
+    cases = [np.array([1.0]), np.array([0.0, 1.0, 0.0]), np.full(7, 1.0 / 7)]
+    for _ in range(200):
+        r = g.normal(0.0, 5.0, int(g.integers(1, 400)))
+        r[g.random(r.size) < 0.3] = -np.inf
+        r[0] = 0.0
+        w = np.exp(r - r.max())
+        cases.append(w / w.sum())
+    for i, p in enumerate(cases):
+        m = 1 + i % 150
+        a, b = np.random.default_rng(i), np.random.default_rng(i)
+        want = a.choice(p.size, size=m, p=p)
+        got = weighted_choice(p, m, b)
+        assert got.dtype == want.dtype and np.array_equal(got, want)
+        assert a.random() == b.random()
+
+
 def test_log_normalize_extremes():
     lw, ok = log_normalize(np.array([-1e300, -1e300 + 1, -np.inf]))
     assert ok and np.isclose(np.exp(lw).sum(), 1.0) and np.all(np.isfinite(lw[:2]))

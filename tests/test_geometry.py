@@ -75,3 +75,20 @@ def test_background_grid_covers_the_frame_and_leaves_out_the_target():
     assert 0 < len(kept) < len(ell)
     assert np.all((np.abs(kept[:, 0] - 160.0) >= 25.0) | (np.abs(kept[:, 1] - 120.0) >= 45.0))
     assert len(background_grid(320, 240, 400.0, 400.0, 100)) == 1  # no denser than one half-axis per cell
+
+
+def test_exit_edge_is_numpy_argmin_of_the_four_distances():
+    from pftrack.geometry import exit_edge
+
+    g = np.random.default_rng(0)
+    for _ in range(3000):
+        cx, cy = (float(v) for v in g.integers(-20, 340, 2))
+        hx, hy = (float(v) for v in g.integers(1, 40, 2))
+        if g.random() < 0.05:
+            cx = float("nan")
+        want = int(np.argmin([cx / hx, (320 - cx) / hx, cy / hy, (240 - cy) / hy]))
+        assert exit_edge(cx, cy, hx, hy, 320, 240) == want
+    assert exit_edge(-5.0, 100.0, 10.0, 10.0, 320, 240) == 0
+    assert exit_edge(330.0, 100.0, 10.0, 10.0, 320, 240) == 1
+    assert exit_edge(160.0, 3.0, 10.0, 10.0, 320, 240) == 2
+    assert exit_edge(160.0, 239.0, 10.0, 10.0, 320, 240) == 3

@@ -22,8 +22,9 @@ from ..cues.lk import gray_of
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, X, Y, lost_prediction, reappearance_log_prior
 from ..filtering.loss import confidence
+from ..filtering.resampling import weighted_choice
 from ..frames import as_bgr_uint8
-from ..geometry import Box, box_to_ellipse, ellipse_to_box, in_frame_fraction, validate_box
+from ..geometry import Box, box_to_ellipse, ellipse_to_box, exit_edge, in_frame_fraction, validate_box
 from .base import TrackState
 from .vetoes import near_mask, search_rank
 
@@ -154,11 +155,13 @@ class SearchMixin:
         if boxes is None:
             fh, fw = self._shape
             boxes = np.array([[0.0, 0.0, fw, fh]])
-        areas = boxes[:, 2] * boxes[:, 3]
-        # split m among the regions in proportion to their area (largest remainder)
-        share = m * areas / areas.sum()
-        counts = np.floor(share).astype(int)
-        counts[np.argsort(-(share - counts))[: m - counts.sum()]] += 1
+        if len(boxes) == 1:  # the frame or one strip: all m there (the apportionment below gives m)
+            counts = [m]
+        else:  # split m among the regions in proportion to their area (largest remainder)
+            areas = boxes[:, 2] * boxes[:, 3]
+            share = m * areas / areas.sum()
+            counts = np.floor(share).astype(int)
+            counts[np.argsort(-(share - counts))[: m - counts.sum()]] += 1
         out = []
         for (x, y, w, h), c in zip(boxes, counts):
             if c <= 0:
@@ -166,9 +169,12 @@ class SearchMixin:
             nx = max(1, int(round(math.sqrt(c * w / h))))
             ny = max(1, int(math.ceil(c / nx)))
             cell = rng.permutation(nx * ny)[:c]
-            cx = (cell % nx + rng.random(c)) * (w / nx) + x
-            cy = (cell // nx + rng.random(c)) * (h / ny) + y
-            out.append(np.column_stack([cx, cy]))
+            xy = np.empty((c, 2))
+            xy[:, 0] = (cell % nx + rng.random(c)) * (w / nx) + x
+            xy[:, 1] = (cell // nx + rng.random(c)) * (h / ny) + y
+            out.append(xy)
+        if len(out) == 1:
+            return out[0]
         return np.concatenate(out) if out else np.empty((0, 2))
 
     def _search_due(self) -> bool:
@@ -200,18 +206,20 @@ class SearchMixin:
         b = self.params.reenter_border
         if b <= 0 or self.regions is not None or self._lost_at is None:
             return None
-        hx, hy = self.size
+        hx, hy = float(self.size[0]), float(self.size[1])  # Python floats: called several times a search frame
         fh, fw = self._shape
         k = self._search_since - self._lost_at[0]
-        cx, cy = self._lost_at[1] + k * np.asarray(self._exit_velocity)
+        vx, vy = self._exit_velocity
+        cx = float(self._lost_at[1][0]) + k * float(vx)
+        cy = float(self._lost_at[1][1]) + k * float(vy)
         if in_frame_fraction((cx - hx, cy - hy, 2.0 * hx, 2.0 * hy), fw, fh) >= self.params.reenter_exit_share:
             # reenter_memory: a box seen mostly outside just before the loss (the tracker slid back inside after)
             seen = [e for e in self._edge_seen if e[0] >= self._search_since - self.params.reenter_memory]
             if not seen:
                 return None
-            cx, cy = seen[-1][1], seen[-1][2]
+            cx, cy = float(seen[-1][1]), float(seen[-1][2])
         # the edge it left through: the one its predicted centre is furthest beyond (in target sizes)
-        edge = int(np.argmin([cx / hx, (fw - cx) / hx, cy / hy, (fh - cy) / hy]))
+        edge = exit_edge(cx, cy, hx, hy, fw, fh)
         speed = self.params.reenter_grow * math.hypot(*self._exit_velocity)
         grow = speed * max(self.frame_index - self._search_since, 0)
         half, extent = (hx, fw) if edge < 2 else (hy, fh)
@@ -317,7 +325,7 @@ class SearchMixin:
             return states, ell, rho, tot, loglik, prior, roi
         rho, tot = rho.copy(), tot.copy()  # the cue's result buffers are reused by the next call
         w = np.exp(rank - rank.max())
-        idx = self.rng.choice(len(w), size=m, p=w / w.sum())
+        idx = weighted_choice(w / w.sum(), m, self.rng)
         extra = states[idx].copy()
         extra[:, X:Y + 1] += self.rng.normal(0.0, 0.25, (m, 2)) * extra[:, HX:HY + 1]
         self._clip_states(extra)
