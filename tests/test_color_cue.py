@@ -272,6 +272,11 @@ def test_channel_levels_are_the_medians_of_the_lattice():
     grey = rng.integers(0, 256, (40, 50), dtype=np.uint8)
     assert np.array_equal(channel_levels(grey, stride=3), np.maximum(np.median(grey[::3, ::3].reshape(-1, 1), axis=0),
                                                                      1.0))
+    # the compiled lattice on a view (a block of the frame, as light_levels' blocks are) and on 4 channels
+    img = rng.integers(0, 256, (61, 83, 4), dtype=np.uint8)
+    for view in (img[5:40, 7:70], img[::-1, ::2]):
+        ref = np.maximum(np.median(view[::4, ::4].reshape(-1, 4), axis=0), 1.0)
+        assert np.array_equal(channel_levels(view, stride=4), ref)
 
 
 

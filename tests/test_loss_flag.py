@@ -37,6 +37,27 @@ def test_absent_distribution_is_the_upper_tail():
     assert mu > np.percentile(bg, 85) and sd >= 0.03
 
 
+def test_background_statistics_are_numpys_numbers():
+    """robust_background and absent_distribution compute means and spreads without NumPy's wrappers: the same
+    numbers as s.mean(), s.std() and np.median, with NaNs left out, ties, and fewer scores than the tail's three."""
+    from pftrack.filtering.loss import robust_background
+
+    rng = np.random.default_rng(7)
+    for t in range(400):
+        s = rng.normal(rng.normal(), rng.uniform(0.0, 2.0), int(rng.integers(1, 260)))
+        if t % 3 == 0:
+            s = np.round(s, 1)
+        if t % 4 == 0:
+            s[rng.integers(0, s.size, 2)] = np.nan
+        f = s[np.isfinite(s)]
+        if f.size == 0:
+            continue
+        mad = 1.4826 * float(np.median(np.abs(f - np.median(f))))
+        assert robust_background(s, sd_floor=0.01) == (float(f.mean()), max(float(f.std()), mad, 0.01))
+        top = np.sort(f)[-max(3, int(np.ceil(0.1 * f.size))):]
+        assert absent_distribution(s, tail=0.1, sd_floor=0.01) == (float(top.mean()), max(float(top.std()), 0.01))
+
+
 def test_detector_hysteresis_and_history():
     det = LossDetector(lost_frames=3)
     det.reset(1.0)

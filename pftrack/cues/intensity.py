@@ -222,9 +222,40 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
 
 # ------------------------------------------------------------------------------ colour frames under changing light
 
+@njit(cache=True)
+def _lattice_medians(frame, stride, out):
+    """Each channel's median over the ``stride`` lattice of a uint8 ``(H, W, C)`` frame, from its histogram: the
+    mean of the sorted values at positions ``(n - 1) // 2`` and ``n // 2`` (:func:`channel_levels`'s numbers)."""
+    h, w, nc = frame.shape
+    counts = np.zeros((nc, 256), np.int64)
+    n = 0
+    for y in range(0, h, stride):
+        for x in range(0, w, stride):
+            for c in range(nc):
+                counts[c, frame[y, x, c]] += 1
+            n += 1
+    t_lo = (n - 1) // 2
+    t_hi = n // 2
+    for c in range(nc):
+        cum = 0
+        lo = -1
+        for v in range(256):  # the first level with more than t pixels at or below it
+            cum += counts[c, v]
+            if lo < 0 and cum > t_lo:
+                lo = v
+            if cum > t_hi:
+                out[c] = (float(lo) + float(v)) / 2.0
+                break
+    return out
+
+
 def channel_levels(frame: np.ndarray, *, stride: int = 4) -> np.ndarray:
     """Robust per-channel level of a BGR frame: the median of a ``stride`` lattice, ``(3,)`` float (for 8-bit
-    frames from each channel's histogram: the same numbers as ``np.median``, several times faster)."""
+    frames from each channel's histogram: the same numbers as ``np.median``, several times faster; compiled for
+    a 3-D frame when Numba is on)."""
+    if (numba_enabled() and frame.ndim == 3 and frame.dtype == np.uint8 and frame.shape[0] > 0
+            and frame.shape[1] > 0):
+        return np.maximum(_lattice_medians(frame, int(stride), np.empty(frame.shape[2])), 1.0)
     sub = frame[::stride, ::stride].reshape(-1, frame.shape[2] if frame.ndim == 3 else 1)
     n = sub.shape[0]
     if sub.dtype != np.uint8 or n == 0:
