@@ -21,6 +21,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from ._numba import njit, numba_enabled
 from .errors import BoxError
 
 Box = tuple[float, float, float, float]
@@ -235,12 +236,35 @@ def parabola_peak(a: float, b: float, c: float) -> float:
     return 0.0 if den >= 0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
 
 
+@njit
+def _grid(step_x, step_y, nx, ny, hx, hy, ex, exclude):
+    """:func:`background_grid`'s ellipses: cell centres ``(i + 0.5) step_x``, ``(j + 0.5) step_y`` row by row,
+    without those whose box overlaps ``ex``'s when ``exclude``."""
+    out = np.empty((nx * ny, 4))
+    m = 0
+    for j in range(ny):
+        y = (j + 0.5) * step_y
+        for i in range(nx):
+            x = (i + 0.5) * step_x
+            if exclude and not (abs(x - ex[0]) >= hx + ex[2] or abs(y - ex[1]) >= hy + ex[3]):
+                continue
+            out[m, 0] = x
+            out[m, 1] = y
+            out[m, 2] = hx
+            out[m, 3] = hy
+            m += 1
+    return out[:m]
+
+
 def background_grid(width: float, height: float, hx: float, hy: float, cap: int, exclude=None) -> np.ndarray:
     """Ellipses ``(cx, cy, hx, hy)`` of one size on a regular grid over a ``width`` x ``height`` frame, row by row
     (at most about ``cap``, and no denser than one half-axis per cell), without those that overlap the ellipse
     ``exclude``'s bounding box: the background samples of the colour trackers' statistics (Nummiaro Eqs. 13-14)."""
     nx = max(1, min(int(width / max(hx, 1.0)), int(math.ceil(math.sqrt(cap * width / max(height, 1))))))
     ny = max(1, min(int(height / max(hy, 1.0)), int(math.ceil(cap / nx))))
+    if numba_enabled():  # the same numbers in one compiled pass (the statistics are refreshed every few frames)
+        ex = np.zeros(4) if exclude is None else np.asarray(exclude, dtype=np.float64)
+        return _grid(float(width / nx), float(height / ny), nx, ny, float(hx), float(hy), ex, exclude is not None)
     xs = (np.arange(nx) + 0.5) * (width / nx)
     ys = (np.arange(ny) + 0.5) * (height / ny)
     ell = np.empty((nx * ny, 4))  # the grid row by row (np.meshgrid's order)

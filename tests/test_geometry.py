@@ -92,3 +92,24 @@ def test_exit_edge_is_numpy_argmin_of_the_four_distances():
     assert exit_edge(330.0, 100.0, 10.0, 10.0, 320, 240) == 1
     assert exit_edge(160.0, 3.0, 10.0, 10.0, 320, 240) == 2
     assert exit_edge(160.0, 239.0, 10.0, 10.0, 320, 240) == 3
+
+
+def test_background_grid_compiled_equals_the_numpy_path():
+    from pftrack._numba import numba_enabled, set_numba_enabled
+    from pftrack.geometry import background_grid
+
+    if not numba_enabled():
+        pytest.skip("Numba is off")
+    g = np.random.default_rng(5)
+    for t in range(300):
+        w, h = int(g.integers(10, 1000)), int(g.integers(10, 800))
+        hx, hy, cap = float(g.uniform(0.5, 200)), float(g.uniform(0.5, 200)), int(g.integers(1, 300))
+        ex = None if t % 3 == 0 else np.array([g.uniform(-50, w + 50), g.uniform(-50, h + 50), g.uniform(1, 150),
+                                               g.uniform(1, 150)])
+        fast = background_grid(w, h, hx, hy, cap, ex)
+        set_numba_enabled(False)
+        try:
+            ref = background_grid(w, h, hx, hy, cap, ex)
+        finally:
+            set_numba_enabled(True)
+        assert fast.shape == ref.shape and np.array_equal(fast, ref)
