@@ -46,6 +46,12 @@ def box_to_ellipse(boxes) -> np.ndarray:
     return out
 
 
+def ellipse_box(cx: float, cy: float, hx: float, hy: float) -> Box:
+    """One ellipse's bounding box ``(x, y, w, h)`` on Python floats (:func:`ellipse_to_box`'s numbers, for the
+    once-a-frame estimate, where an array's overhead would dominate)."""
+    return cx - hx, cy - hy, 2.0 * hx, 2.0 * hy
+
+
 def ellipse_to_box(ellipses) -> np.ndarray:
     """``(cx, cy, hx, hy)`` → the bounding box ``(x, y, w, h)``."""
     e = as_boxes(ellipses)

@@ -109,8 +109,9 @@ class QuotientImage:
     def __call__(self, frame: np.ndarray, *, gray: np.ndarray | None = None) -> np.ndarray:
         """The self-quotient image of ``frame`` (``gray``: its grey image, when the caller has it already)."""
         if gray is None:  # a BGR frame made from a grey image: that image (read only here), the same levels
-            gray = grey_origin(frame) if frame.ndim == 3 else None
-            gray = to_gray(frame) if gray is None else gray
+            gray = grey_origin(frame)
+        if gray is None:
+            gray = to_gray(frame)
         h, w = gray.shape
         k = max(1, min(self.block, w, h))  # a frame smaller than a block is one cell per pixel row or column
         sw, sh = w // k, h // k

@@ -189,7 +189,7 @@ def quantize_gray(frame: np.ndarray, roi: tuple[int, int, int, int], pitch: int,
     """
     x0, y0, x1, y1 = roi
     fh, fw = frame.shape[:2]
-    grey = grey_origin(frame) if frame.ndim == 3 else None
+    grey = grey_origin(frame)
     if grey is not None:  # a BGR frame made from a grey image: its one channel, the same levels (v, v, v) -> v
         frame = grey
     if (pitch >= 3 and frame.dtype == np.uint8 and frame.flags.c_contiguous

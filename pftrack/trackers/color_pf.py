@@ -54,7 +54,7 @@ from ..filtering.dynamics import HX, HY, VX, VY, ConstantVelocityScale, X, Y
 from ..filtering.loss import LossDetector, toward_background
 from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
-from ..geometry import Box, box_to_ellipse, displacement_rate, in_frame_fraction
+from ..geometry import Box, box_to_ellipse, displacement_rate, ellipse_box, in_frame_fraction
 from .base import Tracker, TrackState
 from .color_hooks import ColorHooks
 from .color_likelihood import LikelihoodMixin
@@ -277,7 +277,7 @@ class ColorParticleFilter(LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixi
         if self._lit is not None and tot_e[0] > 0:
             rho_e = max(rho_e, self._lit.estimate_rho(feats.roi, feats.pitch, e_ell))
         cx, cy, hx, hy = e_ell[0].tolist()
-        box = (cx - hx, cy - hy, 2.0 * hx, 2.0 * hy)  # ellipse_to_box
+        box = ellipse_box(cx, cy, hx, hy)
         # appearance condition (Eq. 15) -> lost detection (§6)
         thr = self._threshold()
         n_pass = int(np.count_nonzero(rho > thr))

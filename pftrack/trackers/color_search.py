@@ -24,7 +24,7 @@ from ..filtering.dynamics import HX, HY, X, Y, lost_prediction, reappearance_log
 from ..filtering.loss import confidence
 from ..filtering.resampling import weighted_choice
 from ..frames import as_bgr_uint8
-from ..geometry import Box, box_to_ellipse, ellipse_to_box, exit_edge, in_frame_fraction, validate_box
+from ..geometry import Box, box_to_ellipse, ellipse_box, ellipse_to_box, exit_edge, in_frame_fraction, validate_box
 from .base import TrackState
 from .vetoes import near_mask, search_rank
 
@@ -212,7 +212,7 @@ class SearchMixin:
         vx, vy = self._exit_velocity
         cx = float(self._lost_at[1][0]) + k * float(vx)
         cy = float(self._lost_at[1][1]) + k * float(vy)
-        if in_frame_fraction((cx - hx, cy - hy, 2.0 * hx, 2.0 * hy), fw, fh) >= self.params.reenter_exit_share:
+        if in_frame_fraction(ellipse_box(cx, cy, hx, hy), fw, fh) >= self.params.reenter_exit_share:
             # reenter_memory: a box seen mostly outside just before the loss (the tracker slid back inside after)
             seen = [e for e in self._edge_seen if e[0] >= self._search_since - self.params.reenter_memory]
             if not seen:

@@ -41,7 +41,7 @@ from ..cues.structure_hog import BestStructure, HogStructure
 from ..cues.structure_light import LitStructure
 from ..filtering.dynamics import HX, HY, VX, VY
 from ..filtering.loss import FusedLoss
-from ..geometry import box_to_ellipse
+from ..geometry import box_to_ellipse, ellipse_box
 from .color_hooks import fused_supporters
 from .color_pf import _ELL_COLS, ColorPF
 from .fusion_params import FusionPFParams
@@ -281,10 +281,8 @@ class FusionPF(ColorPF):
             self.structure.update(frame, estimate[_ELL_COLS], p.structure_rate, p.structure_anchor_gate)
         if not p.contrast or p.contrast_alpha <= 0:
             return
-        cx, cy, hx, hy = estimate[_ELL_COLS].tolist()
-        box = (cx - hx, cy - hy, 2.0 * hx, 2.0 * hy)  # ellipse_to_box, in Python floats
-        obj, sur = box_counts(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins, ring=p.ring,
-                              pitch=feats.pitch)
+        obj, sur = box_counts(feats.bins, feats.x0, feats.y0, ellipse_box(*estimate[_ELL_COLS].tolist()),
+                              self.cue.feature_bins, ring=p.ring, pitch=feats.pitch)
         # counts are compared as distributions scaled to the reference areas
         blended = blend_counts(self._obj, obj, self._sur, sur, p.contrast_alpha)
         if blended is not None:
