@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 import pytest
@@ -116,6 +118,81 @@ def test_ncc_of_a_batch_equals_one_box_at_a_time(n_templates, kind):
         one = [_ncc_one(gray, e, float(red.x0), float(red.y0), float(red.k), u, v, tw, wts, 1.0, np.empty(n_templates))
                for e in ell]
         assert np.array_equal(out, np.array(one))
+
+
+def _ncc_box_reference(gray, e, x0, y0, k, u, v, tmpl, wts, floor2):
+    """The compiled NCC of one box written out in plain Python floats, one loop over the samples in the order
+    the kernel sums them: each correlation and the best, for a bit-for-bit comparison."""
+    h, w = gray.shape
+    cx, cy, sx, sy = (e[0] - x0) / k - 0.5, (e[1] - y0) / k - 0.5, e[2] / k, e[3] / k
+
+    def grid(c, s, t, n):
+        p = min(max(c + t * s, 0.0), n - 1.0)
+        i = min(int(p), max(n - 2, 0))
+        return i, (p - i if n > 1 else 0.0)
+
+    s1 = s2 = 0.0
+    dots = [0.0] * tmpl.shape[0]
+    kk = 0
+    for a in range(v.size):
+        ya, fy = grid(cy, sy, float(v[a]), h)
+        yb = ya + (1 if h > 1 else 0)
+        for b in range(u.size):
+            xa, fx = grid(cx, sx, float(u[b]), w)
+            xb = xa + (1 if w > 1 else 0)
+            g00, g10 = float(gray[ya, xa]), float(gray[yb, xa])
+            top = g00 + fx * (float(gray[ya, xb]) - g00)
+            bot = g10 + fx * (float(gray[yb, xb]) - g10)
+            val = top + fy * (bot - top)
+            wv = val if wts.size == 0 else float(wts[kk]) * val
+            s1 += wv
+            s2 += wv * val
+            for q in range(len(dots)):
+                dots[q] += val * float(tmpl[q, kk])
+            kk += 1
+    n = u.size * v.size
+    var = max(s2 - s1 * s1 / n, 0.0)
+    norm = math.sqrt(var + floor2 * n)
+    dots = [d / norm for d in dots]
+    best = -math.inf
+    for d in dots:
+        if d > best:
+            best = d
+    return best, dots
+
+
+@pytest.mark.skipif(not numba_enabled(), reason="a property of the compiled NCC")
+@pytest.mark.parametrize("n_templates", [1, 2, 3])
+@pytest.mark.parametrize("kind", ["kernel", "uniform"])
+@pytest.mark.parametrize("region", [(40, 55), (1, 30), (25, 1), (1, 1)])
+@pytest.mark.parametrize("dtype", [np.float64, np.uint8])
+def test_compiled_ncc_equals_its_plain_transcription_bit_for_bit(n_templates, kind, region, dtype):
+    """The compiled NCC (samples, sums, the best of the templates) gives the numbers of the formula summed in
+    one loop over the samples, to the last bit: regions of one row or column, 8-bit and float levels, boxes
+    past the border, a template of 0.0 correlation (ties), weights or none."""
+    from pftrack.cues.ncc_kernels import _ncc_boxes, _ncc_one
+    from pftrack.cues.structure import _grid
+
+    rng = np.random.default_rng(5 + n_templates)
+    gray = rng.integers(0, 256, region).astype(dtype)
+    shape = (9, 7)
+    u, v = _grid(shape)
+    w = kernel_weights(shape, kind)
+    raw = rng.normal(size=(n_templates, 63))
+    if n_templates == 3:
+        raw[1] = raw[0]  # two equal templates: equal correlations, the first kept
+    tw, wts = weighted_templates(standardize(raw.astype(np.float32), weights=w), None if kind == "uniform" else w)
+    x0, y0, k = 10.0, -4.0, 2.5
+    ell = np.column_stack([rng.uniform(-20, 160, 40), rng.uniform(-30, 150, 40), rng.uniform(0.5, 60, 40),
+                           rng.uniform(0.5, 60, 40)])
+    out = np.empty(len(ell))
+    _ncc_boxes(gray, ell, x0, y0, k, u, v, tw, wts, 0.7, out)
+    for i, e in enumerate(ell):
+        best, dots = _ncc_box_reference(gray, e, x0, y0, k, u, v, tw, wts, 0.7)
+        got = np.empty(n_templates)
+        one = _ncc_one(gray, e, x0, y0, k, u, v, tw, wts, 0.7, got)
+        assert out[i] == best and one == best
+        assert got.tolist() == dots
 
 
 def test_sampled_box_equals_the_area_resized_crop():
