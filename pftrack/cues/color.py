@@ -41,6 +41,10 @@ DEFAULT_BINS = {"rgb": (8, 8, 8), "hsv": (8, 8, 4)}
 
 # --------------------------------------------------------------------------- histograms
 
+_ONE = np.uint64(1)
+_TWO = np.uint64(2)
+
+
 @njit
 def _pixel_span(c, h, n_pixels):
     """First and last pixel index whose centre can lie within ``c ± h`` (clipped)."""
@@ -49,7 +53,7 @@ def _pixel_span(c, h, n_pixels):
     return lo, hi
 
 
-@njit
+@njit(inline="always")
 def _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0, acc1, mark, j_lo, r0, r1, span_a, span_b, off):
     """The rows ``r0 <= r < r1`` (``j_lo + r`` in ``bins``) of :func:`_accumulate_ellipse`, marking bin ``u + off``
     for a pixel of bin ``u``."""
@@ -69,22 +73,23 @@ def _accumulate_rows(bins, cx, cy, hx, kernel, ia2, ihy2, acc0, acc1, mark, j_lo
         dx = a + 0.5 - cx
         w0 = base - dx * dx * scale  # weight of pixel i
         d0 = -(2.0 * dx + 1.0) * scale  # w(i + 1) - w(i)
-        i = a
         if marking:
             for t in range(a, b + 1):
                 mark[(row[t] + off) >> 3] = 1
-        while i < b:
+        i = np.uint64(a)  # unsigned: Numba's indexing skips its test for a negative index
+        bu = np.uint64(b)
+        while i < bu:
             acc0[row[i]] += w0
             w1 = w0 + d0
-            acc1[row[i + 1]] += w1
+            acc1[row[i + _ONE]] += w1
             w0 = w1 + d0 + dd
             d0 += 2.0 * dd
-            i += 2
-        if i == b:
+            i += _TWO
+        if i == bu:
             acc0[row[i]] += w0
 
 
-@njit
+@njit(inline="always")
 def _accumulate_ellipse(bins, cx, cy, hx, hy, kernel, acc0, acc1, mark, spans, half):
     """Add the kernel weights of one ellipse's pixels to ``acc0 + acc1`` (each (n_bins,)); with ``mark`` not
     empty, also set ``mark[u >> 3]`` for every bin ``u`` touched (groups of 8 bins, for a scan to skip the rest).
@@ -168,7 +173,7 @@ def _present_bins(bins, n_bins, half, out):
     return m
 
 
-@njit
+@njit(inline="always")
 def _rho_from_acc(acc0, acc1, sqrt_q, u):
     """Bin ``u``'s terms of rho: ``(sqrt(h_u) sqrt(q_u), h_u)`` of ``h = acc0 + acc1``, resetting both (zeros for an
     empty bin; a tiny negative sum is rounding at the kernel's boundary: an empty bin too)."""

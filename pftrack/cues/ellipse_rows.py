@@ -20,7 +20,7 @@ _SNAP = 1e-5
 _GRAZE = 1e-4
 
 
-@njit
+@njit(inline="always")
 def _row_spans(cx, cy, hx, hy, j_lo, n_rows, wid, span_a, span_b, fix):
     """Pixel spans ``[span_a[r], span_b[r]]`` of rows ``j_lo + r`` inside the ellipse, exactly those of
     :func:`_row_span` (clipped to ``[0, wid - 1]``).  The analytic spans are computed for all rows first (a
