@@ -212,7 +212,7 @@ def _ellipse_rho_numba(bins, x0, y0, ell, kernel, sqrt_q, rho, totals, acc, half
     for n in range(ell.shape[0]):
         covered += 4.0 * max(ell[n, 2], 0.0) * max(ell[n, 3], 0.0)
     by_region = bins.shape[0] * bins.shape[1] <= covered
-    present = np.empty(n_bins if by_region else 0, np.int64)
+    present = np.empty(n_bins if by_region else 0, np.uint64)  # unsigned: no negative-index test when read
     m = _present_bins(bins, n_bins, half, present) if by_region else 0
     mark = np.zeros(0 if by_region else (n_bins + 7) >> 3, np.uint8)
     spans = np.empty((3, bins.shape[0]), np.int64)
