@@ -100,8 +100,8 @@ def _patch_ncc_any(vals, tmpl, wts, floor2, dots):
 @njit(cache=True, inline="always")
 def _patch_ncc(vals, tmpl, t0, t1, wts, floor2, dots):
     """The best NCC of the samples ``vals`` with the templates (:func:`_ncc_boxes`; ``t0, t1``: the first and the
-    last of them); ``dots`` keeps the NCC with each one.  Of equal correlations the first is returned, and a NaN
-    is never the best unless all are."""
+    last of them); ``dots`` keeps the NCC with each one.  Of equal correlations the first is returned; a NaN is
+    never the best (all NaN give -inf)."""
     n = vals.shape[0]
     kt = tmpl.shape[0]
     s1 = 0.0
@@ -131,8 +131,8 @@ def _patch_ncc(vals, tmpl, t0, t1, wts, floor2, dots):
 
 @njit(cache=True, inline="always")
 def _box_ncc(gray, cx, cy, sx, sy, u, v, tmpl, t0, t1, wts, floor2, xu, xf, yu, yf, vals, dots):
-    """One ellipse ``e`` of :func:`_ncc_boxes` (its box in reduced pixels): its NCC with every template in
-    ``dots``; returns the best.  ``xu, xf, yu, yf, vals``: scratch."""
+    """One box of :func:`_ncc_boxes` (centre ``cx, cy`` and half-sizes ``sx, sy`` in reduced pixels): its NCC with
+    every template in ``dots``; returns the best.  ``xu, xf, yu, yf, vals``: scratch."""
     h, w = gray.shape
     _sample_grid(cx, cy, sx, sy, u, v, h, w, xu, xf, yu, yf)
     _sample_patch(gray, xu, xf, yu, yf, vals)
@@ -165,6 +165,6 @@ def _ncc_one(gray, e, x0, y0, k, u, v, tmpl, wts, floor2, dots):
     yu = np.empty(v.shape[0], np.uint64)
     yf = np.empty(v.shape[0])
     vals = np.empty(u.shape[0] * v.shape[0])
-    return _box_ncc(gray, (e[0] - x0) / k - 0.5, (e[1] - y0) / k - 0.5, e[2] / k, e[3] / k, u, v, tmpl, tmpl[0],
-                    tmpl[tmpl.shape[0] - 1], wts, floor2,
-                    xu, xf, yu, yf, vals, dots)
+    t0, t1 = tmpl[0], tmpl[tmpl.shape[0] - 1]
+    return _box_ncc(gray, (e[0] - x0) / k - 0.5, (e[1] - y0) / k - 0.5, e[2] / k, e[3] / k, u, v, tmpl, t0, t1, wts,
+                    floor2, xu, xf, yu, yf, vals, dots)
