@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.pftrack-installed
 
-.PHONY: setup demo test bench bench-kernels clean
+.PHONY: setup demo test bench bench-kernels clean clean-kernels
 
 setup: $(STAMP)
 
@@ -25,8 +25,13 @@ test: setup
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; fi; \
 	exit $$rc
 
-clean:
+clean: clean-kernels
 	rm -rf $(VENV) demo_out build *.egg-info .pytest_cache
+
+# Numba's on-disk cache of the compiled kernels (__pycache__/*.nbi, *.nbc).  A kernel's entry is keyed on its own
+# file only: after editing a compiled helper that a kernel in another file calls or inlines, clear it.
+clean-kernels:
+	find pftrack -name '*.nbi' -delete -o -name '*.nbc' -delete
 
 # Speed: pftrack bench (synthetic sweeps + dev sequences, OpenCV peers interleaved) and kernel micro-benchmarks.
 bench: setup
