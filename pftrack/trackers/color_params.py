@@ -207,7 +207,7 @@ class ColorModelParams(Params):
         "With static_ncc: how many of a patch's four quarters (2 x 2; all of the non-flat ones when fewer) must be "
         "found again unchanged for the background test (and the persistence's still test) to call it the scene's; "
         "4 (default): every one. A railing whose top quarter walkers pass over is the scene's by three of them "
-        "(reports/static_quarters_rule.txt)."))
+        "(docs/rules/static_quarters_rule.txt)."))
     probation_llr: float = param(0.0, ge=0, le=50, doc=(
         "Probation after a weak re-acquisition (pftrack.trackers.probation): an acquisition whose loss-test "
         "ratio is below this starts a probation, during which the tracker follows the candidate without "
@@ -335,7 +335,7 @@ class ColorModelParams(Params):
         "With reenter_border: the loss is also an exit when the estimate's box was less than half inside the frame "
         "on one of this many tracked frames before the loss was declared (the edge that box was beyond): a tracker "
         "that slid back onto a companion as the target left loses it inside the view, and its last confident "
-        "position says no exit. 0: off (reports/exit_memory_rule.txt)."))
+        "position says no exit. 0: off (docs/rules/exit_memory_rule.txt)."))
     reenter_reach: float = param(0.0, ge=0, le=100, doc=(
         "With reenter_border: the strip widens no deeper than this many target widths (heights, for the top and "
         "bottom edges) from the edge, however long the target has been out; 0: no limit. A look-alike walking in "
@@ -349,7 +349,7 @@ class ColorModelParams(Params):
     reenter_along: float = param(0.0, ge=0, le=100, doc=(
         "With reenter_outward: a candidate of the exit strip moving along the exit edge faster than this many exit "
         "speeds (at least 1 px/frame) and over twice as fast as across it is passing by, not coming back, and is "
-        "not acquired; 0: off (reports/reenter_along_rule.txt)."))
+        "not acquired; 0: off (docs/rules/reenter_along_rule.txt)."))
     reenter_resident: int = param(0, ge=0, le=10_000, doc=(
         "With reenter_border: a target coming back entered the view since it left. A candidate of the exit strip "
         "traced back (the central part of its box found again frame by frame) over the frames since the search "
@@ -358,7 +358,7 @@ class ColorModelParams(Params):
     reenter_resident_reach: float = param(0.0, ge=0, le=10, doc=(
         "With reenter_resident: the trace back searches at least this many of the candidate's half-widths around "
         "it (besides three exit speeds, at least 8 px), so that a walker faster than the target left is followed; "
-        "0: off (reports/resident_reach_rule.txt)."))
+        "0: off (docs/rules/resident_reach_rule.txt)."))
     reenter_min_llr: float = param(0.0, ge=0, le=1000, doc=(
         "With reenter_border: while the search is confined to the exit strip, a candidate is acquired only when its "
         "fused log-likelihood ratio (the acquisition test's, log prior included) is at least this; a weaker one is "

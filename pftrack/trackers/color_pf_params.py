@@ -26,7 +26,7 @@ class ColorPFParams(ColorModelParams):
         "0.418 against 0.413 (color-pf 0.579 against 0.582), re-acquired 73 against 74 of 96 (76 both)."))
     acquire_early_frames: int = param(10, ge=0, doc=(
         "See ColorModelParams.acquire_early_frames (off there and for fusion-pf). 10 for color-pf, chosen on the "
-        "tune data under a rule stated before the runs (reports/acquire_early_rule.txt, docs/robustness.md): tune "
+        "tune data under a rule stated before the runs (docs/rules/acquire_early_rule.txt, docs/robustness.md): tune "
         "windows of the real sequences re-acquired 45 against 43 of 60, the tune split and the PETS tune views "
         "unchanged (mean AUC 0.572, 80 of 90, views' pooled lost recall 0.211); 20 frames re-acquired 44. fusion-pf "
         "failed the rule on the views (0.511 against 0.575). Report data, run once after the choice: windows 23 of "
@@ -115,7 +115,7 @@ class ColorPFParams(ColorModelParams):
         "(reports/final_r8): within +-0.001, re-acquired 66 / 96 (the same) and 74 / 96 (73)."))
     reenter_memory: int = param(5, ge=0, le=1000, doc=(
         "See ColorModelParams.reenter_memory (0 there). 5 for color-pf and fusion-pf, chosen on the tune data under "
-        "a rule stated before the runs (reports/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled "
+        "a rule stated before the runs (docs/rules/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled "
         "lost recall 0.262 against 0.216 (fusion-pf 0.475 against 0.439); tune split unchanged; tune exit windows "
         "re-acquired 25 against 26 of 60 (10: 22)."))
     static_ncc: float = param(0.8, ge=0, le=1, doc=(

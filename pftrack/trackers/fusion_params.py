@@ -35,35 +35,35 @@ class FusionPFParams(ColorPFParams):
     acquire_early_frames: int = param(0, ge=0, doc=(
         "See ColorModelParams.acquire_early_frames. Off for fusion-pf (10 for color-pf): on the tune data it took "
         "12 more of the windows' 60 returns, but the PETS tune views' pooled lost recall fell to 0.511 against "
-        "0.575, outside its rule (reports/acquire_early_rule.txt, docs/robustness.md)."))
+        "0.575, outside its rule (docs/rules/acquire_early_rule.txt, docs/robustness.md)."))
     reenter_resident: int = param(15, ge=0, le=10_000, doc=(
         "See ColorModelParams.reenter_resident (off there and for color-pf). 15 for fusion-pf, chosen on the tune "
-        "data under a rule stated before the runs (reports/resident_rule.txt, docs/robustness.md): PETS tune views' "
+        "data under a rule stated before the runs (docs/rules/resident_rule.txt, docs/robustness.md): PETS tune views' "
         "pooled lost recall 0.276 against 0.240 off; tune split mean AUC 0.7025 against 0.7011, re-acquired 78 of "
         "90 both, false-lost 0.019 both. color-pf gained 0.026 there, under the rule's 0.03: off."))
     acquire_unique: bool = param(True, doc=(
         "See ColorModelParams.acquire_unique (off there and for color-pf). On for fusion-pf, chosen on the tune data "
-        "under a rule stated before the runs (reports/acquire_unique_rule.txt, docs/robustness.md): PETS tune views' "
-        "pooled lost recall 0.319 against 0.276 off; tune split and tune real-exit windows unchanged (mean AUC 0.7025, "
-        "re-acquired 78 of 90 and 20 of 60, false-lost 0.019). color-pf gained 0.022 on the views, under the rule's "
-        "0.03, and lost 10 of its 26 exit re-acquisitions: off."))
+        "under a rule stated before the runs (docs/rules/acquire_unique_rule.txt, docs/robustness.md): PETS tune "
+        "views' pooled lost recall 0.319 against 0.276 off; tune split and tune real-exit windows unchanged (mean "
+        "AUC 0.7025, re-acquired 78 of 90 and 20 of 60, false-lost 0.019). color-pf gained 0.022 on the views, under "
+        "the rule's 0.03, and lost 10 of its 26 exit re-acquisitions: off."))
     acquire_unique_hold: int = param(15, ge=0, le=10_000, doc=(
         "See ColorModelParams.acquire_unique_hold (0 there). 15 for fusion-pf, chosen on the tune data under a rule "
-        "stated before the runs (reports/acquire_hold_rule.txt, docs/robustness.md): PETS tune views' pooled lost "
+        "stated before the runs (docs/rules/acquire_hold_rule.txt, docs/robustness.md): PETS tune views' pooled lost "
         "recall 0.403 against 0.319 with 0 (5: 0.370); tune split and tune real-exit windows unchanged. The views' "
         "own re-acquisitions fell from 6 to 4 of 18."))
     reenter_along: float = param(1.0, ge=0, le=100, doc=(
         "See ColorModelParams.reenter_along (0 there and for color-pf). 1 for fusion-pf, chosen on the tune data under "
-        "a rule stated before the runs (reports/reenter_along_rule.txt, docs/robustness.md): PETS tune views' pooled "
-        "lost recall 0.587 against 0.475 (2: 0.526); tune split mean AUC 0.7042 against 0.7041, re-acquired 78 of 90 "
-        "both; tune exit windows 19 against 20 of 60."))
+        "a rule stated before the runs (docs/rules/reenter_along_rule.txt, docs/robustness.md): PETS tune views' "
+        "pooled lost recall 0.587 against 0.475 (2: 0.526); tune split mean AUC 0.7042 against 0.7041, re-acquired 78 "
+        "of 90 both; tune exit windows 19 against 20 of 60."))
     reenter_memory: int = param(5, ge=0, le=1000, doc=(
         "See ColorModelParams.reenter_memory (0 there). 5 for fusion-pf, chosen on the tune data under a rule stated "
-        "before the runs (reports/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled lost recall "
+        "before the runs (docs/rules/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled lost recall "
         "0.475 against 0.439; tune split and tune exit windows unchanged (10 gave the same)."))
     static_quarters: int = param(3, ge=1, le=4, doc=(
         "See ColorModelParams.static_quarters (4 there and for color-pf). 3 for fusion-pf, chosen on the tune data "
-        "under a rule stated before the runs (reports/static_quarters_rule.txt, docs/robustness.md): PETS tune "
+        "under a rule stated before the runs (docs/rules/static_quarters_rule.txt, docs/robustness.md): PETS tune "
         "views' pooled lost recall 0.439 against 0.403 with 4; tune split mean AUC 0.7041 against 0.7025, "
         "re-acquired 78 of 90 both, false-lost 0.023 against 0.019; tune real-exit windows 20 of 60 both. "
         "color-pf's views did not gain (0.214 against 0.216): 4."))

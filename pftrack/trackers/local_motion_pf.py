@@ -71,7 +71,7 @@ class LocalMotionPFParams(ColorModelParams):
                                           "amplitude weighs less than the direction.")
     w_noise: float = param(0.01, ge=0, lt=1, doc="Weight of the uniform component of Eq. 7 (§5: 0.01).")
     # color-pf's grey model and grey search, and its loss and persistence counts: chosen on the tune data under a
-    # rule stated beforehand (reports/lm_grey_rule2.txt; docs/local-motion.md, "Grey input")
+    # rule stated beforehand (docs/rules/lm_grey_rule2.txt; docs/local-motion.md, "Grey input")
     grey_check: Literal["off", "structure", "fused"] = param("fused", doc=(
         "See ColorModelParams.grey_check. 'fused', color-pf's value, chosen on the tune data with the five settings "
         "below (docs/local-motion.md): grey tune set mean AUC 0.534 against 0.376, tune split 0.456 against 0.404."))
