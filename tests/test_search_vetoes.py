@@ -38,13 +38,16 @@ class _Host(VetoMixin):
     """Three candidates 100 px apart; the ones at ``refused`` x positions are vetoed."""
 
     def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3), *, width=320, acquire_in_frame=0.0,
-                 acquire_unique=False, hold=0, margin=0.0, early_frames=0, exit_strip=None, searching_for=0):
+                 acquire_unique=False, hold=0, margin=0.0, early_frames=0, exit_strip=None, searching_for=0,
+                 sliver_frames=0):
         self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
                                       n_particles=30, acquire_in_frame=acquire_in_frame,
                                       acquire_early_frames=early_frames, acquire_in_frame_early=0.25,
                                       acquire_unique=acquire_unique, acquire_unique_hold=hold,
-                                      acquire_unique_refine=False, acquire_unique_margin=margin)
+                                      acquire_unique_refine=False, acquire_unique_margin=margin,
+                                      acquire_sliver_frames=sliver_frames)
         self.frame_index, self._ambiguous_until = searching_for, -1
+        self._sliver = None
         self._search_since = 0
         self._strip = exit_strip
         self._shape = (120, width)
@@ -145,6 +148,35 @@ def test_right_after_an_exit_a_candidate_needs_less_of_its_box_inside(searching_
                  exit_strip=strip, searching_for=searching_for)
     a = _choose(host)
     assert a.found == found and host.states[a.best, 0] == 250.0
+
+
+def test_a_sliver_found_on_k_search_frames_in_a_row_is_taken():
+    """acquire_sliver_frames = 3: the best candidate's box is 40 % inside (a frame 248 px wide) and passes the loss
+    test on every frame. It is refused on the first two search frames and taken on the third; a gap of three
+    frames, a candidate elsewhere, or a new search starts the count again; 0 never takes it."""
+    def frames(host, indices, moves=None):
+        found = []
+        for i in indices:
+            host.frame_index = i
+            host.loss.lost = True
+            if moves and i in moves:
+                host.states[20:, 1] = moves[i]
+            found.append(_choose(host).found)
+        return found
+
+    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3),
+                  [10, 11, 12]) == [False, False, True]
+    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3),
+                  [10, 12, 14]) == [False, False, True]  # searches every other frame
+    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3),
+                  [10, 11, 14, 15, 16]) == [False, False, False, False, True]
+    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3),
+                  [10, 11, 12, 13], moves={12: 20.0, 13: 20.0}) == [False, False, False, False]
+    host = _Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3)
+    assert frames(host, [10, 11]) == [False, False]
+    host._search_since = 12  # lost again: a new search
+    assert frames(host, [12, 13, 14]) == [False, False, True]
+    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5), range(10, 20)) == [False] * 10
 
 
 def test_a_candidate_with_a_passing_rival_elsewhere_is_not_taken():

@@ -168,6 +168,11 @@ class ColorModelParams(Params):
         "through an edge is the likeliest thing to show there again, part of it first. 0: off (default)."))
     acquire_in_frame_early: float = param(0.25, ge=0, le=1, doc=(
         "The in-frame share asked of a candidate in the first acquire_early_frames frames after an exit."))
+    acquire_sliver_frames: int = param(0, ge=0, le=1000, doc=(
+        "With acquire_in_frame: a best candidate that passes the loss test with too little of its box inside the "
+        "frame is not refused for that when the best candidates of the K - 1 search frames before it did the same, "
+        "each overlapping the next (IoU >= 0.3 within the frame, at most 2 frames apart): a target that stays at "
+        "the edge, a sliver of it in view, is there to take. The vetoes still apply. 0: off (default)."))
     acquire_unique: bool = param(False, doc=(
         "With loss_test='likelihood', while lost: a candidate is not acquired while another one elsewhere in the frame "
         "(beyond two half-axes each way, not the still scene) passes the acquisition test too: two look-alikes, and "

@@ -152,6 +152,7 @@ class ColorParticleFilter(LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixi
         self._vetoed: list = []  # (frame index, centre, shift) of the candidates reenter_outward refused lately
         self._edge_seen: deque = deque(maxlen=max(1, self.params.reenter_memory))  # (frame, cx, cy) mostly outside
         self._ambiguous_until = -1  # acquire_unique_hold: no acquisition up to this frame
+        self._sliver: tuple | None = None  # acquire_sliver_frames: (frame index, streak, box in the frame)
         self._ell = np.empty((0, 4))
         self._lit: LitHistogram | None = None  # grey_histogram="both" on grey input (decided by _init)
 

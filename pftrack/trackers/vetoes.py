@@ -42,7 +42,7 @@ import numpy as np
 
 from ..cues.template import patch_shift, trace_back
 from ..filtering.dynamics import HX, HY, X, Y
-from ..geometry import ellipse_to_box, in_frame_fraction
+from ..geometry import clip_box, ellipse_to_box, in_frame_fraction, iou
 
 __all__ = ["RESIDENT_CORE", "RESIDENT_IN_FRAME", "Acquisition", "VetoMixin", "near_mask", "search_rank"]
 
@@ -248,12 +248,30 @@ class VetoMixin:
         """Does at least ``g`` (``acquire_in_frame``) of the box of candidate ellipse ``ell`` lie inside the frame, or,
         in the first ``acquire_early_frames`` frames of a search after an exit, ``acquire_in_frame_early``?"""
         p = self.params
-        share = in_frame_fraction(tuple(ellipse_to_box(ell)), self._shape[1], self._shape[0])
+        box = ellipse_to_box(ell)
+        share = in_frame_fraction(tuple(box), self._shape[1], self._shape[0])
         if share >= g:
             return True
-        return bool(share >= p.acquire_in_frame_early and p.acquire_early_frames > 0
-                    and self.frame_index - self._search_since <= p.acquire_early_frames
-                    and self._exit_strip() is not None)
+        if (share >= p.acquire_in_frame_early and p.acquire_early_frames > 0
+                and self.frame_index - self._search_since <= p.acquire_early_frames
+                and self._exit_strip() is not None):
+            return True
+        return p.acquire_sliver_frames > 0 and self._persistent_sliver(box)
+
+    def _persistent_sliver(self, box: np.ndarray) -> bool:
+        """``acquire_sliver_frames`` = K: has the best candidate passed the loss test with too little of its box in
+        the frame on K search frames in a row (at most 2 frames apart), each overlapping the last (IoU >= 0.3 of
+        the boxes cut to the frame)? Counted once a frame, for the frame's first such candidate."""
+        last = self._sliver
+        if last is not None and last[0] == self.frame_index:
+            return False
+        cut = clip_box(box, self._shape[1], self._shape[0])
+        streak = 1
+        if (last is not None and 0 < self.frame_index - last[0] <= 2 and last[0] >= self._search_since
+                and float(iou(cut, last[2])) >= 0.3):
+            streak = last[1] + 1
+        self._sliver = (self.frame_index, streak, cut)
+        return streak >= self.params.acquire_sliver_frames
 
     def _choose(self, frame: np.ndarray, c, supporters: np.ndarray) -> Acquisition:
         """The candidate of search ``c`` (:class:`~.color_search.SearchCandidates`) to acquire, if any.
