@@ -36,6 +36,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pftrack.eval.runner import parse_tracker_list
 from pftrack.geometry import in_frame_fraction, iou
 from pftrack.io.datasets import read_sequence
 from pftrack.trackers import create_tracker
@@ -122,7 +123,8 @@ def main() -> None:
     gt = pets.mot_gt
     height, width = cv2.imread(str(pets.frames[0])).shape[:2]
     seeds = [int(s) for s in args.seeds.split(",")]
-    for name in args.trackers.split(","):
+    for cfg in parse_tracker_list(args.trackers):  # variants as pftrack eval takes them: fusion-pf[key=value]
+        name = cfg.label
         total = dict.fromkeys(CLASSES, 0)
         absent = up = 0
         # exit strip on the frame before -> [acquisitions, on a walker who had just entered, on one who stayed]
@@ -139,7 +141,7 @@ def main() -> None:
             others = {t: gt[(gt[:, 0] == n) & (gt[:, 1] != pid), 1:6] for t, n in enumerate(numbers)}
             frames = [cv2.imread(str(p)) for p in seq.frames]
             for seed in seeds:
-                tr = create_tracker(name, seed=seed)
+                tr = create_tracker(cfg.name, seed=seed, params=cfg.param_dict)
                 boxes, lost = [seq.init_box], [False]
                 tr.init(frames[0], seq.init_box)
                 for t, f in enumerate(frames[1:], start=1):
