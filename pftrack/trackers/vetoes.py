@@ -246,7 +246,9 @@ class VetoMixin:
 
     def _in_frame_enough(self, ell: np.ndarray, g: float) -> bool:
         """Does at least ``g`` (``acquire_in_frame``) of the box of candidate ellipse ``ell`` lie inside the frame, or,
-        in the first ``acquire_early_frames`` frames of a search after an exit, ``acquire_in_frame_early``?"""
+        in the first ``acquire_early_frames`` frames of a search after an exit, ``acquire_in_frame_early``? With
+        ``acquire_sliver_frames``, a candidate with less inside passes when the search has found it at one place
+        on that many search frames in a row (:meth:`_persistent_sliver`)."""
         p = self.params
         box = ellipse_to_box(ell)
         share = in_frame_fraction(tuple(box), self._shape[1], self._shape[0])
