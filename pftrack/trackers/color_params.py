@@ -175,7 +175,7 @@ class ColorModelParams(Params):
         "the edge, a sliver of it in view, is there to take. The vetoes still apply. 0: off (default). On the tune "
         "data (docs/rules/acquire_sliver_rule.txt) K = 3 re-acquired 45 of fusion-pf's 60 tune-window returns "
         "against 30, and cost the PETS tune views' pooled lost recall 0.575 -> 0.431 (5: 0.520, 8: 0.550): "
-        "walkers leave pieces of themselves at a window's edge too (docs/robustness.md)."))
+        "other walkers partly in view along a window's edge are found at one place too (docs/robustness.md)."))
     acquire_unique: bool = param(False, doc=(
         "With loss_test='likelihood', while lost: a candidate is not acquired while another one elsewhere in the frame "
         "(beyond two half-axes each way, not the still scene) passes the acquisition test too: two look-alikes, and "
