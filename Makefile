@@ -4,7 +4,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.pftrack-installed
 
-.PHONY: setup demo test bench bench-kernels clean clean-kernels
+.PHONY: setup demo test test-experiments bench bench-kernels clean clean-kernels
 
 setup: $(STAMP)
 
@@ -24,6 +24,10 @@ test: setup
 	@$(BIN)/python -m pytest -q -n 2 --dist loadfile; rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; fi; \
 	exit $$rc
+
+# The longer experiments left out of the default run (each reproduces a comparison a doc page reports).
+test-experiments: setup
+	@$(BIN)/python -m pytest -q -n 2 --dist loadfile -m experiment
 
 clean: clean-kernels
 	rm -rf $(VENV) demo_out build *.egg-info .pytest_cache

@@ -198,6 +198,7 @@ def test_track_show_map_puts_the_learned_map_beside_the_frame(tmp_path, capsys):
     assert "no confidence map" in capsys.readouterr().err
 
 
+@pytest.mark.experiment
 def test_colour_term_improves_tracking_over_varied_scenes():
     """The kernel colour histogram term (``colour_weight``, not in the chapter) against the object map alone,
     over seeded varied scenes (random distractors, light, grey frames).  Measured on seeds 300-303: mean IoU

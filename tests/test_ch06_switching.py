@@ -94,6 +94,7 @@ def test_refine_centre_moves_to_the_best_matching_window():
     np.testing.assert_allclose(fs.refine_centre(joint, model, (0, 0), far, size), far - [4.0, 0.0])
 
 
+@pytest.mark.experiment
 def test_joint_partner_keeps_grey_camouflaged_targets():
     """Grey camouflage scenes (target textured like the background): with the partner ranked alone the
     pair is two intensities and the window slides off; ranked jointly it holds (ch06.md §1.2)."""
@@ -167,7 +168,7 @@ def test_deterministic(name):
     assert all(np.all(np.isfinite(s.box)) for s in a)
 
 
-@pytest.mark.slow
+@pytest.mark.experiment
 def test_switching_recovers_teleports_that_local_mean_shift_loses():
     """ch06.md §5.2 on varied teleport scenes (seeds drawn colours, light, grey frames)."""
     wins, sw_rates, fs_rates = 0, [], []

@@ -2,6 +2,7 @@
 blobs), and the walkers scene."""
 
 import numpy as np
+import pytest
 
 from pftrack.events.eval import match_events, track_crossings
 from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams, estimate_radius
@@ -177,6 +178,7 @@ def test_walkers_scene_is_exact_and_seeded():
     assert kinds == {"horizontal", "vertical", "oblique"}
 
 
+@pytest.mark.experiment
 def test_foot_timing_on_seeded_walkers():
     """Upright walkers crossing a horizontal ground line (4 seeds, docs/tripwire.md), without the blobs' foot
     crossings (``feet``) but in the last check. The confirmed foot timing is precise (>= 0.9) at a lower recall;

@@ -130,6 +130,7 @@ def _field_error(tr, sc, n) -> float:
     return float(np.mean(np.linalg.norm(displacement_at(grid, P, V - V0, model) - sc.displacement(n, P), axis=1)))
 
 
+@pytest.mark.experiment
 @pytest.mark.parametrize("seed", [7, 8])
 def test_dense_model_follows_deformations_finer_than_the_mesh(seed):
     """Bumps 14-24 px wide, finer than the 7 x 7 mesh's 27 px cells, frame 12 registered onto the model directly.

@@ -311,6 +311,7 @@ def test_to_model_registers_a_translated_frame_onto_the_model():
     assert np.max(np.abs(to_model(In, grid, np.zeros((grid.K, 2))) - In)) < 1e-3
 
 
+@pytest.mark.experiment
 def test_frame_to_frame_chaining_drifts_where_analysis_by_synthesis_does_not():
     """ch13.md T4 in small (the experiment: scripts/ch13_experiments.py --part t4). On a 40-frame sheet (tune seed
     0) registering each frame onto the previous one ends 1.05 px off (mean vertex error, last 5 frames), analysis by

@@ -135,6 +135,7 @@ def test_same_colour_crossings_keep_their_identities_with_the_predicted_occlusio
         assert s.num_switches == 0 and s.idf1 > 0.9
 
 
+@pytest.mark.experiment
 def test_occlusion_handling_helps_through_detection_gaps():
     on = [crossing_run(seed, same_colors=False, occlusion=True) for seed in range(12)]
     off = [crossing_run(seed, same_colors=False, occlusion=False) for seed in range(12)]

@@ -49,6 +49,7 @@ def test_visible_score_sees_the_part_of_a_target_inside_the_frame(make):
     assert cue.visible_score(other, at_edge) < 0.5
 
 
+@pytest.mark.experiment
 def test_fusion_pf_takes_a_target_that_stays_at_the_edge():
     """Grey leave scene 1703: the target comes back through the left edge and stands with a quarter of its box
     outside to the end. Without the option the search never takes it (the box covers it on 11 frames, before it
