@@ -26,7 +26,7 @@ from pftrack.io.datasets import read_sequence
 from pftrack.trackers import create_tracker
 
 sys.path.insert(0, str(Path(__file__).parent))
-from views_flag_trace import pets_frame, view_window, walker_on  # noqa: E402
+from views_flag_trace import view_walkers, walker_on  # noqa: E402
 
 
 def fb_error(g_now: np.ndarray, g_then: np.ndarray, b_now, b_then, reach: float = 1.5) -> float:
@@ -60,10 +60,7 @@ def main() -> None:
     rows = []  # (class, error, within 10 frames of the view's first switch)
     for folder in sorted(p for p in args.views.iterdir() if (p / "groundtruth_rect.txt").exists()):
         seq = read_sequence(folder)
-        pid = int(folder.name.rsplit("_id", 1)[1])
-        window = view_window(folder, width, height)
-        numbers = [pets_frame(p) for p in seq.frames]
-        others = {t: gt[(gt[:, 0] == n) & (gt[:, 1] != pid), 1:6] for t, n in enumerate(numbers)}
+        _, window, others = view_walkers(folder, seq, gt, width, height)
         frames = [cv2.imread(str(p)) for p in seq.frames]
         grays = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
         truth = np.asarray(seq.groundtruth, float)

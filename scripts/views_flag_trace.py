@@ -60,6 +60,15 @@ def pets_frame(path: Path) -> int:
     return int(re.findall(r"(\d+)", Path(os.readlink(path)).stem)[-1])
 
 
+def view_walkers(folder: Path, seq, gt: np.ndarray, width: int, height: int) -> tuple[int, tuple, dict]:
+    """A view's person id, its window ``x0, y0, w, h`` and, per view frame, the other annotated walkers (rows
+    ``id, x, y, w, h`` in frame coordinates) from the PETS annotation ``gt``."""
+    pid = int(folder.name.rsplit("_id", 1)[1])
+    numbers = [pets_frame(p) for p in seq.frames]
+    others = {t: gt[(gt[:, 0] == n) & (gt[:, 1] != pid), 1:6] for t, n in enumerate(numbers)}
+    return pid, view_window(folder, width, height), others
+
+
 def walker_on(box, others_t, window) -> int | None:
     """The id of the walker whose box, clipped to the window, ``box`` (window coordinates) overlaps most, with IoU
     >= 0.3; None if none does. ``others_t`` holds rows ``id, x, y, w, h`` in frame coordinates."""
@@ -135,10 +144,7 @@ def main() -> None:
             seq = read_sequence(folder)
             if seq.absent is None or not seq.absent[1:].any():
                 continue
-            pid = int(folder.name.rsplit("_id", 1)[1])
-            window = view_window(folder, width, height)
-            numbers = [pets_frame(p) for p in seq.frames]
-            others = {t: gt[(gt[:, 0] == n) & (gt[:, 1] != pid), 1:6] for t, n in enumerate(numbers)}
+            pid, window, others = view_walkers(folder, seq, gt, width, height)
             frames = [cv2.imread(str(p)) for p in seq.frames]
             for seed in seeds:
                 tr = create_tracker(cfg.name, seed=seed, params=cfg.param_dict)
