@@ -164,19 +164,18 @@ def test_a_sliver_found_on_k_search_frames_in_a_row_is_taken():
             found.append(_choose(host).found)
         return found
 
-    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3),
-                  [10, 11, 12]) == [False, False, True]
-    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3),
-                  [10, 12, 14]) == [False, False, True]  # searches every other frame
-    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3),
-                  [10, 11, 14, 15, 16]) == [False, False, False, False, True]
-    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3),
-                  [10, 11, 12, 13], moves={12: 20.0, 13: 20.0}) == [False, False, False, False]
-    host = _Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=3)
-    assert frames(host, [10, 11]) == [False, False]
-    host._search_since = 12  # lost again: a new search
-    assert frames(host, [12, 13, 14]) == [False, False, True]
-    assert frames(_Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5), range(10, 20)) == [False] * 10
+    def host(k=3):  # the best candidate 40 % inside a frame 248 px wide
+        return _Host(2, (), (0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_frames=k)
+
+    assert frames(host(), [10, 11, 12]) == [False, False, True]
+    assert frames(host(), [10, 12, 14]) == [False, False, True]  # searches every other frame
+    assert frames(host(), [10, 11, 14, 15, 16]) == [False, False, False, False, True]
+    assert frames(host(), [10, 11, 12, 13], moves={12: 20.0, 13: 20.0}) == [False, False, False, False]
+    h = host()
+    assert frames(h, [10, 11]) == [False, False]
+    h._search_since = 12  # lost again: a new search
+    assert frames(h, [12, 13, 14]) == [False, False, True]
+    assert frames(host(0), range(10, 20)) == [False] * 10
 
 
 def test_a_candidate_with_a_passing_rival_elsewhere_is_not_taken():
