@@ -2,6 +2,7 @@
 
     python scripts/ch11_experiments.py [--data ../shared/data] [--repeats 10] [--json reports/ch11.json]
     python scripts/ch11_experiments.py --seeds 300-309 [--response strong]   # a fresh draw of colour responses
+    python scripts/ch11_experiments.py --oracle ...   # also the scene's true colour response as the BTF ('true')
 
 Scenes (`pftrack synth twocam`): camera A sees the left part of the PETS frames, camera B the
 right part through a seeded nonlinear colour response; the strip between them is blind.
@@ -50,7 +51,9 @@ def foreground(frames: dict) -> dict:
     return {n: cv2.morphologyEx((bgs.apply(f) == 255).astype(np.uint8), cv2.MORPH_OPEN, k) for n, f in frames.items()}
 
 
-def scene_scores(sc, repeats: int, seed: int) -> dict:
+def scene_scores(sc, repeats: int, seed: int, oracle: bool = False) -> dict:
+    """Links, rank-1 and link counts per appearance and method in one scene; with ``oracle`` also the scene's own
+    colour response used as the BTF (method ``true``: what a perfect estimate of the response would give)."""
     lo, hi = sc.numbers
     FA = {n: sc.frame_a(n) for n in range(lo, hi + 1)}
     FB = {n: sc.frame_b(n) for n in range(lo, hi + 1)}
@@ -90,11 +93,11 @@ def scene_scores(sc, repeats: int, seed: int) -> dict:
                 acc_s = out.setdefault("BTF subspace (PPCA) rank-1 only", [0, 0, 0, 0])
                 acc_s[1] += r1s
                 acc_s[2] += len(test)
-            for method in ("none", "mbtf", "cbtf", "cbtf-pixels"):
-                lut = fit_btf(app_a, app_b, pairs, method)
+            for method in ("none", "mbtf", "cbtf", "cbtf-pixels") + (("true",) if oracle else ()):
+                lut = sc.response.astype(np.float64) if method == "true" else fit_btf(app_a, app_b, pairs, method)
                 tau = cooccur_threshold(app_a, app_b, lut, NEW_QUANTILE)
                 if tau is None:
-                    tau = new_threshold(app_a, app_b, pairs, method)
+                    tau = new_threshold(app_a, app_b, pairs, method) if method != "true" else 0.0
                 links = link_tracks(app_a, app_b, lut, tau_new=tau, exclude_a=ex_a, exclude_b=ex_b)
                 ok = sum((a, b) in set(test) for a, b, _ in links)
                 tr = fit_transit(app_a, app_b, pairs)
@@ -105,12 +108,13 @@ def scene_scores(sc, repeats: int, seed: int) -> dict:
                 acc_t[2] += len(test)
                 acc_t[3] += len(links_t)
                 # the former rule: the threshold that best separates the training pairs from their impostors
-                links_p = link_tracks(app_a, app_b, lut, tau_new=new_threshold(app_a, app_b, pairs, method),
-                                      exclude_a=ex_a, exclude_b=ex_b)
-                acc_p = out.setdefault(f"{feat} {method} pairs-rule", [0, 0, 0, 0])
-                acc_p[0] += sum((a, b) in set(test) for a, b, _ in links_p)
-                acc_p[2] += len(test)
-                acc_p[3] += len(links_p)
+                acc_p = out.setdefault(f"{feat} {method} pairs-rule", [0, 0, 0, 0]) if method != "true" else None
+                if acc_p is not None:
+                    links_p = link_tracks(app_a, app_b, lut, tau_new=new_threshold(app_a, app_b, pairs, method),
+                                          exclude_a=ex_a, exclude_b=ex_b)
+                    acc_p[0] += sum((a, b) in set(test) for a, b, _ in links_p)
+                    acc_p[2] += len(test)
+                    acc_p[3] += len(links_p)
                 # rank-1: each test probe against the earlier tracks of the other camera (not training ones)
                 r1 = 0
                 for a, b in test:
@@ -128,7 +132,8 @@ def scene_scores(sc, repeats: int, seed: int) -> dict:
                 acc[0] += ok
                 acc[1] += r1
                 acc_t[1] += r1                             # rank-1 is appearance only
-                acc_p[1] += r1
+                if acc_p is not None:
+                    acc_p[1] += r1
                 acc[2] += len(test)
                 acc[3] += len(links)
     return out
@@ -171,13 +176,13 @@ def intra_camera(data: Path, numbers, repeats: int, seed: int = 0) -> dict:
     return {"people": len(ids), "rank1": out}
 
 
-def run(data: Path, numbers, seeds, repeats: int, response: str = "mild") -> dict:
+def run(data: Path, numbers, seeds, repeats: int, response: str = "mild", oracle: bool = False) -> dict:
     per_scene: dict = {}
     total: dict = {}
     for sd in seeds:
         for sp in SPLITS:
             sc = twocam_scene(data / "pets09_s2l1_dev", sd, numbers=numbers, split=sp, response=response)
-            sc_scores = scene_scores(sc, repeats, sd)
+            sc_scores = scene_scores(sc, repeats, sd, oracle)
             for k, (ok, r1, n, nl) in sc_scores.items():
                 per_scene.setdefault(k, []).append(ok / n)
                 t = total.setdefault(k, [0, 0, 0, 0])
@@ -202,6 +207,8 @@ def main() -> None:
     ap.add_argument("--intra", action="store_true", help="only E11.1 (intra-camera rank-1 per extraction method)")
     ap.add_argument("--response", choices=["mild", "strong"], default="mild",
                     help="camera B's colour response (pftrack.synth.twocam.RESPONSES); 'strong' is a stress test")
+    ap.add_argument("--oracle", action="store_true",
+                    help="also score the scene's own colour response as the BTF (method 'true'), a diagnostic")
     args = ap.parse_args()
     data = Path(args.data)
     if args.intra:
@@ -215,12 +222,13 @@ def main() -> None:
         lo, _, hi = args.seeds.partition("-")
         seeds = list(range(int(lo), int(hi) + 1)) if hi else [int(v) for v in args.seeds.split(",")]
         res[f"fresh: report frames 201-400, seeds {args.seeds}"] = run(data, (201, 400), seeds, args.repeats,
-                                                                     args.response)
+                                                                     args.response, args.oracle)
     elif args.split in ("tune", "both"):
-        res["tune frames 1-200, seeds 0-2"] = run(data, (1, 200), [0, 1, 2], args.repeats, args.response)
+        res["tune frames 1-200, seeds 0-2"] = run(data, (1, 200), [0, 1, 2], args.repeats, args.response,
+                                                   args.oracle)
     if args.split in ("report", "both") and not args.seeds:
         res["report frames 201-400, seeds 100-104"] = run(data, (201, 400), [100, 101, 102, 103, 104], args.repeats,
-                                                               args.response)
+                                                               args.response, args.oracle)
     for name, table in res.items():
         print(name)
         for k, v in sorted(table.items()):
