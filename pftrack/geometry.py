@@ -136,11 +136,12 @@ def exit_edge(cx: float, cy: float, hx: float, hy: float, width: float, height: 
 
 def visible_box(box, width: int, height: int) -> tuple[float, float, float, float] | None:
     """The part of ``box`` inside the ``width x height`` frame, at least one pixel wide and high (a box wholly
-    outside becomes a one-pixel box at the nearest edge); None when the box lies inside already (on Python floats:
-    it runs on every tracked frame)."""
+    outside becomes a one-pixel box at the nearest edge, and a box under a pixel grows to one from its top-left
+    corner); None when the box lies inside already and is at least a pixel wide and high (on Python floats: it runs
+    on every tracked frame)."""
     x, y, bw, bh = box
     x1, y1 = x + bw, y + bh
-    if x >= 0.0 and y >= 0.0 and x1 <= width and y1 <= height:
+    if x >= 0.0 and y >= 0.0 and x1 <= width and y1 <= height and bw >= 1.0 and bh >= 1.0:
         return None
     x0 = min(max(float(x), 0.0), width - 1.0)
     y0 = min(max(float(y), 0.0), height - 1.0)

@@ -24,6 +24,10 @@ def test_visible_box_cuts_to_the_frame_and_keeps_a_pixel():
     assert visible_box((98.0, 95.0, 20.0, 20.0), 100, 100) == (98.0, 95.0, 2.0, 5.0)
     assert visible_box((-50.0, -50.0, 5.0, 5.0), 100, 100) == (0.0, 0.0, 1.0, 1.0)  # wholly outside
     assert visible_box((150.0, 20.0, 5.0, 5.0), 100, 100) == (99.0, 20.0, 1.0, 5.0)
+    # a box under a pixel inside the frame grows to one from its top-left corner (the protocol's smallest box)
+    assert visible_box((40.5, 41.0, 0.95, 0.99), 100, 100) == (40.5, 41.0, 1.0, 1.0)
+    assert visible_box((40.5, 41.0, 0.5, 3.0), 100, 100) == (40.5, 41.0, 1.0, 3.0)
+    assert visible_box((99.5, 20.0, 0.2, 0.2), 100, 100) == (99.0, 20.0, 1.0, 1.0)  # at the edge: kept inside
 
 
 def _leaving_scene(seed: int) -> SceneSpec:
