@@ -1,4 +1,6 @@
-"""Every registered tracker honours the protocol on colour, three-channel grey and one-channel grey frames.
+"""Every registered tracker honours the protocol on colour, three-channel grey and one-channel grey frames, and on
+awkward starts and inputs (a one-pixel box, a box partly or wholly beyond the frame, BGRA and 16-bit frames, a tiny
+frame).
 
 ``init(frame, box)`` and ``update(frame)`` return a state whose box is finite, at least a pixel wide and high and
 inside the frame, whose score is in [0, 1] and whose ``lost`` is a bool; particles, when a tracker has them, are
@@ -14,6 +16,7 @@ import numpy as np
 import pytest
 
 import pftrack
+from pftrack.errors import InputError
 from pftrack.trackers.registry import tracker_names
 
 H, W = 120, 160
@@ -75,3 +78,54 @@ def test_the_loss_monitor_keeps_the_protocol(cues, kind):
     for s in states:
         _check(s)
     assert not any(s.lost for s in states)  # the box stays on the target
+
+
+def _edge_frames(case: str) -> tuple[list[np.ndarray], tuple[float, float, float, float]]:
+    """Five frames and a first box for one awkward start: a one-pixel box, a target leaving through a corner, a box
+    larger than the frame, BGRA and 16-bit input, a 16 x 16 frame."""
+    rng = np.random.default_rng(7)
+    h, w, box, step = H, W, (40.0, 40.0, 20.0, 24.0), (2, 1)
+    if case == "one-pixel":
+        box = (40.0, 40.0, 1.0, 1.0)
+    elif case == "corner":
+        box, step = (145.0, 105.0, 20.0, 24.0), (3, 3)
+    elif case == "larger-than-frame":
+        h, w, box, step = 60, 80, (-10.0, -10.0, 100.0, 80.0), (0, 0)
+    elif case == "small-frame":
+        h, w, box, step = 16, 16, (4.0, 4.0, 6.0, 6.0), (0, 0)
+    out = []
+    for n in range(5):
+        f = rng.integers(40, 200, (h, w, 3)).astype(np.uint8)
+        x0, y0 = int(box[0]) + step[0] * n, int(box[1]) + step[1] * n
+        f[max(y0, 0):max(y0 + int(box[3]), 0), max(x0, 0):max(x0 + int(box[2]), 0)] = (30, 60, 220)
+        if case == "bgra":
+            f = np.dstack([f, np.full((h, w), 255, np.uint8)])
+        elif case == "uint16":
+            f = f.astype(np.uint16) * 257
+        out.append(f)
+    return out, box
+
+
+@pytest.mark.parametrize("case", ["one-pixel", "corner", "larger-than-frame", "bgra", "uint16", "small-frame"])
+@pytest.mark.parametrize("name", tracker_names())
+def test_tracker_protocol_on_awkward_starts_and_inputs(name, case):
+    """Either a clean one-line input error at ``init`` (some of OpenCV's trackers refuse tiny boxes and frames) or
+    states that honour the protocol on every frame, whatever the box and pixel type."""
+    frames, box = _edge_frames(case)
+    h, w = frames[0].shape[:2]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        tracker = pftrack.create_tracker(name, seed=0)
+        try:
+            state = tracker.init(frames[0], box)
+        except InputError as exc:
+            assert case in ("one-pixel", "larger-than-frame", "small-frame") and "\n" not in str(exc)
+            return
+        for f in [None] + frames[1:]:
+            state = state if f is None else tracker.update(f)
+            x, y, bw, bh = state.box
+            assert np.all(np.isfinite(state.box)) and bw >= 1 and bh >= 1
+            assert -1e-6 <= x and -1e-6 <= y and x + bw <= w + 1e-6 and y + bh <= h + 1e-6
+            assert 0.0 <= state.score <= 1.0 and isinstance(state.lost, (bool, np.bool_))
+            if state.particles is not None:
+                assert np.all(np.isfinite(state.particles))
