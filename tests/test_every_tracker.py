@@ -49,6 +49,7 @@ def _check(state) -> None:
     assert -1e-6 <= x and -1e-6 <= y and x + w <= W + 1e-6 and y + h <= H + 1e-6
     assert 0.0 <= state.score <= 1.0
     assert isinstance(state.lost, (bool, np.bool_))
+    assert not (state.lost and state.score > 0.5)  # lost and a confident score never come together
     if state.particles is not None:
         assert np.all(np.isfinite(state.particles))
         if state.weights is not None:
@@ -127,5 +128,28 @@ def test_tracker_protocol_on_awkward_starts_and_inputs(name, case):
             assert np.all(np.isfinite(state.box)) and bw >= 1 and bh >= 1
             assert -1e-6 <= x and -1e-6 <= y and x + bw <= w + 1e-6 and y + bh <= h + 1e-6
             assert 0.0 <= state.score <= 1.0 and isinstance(state.lost, (bool, np.bool_))
+            assert not (state.lost and state.score > 0.5)
             if state.particles is not None:
                 assert np.all(np.isfinite(state.particles))
+
+
+def test_a_lost_state_never_keeps_a_confident_score():
+    """The protocol's boundary caps a lost state's score at 0.5, for any tracker (a plug-in's included), and keeps the
+    tracker's own figure in ``info["score_raw"]``; a state that is not lost keeps its score."""
+    from pftrack.trackers.base import Tracker, TrackState
+
+    class Stubborn(Tracker):
+        name = "stubborn"
+
+        def _init(self, frame, box):
+            return TrackState(box=tuple(box), score=1.0, lost=False)
+
+        def _update(self, frame):
+            return TrackState(box=(10.0, 10.0, 5.0, 5.0), score=0.9, lost=self.frame_index % 2 == 1)
+
+    frames = FRAMES["colour"]
+    t = Stubborn(seed=0)
+    assert t.init(frames[0], BOX).score == 1.0
+    lost, kept = t.update(frames[1]), t.update(frames[2])
+    assert lost.lost and lost.score == 0.5 and lost.info["score_raw"] == 0.9
+    assert not kept.lost and kept.score == 0.9 and "score_raw" not in kept.info

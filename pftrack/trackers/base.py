@@ -40,7 +40,9 @@ class TrackState:
     score : confidence in ``[0, 1]``. For the colour particle filters it is the loss
         test's posterior P(target | rho) (:mod:`pftrack.filtering.loss`): ``lost`` is raised
         when it stays below 0.5 for ``lost_frames`` frames; the Bhattacharyya coefficient of
-        the estimate is ``info["rho"]`` (with ``loss_test="appearance"`` the score is rho).
+        the estimate is ``info["rho"]`` (with ``loss_test="appearance"`` the score is rho).  While
+        ``lost`` the score is at most 0.5 for every tracker (a tracker's own higher figure is kept in
+        ``info["score_raw"]``).
     lost : True while the target is judged absent or occluded.
     particles : ``(N, D)`` particle states (None for trackers without particles);
         ``state_names`` labels the columns.
@@ -102,7 +104,11 @@ class Tracker(abc.ABC):
         return frame
 
     def _visible(self, state: TrackState) -> TrackState:
-        """``state`` with its box cut to the frame (:func:`visible_box`), the whole box in ``info["box_full"]``."""
+        """``state`` with its box cut to the frame (:func:`visible_box`), the whole box in ``info["box_full"]``, and a
+        lost state's score at most 0.5 (a tracker's own higher figure in ``info["score_raw"]``): ``lost`` and a
+        confident score never come together."""
+        if state.lost and state.score > 0.5:
+            state = replace(state, score=0.5, info={**state.info, "score_raw": float(state.score)})
         h, w = self._shape
         box = state.box
         cut = visible_box(box, w, h)
