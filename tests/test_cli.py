@@ -185,3 +185,21 @@ def test_seed_lists_parse_ranges_and_single_values():
     for bad in ("", "5-1", "a", "-3", "1-"):
         with pytest.raises(ValueError):
             parse_seeds(bad)
+
+
+def test_coordinates_may_start_with_a_minus_sign(clip, tmp_path, capsys):
+    """A box or line that starts left of or above the frame is written as argparse would take for an option
+    (``--box -5,...``); the command line attaches it to its option instead of failing with a usage error."""
+    from pftrack.cli import attach_negative_values
+
+    assert attach_negative_values(["tripwire", "v", "--line", "-50,120;400,120", "--out", "e.csv"]) == [
+        "tripwire", "v", "--line=-50,120;400,120", "--out", "e.csv"]
+    assert attach_negative_values(["track", "v", "--box", "-.5,2,3,4"]) == ["track", "v", "--box=-.5,2,3,4"]
+    assert attach_negative_values(["track", "v", "--box", "-h"]) == ["track", "v", "--box", "-h"]  # an option
+    path, box = clip
+    x, y, w, h = (float(v) for v in box.split(","))
+    out = tmp_path / "t.csv"
+    rc = main(["track", str(path), "--box", f"{-2.0},{y},{x + w + 2.0},{h}", "--out", str(out), "--quiet",
+               "--param", "n_particles=50"])
+    assert rc == 0, capsys.readouterr().err
+    assert read_track_csv(out).shape == (20, 7)

@@ -65,11 +65,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Options whose value is a list of coordinates, which may start with a minus sign (a line or box that begins left
+#: of or above the frame).
+COORDINATE_OPTIONS = ("--box", "--line", "--points", "--roi", "--strip")
+
+
+def attach_negative_values(argv: Sequence[str]) -> list[str]:
+    """``--line -50,120;400,120`` as ``--line=-50,120;400,120``: argparse takes a value that starts with a minus
+    sign and holds a comma for an option of its own, so a coordinate option's value is attached to it first."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        nxt = argv[i + 1] if i + 1 < len(argv) else ""
+        if a in COORDINATE_OPTIONS and len(nxt) > 1 and nxt[0] == "-" and (nxt[1].isdigit() or nxt[1] == "."):
+            out.append(f"{a}={nxt}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     # FFmpeg prints decoder chatter ("moov atom not found") for bad files; our one-line error says it all.
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(attach_negative_values(sys.argv[1:] if argv is None else list(argv)))
     warnings.simplefilter("default")
     warnings.formatwarning = lambda msg, cat, *a, **k: f"pftrack: warning: {msg}\n"
     try:
