@@ -162,6 +162,20 @@ def test_opencv_mil_refuses_a_box_it_would_hang_on():
     assert np.all(np.isfinite(t.update(frame).box))
 
 
+def test_opencv_tld_refuses_a_box_it_would_crawl_on():
+    """OpenCV's legacy TLD takes seconds to minutes a frame on boxes of a few pixels (76 s an update on a 1 x 1 box in
+    a 640 x 480 frame): the adapter refuses boxes under 5 pixels a side with a BoxError, and takes a 5 x 5 one."""
+    from pftrack.errors import BoxError
+
+    frame = np.random.default_rng(0).integers(0, 255, (120, 160, 3), dtype=np.uint8)
+    for box in ((50, 50, 1, 1), (50, 50, 4, 30), (50, 50, 30, 2)):
+        with pytest.raises(BoxError, match="too small for OpenCV's TLD"):
+            pftrack.create_tracker("opencv-tld").init(frame, box)
+    t = pftrack.create_tracker("opencv-tld")
+    t.init(frame, (50, 50, 5, 5))
+    assert np.all(np.isfinite(t.update(frame).box))
+
+
 def test_opencv_tracker_that_refuses_its_box_gives_a_box_error(tmp_path):
     """OpenCV's MIL cannot place its samples around a box that fills the frame: an OpenCV assertion becomes a
     BoxError, and the command prints one line and exits with code 2."""

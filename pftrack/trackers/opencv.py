@@ -44,6 +44,10 @@ _RANDOM = {"mil", "tld"}
 # 4 x 5, 3 x 8 and 5 x 5 work. Boxes under 25 pixels or 3 pixels a side are refused with a clear error rather than
 # a hang (3 x 8 among them: the rule is kept simple).
 _MIL_MIN_SIDE, _MIL_MIN_AREA = 3, 25
+# OpenCV's legacy TLD slows down steeply as the box shrinks (measured with OpenCV 4.x on a 640 x 480 frame, one update:
+# 0.28 s at 10 x 10, 1.1 s at 5 x 5, 3.2 s at 3 x 3, 76 s at 1 x 1, after an 11.7 s init): boxes under 5 pixels a
+# side are refused with a clear error rather than a run that seems to hang.
+_TLD_MIN_SIDE = 5
 
 
 @functools.lru_cache(maxsize=1)
@@ -103,6 +107,10 @@ class OpenCVTracker(Tracker):
             # 40 x 30 with a 30 x 20 box, and on frames under 50 px with a box that fills them): refuse it instead
             raise BoxError(f"{self.name}: OpenCV's TLD crashes or hangs on frames under 50 px on a side (this one is "
                            f"{w}x{h}); use another tracker")
+        if self.kind == "tld" and min(rect[2:]) < _TLD_MIN_SIDE:
+            raise BoxError(f"{self.name}: box {rect[2]:g}x{rect[3]:g} is too small for OpenCV's TLD, which takes "
+                           f"seconds to minutes a frame on boxes under {_TLD_MIN_SIDE}x{_TLD_MIN_SIDE} pixels; give a "
+                           f"box of at least {_TLD_MIN_SIDE}x{_TLD_MIN_SIDE} or use another tracker")
         if self.kind == "tld" and min(rect[2:]) < 21 and (rect[2] >= w - 0.5 or rect[3] >= h - 0.5):
             # OpenCV's legacy TLD crashes the process (a segmentation fault) on such a box: refuse it instead
             raise BoxError(f"{self.name}: OpenCV's TLD crashes on a box that spans the whole frame one way and is "
