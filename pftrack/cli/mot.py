@@ -216,6 +216,9 @@ def cmd_mot(args) -> int:
     res = run_mot(args.source, out=args.out, detector=args.detector, video_out=args.video_out, seed=args.seed,
                   params=params, skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, tracker_name=args.tracker,
                   mpeg7=args.mpeg7)
-    print(f"{res['frames']} frames, {res['identities']} identities, {res['rows']} boxes: {res['update_fps']:.0f} fps "
-          f"(detection + tracking), {res['end_to_end_fps']:.0f} fps end to end -> {args.out}", file=sys.stderr)
+    n, ids, rows = res["frames"], res["identities"], res["rows"]
+    counts = (f"{n} frame{'s' if n != 1 else ''}, {ids} identit{'ies' if ids != 1 else 'y'}, "
+              f"{rows} box{'es' if rows != 1 else ''}")
+    print(f"{counts}: {res['update_fps']:.0f} fps (detection + tracking), {res['end_to_end_fps']:.0f} fps end to end "
+          f"-> {args.out}", file=sys.stderr)
     return 0
