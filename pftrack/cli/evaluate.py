@@ -91,8 +91,8 @@ def cmd_eval(args) -> int:
     if report_dir is not None:
         write_report(records, report_dir, sequences={s.name: s for s in seqs}, command=command,
                      title=args.title)
-        print(f"report: {report_dir / 'index.html'} ({runner.ran} runs computed, {runner.reused} reused)",
-              file=sys.stderr)
+        print(f"report: {report_dir / 'index.html'} ({runner.ran} run{'s' if runner.ran != 1 else ''} computed, "
+              f"{runner.reused} reused)", file=sys.stderr)
         if runner.reused_other_code:
             print(f"pftrack: warning: {runner.reused_other_code} of the {runner.reused} reused runs were made by other "
                   f"pftrack code than this; --fresh computes them again", file=sys.stderr)
