@@ -14,6 +14,11 @@ class ArgumentParser(argparse.ArgumentParser):
         self.exit(2, f"pftrack: error: {message}\n")
 
 
+def counted(n: int, word: str, plural: str | None = None) -> str:
+    """``"1 frame"``, ``"2 frames"``: a count with its noun in the right number (``plural``: an irregular plural)."""
+    return f"{n} {word if n == 1 else (plural or word + 's')}"
+
+
 def parse_seeds(text: str) -> list[int]:
     """Seeds written as ranges and single values, ``0-9``, ``1,4,7`` or ``100,200-202``, in order; ValueError for
     anything else (a negative seed, a descending range, no seed at all)."""

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 from ..errors import Interrupted
-from .common import progress
+from .common import counted, progress
 
 
 def add_activity(sub) -> None:
@@ -95,5 +95,5 @@ def cmd_activity(args) -> int:
 
         plot_activity(series, args.plot, title=f"motion activity (weighting: {mode})")
     levels = np.bincount([s[2] for s in series], minlength=6)[1:]
-    print(f"{len(series)} frames, frames per level 1-5: {levels.tolist()} -> {args.out}", file=sys.stderr)
+    print(f"{counted(len(series), 'frame')}, frames per level 1-5: {levels.tolist()} -> {args.out}", file=sys.stderr)
     return 0

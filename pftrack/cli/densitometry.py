@@ -6,7 +6,7 @@ import itertools
 import sys
 
 from ..errors import Interrupted
-from .common import close_all, progress
+from .common import close_all, counted, progress
 
 
 def add_densitometry(sub) -> None:
@@ -116,5 +116,5 @@ def cmd_densitometry(args) -> int:
         raise Interrupted(f"interrupted; rows so far are in {args.out}") from None
     finally:
         close_all(bar, sinks, source)
-    print(f"{done} frames measured with template[{args.metric}] -> {args.out}", file=sys.stderr)
+    print(f"{counted(done, 'frame')} measured with template[{args.metric}] -> {args.out}", file=sys.stderr)
     return 0

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, progress
+from .common import close_all, counted, progress
 
 EVENTS_HEADER = "frame,direction,time_s,to_patch,from_patch,tau_frame,score,s_color,s_motion,x,y,vx,vy"
 
@@ -70,8 +70,8 @@ def _tracks_mode(args, line: np.ndarray) -> int:
         out._write("frame,direction,track,x,y")
         for c in found:
             out._write(f"{c.frame:.2f},{'positive' if c.direction > 0 else 'negative'},{c.track},{c.x:.1f},{c.y:.1f}")
-    print(f"{len(found)} crossings of {len(np.unique(rows[:, 1])) if len(rows) else 0} tracks -> {args.out}",
-          file=sys.stderr)
+    n_tracks = len(np.unique(rows[:, 1])) if len(rows) else 0
+    print(f"{counted(len(found), 'crossing')} of {counted(n_tracks, 'track')} -> {args.out}", file=sys.stderr)
     return 0
 
 
@@ -186,6 +186,7 @@ def cmd_tripwire(args) -> int:
         raise Interrupted(f"interrupted; events so far are in {args.out}") from None
     finally:
         close_all(bar, sinks, source)
-    print(f"{count[1]} positive and {count[-1]} negative crossings (r = {params.radius:.1f} px) -> {args.out}",
+    noun = "crossing" if count[1] + count[-1] == 1 else "crossings"
+    print(f"{count[1]} positive and {count[-1]} negative {noun} (r = {params.radius:.1f} px) -> {args.out}",
           file=sys.stderr)
     return 0

@@ -6,7 +6,7 @@ import sys
 
 import numpy as np
 
-from .common import progress
+from .common import counted, progress
 
 
 def add_handover(sub) -> None:
@@ -153,5 +153,6 @@ def cmd_handover(args) -> int:
         out._write("track_a,track_b,similarity")
         for a, b, s in links:
             out._write(f"{a},{b},{s:.5f}")
-    print(f"{len(links)} links ({args.btf}, {args.features}, new below {tau:.3f}) -> {args.out}", file=sys.stderr)
+    print(f"{counted(len(links), 'link')} ({args.btf}, {args.features}, new below {tau:.3f}) -> {args.out}",
+          file=sys.stderr)
     return 0

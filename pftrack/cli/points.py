@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, first_frame, follow_frames, progress
+from .common import close_all, counted, first_frame, follow_frames, progress
 
 POINTS_HEADER = "frame,point,x,y,source"
 DIAG_HEADER = "frame,point,x,y,vx_of,vy_of,vx_af,vy_af,eps,delta_eps,e,qv,k,source"
@@ -151,7 +151,8 @@ def cmd_points(args) -> int:
         raise Interrupted(f"interrupted; rows so far are in {args.out}") from None
     finally:
         close_all(bar, sinks, source)
-    print(f"{len(pts)} points through {done} frames ({args.method}) -> {args.out}", file=sys.stderr)
+    print(f"{counted(len(pts), 'point')} through {counted(done, 'frame')} ({args.method}) -> {args.out}",
+          file=sys.stderr)
     return 0
 
 
@@ -231,5 +232,6 @@ def cmd_stereo(args) -> int:
     finally:
         close_all(bar, sinks, left)
         right.close()
-    print(f"{len(pts)} points through {done} stereo frames ({args.method}) -> {args.out}", file=sys.stderr)
+    print(f"{counted(len(pts), 'point')} through {counted(done, 'stereo frame')} ({args.method}) -> {args.out}",
+          file=sys.stderr)
     return 0

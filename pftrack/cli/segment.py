@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, first_frame, follow_frames, image_file, progress
+from .common import close_all, counted, first_frame, follow_frames, image_file, progress
 
 
 def add_segment(sub) -> None:
@@ -91,5 +91,5 @@ def cmd_segment(args) -> int:
         raise Interrupted(f"interrupted; masks so far are in {out_dir}") from None
     finally:
         close_all(bar, sinks, source)
-    print(f"{done} masks ({lost} frames lost) -> {out_dir}", file=sys.stderr)
+    print(f"{counted(done, 'mask')} ({counted(lost, 'frame')} lost) -> {out_dir}", file=sys.stderr)
     return 0
