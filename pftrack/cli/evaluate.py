@@ -8,7 +8,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import Interrupted
-from .common import reproduce_command
+from .common import counted, reproduce_command
 
 
 def add_eval(sub) -> None:
@@ -91,7 +91,7 @@ def cmd_eval(args) -> int:
     if report_dir is not None:
         write_report(records, report_dir, sequences={s.name: s for s in seqs}, command=command,
                      title=args.title)
-        print(f"report: {report_dir / 'index.html'} ({runner.ran} run{'s' if runner.ran != 1 else ''} computed, "
+        print(f"report: {report_dir / 'index.html'} ({counted(runner.ran, 'run')} computed, "
               f"{runner.reused} reused)", file=sys.stderr)
         if runner.reused_other_code:
             print(f"pftrack: warning: {runner.reused_other_code} of the {runner.reused} reused runs were made by other "

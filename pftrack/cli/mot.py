@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from ..errors import Interrupted
-from .common import close_all, progress, seed_value
+from .common import close_all, counted, progress, seed_value
 
 
 def add_mot(sub) -> None:
@@ -217,8 +217,7 @@ def cmd_mot(args) -> int:
                   params=params, skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, tracker_name=args.tracker,
                   mpeg7=args.mpeg7)
     n, ids, rows = res["frames"], res["identities"], res["rows"]
-    counts = (f"{n} frame{'s' if n != 1 else ''}, {ids} identit{'ies' if ids != 1 else 'y'}, "
-              f"{rows} box{'es' if rows != 1 else ''}")
+    counts = f"{counted(n, 'frame')}, {counted(ids, 'identity', 'identities')}, {counted(rows, 'box', 'boxes')}"
     print(f"{counts}: {res['update_fps']:.0f} fps (detection + tracking), {res['end_to_end_fps']:.0f} fps end to end "
           f"-> {args.out}", file=sys.stderr)
     return 0

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import DEFAULT_TRACKER, close_all, progress, seed_value
+from .common import DEFAULT_TRACKER, close_all, counted, progress, seed_value
 
 
 def add_track(sub) -> None:
@@ -134,11 +134,10 @@ def cmd_track(args) -> int:
     n = res["frames"]
     speed = (f"{res['update_fps']:.0f} update fps, {res['end_to_end_fps']:.0f} fps end to end" if n > 1
              else "no update to time")  # one frame is the initialisation only
-    msg = (f"{n} frame{'s' if n != 1 else ''} tracked with {args.tracker}: {speed}, lost in {res['lost_frames']} "
-           f"frames -> {args.out}")
+    msg = (f"{counted(n, 'frame')} tracked with {args.tracker}: {speed}, lost in "
+           f"{counted(res['lost_frames'], 'frame')} -> {args.out}")
     if res["skipped"]:
-        k = len(res["skipped"])
-        msg += f" ({k} unreadable frame{'s' if k != 1 else ''} skipped)"
+        msg += f" ({counted(len(res['skipped']), 'unreadable frame')} skipped)"
     print(msg, file=sys.stderr)
     return 0
 
