@@ -6,7 +6,7 @@ import os
 import sys
 from pathlib import Path
 
-from .common import parse_seeds, reproduce_command
+from .common import counted, parse_seeds, reproduce_command
 
 DEFAULT_PEERS = "opencv-csrt,opencv-kcf,opencv-mil,opencv-medianflow"
 
@@ -283,5 +283,5 @@ def cmd_synth(args) -> int:
             export_otb(SCENES[args.kind](sd, **draw), out / f"{args.kind}-{sd:03d}")
     (out / "README.txt").write_text(f"Synthetic '{args.kind}' scenes, seeds {args.seeds}, written by pftrack synth.\n",
                                     encoding="utf-8")
-    print(f"wrote {len(seeds)} '{args.kind}' sequences to {out}", file=sys.stderr)
+    print(f"wrote {counted(len(seeds), 'sequence')} of '{args.kind}' to {out}", file=sys.stderr)
     return 0
