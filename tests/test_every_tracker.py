@@ -43,10 +43,11 @@ def _frames(kind: str) -> list[np.ndarray]:
 FRAMES = {kind: _frames(kind) for kind in ("colour", "grey-3", "grey-1")}
 
 
-def _check(state) -> None:
+def _check(state, width: int = W, height: int = H) -> None:
+    """The protocol on one state of a ``width x height`` frame."""
     x, y, w, h = state.box
     assert np.all(np.isfinite(state.box)) and w >= 1 and h >= 1
-    assert -1e-6 <= x and -1e-6 <= y and x + w <= W + 1e-6 and y + h <= H + 1e-6
+    assert -1e-6 <= x and -1e-6 <= y and x + w <= width + 1e-6 and y + h <= height + 1e-6
     assert 0.0 <= state.score <= 1.0
     assert isinstance(state.lost, (bool, np.bool_))
     assert not (state.lost and state.score > 0.5)  # lost and a confident score never come together
@@ -122,15 +123,9 @@ def test_tracker_protocol_on_awkward_starts_and_inputs(name, case):
         except InputError as exc:
             assert case in ("one-pixel", "larger-than-frame", "small-frame") and "\n" not in str(exc)
             return
-        for f in [None] + frames[1:]:
-            state = state if f is None else tracker.update(f)
-            x, y, bw, bh = state.box
-            assert np.all(np.isfinite(state.box)) and bw >= 1 and bh >= 1
-            assert -1e-6 <= x and -1e-6 <= y and x + bw <= w + 1e-6 and y + bh <= h + 1e-6
-            assert 0.0 <= state.score <= 1.0 and isinstance(state.lost, (bool, np.bool_))
-            assert not (state.lost and state.score > 0.5)
-            if state.particles is not None:
-                assert np.all(np.isfinite(state.particles))
+        _check(state, w, h)
+        for f in frames[1:]:
+            _check(tracker.update(f), w, h)
 
 
 def test_a_lost_state_never_keeps_a_confident_score():
