@@ -213,7 +213,8 @@ def _return_scene(seed: int) -> SceneSpec:
 def test_acquire_in_frame_waits_until_half_of_the_candidate_is_in(seed):
     """acquire_in_frame = 0.5 (the default): the returning target is not acquired on its first sliver at the edge
     (frame 51 without the rule, the box a quarter inside) but once about half of it is in (frames 52-54 measured),
-    still within a few frames of its return; nothing is acquired while it is away."""
+    still within a few frames of its return; nothing is acquired while it is away. (fusion-pf's acquire_sliver_llr,
+    which takes a sliver on a ratio at the cap, is off here: tests/test_sliver.py covers it.)"""
     from pftrack.geometry import in_frame_fraction
 
     scene = Scene(_return_scene(seed))
@@ -222,7 +223,7 @@ def test_acquire_in_frame_waits_until_half_of_the_candidate_is_in(seed):
     h, w = frames[0].shape[:2]
     first = {}
     for g in (0.0, 0.5):
-        t = pftrack.create_tracker("fusion-pf", seed=seed, acquire_in_frame=g)
+        t = pftrack.create_tracker("fusion-pf", seed=seed, acquire_in_frame=g, acquire_sliver_llr=0)
         t.init(frames[0], tuple(gt[0]))
         states = [t.update(f) for f in frames[1:]]
         assert all(s.lost for s in states[29:45])  # frames 30-45: the target is out of view

@@ -39,13 +39,13 @@ class _Host(VetoMixin):
 
     def __init__(self, retries, refused, scores=(0.9, 0.8, 0.3), *, width=320, acquire_in_frame=0.0,
                  acquire_unique=False, hold=0, margin=0.0, early_frames=0, exit_strip=None, searching_for=0,
-                 sliver_frames=0):
+                 sliver_frames=0, sliver_llr=0.0):
         self.params = SimpleNamespace(search_retries=retries, acquire_samples=3, kickoff_fraction=0.1,
                                       n_particles=30, acquire_in_frame=acquire_in_frame,
                                       acquire_early_frames=early_frames, acquire_in_frame_early=0.25,
                                       acquire_unique=acquire_unique, acquire_unique_hold=hold,
                                       acquire_unique_refine=False, acquire_unique_margin=margin,
-                                      acquire_sliver_frames=sliver_frames)
+                                      acquire_sliver_frames=sliver_frames, acquire_sliver_llr=sliver_llr)
         self.frame_index, self._ambiguous_until = searching_for, -1
         self._sliver = None
         self._search_since = 0
@@ -176,6 +176,18 @@ def test_a_sliver_found_on_k_search_frames_in_a_row_is_taken():
     h._search_since = 12  # lost again: a new search
     assert frames(h, [12, 13, 14]) == [False, False, True]
     assert frames(host(0), range(10, 20)) == [False] * 10
+
+
+@pytest.mark.parametrize("sliver_llr, found", [(0.0, False), (0.85, True), (0.9, True), (0.95, False)])
+def test_a_sliver_with_an_unambiguous_ratio_is_taken(sliver_llr, found):
+    """acquire_sliver_llr: the best candidate's box is 40 % inside (a frame 248 px wide) and passes the loss test
+    with a ratio of 0.9 (this stub's ratio is the score). It is taken on the first search frame when the option asks
+    at most that ratio, refused when it asks more, and refused with the option off; the frame's loss test moves
+    once either way."""
+    host = _Host(2, refused=(), scores=(0.3, 0.8, 0.9), width=248, acquire_in_frame=0.5, sliver_llr=sliver_llr)
+    a = _choose(host)
+    assert a.found == found and host.states[a.best, 0] == 250.0
+    assert host.asked == ([250.0] if found else []) and host.loss.unseen == 1 and host.loss.lost == (not found)
 
 
 def test_a_candidate_with_a_passing_rival_elsewhere_is_not_taken():

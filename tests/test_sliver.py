@@ -1,4 +1,5 @@
-"""A target that comes back and stays at the view's edge, a sliver of it in view (``acquire_sliver_frames``)."""
+"""A target that comes back and stays at the view's edge, a sliver of it in view (``acquire_sliver_frames``,
+``acquire_sliver_llr``)."""
 
 from __future__ import annotations
 
@@ -20,17 +21,17 @@ def _sliver_scene(seed: int) -> SceneSpec:
 
 @pytest.mark.parametrize("seed", range(6))
 def test_a_target_that_stays_at_the_edge_is_taken_after_k_frames(seed):
-    """acquire_in_frame = 0.5 (default) never takes the target standing a third in view; with
-    acquire_sliver_frames = 3 it is taken within the 15 frames of the re-acquisition measure (measured: frames
-    51-53 on five seeds, 65 on seed 1), and nothing is taken while it is away. Tracked as a sliver, its estimate
-    counts for little with edge_share (fusion-pf's default), so the flag may rise again (covered on 1-10 of the
-    25 frames)."""
+    """acquire_in_frame = 0.5 (default), without acquire_sliver_llr, never takes the target standing a third in
+    view; with acquire_sliver_frames = 3 it is taken within the 15 frames of the re-acquisition measure
+    (measured: frames 51-53 on five seeds, 65 on seed 1), and nothing is taken while it is away. Tracked as a
+    sliver, its estimate counts for little with edge_share (fusion-pf's default), so the flag may rise again
+    (covered on 1-10 of the 25 frames)."""
     scene = Scene(_sliver_scene(seed))
     frames = scene.frames()
     gt = scene.groundtruth()
     covered = {}
     for k in (0, 3):
-        t = pftrack.create_tracker("fusion-pf", seed=seed, acquire_sliver_frames=k)
+        t = pftrack.create_tracker("fusion-pf", seed=seed, acquire_sliver_frames=k, acquire_sliver_llr=0)
         t.init(frames[0], tuple(gt[0]))
         states = [t.update(f) for f in frames[1:]]
         assert all(s.lost for s in states[29:42]), k  # frames 30-42: the target is out of view
@@ -38,3 +39,28 @@ def test_a_target_that_stays_at_the_edge_is_taken_after_k_frames(seed):
     assert not [i for i in covered[0] if i >= 45], covered
     back = [i for i in covered[3] if i >= 45]
     assert back and back[0] <= 65, covered
+
+
+def _covered_after_return(seed: int, **params) -> tuple[list[int], bool]:
+    scene = Scene(_sliver_scene(seed))
+    frames = scene.frames()
+    gt = scene.groundtruth()
+    t = pftrack.create_tracker("fusion-pf", seed=seed, **params)
+    t.init(frames[0], tuple(gt[0]))
+    states = [t.update(f) for f in frames[1:]]
+    away = all(s.lost for s in states[29:42])  # frames 30-42: the target is out of view
+    return [i for i, s in enumerate(states, start=1) if i >= 45 and not s.lost and iou(s.box, gt[i]) > 0.3], away
+
+
+def test_a_sliver_with_an_unambiguous_ratio_is_taken_at_once():
+    """acquire_sliver_llr = 19.5 (fusion-pf's default; the fused ratio's cap is 20): the target standing a third in
+    view is taken on the first frames of its return where both cues are at their clip (measured: frames 50-54 on
+    seeds 1-4; seeds 0 and 5 stay below 19.5, and 15 takes seed 5 too), never while it is away; off (0), never."""
+    taken = 0
+    for seed in range(6):
+        covered, away = _covered_after_return(seed)
+        assert away, seed
+        taken += bool(covered and covered[0] <= 55)
+        off, away_off = _covered_after_return(seed, acquire_sliver_llr=0)
+        assert away_off and not off, (seed, off)
+    assert taken >= 4, taken

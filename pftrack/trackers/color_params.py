@@ -176,6 +176,11 @@ class ColorModelParams(Params):
         "data (docs/rules/acquire_sliver_rule.txt) K = 3 re-acquired 45 of fusion-pf's 60 tune-window returns "
         "against 30, and cost the PETS tune views' pooled lost recall 0.575 -> 0.431 (5: 0.520, 8: 0.550): "
         "other walkers partly in view along a window's edge are found at one place too (docs/robustness.md)."))
+    acquire_sliver_llr: float = param(0.0, ge=0, le=1000, doc=(
+        "With acquire_in_frame: a best candidate that passes the loss test with too little of its box inside the "
+        "frame is not refused for that when its fused log-likelihood ratio (with the position prior, as the "
+        "acquisition test computes it) is at least this: a sliver is weak evidence, taken only where it is "
+        "unambiguous. The vetoes still apply. 0: off (default; docs/rules/acquire_sliver_llr_rule.txt)."))
     acquire_unique: bool = param(False, doc=(
         "With loss_test='likelihood', while lost: a candidate is not acquired while another one elsewhere in the frame "
         "(beyond two half-axes each way, not the still scene) passes the acquisition test too: two look-alikes, and "

@@ -299,7 +299,8 @@ class VetoMixin:
             ok, llr = self.loss.would_acquire(s_best, lp)
             if not ok:
                 break
-            if g > 0 and not self._in_frame_enough(c.ell[best], g):
+            if g > 0 and not (p.acquire_sliver_llr > 0 and llr >= p.acquire_sliver_llr) \
+                    and not self._in_frame_enough(c.ell[best], g):
                 break
             if p.acquire_unique and (self.frame_index <= self._ambiguous_until or self._rival(frame, c, best, llr)):
                 # two look-alikes (on this frame, or within acquire_unique_hold frames): no candidate is taken (the
