@@ -115,10 +115,18 @@ def main() -> None:
     print("\nmean over sequences:")
     for item in _split(args.trackers):
         rs = [r for r in rows if r["tracker"] == item]
-        m = {k: np.nanmean([r[k] for r in rs]) for k in ("auc", "d1", "mae_x", "mae_y", "mae_w", "mae_h", "d2_q0",
-                                                           "d2_qt", "ms_per_frame")}
+        m = {k: _mean_defined([r[k] for r in rs]) for k in ("auc", "d1", "mae_x", "mae_y", "mae_w", "mae_h", "d2_q0",
+                                                              "d2_qt", "ms_per_frame")}
+        qt = "–" if np.isnan(m["d2_qt"]) else f"{m['d2_qt']:.3f}"  # only the hybrid learns a reference
         print(f"| `{item}` | {m['auc']:.3f} | {m['d1']:.1f} | {m['mae_x']:.1f} / {m['mae_y']:.1f} / {m['mae_w']:.1f} / "
-              f"{m['mae_h']:.1f} | {m['d2_q0']:.3f} | {m['d2_qt']:.3f} | {m['ms_per_frame']:.1f} |")
+              f"{m['mae_h']:.1f} | {m['d2_q0']:.3f} | {qt} | {m['ms_per_frame']:.1f} |")
+
+
+def _mean_defined(values) -> float:
+    """The mean of the values that are not NaN; NaN when none is."""
+    v = np.asarray(values, dtype=np.float64)
+    v = v[~np.isnan(v)]
+    return float(v.mean()) if v.size else float("nan")
 
 
 if __name__ == "__main__":
