@@ -55,12 +55,11 @@ def _covered_after_return(seed: int, **params) -> tuple[list[int], bool]:
 def test_a_sliver_with_an_unambiguous_ratio_is_taken_at_once():
     """acquire_sliver_llr = 19.5 (fusion-pf's default; the fused ratio's cap is 20): the target standing a third in
     view is taken on the first frames of its return where both cues are at their clip (measured: frames 50-54 on
-    seeds 1-4; seeds 0 and 5 stay below 19.5, and 15 takes seed 5 too), never while it is away; off (0), never."""
+    seeds 1-4; seeds 0 and 5 stay below 19.5, and 15 takes seed 5 too), never while it is away. Off (0), it is
+    never taken: the test above, whose runs set it to 0."""
     taken = 0
     for seed in range(6):
         covered, away = _covered_after_return(seed)
         assert away, seed
         taken += bool(covered and covered[0] <= 55)
-        off, away_off = _covered_after_return(seed, acquire_sliver_llr=0)
-        assert away_off and not off, (seed, off)
     assert taken >= 4, taken
