@@ -89,6 +89,13 @@ def run(seq, item: str) -> dict:
             "ms_per_frame": 1e3 * float(np.median(times))}
 
 
+def _mean_defined(values) -> float:
+    """The mean of the values that are not NaN; NaN when none is."""
+    v = np.asarray(values, dtype=np.float64)
+    v = v[~np.isnan(v)]
+    return float(v.mean()) if v.size else float("nan")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("sequences", nargs="+")
@@ -121,12 +128,6 @@ def main() -> None:
         print(f"| `{item}` | {m['auc']:.3f} | {m['d1']:.1f} | {m['mae_x']:.1f} / {m['mae_y']:.1f} / {m['mae_w']:.1f} / "
               f"{m['mae_h']:.1f} | {m['d2_q0']:.3f} | {qt} | {m['ms_per_frame']:.1f} |")
 
-
-def _mean_defined(values) -> float:
-    """The mean of the values that are not NaN; NaN when none is."""
-    v = np.asarray(values, dtype=np.float64)
-    v = v[~np.isnan(v)]
-    return float(v.mean()) if v.size else float("nan")
 
 
 if __name__ == "__main__":

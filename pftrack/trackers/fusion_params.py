@@ -61,10 +61,10 @@ class FusionPFParams(ColorPFParams):
         "See ColorModelParams.acquire_sliver_llr (off there and for color-pf). 19.5 for fusion-pf (the fused ratio's "
         "cap is 2 x loss_cue_clip = 20: both cues at their clip; move it with loss_cue_clip), chosen on the tune "
         "data under a rule stated before the runs (docs/rules/acquire_sliver_llr_rule.txt, docs/robustness.md): "
-        "tune real-exit windows re-acquired 45 of 60 "
-        "against 30, false-lost 0.028 against 0.059; PETS tune views' pooled lost recall 0.575 both; tune split mean "
-        "AUC 0.7042 against 0.7041, re-acquired 78 of 90 both (15 and 18 gained the same 45; 15 cost the views "
-        "0.003). Report data, run once after: unchanged (windows 26 of 36, views 0.668, split 78 of 96)."))
+        "tune real-exit windows re-acquired 45 of 60 against 30, false-lost 0.028 against 0.059; PETS tune views' "
+        "pooled lost recall 0.575 both; tune split mean AUC 0.7042 against 0.7041, re-acquired 78 of 90 both (15 "
+        "and 18 gained the same 45; 15 cost the views 0.003). Report data, run once after: unchanged (windows 26 of "
+        "36, views 0.668, split 78 of 96)."))
     reenter_memory: int = param(5, ge=0, le=1000, doc=(
         "See ColorModelParams.reenter_memory (0 there). 5 for fusion-pf, chosen on the tune data under a rule stated "
         "before the runs (docs/rules/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled lost recall "
