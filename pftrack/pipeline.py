@@ -19,6 +19,7 @@ from typing import Iterator
 import numpy as np
 
 from .errors import BoxError
+from .io.datasets import track_ids_text
 from .io.sources import FrameSource
 from .trackers.base import Tracker, TrackState
 
@@ -46,17 +47,23 @@ def track_source(source: FrameSource, tracker: Tracker, box=None, *, run: TrackR
                  keep_times: bool = False) -> Iterator[tuple[int, np.ndarray, TrackState]]:
     """Initialise ``tracker`` on the first frame with ``box`` and track through the rest.
 
-    ``box`` defaults to the source's first ground-truth box (OTB/VOT folders).
-    Yields ``(frame_number, frame, state)`` for every frame, the first included.
+    ``box`` defaults to the source's first ground-truth box (OTB/VOT folders, a MOTChallenge folder's track picked
+    with ``open_source(..., target=ID)``); tracking then starts on that box's frame, as the benchmarks' one-pass
+    protocol does, and the frames before it are read but not yielded.
+    Yields ``(frame_number, frame, state)`` for every frame from the first tracked one on.
     """
     run = run if run is not None else TrackRun()
+    start = 1
     if box is None:
         box = source.init_box
         if box is None:
-            raise BoxError(f"{source.name}: give an initial box (--box X,Y,W,H); the source has no ground truth")
+            raise BoxError(missing_box_message(source))
+        start = source.init_number
     t_start = time.perf_counter()
     first = True
     for number, frame in source.numbered():
+        if number < start:
+            continue
         t0 = time.perf_counter()
         state = tracker.init(frame, box) if first else tracker.update(frame)
         dt = time.perf_counter() - t0
@@ -69,6 +76,15 @@ def track_source(source: FrameSource, tracker: Tracker, box=None, *, run: TrackR
         run.total_seconds = time.perf_counter() - t_start
         yield number, frame, state
     run.total_seconds = time.perf_counter() - t_start
+
+
+def missing_box_message(source: FrameSource) -> str:
+    """The one-line error for a source without an initial box: what to give instead."""
+    seq = source.sequence
+    if seq is not None and seq.mot_gt is not None and len(seq.mot_gt):
+        return (f"{source.name}: give an initial box (--box X,Y,W,H) or a ground-truth track to start from "
+                f"(--target ID; {track_ids_text(seq.mot_gt)})")
+    return f"{source.name}: give an initial box (--box X,Y,W,H); the source has no ground truth"
 
 
 class StopRequest:

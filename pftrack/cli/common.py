@@ -49,6 +49,17 @@ def seed_value(text: str) -> int:
     return value
 
 
+def target_id(text: str) -> int:
+    """An argparse type for ``--target``: an integer >= 0 (a ground-truth track id, or an OTB target's N)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a target is an integer id >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"a target is an integer id >= 0, got {text!r}")
+    return value
+
+
 def progress(total: int | None, desc: str, quiet: bool):
     from tqdm import tqdm
 

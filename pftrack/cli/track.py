@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import DEFAULT_TRACKER, close_all, counted, progress, seed_value
+from .common import DEFAULT_TRACKER, close_all, counted, progress, seed_value, target_id
 
 
 def add_track(sub) -> None:
@@ -17,6 +17,9 @@ def add_track(sub) -> None:
     p.add_argument("source", help="video file, frame folder, OTB/VOT/MOTChallenge folder, a folder holding a video "
                    "and its ground truth, or camera index")
     p.add_argument("--box", help="initial box X,Y,W,H (default: the sequence's first ground-truth box)")
+    p.add_argument("--target", type=target_id, metavar="ID", help=(
+        "the ground truth to start from: a track id of a MOTChallenge folder's gt/gt.txt, or the N of an OTB "
+        "folder's groundtruth_rect.N.txt; tracking starts on that target's first annotated frame"))
     p.add_argument("--tracker", default=DEFAULT_TRACKER, help=f"tracker name (default {DEFAULT_TRACKER}; see 'pftrack list')")
     p.add_argument("--out", default="track.csv", help="CSV output (default track.csv)")
     p.add_argument("--json-out", help="also write JSON Lines (one object per frame, with particles summary)")
@@ -47,13 +50,13 @@ def scalar_info(info: dict) -> dict:
 
 
 def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=None, seed=0, params=None,
-              skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False) -> dict:
+              skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False, target=None) -> dict:
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
     from ..errors import BoxError, ParameterError
     from ..geometry import parse_box
     from ..io.sinks import CsvTrackSink, JsonLinesSink, VideoSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
-    from ..pipeline import TrackRun, interrupt_on_sigterm, track_source
+    from ..pipeline import TrackRun, interrupt_on_sigterm, missing_box_message, track_source
     from ..trackers.registry import create_tracker
     from ..trackers.warmup import warm_up
     from ..viz.draw import TrackDrawer, map_panel
@@ -72,10 +75,10 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
         prepare_video_output(video_out)
     if json_out:
         prepare_output(json_out)
-    source = open_source(source_spec, skip_bad_frames=skip_bad_frames)
+    source = open_source(source_spec, skip_bad_frames=skip_bad_frames, target=target)
     if init_box is None and source.init_box is None:  # said before any output file is created
         source.close()
-        raise BoxError(f"{source.name}: give an initial box (--box X,Y,W,H); the source has no ground truth")
+        raise BoxError(missing_box_message(source))
     run = TrackRun()
     sinks: list = []
     drawer = TrackDrawer()
@@ -130,7 +133,8 @@ def cmd_track(args) -> int:
 
     res = run_track(args.source, box=args.box, tracker_name=args.tracker, out=args.out, video_out=args.video_out,
                     json_out=args.json_out, seed=args.seed, params=parse_param_assignments(args.param),
-                    skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, show_map=args.show_map)
+                    skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, show_map=args.show_map,
+                    target=args.target)
     n = res["frames"]
     speed = (f"{res['update_fps']:.0f} update fps, {res['end_to_end_fps']:.0f} fps end to end" if n > 1
              else "no update to time")  # one frame is the initialisation only

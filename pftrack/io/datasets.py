@@ -318,3 +318,30 @@ def read_mot(path: str | Path) -> Sequence:
     if gt_path.is_file():
         gt = read_mot_txt(gt_path)
     return Sequence(info.get("name", path.name), "mot", path, files, mot_gt=gt, fps=fps, size=size)
+
+
+def mot_target(seq: Sequence, identity: int) -> Sequence:
+    """One ground-truth track of a MOTChallenge sequence as a single-object sequence over all its frames: the
+    track's boxes, ``NaN`` on the frames without one (before it starts, after it ends, where it is broken), named
+    ``NAME.ID``.  Its :attr:`~Sequence.init_box` is the track's first box, on frame :attr:`~Sequence.init_index`.
+    Raises :class:`~pftrack.errors.SourceError` (one line) without ``gt/gt.txt`` or without that track."""
+    gt = seq.mot_gt
+    if gt is None or not len(gt):
+        raise SourceError(f"{seq.path}: no ground truth (gt/gt.txt) to take track {identity} from")
+    n = len(seq.frames)
+    rows = gt[(gt[:, 1] == identity) & (gt[:, 0] >= 1) & (gt[:, 0] <= n)]
+    if not len(rows):
+        raise SourceError(f"{seq.path}: no ground-truth track {identity} on its {n} frames "
+                          f"({track_ids_text(gt)})")
+    boxes = np.full((n, 4), np.nan)
+    boxes[rows[:, 0].astype(int) - 1] = rows[:, 2:6]
+    return Sequence(f"{seq.name}.{int(identity)}", "mot", seq.path, seq.frames, groundtruth=boxes, fps=seq.fps,
+                    size=seq.size, target=int(identity))
+
+
+def track_ids_text(mot_gt: np.ndarray) -> str:
+    """The track ids of MOTChallenge ground-truth rows, for a message: ``3 tracks: ids 1, 2, 7`` (a range when
+    there are more than 12)."""
+    ids = np.unique(np.asarray(mot_gt)[:, 1]).astype(int)
+    listed = ", ".join(str(i) for i in ids) if ids.size <= 12 else f"{ids.min()} to {ids.max()}"
+    return f"{ids.size} track{'s' if ids.size != 1 else ''}: id{'s' if ids.size != 1 else ''} {listed}"

@@ -21,7 +21,8 @@ import numpy as np
 
 from ..errors import FrameError, SourceError
 from ..frames import as_bgr_uint8
-from .datasets import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, read_sequence
+from .datasets import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, mot_target, otb_targets, read_otb,
+                       read_sequence)
 from .prefetch import prefetch
 from .quiet import quiet_opencv
 from .video_frames import VideoFrame, read_video_folder, read_video_frame, single_video
@@ -79,6 +80,11 @@ class FrameSource:
     @property
     def init_box(self):
         return None if self.sequence is None else self.sequence.init_box
+
+    @property
+    def init_number(self) -> int:
+        """The number (from 1) of the frame whose ground truth gives :attr:`init_box` (1 without ground truth)."""
+        return 1 if self.sequence is None else self.sequence.init_index + 1
 
     def numbered(self) -> Iterator[tuple[int, np.ndarray]]:
         """Yield ``(frame_number, frame)`` with numbers from 1, skipped frames left out."""
@@ -200,22 +206,33 @@ class VideoSource(FrameSource):
         self.cap.release()
 
 
-def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False) -> FrameSource:
+def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False, target: int | None = None) -> FrameSource:
     """Open a video file, image folder, OTB/VOT/MOTChallenge folder or camera index.
 
+    ``target`` picks the ground truth of one of several targets: the ``N`` of an OTB folder's
+    ``groundtruth_rect.N.txt``, or a track id of a MOTChallenge folder's ``gt/gt.txt``
+    (:func:`~pftrack.io.datasets.mot_target`).
+
     Raises :class:`~pftrack.errors.SourceError` with one line naming the problem:
-    missing path, empty folder, unreadable video, unknown format.
+    missing path, empty folder, unreadable video, unknown format, a target the source does not have.
     """
-    if isinstance(spec, int) or (isinstance(spec, str) and spec.strip().isdigit()):
+    camera = isinstance(spec, int) or (isinstance(spec, str) and spec.strip().isdigit())
+    path = None if camera else Path(spec)
+    if path is not None and not path.exists():
+        raise SourceError(f"{path}: no such file or folder")
+    if target is not None and (path is None or not (path.is_dir() and detect_layout(path) in ("otb", "mot"))):
+        raise SourceError(f"{spec}: a target (--target) picks one of an OTB folder's annotated targets or a track of "
+                          "a MOTChallenge folder's ground truth; this source is neither")
+    if path is None:
         index = int(spec)
         return VideoSource(index, f"camera {index}", skip_bad_frames=skip_bad_frames)
-    path = Path(spec)
-    if not path.exists():
-        raise SourceError(f"{path}: no such file or folder")
     if path.is_dir():
         layout = detect_layout(path)
         if layout is None:
             raise SourceError(f"{path}: folder has no images and no single video file")
+        if target is not None:
+            seq = _target_sequence(path, layout, int(target))
+            return ImageFolderSource(seq.frames, str(path), sequence=seq, skip_bad_frames=skip_bad_frames)
         if layout == "video":  # streamed: the ground truth is read (first), the frames are not counted ahead
             seq = read_video_folder(path, count=False)
             source = VideoSource(str(single_video(path)), str(path), skip_bad_frames=skip_bad_frames)
@@ -230,3 +247,17 @@ def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False) -> Fra
     if suffix not in VIDEO_EXTENSIONS:
         warnings.warn(f"{path}: unknown extension {suffix!r}, trying to open it as a video", stacklevel=2)
     return VideoSource(str(path), str(path), skip_bad_frames=skip_bad_frames)
+
+
+def _target_sequence(path: Path, layout: str, target: int) -> Sequence:
+    """The sequence of one target of an OTB folder (its ``groundtruth_rect.N.txt``; ``1`` is also the only target
+    of a folder with one ``groundtruth_rect.txt``) or of a MOTChallenge folder (a ground-truth track id)."""
+    if layout == "mot":
+        return mot_target(read_sequence(path), target)
+    targets = otb_targets(path)
+    if not targets and target == 1:
+        return read_otb(path)
+    if target not in targets:
+        have = ", ".join(str(t) for t in targets) if targets else "1 (one groundtruth_rect.txt)"
+        raise SourceError(f"{path}: no target {target}; its targets are {have}")
+    return read_otb(path, target=target)

@@ -1,0 +1,120 @@
+"""``pftrack track --target``: one target of a MOTChallenge or multi-target OTB folder, tracked from its first
+annotated frame; a source whose ground truth starts late is tracked from there; bad targets exit 2 with one line."""
+
+import cv2
+import numpy as np
+import pytest
+
+from pftrack.cli import main
+from pftrack.errors import SourceError
+from pftrack.io import read_track_csv
+from pftrack.io.datasets import write_groundtruth, write_mot_groundtruth, write_seqinfo
+from pftrack.io.sources import open_source
+from pftrack.pipeline import track_source
+from pftrack.trackers.registry import create_tracker
+
+N = 16
+
+
+def _frames(n=N, w=160, h=120):
+    """A red square moving right and a green one moving down over grey noise (boxes per frame for each)."""
+    rng = np.random.default_rng(3)
+    frames, red, green = [], [], []
+    for t in range(n):
+        f = (rng.random((h, w, 3)) * 40 + 90).astype(np.uint8)
+        rx, gy = 10 + 3 * t, 5 + 2 * t
+        f[60:80, rx:rx + 20] = (40, 40, 210)
+        f[gy:gy + 20, 120:140] = (40, 200, 40)
+        frames.append(f)
+        red.append((rx, 60, 20, 20))
+        green.append((120, gy, 20, 20))
+    return frames, np.array(red, float), np.array(green, float)
+
+
+@pytest.fixture(scope="module")
+def mot_folder(tmp_path_factory):
+    """A MOTChallenge folder: track 4 (red) on every frame, track 9 (green) from frame 6 on."""
+    frames, red, green = _frames()
+    d = tmp_path_factory.mktemp("mot") / "two"
+    (d / "img1").mkdir(parents=True)
+    (d / "gt").mkdir()
+    for t, f in enumerate(frames, 1):
+        cv2.imwrite(str(d / "img1" / f"{t:06d}.png"), f)
+    rows = [[t, 4, *red[t - 1], 1, 1, 1] for t in range(1, N + 1)]
+    rows += [[t, 9, *green[t - 1], 1, 1, 1] for t in range(6, N + 1)]
+    write_mot_groundtruth(d / "gt" / "gt.txt", np.array(rows, dtype=np.float64))
+    write_seqinfo(d, name="two", fps=10, length=N, width=160, height=120, ext=".png")
+    return d, red, green
+
+
+@pytest.fixture(scope="module")
+def otb_folder(tmp_path_factory):
+    """An OTB folder with two annotated targets (groundtruth_rect.1.txt: red, .2.txt: green, from frame 4)."""
+    frames, red, green = _frames()
+    d = tmp_path_factory.mktemp("otb") / "Pair"
+    (d / "img").mkdir(parents=True)
+    for t, f in enumerate(frames, 1):
+        cv2.imwrite(str(d / "img" / f"{t:04d}.jpg"), f)
+    late = green.copy()
+    late[:3] = np.nan
+    write_groundtruth(d / "groundtruth_rect.1.txt", red)
+    write_groundtruth(d / "groundtruth_rect.2.txt", late)
+    return d, red, late
+
+
+def test_a_mot_track_starts_on_its_first_frame(mot_folder):
+    d, red, green = mot_folder
+    src = open_source(d, target=9)
+    assert src.init_box == tuple(green[5]) and src.init_number == 6
+    assert np.isnan(src.groundtruth[:5]).all() and np.allclose(src.groundtruth[5:], green[5:])
+    numbers = [n for n, _, _ in track_source(src, create_tracker("color-pf", seed=0))]
+    assert numbers == list(range(6, N + 1))
+
+
+def test_track_cli_follows_the_picked_target(mot_folder, otb_folder, tmp_path):
+    for (d, red, green), target, truth, first in ((mot_folder, 9, mot_folder[2], 6), (mot_folder, 4, mot_folder[1], 1),
+                                                  (otb_folder, 2, otb_folder[2], 4)):
+        out = tmp_path / f"{d.name}{target}.csv"
+        assert main(["track", str(d), "--target", str(target), "--out", str(out), "--quiet"]) == 0
+        rows = read_track_csv(out)
+        assert rows[0, 0] == first and rows[-1, 0] == N
+        centre = rows[:, 1:3] + rows[:, 3:5] / 2
+        want = truth[first - 1:, :2] + truth[first - 1:, 2:] / 2
+        assert np.max(np.linalg.norm(centre - want, axis=1)) < 8  # on the picked square, not the other one
+
+
+def test_ground_truth_that_starts_late_is_tracked_from_there(otb_folder, tmp_path):
+    """Without --target an OTB folder gives its first target; a ground truth whose first rows are NaN starts the
+    tracker on its first box's frame, as the one-pass protocol of `pftrack eval` does."""
+    d, red, late = otb_folder
+    src = open_source(d, target=2)
+    states = list(track_source(src, create_tracker("color-pf", seed=0)))
+    assert states[0][0] == 4 and states[0][2].box == pytest.approx(tuple(late[3]))
+    assert open_source(d).init_box == tuple(red[0])
+
+
+@pytest.mark.parametrize("source, args, needle", [
+    ("mot", [], "--target ID; 2 tracks: ids 4, 9"),
+    ("mot", ["--target", "5"], "no ground-truth track 5"),
+    ("mot", ["--target", "-1"], "integer id >= 0"),
+    ("otb", ["--target", "3"], "no target 3; its targets are 1, 2"),
+    ("frames", ["--target", "1", "--box", "1,1,9,9"], "this source is neither"),
+])
+def test_bad_targets_exit_2_with_one_line(mot_folder, otb_folder, source, args, needle, tmp_path, capsys):
+    d = {"mot": mot_folder[0], "otb": otb_folder[0], "frames": mot_folder[0] / "img1"}[source]
+    out = tmp_path / "t.csv"
+    try:
+        rc = main(["track", str(d), "--out", str(out), "--quiet", *args])
+    except SystemExit as exc:  # argparse's own checks (an argument's type) exit from the parser
+        rc = exc.code
+    assert rc == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and needle in err[0] and err[0].startswith("pftrack: error:"), err
+    assert not out.exists()  # nothing written for a run that cannot start
+    assert not out.exists()
+
+
+def test_open_source_refuses_a_target_of_a_camera_or_video():
+    with pytest.raises(SourceError, match="neither"):
+        open_source(0, target=1)
+
