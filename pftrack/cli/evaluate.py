@@ -64,7 +64,9 @@ def cmd_eval(args) -> int:
         for seq in discover_sequences(d):
             if (seq.mot_gt is None) if mot else (seq.groundtruth is None):
                 kind = "MOTChallenge" if mot else "single-object"
-                warnings.warn(f"{seq.name}: no {kind} ground truth, skipped for --protocol {args.protocol}")
+                hint = ("; a MOTChallenge folder is scored with --protocol mot (multi-target trackers), or cut into "
+                        "one sequence per person first (docs/evaluation.md)") if seq.mot_gt is not None else ""
+                warnings.warn(f"{seq.name}: no {kind} ground truth, skipped for --protocol {args.protocol}{hint}")
                 continue
             seqs.append(seq)
     if not seqs:
