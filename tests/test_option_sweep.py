@@ -1,7 +1,7 @@
 """Every switch of the trackers runs: each boolean option flipped and each choice of an option with a fixed set of
 values, on a short colour and grey scene whose target hides and comes back (so the loss test, the search and the
-re-acquisition run too). The slowest trackers (covariance, switching, graph cuts, the mesh) are left out.  An option that crashed only when switched on (local-motion-pf's ``search``) went
-unnoticed until such a sweep."""
+re-acquisition run too). The slowest trackers (covariance, switching, graph cuts, the mesh) are left out.  An
+option that crashed only when switched on (local-motion-pf's ``search``) went unnoticed until such a sweep."""
 
 from __future__ import annotations
 

@@ -124,7 +124,8 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
         raise Interrupted(f"interrupted after {run.frames} frames; rows so far are in {out}") from None
     finally:
         close_all(bar, sinks, source)
-    return {"frames": run.frames, "warmup_seconds": warm_seconds, "update_fps": run.update_fps, "end_to_end_fps": run.end_to_end_fps,
+    return {"frames": run.frames, "warmup_seconds": warm_seconds, "update_fps": run.update_fps,
+            "end_to_end_fps": run.end_to_end_fps,
             "lost_frames": lost, "skipped": list(source.skipped), "source": source, "frame_size": size}
 
 

@@ -145,8 +145,8 @@ def illumination_quotient(frame: np.ndarray, sigma: float = 0.1, *, block: int =
     """The self-quotient image of a grey (or BGR, converted to grey) frame, as a BGR ``uint8`` frame.
 
     ``sigma`` is the std of the Gaussian illumination estimate as a fraction of the frame's
-    larger side; ``block`` the side of the cells the estimate is taken on.  Levels saturate at 255.  Each output channel holds the
-    same grey levels, so the result stays a grey frame for
+    larger side; ``block`` the side of the cells the estimate is taken on.  Levels saturate at 255.  Each output
+    channel holds the same grey levels, so the result stays a grey frame for
     :func:`~pftrack.cues.intensity.is_gray`.
     """
     return QuotientImage(sigma, block=block)(frame)

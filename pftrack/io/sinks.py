@@ -100,7 +100,8 @@ class CsvTrackSink(_TextSink):
 
     def write(self, frame: int, box, score: float, lost: bool) -> None:
         x, y, w, h = (float(v) for v in box)
-        self._write(f"{int(frame)},{_fmt(x, 3)},{_fmt(y, 3)},{_fmt(w, 3)},{_fmt(h, 3)},{_fmt(float(score), 5)},{int(bool(lost))}")
+        self._write(f"{int(frame)},{_fmt(x, 3)},{_fmt(y, 3)},{_fmt(w, 3)},{_fmt(h, 3)},{_fmt(float(score), 5)},"
+                    f"{int(bool(lost))}")
 
     def write_state(self, frame: int, state) -> None:
         self.write(frame, state.box, state.score, state.lost)
@@ -111,7 +112,8 @@ class MotSink(_TextSink):
 
     def write(self, frame: int, track_id: int, box, score: float) -> None:
         x, y, w, h = (float(v) for v in box)
-        self._write(f"{int(frame)},{int(track_id)},{_fmt(x, 2)},{_fmt(y, 2)},{_fmt(w, 2)},{_fmt(h, 2)},{_fmt(float(score), 4)},-1,-1,-1")
+        self._write(f"{int(frame)},{int(track_id)},{_fmt(x, 2)},{_fmt(y, 2)},{_fmt(w, 2)},{_fmt(h, 2)},"
+                    f"{_fmt(float(score), 4)},-1,-1,-1")
 
 
 class JsonLinesSink(_TextSink):

@@ -42,7 +42,8 @@ class CDParams(Params):
     occ_margin: float = param(8.0, ge=0, doc="Box dilation in pixels for the occlusion test (delta_occ).")
     gate_px: float = param(48.0, gt=0, doc="Association gate in pixels at 384 px width (scaled with the width).")
     tau_new: float = param(0.5, ge=0, doc="Eq. (12) dissimilarity above which a reappearing group gets a new label.")
-    similarity: Literal["default", "faithful"] = param("default", doc="'default' (1 + dtheta/180) |dlog10(1+e)| or 'faithful' |dlog10 D| |dlog10 e|.")
+    similarity: Literal["default", "faithful"] = param("default", doc=(
+        "'default' (1 + dtheta/180) |dlog10(1+e)| or 'faithful' |dlog10 D| |dlog10 e|."))
     refine: Literal["none", "difference"] = param("difference", doc=(
         "'none': the chapter's rule (a vector and a pseudo-residual above tau_r); 'difference' (our addition, the "
         "default: MOTA -0.26 -> 0.02 on PETS frames 1-200): around the moving blocks (2 blocks), keep the 4x4 blocks "

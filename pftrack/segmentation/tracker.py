@@ -53,7 +53,8 @@ class GraphCutParams(Params):
         "Lost when the mask's colour support (mean object-histogram value H_obj/max over its pixels) falls below "
         "this fraction of the first mask's: the temporal seeds alone can hold a mask on a frame that no longer "
         "shows the object."))
-    backend: Literal["scipy", "pymaxflow"] = param("scipy", doc="Max-flow solver: SciPy's Dinic (BSD) or PyMaxflow (GPL, optional).")
+    backend: Literal["scipy", "pymaxflow"] = param("scipy", doc=(
+        "Max-flow solver: SciPy's Dinic (BSD) or PyMaxflow (GPL, optional)."))
     max_pixels: int = param(60000, ge=0, le=100_000_000, doc=(
         "Speed bound: a ROI with more pixels is cut on a grid scaled down to this many pixels and the mask "
         "scaled back (0 = always full resolution)."))

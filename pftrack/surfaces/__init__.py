@@ -24,6 +24,7 @@ from .mesh import (
 from .dense import DenseSettings, DenseSolver
 from .solver import MeshSolver, SolverSettings, huber_rho, huber_weights
 
-__all__ = ["DenseSettings", "DenseSolver", "Grid", "MeshSolver", "SolverSettings", "directional_laplacian", "displacement_at", "huber_rho",
+__all__ = ["DenseSettings", "DenseSolver", "Grid", "MeshSolver", "SolverSettings", "directional_laplacian",
+           "displacement_at", "huber_rho",
            "huber_weights",
            "interp_weights", "parse_mesh", "umbrella_laplacian", "weights_matrix"]

@@ -38,5 +38,6 @@ SCENES = {
 }
 
 __all__ = ["HIDDEN_BELOW", "SCENES", "VARIED_SCENES", "Occluder", "Scene", "SceneSpec", "Target", "Truth",
-           "camouflage_scene", "crossing_scene", "draw_nuisances", "entering_scene", "export_otb", "hidden_frames", "illumination_scene", "teleport_scene",
+           "camouflage_scene", "crossing_scene", "draw_nuisances", "entering_scene", "export_otb", "hidden_frames",
+           "illumination_scene", "teleport_scene",
            "leave_scene", "occlusion_scene", "simple_scene", "vanish_scene", "varied_scene", "waving_scene"]

@@ -56,8 +56,9 @@ class TemplateParams(Params):
         "Rate of the template update t <- (1 - a) t + a p on frames that are not lost; 0 keeps the chapter's "
         "fixed template (its updated variant drifts after one bad match)."))
     lost_psr: float = param(2.5, ge=0, le=1000, doc=(
-        "For the other criteria (ssd, ccorr, sad, morph, morph_normed, mi, nmi): the peak-to-sidelobe ratio (sidelobe beyond +-5 template pixels) "
-        "below which a match is unreliable. Correct matches measured 2.5-4 on synthetic scenes."))
+        "For the other criteria (ssd, ccorr, sad, morph, morph_normed, mi, nmi): the peak-to-sidelobe ratio "
+        "(sidelobe beyond +-5 template pixels) below which a match is unreliable. Correct matches measured 2.5-4 on "
+        "synthetic scenes."))
     lost_score: float = param(0.5, ge=-1, le=1, doc=(
         "For ncc and ncc_uncentred: a best score below this is unreliable (ch14.md: NCC < 0.5)."))
     lost_frames: int = param(3, ge=1, le=1000, doc="Consecutive unreliable frames before the target is declared lost.")
