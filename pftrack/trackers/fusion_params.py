@@ -204,12 +204,13 @@ class FusionPFParams(ColorPFParams):
         "hold): a target that comes back and stays at the edge is not refused by the structure for that. Off: "
         "neutral on the tune data (tune split unchanged, windows 34 against 33 re-acquired, none gained of 555 "
         "synthetic reappearances; docs/robustness.md)."))
-    acquire_shape_step: float = param(0.0, ge=0, le=1, doc=(
+    acquire_shape_step: float = param(0.15, ge=0, le=1, doc=(
         "While searching, the loss test of the candidate to acquire takes its structural score as the best over "
         "its box's shape and the shapes whose half-axes are 1/(1+step) or 1+step times its own, each axis on its "
         "own (9 shapes), when the largest is inside the frame: a target that came back larger, smaller or turned "
         "(a couple walking toward the camera) is not refused by the structure because the search looks for it at "
-        "the size it had when lost. 0: off."))
+        "the size it had when lost. 0: off. 0.15 chosen on the tune data under docs/rules/acquire_shape_step_rule.txt "
+        "(tune windows: 50 of 60 returns re-acquired against 45; docs/robustness.md)."))
     relit_colour: bool = param(True, doc=(
         "While searching, when the colour cue would veto the best candidate that the structural cue alone could "
         "acquire, its colour score is retaken after undoing a global per-channel gain (von Kries: the frame's "
