@@ -49,7 +49,7 @@ def track_source(source: FrameSource, tracker: Tracker, box=None, *, run: TrackR
 
     ``box`` defaults to the source's first ground-truth box (OTB/VOT folders, a MOTChallenge folder's track picked
     with ``open_source(..., target=ID)``); tracking then starts on that box's frame, as the benchmarks' one-pass
-    protocol does, and the frames before it are read but not yielded.
+    protocol does, and the frames before it are passed over (not decoded from an image folder).
     Yields ``(frame_number, frame, state)`` for every frame from the first tracked one on.
     """
     run = run if run is not None else TrackRun()
@@ -61,9 +61,7 @@ def track_source(source: FrameSource, tracker: Tracker, box=None, *, run: TrackR
         start = source.init_number
     t_start = time.perf_counter()
     first = True
-    for number, frame in source.numbered():
-        if number < start:
-            continue
+    for number, frame in source.numbered(start):
         t0 = time.perf_counter()
         state = tracker.init(frame, box) if first else tracker.update(frame)
         dt = time.perf_counter() - t0

@@ -98,7 +98,8 @@ def test_ground_truth_that_starts_late_is_tracked_from_there(otb_folder, tmp_pat
     ("mot", ["--target", "5"], "no ground-truth track 5"),
     ("mot", ["--target", "-1"], "integer id >= 0"),
     ("otb", ["--target", "3"], "no target 3; its targets are 1, 2"),
-    ("frames", ["--target", "1", "--box", "1,1,9,9"], "this source is neither"),
+    ("frames", ["--target", "1"], "this source is neither"),
+    ("mot", ["--target", "4", "--box", "1,1,9,9"], "give one of them"),
 ])
 def test_bad_targets_exit_2_with_one_line(mot_folder, otb_folder, source, args, needle, tmp_path, capsys):
     d = {"mot": mot_folder[0], "otb": otb_folder[0], "frames": mot_folder[0] / "img1"}[source]
@@ -112,6 +113,27 @@ def test_bad_targets_exit_2_with_one_line(mot_folder, otb_folder, source, args, 
     assert len(err) == 1 and needle in err[0] and err[0].startswith("pftrack: error:"), err
     assert not out.exists()  # nothing written for a run that cannot start
     assert not out.exists()
+
+
+def test_a_video_whose_ground_truth_starts_late_is_tracked_from_there(tmp_path):
+    """A folder holding a video and its ground truth (streamed, frames grabbed up to the first box's frame)."""
+    frames, red, _ = _frames()
+    d = tmp_path / "clip"
+    d.mkdir()
+    vw = cv2.VideoWriter(str(d / "clip.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 10, (160, 120))
+    for f in frames:
+        vw.write(f)
+    vw.release()
+    late = red.copy()
+    late[:4] = np.nan
+    write_groundtruth(d / "groundtruth_rect.txt", late)
+    out = tmp_path / "v.csv"
+    assert main(["track", str(d), "--out", str(out), "--quiet"]) == 0
+    rows = read_track_csv(out)
+    assert rows[:, 0].tolist() == list(range(5, N + 1))
+    assert rows[0, 1:5] == pytest.approx(late[4], abs=0.01)
+    centre = rows[:, 1:3] + rows[:, 3:5] / 2
+    assert np.max(np.linalg.norm(centre - (late[4:, :2] + late[4:, 2:] / 2), axis=1)) < 8
 
 
 def test_open_source_refuses_a_target_of_a_camera_or_video():

@@ -18,8 +18,8 @@ def add_track(sub) -> None:
                    "and its ground truth, or camera index")
     p.add_argument("--box", help="initial box X,Y,W,H (default: the sequence's first ground-truth box)")
     p.add_argument("--target", type=target_id, metavar="ID", help=(
-        "the ground truth to start from: a track id of a MOTChallenge folder's gt/gt.txt, or the N of an OTB "
-        "folder's groundtruth_rect.N.txt; tracking starts on that target's first annotated frame"))
+        "the ground truth to start from (instead of --box): a track id of a MOTChallenge folder's gt/gt.txt, or "
+        "the N of an OTB folder's groundtruth_rect.N.txt; tracking starts on that target's first annotated frame"))
     p.add_argument("--tracker", default=DEFAULT_TRACKER, help=f"tracker name (default {DEFAULT_TRACKER}; see 'pftrack list')")
     p.add_argument("--out", default="track.csv", help="CSV output (default track.csv)")
     p.add_argument("--json-out", help="also write JSON Lines (one object per frame, with particles summary)")
@@ -61,6 +61,8 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     from ..trackers.warmup import warm_up
     from ..viz.draw import TrackDrawer, map_panel
 
+    if box is not None and target is not None:
+        raise ParameterError("--box and --target both give the initial box; give one of them")
     tracker = create_tracker(tracker_name, seed=seed, params=params or {})
     if show_map and not hasattr(tracker, "confidence_map"):
         raise ParameterError(f"--show-map: tracker '{tracker_name}' has no confidence map (try cotrain-pf)")

@@ -58,8 +58,9 @@ class FrameSource:
         self._reading: Iterator | None = None
 
     # -- overridden by subclasses -------------------------------------------------------
-    def _raw(self) -> Iterator[tuple[int, np.ndarray | None, str]]:
-        """Yield ``(number, image or None, description)``."""
+    def _raw(self, start: int = 1) -> Iterator[tuple[int, np.ndarray | None, str]]:
+        """Yield ``(number, image or None, description)`` from frame number ``start`` on (the frames before it are
+        passed over without being decoded where the source allows)."""
         raise NotImplementedError
 
     def __len__(self) -> int:
@@ -86,9 +87,10 @@ class FrameSource:
         """The number (from 1) of the frame whose ground truth gives :attr:`init_box` (1 without ground truth)."""
         return 1 if self.sequence is None else self.sequence.init_index + 1
 
-    def numbered(self) -> Iterator[tuple[int, np.ndarray]]:
-        """Yield ``(frame_number, frame)`` with numbers from 1, skipped frames left out."""
-        self._reading = raw = prefetch(self._raw(), depth=self.prefetch)
+    def numbered(self, start: int = 1) -> Iterator[tuple[int, np.ndarray]]:
+        """Yield ``(frame_number, frame)`` with numbers from 1, skipped frames left out; from frame ``start`` on
+        (the frames before it are not decoded from an image folder, and only grabbed from a video)."""
+        self._reading = raw = prefetch(self._raw(max(int(start), 1)), depth=self.prefetch)
         try:
             yield from self._checked(raw)
         finally:
@@ -152,8 +154,8 @@ class ImageFolderSource(FrameSource):
     def __len__(self) -> int:
         return len(self.files)
 
-    def _raw(self):
-        for i, path in enumerate(self.files, start=1):
+    def _raw(self, start: int = 1):
+        for i, path in enumerate(self.files[start - 1:], start=start):
             yield i, read_image(path), path.name
 
 
@@ -188,12 +190,17 @@ class VideoSource(FrameSource):
             raise TypeError("camera source has no known length")
         return self._count
 
-    def _raw(self):
+    def _raw(self, start: int = 1):
         number = 0
         if self._first is not None:
             number += 1
             first, self._first = self._first, None
-            yield number, first, "video frame"
+            if start <= 1:
+                yield number, first, "video frame"
+        while number + 1 < start:  # passed over: grabbed, not converted
+            if not self.cap.grab():
+                return
+            number += 1
         while True:
             ok, img = self.cap.read()
             if not ok:
