@@ -22,6 +22,10 @@ def add_eval(sub) -> None:
     p.add_argument("--protocol", choices=["ope", "sre", "vot", "mot"], default="ope",
                    help="OTB one-pass (default); OTB spatial robustness (sre: every tracker from 12 perturbed first "
                         "boxes, --seeds ignored); VOT reset; or MOTChallenge multi-object (trackers: multi-pf[...])")
+    p.add_argument("--people", type=int, nargs="?", const=30, metavar="MIN_FRAMES", help=(
+        "single-object protocols: cut each MOTChallenge folder into one sequence per person with at least MIN_FRAMES "
+        "annotated frames (default 30), from the person's first box to the folder's end; the frames after they "
+        "leave are absent, and those on which a person whose annotation stopped is still in view are not scored"))
     p.add_argument("--seeds", type=int, default=1, help="seeds per stochastic tracker (default 1)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="local worker processes")
@@ -57,15 +61,27 @@ def cmd_eval(args) -> int:
         raise ParameterError("--timeout must be a positive number of seconds")
     if args.timeout is not None and args.scheduler:
         raise ParameterError("--timeout does not apply to a Dask scheduler's runs (use Dask's own limits)")
+    if args.people is not None and args.protocol == "mot":
+        raise ParameterError("--people cuts MOTChallenge folders for the single-object protocols, not --protocol mot")
+    if args.people is not None and args.people < 1:
+        raise ParameterError("--people: MIN_FRAMES must be >= 1")
     trackers = parse_tracker_list(args.trackers, protocol=args.protocol)
     seqs = []
     mot = args.protocol == "mot"
     for d in args.data:
         for seq in discover_sequences(d):
+            if args.people is not None and seq.mot_gt is not None and seq.groundtruth is None:
+                from ..io.person_sequences import people_of
+
+                people = people_of(seq, min_frames=args.people)
+                if not people:
+                    warnings.warn(f"{seq.name}: no person with {args.people} or more annotated frames")
+                seqs.extend(people)
+                continue
             if (seq.mot_gt is None) if mot else (seq.groundtruth is None):
                 kind = "MOTChallenge" if mot else "single-object"
-                hint = ("; a MOTChallenge folder is scored with --protocol mot (multi-target trackers), or cut into "
-                        "one sequence per person first (docs/evaluation.md)") if seq.mot_gt is not None else ""
+                hint = ("; a MOTChallenge folder is scored with --protocol mot (multi-target trackers), or one "
+                        "sequence per person with --people") if seq.mot_gt is not None else ""
                 warnings.warn(f"{seq.name}: no {kind} ground truth, skipped for --protocol {args.protocol}{hint}")
                 continue
             seqs.append(seq)

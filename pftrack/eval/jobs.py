@@ -17,6 +17,7 @@ import time
 import traceback
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -82,7 +83,9 @@ class Job:
     protocol: str  # "ope" | "sre" | "vot" | "mot"
     threads: int = 1
     extra: tuple[tuple[str, Any], ...] = ()
-    target: int | None = None  # which annotated target of an OTB folder with several (``Sequence.target``)
+    #: which annotated target of an OTB folder with several, or which person of a MOTChallenge folder cut into
+    #: people (``Sequence.target``)
+    target: int | None = None
 
     @property
     def key(self) -> str:
@@ -136,9 +139,24 @@ def _finite_list(a) -> list:
             for v in np.asarray(a, dtype=np.float64).ravel().tolist()]
 
 
+def _job_sequence(job: Job):
+    """The sequence a job runs on: the folder, one annotated target of an OTB folder, or one person of a
+    MOTChallenge folder (:func:`~pftrack.io.person_sequences.people_of`)."""
+    from ..io.datasets import detect_layout, read_otb, read_sequence
+    from ..io.person_sequences import people_of
+
+    if job.target is None:
+        return read_sequence(job.sequence)
+    if detect_layout(Path(job.sequence)) == "mot":
+        people = people_of(read_sequence(job.sequence), min_frames=1, identity=job.target)
+        if not people:
+            raise FormatError(f"{job.sequence}: no ground-truth track {job.target}")
+        return people[0]
+    return read_otb(job.sequence, target=job.target)
+
+
 def run_job(job: Job) -> dict:
     """Run one job and return its result record (no side effects on disk)."""
-    from ..io.datasets import read_otb, read_sequence
     from ..io.sources import read_image
     from ..trackers.registry import create_tracker
     from .vot import run_vot
@@ -146,7 +164,7 @@ def run_job(job: Job) -> dict:
     _pin_threads(job.threads)
     with warnings.catch_warnings():  # the folder's own warnings were given once, when the sequences were found
         warnings.simplefilter("ignore")
-        seq = read_sequence(job.sequence) if job.target is None else read_otb(job.sequence, target=job.target)
+        seq = _job_sequence(job)
     if job.protocol == "mot":
         return _run_mot_job(job, seq)
     if seq.groundtruth is None:

@@ -30,7 +30,7 @@ from .datasets import Sequence, write_groundtruth
 IN_VIEW_FRACTION = 0.1  # the synthetic scenes' HIDDEN_BELOW: a target with less of its area in view is absent
 VELOCITY_FRAMES = 5  # the velocity of an extrapolated box: mean displacement over this many annotated frames
 
-__all__ = ["PersonSequence", "person_sequences", "write_otb"]
+__all__ = ["PersonSequence", "people_of", "person_sequences", "write_otb"]
 
 
 @dataclass(frozen=True)
@@ -100,6 +100,39 @@ def person_sequences(mot_gt: np.ndarray, first: int, last: int, *, min_frames: i
         boxes[rows[:, 0].astype(int) - start] = rows[:, 2:6]
         in_view = None if frame_size is None else in_view_frames(boxes, *frame_size)
         out.append(PersonSequence(int(pid), frames, boxes, in_view))
+    return out
+
+
+def people_of(seq: Sequence, *, min_frames: int = 30, identity: int | None = None) -> list[Sequence]:
+    """The single-object sequences of a MOTChallenge sequence with ground truth, in memory: one per identity with at
+    least ``min_frames`` annotated frames (only ``identity``'s when given), from its first annotated frame to the
+    sequence's end, named ``NAME.ID`` (``Sequence.target`` = ID). The frames without a box are absent, but for those
+    on which the person is still in view (:func:`in_view_frames`, from the sequence's frame size), listed as
+    ``unannotated`` in ``meta`` and neither absent nor scored, as :func:`write_otb` writes them."""
+    from ..errors import SourceError
+    from .sequence import _absent_rows
+
+    if seq.mot_gt is None or not len(seq.mot_gt):
+        raise SourceError(f"{seq.path}: no ground truth (gt/gt.txt) to cut into people")
+    size = seq.size
+    if size is None:
+        from .sources import read_image
+
+        img = read_image(seq.frames[0])
+        if img is None:
+            raise SourceError(f"{seq.frames[0]}: cannot be decoded")
+        size = (int(img.shape[1]), int(img.shape[0]))
+    gt = seq.mot_gt if identity is None else seq.mot_gt[seq.mot_gt[:, 1] == identity]
+    out = []
+    for person in person_sequences(gt, 1, len(seq.frames), min_frames=min_frames, frame_size=size):
+        first, last = int(person.frames[0]), int(person.frames[-1])
+        meta: dict = {"kind": "mot-person"}
+        if person.in_view is not None and person.in_view.any():
+            meta["unannotated"] = [int(k) + 1 for k in np.flatnonzero(person.in_view)]
+        frames = seq.frames[first - 1:last]
+        out.append(Sequence(f"{seq.name}.{person.identity}", "mot", seq.path, frames, groundtruth=person.boxes,
+                            fps=seq.fps, size=seq.size, absent=_absent_rows(person.boxes, len(frames), meta, seq.path),
+                            meta=meta, target=person.identity))
     return out
 
 

@@ -1,5 +1,7 @@
-"""``pftrack track --target``: one target of a MOTChallenge or multi-target OTB folder, tracked from its first
-annotated frame; a source whose ground truth starts late is tracked from there; bad targets exit 2 with one line."""
+"""One target of a folder with several: ``pftrack track --target`` (a MOTChallenge track, or one of a multi-target
+OTB folder's), tracked from its first annotated frame; a source whose ground truth starts late is tracked from there;
+bad targets exit 2 with one line. ``pftrack eval --people``: a MOTChallenge folder cut into one single-object
+sequence per person, in memory, as ``scripts/make_mot_sot.py`` writes them."""
 
 import cv2
 import numpy as np
@@ -140,3 +142,62 @@ def test_open_source_refuses_a_target_of_a_camera_or_video():
     with pytest.raises(SourceError, match="neither"):
         open_source(0, target=1)
 
+
+def test_people_of_a_mot_folder_match_the_written_folders(mot_folder, tmp_path):
+    """People in memory (eval --people) and the OTB folders of scripts/make_mot_sot.py agree frame for frame."""
+    from pftrack.io.datasets import read_otb, read_sequence
+    from pftrack.io.person_sequences import people_of, person_sequences, write_otb
+
+    d, red, green = mot_folder
+    seq = read_sequence(d)
+    people = people_of(seq, min_frames=5)
+    assert [p.name for p in people] == ["two.4", "two.9"] and [p.target for p in people] == [4, 9]
+    assert len(people[1].frames) == N - 5 and people[1].frames[0].name == "000006.png"
+    assert np.allclose(people[1].groundtruth, green[5:])
+    assert [p.name for p in people_of(seq, min_frames=N - 4)] == ["two.4"]  # track 9 has N - 5 boxes
+    for person, p in zip(person_sequences(seq.mot_gt, 1, N, min_frames=5, frame_size=(160, 120)), people):
+        back = read_otb(write_otb(seq, person, tmp_path / p.name))
+        assert np.array_equal(np.isnan(back.groundtruth), np.isnan(p.groundtruth))
+        assert np.allclose(np.nan_to_num(back.groundtruth), np.nan_to_num(p.groundtruth), atol=0.01)
+        assert np.array_equal(back.absent, p.absent) and back.meta.get("unannotated") == p.meta.get("unannotated")
+
+
+def test_a_person_whose_annotation_stops_in_view_is_not_absent(tmp_path):
+    """Track 9 is annotated on frames 6-10 only, while the green square stays in view: those later frames are
+    unannotated (neither absent nor scored). Track 4's square (x = 7 + 3 t on frame t, 20 px wide, a 160 px image) is
+    annotated while wholly inside (frames 1-44), partly in view on frames 45-50 (unannotated, as PETS tracks end at
+    the border), and absent from frame 51, when less than a tenth of it would be inside."""
+    from pftrack.io.datasets import read_sequence
+    from pftrack.io.person_sequences import people_of
+
+    frames, red, green = _frames(n=60)
+    d = tmp_path / "cut"
+    (d / "img1").mkdir(parents=True)
+    (d / "gt").mkdir()
+    for t, f in enumerate(frames, 1):
+        cv2.imwrite(str(d / "img1" / f"{t:06d}.png"), f)
+    rows = [[t, 4, *red[t - 1], 1, 1, 1] for t in range(1, 50) if red[t - 1, 0] + 20 <= 160]
+    rows += [[t, 9, *green[t - 1], 1, 1, 1] for t in range(6, 11)]
+    write_mot_groundtruth(d / "gt" / "gt.txt", np.array(rows, dtype=np.float64))
+    write_seqinfo(d, name="cut", fps=10, length=60, width=160, height=120, ext=".png")
+    four, nine = people_of(read_sequence(d), min_frames=5)
+    assert not nine.absent[:5].any() and nine.meta["unannotated"][0] == 6  # frame 11 of the source
+    assert np.all(np.isfinite(four.groundtruth[:44])) and np.isnan(four.groundtruth[44:]).all()
+    assert four.meta["unannotated"] == [45, 46, 47, 48, 49, 50]
+    assert np.flatnonzero(four.absent).tolist() == list(range(50, 60))
+
+
+def test_eval_people_runs_one_sequence_per_person(mot_folder, tmp_path, capsys):
+    import csv
+
+    d, _, _ = mot_folder
+    report = tmp_path / "r"
+    assert main(["eval", str(d), "--trackers", "color-pf", "--people", "5", "--workers", "1", "--quiet",
+                 "--report", str(report)]) == 0
+    with open(report / "results.csv", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert sorted((r["sequence"], int(r["frames"])) for r in rows) == [("two.4", N), ("two.9", N - 5)]
+    assert all(float(r["auc"]) > 0.5 for r in rows)  # each square followed from its own first box
+    capsys.readouterr()
+    assert main(["eval", str(d), "--trackers", "multi-pf", "--protocol", "mot", "--people", "--quiet"]) == 2
+    assert "--people" in capsys.readouterr().err
