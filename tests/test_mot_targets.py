@@ -98,7 +98,7 @@ def test_ground_truth_that_starts_late_is_tracked_from_there(otb_folder, tmp_pat
 @pytest.mark.parametrize("source, args, needle", [
     ("mot", [], "--target ID; 2 tracks: ids 4, 9"),
     ("mot", ["--target", "5"], "no ground-truth track 5"),
-    ("mot", ["--target", "-1"], "integer id >= 0"),
+    ("mot", ["--target", "-1"], "a target id is an integer >= 0"),
     ("otb", ["--target", "3"], "no target 3; its targets are 1, 2"),
     ("frames", ["--target", "1"], "this source is neither"),
     ("mot", ["--target", "4", "--box", "1,1,9,9"], "give one of them"),

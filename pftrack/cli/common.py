@@ -38,26 +38,25 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def seed_value(text: str) -> int:
-    """An argparse type for a random seed: an integer >= 0 (NumPy's seeds), else a one-line usage error."""
+def _non_negative(text: str, what: str) -> int:
+    """``text`` as an integer >= 0, else argparse's one-line usage error saying ``what`` it is."""
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"a seed is an integer >= 0, got {text!r}") from None
+        value = -1
     if value < 0:
-        raise argparse.ArgumentTypeError(f"a seed is an integer >= 0, got {text!r}")
+        raise argparse.ArgumentTypeError(f"{what} is an integer >= 0, got {text!r}")
     return value
+
+
+def seed_value(text: str) -> int:
+    """An argparse type for a random seed: an integer >= 0 (NumPy's seeds), else a one-line usage error."""
+    return _non_negative(text, "a seed")
 
 
 def target_id(text: str) -> int:
     """An argparse type for ``--target``: an integer >= 0 (a ground-truth track id, or an OTB target's N)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"a target is an integer id >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"a target is an integer id >= 0, got {text!r}")
-    return value
+    return _non_negative(text, "a target id")
 
 
 def progress(total: int | None, desc: str, quiet: bool):
