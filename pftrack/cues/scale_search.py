@@ -87,15 +87,31 @@ def search_scale(cue: StructureCue, frame: np.ndarray, ellipse, *, step: float =
     return best_ratio(scores, ratios, len(shifts), margin)
 
 
+def _fits(frame: np.ndarray, cx: float, cy: float, ax: float, ay: float) -> bool:
+    """Is the box of half-axes ``(ax, ay)`` around ``(cx, cy)`` inside the frame?"""
+    fh, fw = frame.shape[:2]
+    return cx - ax >= 0 and cy - ay >= 0 and cx + ax <= fw and cy + ay <= fh
+
+
+def best_shape_score(cue, frame: np.ndarray, ellipse, step: float) -> float:
+    """The best of ``cue``'s scores (``size_scores``) of the 3 x 3 shapes around ``ellipse`` ``(cx, cy, hx, hy)``:
+    each half-axis times 1/(1+step), 1 or 1+step, on its own; -inf when the largest box is not inside the frame (its
+    part beyond the border has no pixels to correlate)."""
+    cx, cy, hx, hy = (float(v) for v in ellipse)
+    k = 1.0 + step
+    if not _fits(frame, cx, cy, k * hx, k * hy):
+        return -math.inf
+    f = (1.0 / k, 1.0, k)
+    return max(cue.size_scores(frame, (cx, cy, hx, hy), [(a, b) for a in f for b in f]))
+
+
 def _vertex_factor(cue, frame: np.ndarray, ellipse, ratios, step: float, rate: float) -> float:
     """``exp(rate log(1+step) v)``, ``v`` the vertex (:func:`vertex_offset`) of the NCC of the boxes of ``ellipse`` at
     the three half-axis ``ratios`` (scalars, or ``(rx, ry)`` pairs); 1 when a box ``1+step`` times as large on both
     axes is not inside the frame (the part of a box beyond the border has no pixels to correlate, and comparing
     boxes there favours the one that fits, docs/robustness.md), or a score is not finite."""
     cx, cy, hx, hy = np.asarray(ellipse, dtype=np.float64).ravel()[:4].tolist()
-    fh, fw = frame.shape[:2]
-    ax, ay = (1.0 + step) * hx, (1.0 + step) * hy
-    if cx - ax < 0 or cy - ay < 0 or cx + ax > fw or cy + ay > fh:
+    if not _fits(frame, cx, cy, (1.0 + step) * hx, (1.0 + step) * hy):
         return 1.0
     lo, mid, hi = cue.size_scores(frame, (cx, cy, hx, hy), ratios)
     if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):

@@ -23,8 +23,6 @@ documented parameter with an ablation in ``docs/fusion-pf.md``:
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..cues.contrast import (
@@ -37,7 +35,7 @@ from ..cues.contrast import (
 from ..cues.intensity import gain_maps, is_gray, light_levels
 from ..cues.grey_patch import grey_patch
 from ..cues.motion import LocalMotionCue, local_motion
-from ..cues.scale_search import aspect_factor, size_factor
+from ..cues.scale_search import aspect_factor, best_shape_score, size_factor
 from ..cues.structure import StructureCue
 from ..cues.structure_hog import BestStructure, HogStructure
 from ..cues.structure_light import LitStructure
@@ -210,19 +208,6 @@ class FusionPF(ColorPF):
         r, tot = self.cue.rho(feats, e, self._sqrt_q, reuse=False)
         return float(r[0]) if tot[0] > 0 else 0.0
 
-    def _best_shape_score(self, frame, ellipse) -> float:
-        """``acquire_shape_step``: the best structural score of the 3 x 3 shapes around ``ellipse`` (-inf when the
-        largest box is not inside the frame, or the cue has no shape scores)."""
-        step = 1.0 + self.params.acquire_shape_step
-        cx, cy, hx, hy = (float(v) for v in ellipse)
-        fh, fw = frame.shape[:2]
-        size_scores = getattr(self.structure, "size_scores", None)
-        if size_scores is None or cx - step * hx < 0 or cy - step * hy < 0 or cx + step * hx > fw \
-                or cy + step * hy > fh:
-            return -math.inf
-        f = (1.0 / step, 1.0, step)
-        return max(size_scores(frame, (cx, cy, hx, hy), [(a, b) for a in f for b in f]))
-
     def _loss_scores(self, frame, ellipses, rho, roi):
         if not self._fused:
             return rho
@@ -236,7 +221,8 @@ class FusionPF(ColorPF):
             if v is not None and v > s[0]:
                 s[0] = v
         if self.mode == "searching" and len(rho) == 1 and self.params.acquire_shape_step > 0:
-            s[0] = max(s[0], self._best_shape_score(frame, ellipses[0]))
+            # a target back with another shape (acquire_shape_step): the best of 9 shapes around the candidate
+            s[0] = max(s[0], best_shape_score(self.structure, frame, ellipses[0], self.params.acquire_shape_step))
         s += 1.0
         s *= 0.5
         if (self.mode == "searching" and len(rho) == 1 and self.params.relit_colour and self._ref_levels is not None
