@@ -25,7 +25,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from pftrack import create_tracker  # noqa: E402
-from pftrack.geometry import ellipse_to_box, in_frame_fraction, iou  # noqa: E402
+from pftrack.cli.common import parse_seeds  # noqa: E402
+from pftrack.geometry import ellipse_to_box, in_frame_fraction, iou, visible_box  # noqa: E402
 from pftrack.io.datasets import read_sequence  # noqa: E402
 from pftrack.params import parse_param_assignments  # noqa: E402
 
@@ -48,11 +49,10 @@ def probe_sequence(path: Path, seed: int, params: dict) -> list[dict]:
         box = ellipse_to_box(c.ell[c.best])
         inside = in_frame_fraction(tuple(box), w, h)
         if ok and (c.near & supporters).sum() >= need and inside < p.acquire_in_frame:
-            x0, y0 = max(box[0], 0.0), max(box[1], 0.0)
-            x1, y1 = min(box[0] + box[2], w), min(box[1] + box[3], h)
             g = gt[self.frame_index]
             present = bool(np.all(np.isfinite(g)))
-            overlap = float(iou((x0, y0, max(x1 - x0, 1.0), max(y1 - y0, 1.0)), tuple(g))) if present else 0.0
+            seen = visible_box(tuple(box), w, h) or tuple(box)  # the part inside the frame
+            overlap = float(iou(seen, tuple(g))) if present else 0.0
             s = np.asarray(c.s_best, dtype=float)
             m = self.loss.members
             found.append({
@@ -81,7 +81,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", type=Path, help="write every record here")
     args = ap.parse_args(argv)
     params = parse_param_assignments(args.param)
-    seeds = [int(s) for s in args.seeds.split(",")]
+    seeds = parse_seeds(args.seeds)
     records = []
     for folder in args.folders:
         rows = []
