@@ -129,6 +129,5 @@ def main() -> None:
               f"{m['mae_h']:.1f} | {m['d2_q0']:.3f} | {qt} | {m['ms_per_frame']:.1f} |")
 
 
-
 if __name__ == "__main__":
     main()
