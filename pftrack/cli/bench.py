@@ -101,6 +101,9 @@ def cmd_bench(args) -> int:
     return 0
 
 
+PHOTO_KINDS = ("photo-leave", "photo-vanish")
+
+
 def add_synth(sub) -> None:
     from ..synth import SCENES
     from ..synth.varied import DRAWN_NUISANCE_SCENES
@@ -109,7 +112,8 @@ def add_synth(sub) -> None:
                        description="Write synthetic scenes (exact ground truth) as OTB sequence folders, e.g. to "
                                    "evaluate trackers on them with 'pftrack eval'.")
     p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse",
-                                                             "twocam", "walkers", "xray", "deform", "kymo", "face"],
+                                                             "twocam", "walkers", "xray", "deform", "kymo", "face",
+                                                             "photo-vanish", "photo-leave"],
                    help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
                         "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
                         "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7; 'traffic-sparse' and "
@@ -121,7 +125,10 @@ def add_synth(sub) -> None:
                         "box.txt; book ch. 13); 'kymo' is a sheet under camera jitter with a patch vibrating inside it "
                         "(img/, box.txt, roi.txt, scanline.txt, truth.json; the stabilised kymogram of book ch. 13); "
                         "'face' is a grey face under a dimming light, a drifting lamp and a "
-                        "sweeping shadow, seen by a panning and zooming camera (built from scikit-image's portrait)")
+                        "sweeping shadow, seen by a panning and zooming camera (built from scikit-image's portrait); "
+                        "'photo-vanish' and 'photo-leave' cut everything from photographs (a target that walks "
+                        "behind an opaque band, or out of the view and back, among hue-turned look-alikes: a scene "
+                        "family independent of the others, pftrack.synth.photo; needs scikit-image)")
     p.add_argument("--source", help="xray: the grey image to warp (an angiography frame); twocam: a MOTChallenge "
                                     "sequence folder")
     p.add_argument("--response", choices=["mild", "strong"], default="mild",
@@ -147,7 +154,7 @@ def add_synth(sub) -> None:
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.add_argument("--gray", type=float, default=None, metavar="P",
                    help="probability that a scene is grey (the scenes with drawn nuisances: "
-                        f"{', '.join(DRAWN_NUISANCE_SCENES)}; default their own, 0.3). The other nuisances of a seed "
+                        f"{', '.join(DRAWN_NUISANCE_SCENES + PHOTO_KINDS)}; default 0.3). The other nuisances of a seed "
                         "stay the same, so --gray 1 gives each seed's scene in grey")
     p.set_defaults(func=cmd_synth)
 
@@ -207,8 +214,9 @@ def cmd_synth(args) -> int:
     image = None
     draw = {}
     if args.gray is not None:
-        if args.kind not in DRAWN_NUISANCE_SCENES:
-            raise ParameterError(f"--gray applies to the scenes {', '.join(DRAWN_NUISANCE_SCENES)}, not {args.kind!r}")
+        if args.kind not in DRAWN_NUISANCE_SCENES + PHOTO_KINDS:
+            raise ParameterError(f"--gray applies to the scenes {', '.join(DRAWN_NUISANCE_SCENES + PHOTO_KINDS)}, "
+                                 f"not {args.kind!r}")
         if not 0.0 <= args.gray <= 1.0:
             raise ParameterError(f"--gray is a probability in [0, 1], got {args.gray}")
         draw["gray"] = args.gray
@@ -234,6 +242,13 @@ def cmd_synth(args) -> int:
 
         try:
             face_image, face_box = portrait(args.portrait)  # loaded once for every seed
+        except ImportError as e:
+            raise ParameterError(str(e)) from None
+    if args.kind in PHOTO_KINDS:
+        from ..synth.photo import photo
+
+        try:
+            photo("astronaut")  # scikit-image present, before any folder is written
         except ImportError as e:
             raise ParameterError(str(e)) from None
     prepare_output(out / "README.txt")
@@ -275,6 +290,10 @@ def cmd_synth(args) -> int:
             scene = live_face_scene if args.live else face_scene
             export_face(*scene(sd, image=face_image, face=face_box, turn=args.turn),
                         out / f"{'live-face' if args.live else 'face'}-{sd:03d}")
+        elif args.kind in PHOTO_KINDS:
+            from ..synth.photo import PHOTO_SCENES, export_photo
+
+            export_photo(PHOTO_SCENES[args.kind](sd, **draw), out / f"{args.kind}-{sd:03d}")
         elif args.kind == "stereo-rail":
             from ..synth.occluder import export_stereo_scene, stereo_rail_scene
 

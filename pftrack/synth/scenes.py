@@ -410,29 +410,46 @@ def export_otb(spec: SceneSpec, folder, *, target: int = 0, ext: str = ".png") -
     frame, or less than :data:`HIDDEN_BELOW` visible), which ``pftrack eval`` uses to
     score the lost flag.
     """
+    scene = Scene(spec)
+    visible: list[float] = []
+
+    def frames():
+        for t in range(spec.n_frames):
+            frame, truth = scene.render(t)
+            visible.append(float(truth.visible[target]) if truth.present[target] else 0.0)
+            yield frame
+
+    write_otb_folder(folder, frames(), visible, lambda: scene.groundtruth(target), spec.width, spec.height,
+                     {"kind": spec.kind, "seed": spec.seed, "gray": spec.gray,
+                      "nuisances": {k: v for k, v in spec.nuisances}}, ext=ext)
+
+
+def write_otb_folder(folder, frames, visible: list[float], boxes, width: int, height: int, meta: dict, *,
+                     ext: str = ".png") -> None:
+    """Write rendered frames as an OTB folder with the ``meta.json`` that ``pftrack eval`` scores the lost flag by.
+
+    ``frames`` is iterated once (each frame written as it comes); ``visible`` holds the target's visible fraction
+    per frame once they are written (the renderer may fill it while ``frames`` runs), and ``boxes`` is a callable
+    giving the target's whole boxes ``(n, 4)`` then. ``meta`` (the generator, seed, ...) is completed with the
+    visible fractions and the ``hidden`` frames.
+    """
     import json
     from pathlib import Path
 
     folder = Path(folder)
     (folder / "img").mkdir(parents=True, exist_ok=True)
-    scene = Scene(spec)
-    visible = []
-    for t in range(spec.n_frames):
-        frame, truth = scene.render(t)
-        visible.append(float(truth.visible[target]) if truth.present[target] else 0.0)
+    for t, frame in enumerate(frames):
         cv2.imwrite(str(folder / "img" / f"{t + 1:04d}{ext}"), frame)
     hidden = [t + 1 for t, v in enumerate(visible) if v < HIDDEN_BELOW]
-    meta = {"kind": spec.kind, "seed": spec.seed, "gray": spec.gray,
-            "nuisances": {k: v for k, v in spec.nuisances}, "hidden_below": HIDDEN_BELOW,
-            "hidden": hidden, "visible": [round(v, 4) for v in visible]}
+    meta = {**meta, "hidden_below": HIDDEN_BELOW, "hidden": hidden, "visible": [round(v, 4) for v in visible]}
     (folder / "meta.json").write_text(json.dumps(meta, default=_jsonable) + "\n", encoding="utf-8")
     # the box's part inside the frame, as single-object benchmarks annotate a target at the image's edge (the
     # whole box, beyond the edge, is the scene's own ``groundtruth``); NaN when it is out of the frame. A target
     # hidden behind an occluder keeps its box
-    gt = clip_box(scene.groundtruth(target), spec.width, spec.height)
+    gt = clip_box(np.asarray(boxes(), dtype=np.float64), width, height)
     gt[np.asarray(visible) <= 0.0] = np.nan
     write_groundtruth(folder / "groundtruth_rect.txt", gt, decimals=3)
-    (folder / "attrs.txt").write_text(f"synthetic, seed {spec.seed}\n", encoding="utf-8")
+    (folder / "attrs.txt").write_text(f"synthetic, seed {meta.get('seed')}\n", encoding="utf-8")
 
 
 def _jsonable(v):
