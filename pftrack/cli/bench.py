@@ -101,11 +101,9 @@ def cmd_bench(args) -> int:
     return 0
 
 
-PHOTO_KINDS = ("photo-leave", "photo-vanish")
-
-
 def add_synth(sub) -> None:
     from ..synth import SCENES
+    from ..synth.photo import PHOTO_SCENES
     from ..synth.varied import DRAWN_NUISANCE_SCENES
 
     p = sub.add_parser("synth", help="write seeded synthetic scenes with exact ground truth as OTB folders",
@@ -113,7 +111,7 @@ def add_synth(sub) -> None:
                                    "evaluate trackers on them with 'pftrack eval'.")
     p.add_argument("kind", choices=sorted(SCENES) + ["occluder", "stereo-rail", "traffic-dense", "traffic-sparse",
                                                              "twocam", "walkers", "xray", "deform", "kymo", "face",
-                                                             "photo-vanish", "photo-leave"],
+                                                             *PHOTO_SCENES],
                    help="scene generator; 'xray' warps the grey frame given with --source by a known motion (book "
                         "ch. 14); 'occluder' (points behind a bar: img/, points_gt.csv) and 'stereo-rail' (left/, "
                         "right/, calib.json, stereo_gt.csv) are the point-tracking scenes of book ch. 7; 'traffic-sparse' and "
@@ -154,8 +152,8 @@ def add_synth(sub) -> None:
     p.add_argument("--out", required=True, help="output folder (one sub-folder per seed)")
     p.add_argument("--gray", type=float, default=None, metavar="P",
                    help="probability that a scene is grey (the scenes with drawn nuisances: "
-                        f"{', '.join(DRAWN_NUISANCE_SCENES + PHOTO_KINDS)}; default 0.3). The other nuisances of a seed "
-                        "stay the same, so --gray 1 gives each seed's scene in grey")
+                        f"{', '.join(DRAWN_NUISANCE_SCENES + tuple(PHOTO_SCENES))}; default 0.3). The other nuisances "
+                        "of a seed stay the same, so --gray 1 gives each seed's scene in grey")
     p.set_defaults(func=cmd_synth)
 
 
@@ -204,6 +202,7 @@ def cmd_synth(args) -> int:
     from ..errors import ParameterError
     from ..io.sinks import prepare_output
     from ..synth import SCENES, export_otb
+    from ..synth.photo import PHOTO_SCENES
     from ..synth.varied import DRAWN_NUISANCE_SCENES
 
     try:
@@ -213,10 +212,10 @@ def cmd_synth(args) -> int:
     out = Path(args.out)
     image = None
     draw = {}
+    drawn = DRAWN_NUISANCE_SCENES + tuple(PHOTO_SCENES)
     if args.gray is not None:
-        if args.kind not in DRAWN_NUISANCE_SCENES + PHOTO_KINDS:
-            raise ParameterError(f"--gray applies to the scenes {', '.join(DRAWN_NUISANCE_SCENES + PHOTO_KINDS)}, "
-                                 f"not {args.kind!r}")
+        if args.kind not in drawn:
+            raise ParameterError(f"--gray applies to the scenes {', '.join(drawn)}, not {args.kind!r}")
         if not 0.0 <= args.gray <= 1.0:
             raise ParameterError(f"--gray is a probability in [0, 1], got {args.gray}")
         draw["gray"] = args.gray
@@ -244,7 +243,7 @@ def cmd_synth(args) -> int:
             face_image, face_box = portrait(args.portrait)  # loaded once for every seed
         except ImportError as e:
             raise ParameterError(str(e)) from None
-    if args.kind in PHOTO_KINDS:
+    if args.kind in PHOTO_SCENES:
         from ..synth.photo import photo
 
         try:
@@ -290,8 +289,8 @@ def cmd_synth(args) -> int:
             scene = live_face_scene if args.live else face_scene
             export_face(*scene(sd, image=face_image, face=face_box, turn=args.turn),
                         out / f"{'live-face' if args.live else 'face'}-{sd:03d}")
-        elif args.kind in PHOTO_KINDS:
-            from ..synth.photo import PHOTO_SCENES, export_photo
+        elif args.kind in PHOTO_SCENES:
+            from ..synth.photo import export_photo
 
             export_photo(PHOTO_SCENES[args.kind](sd, **draw), out / f"{args.kind}-{sd:03d}")
         elif args.kind == "stereo-rail":
