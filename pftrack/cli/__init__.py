@@ -1,7 +1,7 @@
 """The ``pftrack`` command line.  It only wires sources, trackers and sinks together.
 
 One module per command group: :mod:`.track` (track, demo), :mod:`.mot`,
-:mod:`.evaluate` (eval, list), :mod:`.bench` (bench, synth), :mod:`.densitometry` (book ch. 14),
+:mod:`.evaluate` (eval, list), :mod:`.bench` (bench), :mod:`.synth`, :mod:`.densitometry` (book ch. 14),
 :mod:`.points` (points, stereo: book ch. 7), :mod:`.events` (tripwire: book ch. 10),
 :mod:`.multicam` (handover: book ch. 11),
 :mod:`.calibration` (calibrate-sim: book ch. 12), :mod:`.surface` (surface: book ch. 13),
@@ -24,7 +24,7 @@ from collections.abc import Sequence
 
 from .. import __version__
 from ..errors import Interrupted, PftrackError
-from .bench import add_bench, add_synth
+from .bench import add_bench
 from .calibration import add_calibrate_sim
 from .common import DEFAULT_TRACKER, ArgumentParser
 from .compressed import add_activity
@@ -36,6 +36,7 @@ from .multicam import add_handover
 from .points import add_points, add_stereo
 from .segment import add_segment
 from .surface import add_surface
+from .synth import add_synth
 from .track import add_demo, add_track, demo_clip, run_track
 
 __all__ = ["DEFAULT_TRACKER", "build_parser", "demo_clip", "main", "run_mot", "run_track"]
