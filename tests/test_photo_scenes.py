@@ -145,3 +145,7 @@ def test_fusion_pf_lost_flag_holds_on_photo_scenes(kind, make):
     false = np.nanmean([r.false_rate for r in res])
     assert recall >= 0.7, recall
     assert false <= 0.05, false
+    if kind == "leave":  # re-acquired within 15 frames in >= 75 % of the returns (measured 5 of 6); behind the band
+        # the family falls short of that bar (docs/robustness.md: 48 and 41 of 63 on its two seed sets)
+        events = sum(r.reappearances for r in res)
+        assert events == 6 and sum(r.reacquired for r in res) >= 0.75 * events, [r.reacquired for r in res]
