@@ -295,11 +295,24 @@ def _paste(canvas: np.ndarray, cover: np.ndarray | None, piece: Piece, t: int) -
     m = np.array([[sx, 0.0, x - 0.5 + 0.5 * sx], [0.0, sy, y - 0.5 + 0.5 * sy]])
     a = cv2.warpAffine(piece.alpha, m, (W, H), flags=cv2.INTER_LINEAR, borderValue=0.0)
     px = cv2.warpAffine(piece.pixels, m, (W, H), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    canvas *= 1.0 - a[:, :, None]
-    canvas += px * a[:, :, None]
+    # the alpha is 0 beyond the box's pixels and their neighbours: blend only there
+    x0, y0 = min(max(int(math.floor(x)) - 1, 0), W), min(max(int(math.floor(y)) - 1, 0), H)
+    x1, y1 = min(max(int(math.ceil(x + w)) + 1, 0), W), min(max(int(math.ceil(y + h)) + 1, 0), H)
+    ar = a[y0:y1, x0:x1, None]
+    roi = canvas[y0:y1, x0:x1]
+    roi *= 1.0 - ar
+    roi += px[y0:y1, x0:x1] * ar
     if cover is not None:
-        np.maximum(cover, a, out=cover)
+        np.maximum(cover[y0:y1, x0:x1], a[y0:y1, x0:x1], out=cover[y0:y1, x0:x1])
     return a
+
+
+@lru_cache(maxsize=1)
+def _grid() -> tuple[np.ndarray, np.ndarray]:
+    """The frame's pixel rows and columns (float32), for the lamp."""
+    yy, xx = np.mgrid[0:H, 0:W].astype(np.float32)
+    yy.flags.writeable = xx.flags.writeable = False
+    return yy, xx
 
 
 def render_photo(scene: PhotoScene, t: int) -> tuple[np.ndarray, float]:
@@ -327,7 +340,7 @@ def render_photo(scene: PhotoScene, t: int) -> tuple[np.ndarray, float]:
         lx0, ly0, lx1, ly1, r, s = scene.lamp
         f = t / max(scene.n_frames - 1, 1)
         lx, ly = lx0 + (lx1 - lx0) * f, ly0 + (ly1 - ly0) * f
-        yy, xx = np.mgrid[0:H, 0:W].astype(np.float32)
+        yy, xx = _grid()
         light = light * (1.0 + s * np.exp(-((xx - lx) ** 2 + (yy - ly) ** 2) / (2 * r * r)))[:, :, None]
     canvas *= light
     canvas += rng.normal(0.0, scene.noise, canvas.shape).astype(np.float32)
