@@ -444,8 +444,8 @@ def write_otb_folder(folder, frames, visible: list[float], boxes, width: int, he
     meta = {**meta, "hidden_below": HIDDEN_BELOW, "hidden": hidden, "visible": [round(v, 4) for v in visible]}
     (folder / "meta.json").write_text(json.dumps(meta, default=_jsonable) + "\n", encoding="utf-8")
     # the box's part inside the frame, as single-object benchmarks annotate a target at the image's edge (the
-    # whole box, beyond the edge, is the scene's own ``groundtruth``); NaN when it is out of the frame. A target
-    # hidden behind an occluder keeps its box
+    # whole box, beyond the edge, is the scene's own ``groundtruth``); NaN where nothing of the target is visible
+    # (out of the frame, or wholly behind an occluder). A target partly hidden keeps its box
     gt = clip_box(np.asarray(boxes(), dtype=np.float64), width, height)
     gt[np.asarray(visible) <= 0.0] = np.nan
     write_groundtruth(folder / "groundtruth_rect.txt", gt, decimals=3)
