@@ -149,3 +149,36 @@ def test_fusion_pf_lost_flag_holds_on_photo_scenes(kind, make):
         # the family falls short of that bar (docs/robustness.md: 48 and 41 of 63 on its two seed sets)
         events = sum(r.reappearances for r in res)
         assert events == 5 and sum(r.reacquired for r in res) >= 0.75 * events, [r.reacquired for r in res]
+
+
+def test_photo_summary_script_splits_a_run_by_kind_and_nuisance(tmp_path, capsys):
+    """scripts/photo_summary.py: the figures per kind and with / without each nuisance (docs/robustness.md)."""
+    import csv
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("photo_summary", Path(__file__).parents[1] / "scripts" /
+                                                  "photo_summary.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    scenes = tmp_path / "scenes"
+    for name, kind, lamp in (("photo-vanish-000", "photo-vanish", True), ("photo-leave-000", "photo-leave", False)):
+        (scenes / name).mkdir(parents=True)
+        nz = {"lamp": lamp, "lookalikes": 1, "gain_end": [1.0, 1.4, 1.0], "jpeg": 0}
+        (scenes / name / "meta.json").write_text(json.dumps({"kind": kind, "gray": False, "nuisances": nz}))
+    report = tmp_path / "report"
+    report.mkdir()
+    cols = ["tracker", "sequence", "auc", "lost_recall", "false_lost", "reacquired", "reappearances"]
+    with open(report / "results.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(cols)
+        w.writerow(["fusion-pf", "photo-vanish-000", 0.5, 1.0, 0.0, 0, 1])
+        w.writerow(["fusion-pf", "photo-vanish-000", 0.7, 0.8, 0.1, 1, 1])
+        w.writerow(["fusion-pf", "photo-leave-000", 0.9, 1.0, 0.0, 1, 1])
+        w.writerow(["fusion-pf", "other-seq", 0.1, "", "", "", ""])  # not a scene of the folders: left out
+    assert mod.main([str(report), str(scenes)]) == 0
+    out = capsys.readouterr().out
+    assert "photo-vanish  AUC 0.600, lost recall 0.900, false-lost 0.050, re-acquired 1 of 2 (1 scenes)" in out
+    assert "photo-leave   AUC 0.900, lost recall 1.000, false-lost 0.000, re-acquired 1 of 1 (1 scenes)" in out
+    assert "with: re-acquired 1 of 2, AUC 0.600 (2 runs); without: re-acquired 1 of 1, AUC 0.900 (1 runs)" in out
+    assert mod.main([str(report)]) == 2
