@@ -31,9 +31,10 @@ def add_synth(sub) -> None:
                         "(img/, box.txt, roi.txt, scanline.txt, truth.json; the stabilised kymogram of book ch. 13); "
                         "'face' is a grey face under a dimming light, a drifting lamp and a "
                         "sweeping shadow, seen by a panning and zooming camera (built from scikit-image's portrait); "
-                        "'photo-vanish' and 'photo-leave' cut everything from photographs (a target that walks "
-                        "behind an opaque band, or out of the view and back, among hue-turned look-alikes: a scene "
-                        "family independent of the others, pftrack.synth.photo; needs scikit-image)")
+                        "'photo-vanish', 'photo-leave' and 'photo-exit' cut everything from photographs (a target "
+                        "that walks behind an opaque band, out of the view and back, or out in a flow of look-alikes, "
+                        "among hue-turned look-alikes: a scene family independent of the others, "
+                        "pftrack.synth.photo; needs scikit-image)")
     p.add_argument("--source", help="xray: the grey image to warp (an angiography frame); twocam: a MOTChallenge "
                                     "sequence folder")
     p.add_argument("--response", choices=["mild", "strong"], default="mild",

@@ -17,10 +17,12 @@ photograph (scikit-image's data, public domain or CC0; see :data:`PHOTOS`).
   lamp (a broad bright spot) drifts across the view; a third of the scenes are grey; sensor noise of 1.5-4
   levels, and JPEG compression (quality 55-90) in half of them.
 
-Two kinds:
+Three kinds:
 
 * :func:`photo_vanish_scene` — the target walks fully behind the occluder and comes out on the other side;
-* :func:`photo_leave_scene` — the target walks out of the frame, stays out 15-40 frames and walks back in.
+* :func:`photo_leave_scene` — the target walks out of the frame, stays out 15-40 frames and walks back in;
+* :func:`photo_exit_scene` — the target walks out in a flow of look-alikes heading the same way, and comes back or a
+  look-alike walks in instead.
 
 The box is the target's piece, carried through its motion and scale; the visible fraction counts the occluder,
 the look-alikes in front and the frame's edge. :func:`export_photo` writes the OTB folder with the ``meta.json``
@@ -38,7 +40,8 @@ import numpy as np
 
 from .scenes import _wander, write_otb_folder
 
-__all__ = ["PHOTOS", "PhotoScene", "export_photo", "photo_leave_scene", "photo_vanish_scene", "render_photo"]
+__all__ = ["PHOTOS", "PhotoScene", "export_photo", "photo_exit_scene", "photo_leave_scene", "photo_vanish_scene",
+           "render_photo"]
 
 W, H = 320, 240
 #: scikit-image's colour photographs the scenes are cut from (astronaut: NASA, public domain; chelsea, coffee:
@@ -187,14 +190,22 @@ def _draw(rng: np.random.Generator, n_frames: int, gray: float) -> dict:
             "scale_end": float(rng.uniform(0.8, 1.2)), "speed": float(rng.uniform(1.0, 3.5))}
 
 
-def _scene(rng, d: dict, kind: str, seed: int, n_frames: int, path, occluder=None, extra=None) -> PhotoScene:
+def _scene(rng, d: dict, kind: str, seed: int, n_frames: int, path, occluder=None, extra=None,
+           look_paths=None) -> PhotoScene:
+    """The scene of drawn pieces ``d`` and the target's ``path``; the look-alikes wander unless ``look_paths`` gives
+    each one's ``(path, size)``."""
     size = d["size"]
     pix = d["pixels"]
     target = Piece(pix, _alpha(pix.shape[1], pix.shape[0], d["ellipse"]), _boxes(path, n_frames, size,
                                                                                  d["scale_end"]))
     start = path[0][1:]
     looks = []
-    for lp in d["looks"]:
+    for i, lp in enumerate(d["looks"]):
+        if look_paths is not None:
+            lpath, s = look_paths[i]
+            looks.append(Piece(lp, _alpha(lp.shape[1], lp.shape[0], rng.random() < 0.6), _boxes(lpath, n_frames, s,
+                                                                                                  1.0)))
+            continue
         s = tuple(v * rng.uniform(0.85, 1.15) for v in size)
         p0 = None
         for _ in range(20):  # start away from the target, so that the first frame is unambiguous
@@ -285,6 +296,57 @@ def photo_leave_scene(seed: int = 0, n_frames: int = 140, *, gray: float = 0.3) 
     return _scene(rng, d, "photo-leave", seed, n_frames, path, extra={"out_frames": out_frames})
 
 
+def photo_exit_scene(seed: int = 0, n_frames: int = 140, *, gray: float = 0.3) -> PhotoScene:
+    """The target walks out through a side edge in a flow of look-alikes heading the same way.
+
+    1-3 look-alikes follow it towards that edge, 2-6 target widths behind, at 0.7-1.2 times its speed, and leave
+    too. With probability 0.5 the target comes back through that edge 15-40 frames after it left; otherwise a
+    look-alike walks in through it at a drawn time instead (nothing in its looks says it is not the target). The
+    flow at an exit of :func:`pftrack.synth.varied.exit_scene`, cut from photographs."""
+    rng = np.random.default_rng([seed, 94])
+    d = _draw(rng, n_frames, gray)
+    w, h = d["size"]
+    grow = max(1.0, d["scale_end"])
+    speed = float(np.clip(d["speed"], 1.5, 3.5))
+    side = -1.0 if rng.random() < 0.5 else 1.0
+    edge_out = -w * grow if side < 0 else W + w * grow  # the centre where the box is wholly outside
+    x0 = float(np.clip(edge_out - side * speed * rng.uniform(25, 40), w * grow, W - w * grow))
+    y0 = float(rng.uniform(h * grow * 0.6 + 5, H - h * grow * 0.6 - 5))
+    t_exit = abs(edge_out - x0) / speed
+    comes_back = bool(rng.random() < 0.5)
+    if comes_back:
+        t_back = t_exit + int(rng.integers(15, 41))
+        x_in = edge_out - side * min(abs(edge_out - x0), 4.0 * w)
+        t_in = t_back + abs(edge_out - x_in) / speed
+        y_back = float(np.clip(y0 + rng.uniform(-20, 20), h * grow * 0.6 + 5, H - h * grow * 0.6 - 5))
+        path = ((0, x0, y0), (t_exit, edge_out, y0), (t_back, edge_out, y_back), (t_in, x_in, y_back),
+                (max(n_frames - 1, t_in + 1), x_in, y_back))
+    else:
+        path = ((0, x0, y0), (t_exit, edge_out, y0), (max(n_frames - 1, t_exit + 1), edge_out, y0))
+    tsrc = photo(d["tgt_name"])
+    n_flow = int(rng.integers(1, 4))
+    d["looks"] = [_lookalike(rng, d["pixels"], tsrc) for _ in range(n_flow + (0 if comes_back else 1))]
+    look_paths = []
+    for _ in range(n_flow):  # the flow towards the exit
+        s = (w * float(rng.uniform(0.85, 1.15)), h * float(rng.uniform(0.85, 1.15)))
+        v = speed * float(rng.uniform(0.7, 1.2))
+        xs = float(np.clip(x0 - side * w * rng.uniform(2.0, 6.0), -0.4 * w, W + 0.4 * w))
+        ys = float(rng.uniform(s[1] * 0.6 + 5, H - s[1] * 0.6 - 5))
+        out = edge_out - side * (w * grow - s[0])  # wholly outside too
+        look_paths.append((((0, xs, ys), (abs(out - xs) / v, out, ys), (max(n_frames - 1, abs(out - xs) / v + 1), out,
+                                                                        ys)), s))
+    if not comes_back:  # a look-alike walks in through the exit edge
+        s = (w * float(rng.uniform(0.85, 1.15)), h * float(rng.uniform(0.85, 1.15)))
+        t0 = float(t_exit + rng.integers(5, 40))
+        ys = float(rng.uniform(s[1] * 0.6 + 5, H - s[1] * 0.6 - 5))
+        x_in = edge_out - side * W * 0.5
+        t1 = t0 + abs(edge_out - x_in) / speed
+        look_paths.append((((0, edge_out, ys), (t0, edge_out, ys), (t1, x_in, ys), (max(n_frames - 1, t1 + 1), x_in,
+                                                                                   ys)), s))
+    return _scene(rng, d, "photo-exit", seed, n_frames, path, look_paths=look_paths,
+                  extra={"comes_back": comes_back, "flow": n_flow})
+
+
 def _paste(canvas: np.ndarray, cover: np.ndarray | None, piece: Piece, t: int) -> np.ndarray:
     """Draw ``piece`` at frame ``t`` over ``canvas`` (in place); returns its alpha in the frame. ``cover`` (the
     pieces drawn over the target so far) is raised by it when given."""
@@ -369,4 +431,4 @@ def export_photo(scene: PhotoScene, folder) -> None:
 
 
 #: ``pftrack synth`` kinds of this module
-PHOTO_SCENES = {"photo-vanish": photo_vanish_scene, "photo-leave": photo_leave_scene}
+PHOTO_SCENES = {"photo-vanish": photo_vanish_scene, "photo-leave": photo_leave_scene, "photo-exit": photo_exit_scene}
