@@ -10,8 +10,8 @@
 #   report: otb_motorrolling, tld_pedestrian2, davis16_blackswan, davis16_car-shadow, their grey and grey+light
 #           variants, the people of PETS frames 201-400, freshly seeded synthetic scenes, seeds 100-107
 #           (never tuned on); and the PETS windows of frames 201-400, and the four real targets' windows
-#   both:   in a run of their own, the scenes cut from photographs (photo-vanish, photo-leave; a family that shares
-#           no drawing with the synthetic scenes above): seeds 1000-1019 for tune, 0-19 for report
+#   both:   in a run of their own, the scenes cut from photographs (photo-vanish, photo-leave, photo-exit; a family
+#           that shares no drawing with the synthetic scenes above): seeds 1000-1019 for tune, 0-19 for report
 #           (docs/rules/photo_scenes_rule.txt)
 #
 # Usage: bash scripts/make_split_eval.sh [DATA_DIR] [WORK_DIR]   (defaults ../shared/data, reports/split)
@@ -44,7 +44,7 @@ for kind in vanish leave exit varied camouflage teleport; do
   [ -d "$WORK/tune_synth/$kind" ] || "$PFTRACK" synth "$kind" --seeds 0-7 --out "$WORK/tune_synth/$kind"
   [ -d "$WORK/report_synth/$kind" ] || "$PFTRACK" synth "$kind" --seeds 100-107 --out "$WORK/report_synth/$kind"
 done
-for kind in photo-vanish photo-leave; do
+for kind in photo-vanish photo-leave photo-exit; do
   [ -d "$WORK/tune_photo/$kind" ] || "$PFTRACK" synth "$kind" --seeds 1000-1019 --out "$WORK/tune_photo/$kind"
   [ -d "$WORK/report_photo/$kind" ] || "$PFTRACK" synth "$kind" --seeds 0-19 --out "$WORK/report_photo/$kind"
 done
@@ -62,7 +62,7 @@ for split in tune report; do
     --report "$WORK/${split}_exits_eval" --title "pftrack: $split split, windows of the real sequences" \
     > "$WORK/${split}_exits.md"
   # scenes cut from photographs: another drawing style than the synthetic scenes the defaults were chosen on
-  "$PFTRACK" eval "$WORK/${split}_photo"/{photo-vanish,photo-leave} --trackers "$TRACKERS" --seeds "$SEEDS" \
-    --workers 2 --quiet --report "$WORK/${split}_photo_eval" --title "pftrack: $split split, photo scenes" \
-    > "$WORK/${split}_photo.md"
+  "$PFTRACK" eval "$WORK/${split}_photo"/{photo-vanish,photo-leave,photo-exit} --trackers "$TRACKERS" \
+    --seeds "$SEEDS" --workers 2 --quiet --report "$WORK/${split}_photo_eval" \
+    --title "pftrack: $split split, photo scenes" > "$WORK/${split}_photo.md"
 done

@@ -15,6 +15,7 @@ from pftrack.synth.photo import (  # noqa: E402
     PhotoScene,
     Piece,
     _alpha,
+    photo_exit_scene,
     photo_leave_scene,
     photo_vanish_scene,
     render_photo,
@@ -98,6 +99,29 @@ def test_leave_takes_the_target_out_of_the_frame_and_back():
         assert render_photo(sc, int(np.flatnonzero(out)[0]))[1] == 0.0
         x, y, w, h = boxes[-1]
         assert x >= 0 and x + w <= W and y >= 0 and y + h <= H
+
+
+def test_exit_sends_a_flow_of_look_alikes_out_the_same_way_and_one_in_when_the_target_stays_out():
+    kinds = set()
+    for seed in range(8):
+        sc = photo_exit_scene(seed)
+        boxes = sc.target.boxes
+        right = bool((boxes[:, 0] >= W).any())  # it leaves by the right edge (else the left)
+        out = (boxes[:, 0] + boxes[:, 2] <= 0) | (boxes[:, 0] >= W)
+        assert out.any() and render_photo(sc, int(np.flatnonzero(out)[0]))[1] == 0.0
+        back = sc.nuisances["comes_back"]
+        kinds.add(back)
+        assert back == (not out[-1])  # back in view at the end exactly when it comes back
+        flow = sc.lookalikes[:sc.nuisances["flow"]]
+        assert 1 <= len(flow) <= 3 and len(sc.lookalikes) == len(flow) + (0 if back else 1)
+        for piece in flow:  # heading for the target's exit edge (the slow ones may not reach it by the end)
+            x = piece.boxes[:, 0]
+            step = np.diff(x) if right else -np.diff(x)
+            assert np.all(step >= -1e-9) and step.sum() > 0
+        if not back:  # the one walking in starts outside that edge and ends inside
+            b = sc.lookalikes[-1].boxes
+            assert ((b[0, 0] >= W) if right else (b[0, 0] + b[0, 2] <= 0)) and 0 <= b[-1, 0] <= W - b[-1, 2]
+    assert kinds == {True, False}
 
 
 def test_cli_writes_otb_folders_with_hidden_frames_and_grey_on_request(tmp_path, capsys):
