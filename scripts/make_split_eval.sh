@@ -25,14 +25,17 @@ PY="${PY:-.venv/bin/python}"
 TRACKERS="${TRACKERS:-color-pf,fusion-pf,local-motion-pf,opencv-csrt}"
 SEEDS="${SEEDS:-3}"
 mkdir -p "$WORK"/{tune_real,report_real}
-for s in otb_crossing otb_couple vot_bag otb_dragonbaby davis16_dog; do ln -sfn "$(realpath "$DATA/$s")" "$WORK/tune_real/$s"; done
+for s in otb_crossing otb_couple vot_bag otb_dragonbaby davis16_dog; do
+  ln -sfn "$(realpath "$DATA/$s")" "$WORK/tune_real/$s"; done
 for s in otb_motorrolling tld_pedestrian2 davis16_blackswan davis16_car-shadow; do
   ln -sfn "$(realpath "$DATA/$s")" "$WORK/report_real/$s"; done
 [ -d "$WORK/tune_variants" ] || "$PY" scripts/make_variants.py "$WORK"/tune_real/* --out "$WORK/tune_variants"
 [ -d "$WORK/report_variants" ] || "$PY" scripts/make_variants.py "$WORK"/report_real/* --out "$WORK/report_variants"
 [ -d "$WORK/tune_pets" ] || "$PY" scripts/make_mot_sot.py "$DATA/pets09_s2l1_dev" --frames 1-200 --out "$WORK/tune_pets"
-[ -d "$WORK/report_pets" ] || "$PY" scripts/make_mot_sot.py "$DATA/pets09_s2l1_dev" --frames 201-400 --out "$WORK/report_pets"
-[ -d "$WORK/tune_views" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 1-200 --out "$WORK/tune_views"
+[ -d "$WORK/report_pets" ] || "$PY" scripts/make_mot_sot.py "$DATA/pets09_s2l1_dev" --frames 201-400 \
+  --out "$WORK/report_pets"
+[ -d "$WORK/tune_views" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 1-200 \
+  --out "$WORK/tune_views"
 [ -d "$WORK/report_views" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 201-400 \
   --out "$WORK/report_views"
 for split in tune report; do
