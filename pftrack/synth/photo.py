@@ -3,7 +3,7 @@
 The scenes of :mod:`pftrack.synth.varied` draw every target as a two-coloured speckled ellipse over a synthetic
 texture, and the defaults of the colour trackers were chosen on scenes of that style. A tracker may have learnt
 the style rather than the task. These scenes share none of its drawing: everything in them is a piece of a real
-photograph (scikit-image's data, public domain or CC0; see :data:`PHOTOS`).
+photograph of scikit-image's data (public domain, CC0 or without known restrictions; see :data:`PHOTOS`).
 
 * **Background.** A crop of one photograph, resized to 320 x 240, panned slowly by the camera in half the scenes.
 * **Target.** A textured piece of another photograph (18-48 px wide, aspect 0.7-2.2), feathered to an ellipse or
@@ -44,11 +44,12 @@ __all__ = ["PHOTOS", "PhotoScene", "export_photo", "photo_exit_scene", "photo_le
            "render_photo"]
 
 W, H = 320, 240
-#: scikit-image's colour photographs the scenes are cut from (astronaut: NASA, public domain; chelsea, coffee:
-#: Stefan van der Walt, CC0; rocket: SpaceX, CC0; motorcycle: Middlebury stereo, via scikit-image; ihc: Guillermo
-#: Marcus, CC0)
+#: scikit-image's colour photographs the scenes are cut from, as its data module describes them (astronaut: NASA,
+#: public domain; chelsea: Stefan van der Walt, CC0; coffee: Rachel Michetti, CC0; rocket: SpaceX, public domain;
+#: motorcycle: the Middlebury 2014 stereo benchmark, down-sampled; ihc: the Center for Microscopy And Molecular
+#: Imaging, no known copyright restrictions)
 PHOTOS = ("astronaut", "chelsea", "coffee", "rocket", "motorcycle", "ihc")
-#: grey textures of scikit-image, tinted, for occluders
+#: grey textures of scikit-image (from CC0Textures, CC0), tinted, for occluders
 TEXTURES = ("brick", "grass", "gravel")
 
 
