@@ -39,6 +39,7 @@ import cv2
 import numpy as np
 
 from .scenes import _wander, write_otb_folder
+from .varied import exit_path, exit_walkers
 
 __all__ = ["PHOTOS", "PhotoScene", "export_photo", "photo_exit_scene", "photo_leave_scene", "photo_vanish_scene",
            "render_photo"]
@@ -309,41 +310,13 @@ def photo_exit_scene(seed: int = 0, n_frames: int = 140, *, gray: float = 0.3) -
     w, h = d["size"]
     grow = max(1.0, d["scale_end"])
     speed = float(np.clip(d["speed"], 1.5, 3.5))
-    side = -1.0 if rng.random() < 0.5 else 1.0
-    edge_out = -w * grow if side < 0 else W + w * grow  # the centre where the box is wholly outside
-    x0 = float(np.clip(edge_out - side * speed * rng.uniform(25, 40), w * grow, W - w * grow))
-    y0 = float(rng.uniform(h * grow * 0.6 + 5, H - h * grow * 0.6 - 5))
-    t_exit = abs(edge_out - x0) / speed
-    comes_back = bool(rng.random() < 0.5)
-    if comes_back:
-        t_back = t_exit + int(rng.integers(15, 41))
-        x_in = edge_out - side * min(abs(edge_out - x0), 4.0 * w)
-        t_in = t_back + abs(edge_out - x_in) / speed
-        y_back = float(np.clip(y0 + rng.uniform(-20, 20), h * grow * 0.6 + 5, H - h * grow * 0.6 - 5))
-        path = ((0, x0, y0), (t_exit, edge_out, y0), (t_back, edge_out, y_back), (t_in, x_in, y_back),
-                (max(n_frames - 1, t_in + 1), x_in, y_back))
-    else:
-        path = ((0, x0, y0), (t_exit, edge_out, y0), (max(n_frames - 1, t_exit + 1), edge_out, y0))
+    path, side, edge_out, x0, t_exit, comes_back = exit_path(rng, n_frames, w, h, speed, grow)
     tsrc = photo(d["tgt_name"])
     n_flow = int(rng.integers(1, 4))
     d["looks"] = [_lookalike(rng, d["pixels"], tsrc) for _ in range(n_flow + (0 if comes_back else 1))]
-    look_paths = []
-    for _ in range(n_flow):  # the flow towards the exit
-        s = (w * float(rng.uniform(0.85, 1.15)), h * float(rng.uniform(0.85, 1.15)))
-        v = speed * float(rng.uniform(0.7, 1.2))
-        xs = float(np.clip(x0 - side * w * rng.uniform(2.0, 6.0), -0.4 * w, W + 0.4 * w))
-        ys = float(rng.uniform(s[1] * 0.6 + 5, H - s[1] * 0.6 - 5))
-        out = edge_out - side * (w * grow - s[0])  # wholly outside too
-        look_paths.append((((0, xs, ys), (abs(out - xs) / v, out, ys), (max(n_frames - 1, abs(out - xs) / v + 1), out,
-                                                                        ys)), s))
-    if not comes_back:  # a look-alike walks in through the exit edge
-        s = (w * float(rng.uniform(0.85, 1.15)), h * float(rng.uniform(0.85, 1.15)))
-        t0 = float(t_exit + rng.integers(5, 40))
-        ys = float(rng.uniform(s[1] * 0.6 + 5, H - s[1] * 0.6 - 5))
-        x_in = edge_out - side * W * 0.5
-        t1 = t0 + abs(edge_out - x_in) / speed
-        look_paths.append((((0, edge_out, ys), (t0, edge_out, ys), (t1, x_in, ys), (max(n_frames - 1, t1 + 1), x_in,
-                                                                                   ys)), s))
+    # the flow ends wholly outside too
+    look_paths = exit_walkers(rng, n_flow, n_frames, (w, h), speed, x0, side, edge_out, t_exit, comes_back,
+                              out=lambda s: edge_out - side * (w * grow - s[0]))
     return _scene(rng, d, "photo-exit", seed, n_frames, path, look_paths=look_paths,
                   extra={"comes_back": comes_back, "flow": n_flow})
 

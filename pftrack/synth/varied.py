@@ -196,6 +196,57 @@ def camouflage_scene(seed: int = 0, n_frames: int = 150, **draw) -> SceneSpec:
                      illumination=(gain, gain, gain), kind="camouflage", nuisances=tuple(sorted(nz.items())))
 
 
+def exit_path(rng: np.random.Generator, n_frames: int, w: float, h: float, speed: float, grow: float = 1.0):
+    """The path of a target of size ``(w, h)`` (up to ``grow`` times larger) that walks out through a side edge at
+    ``speed`` and, with probability 0.5, comes back through it 15-40 frames later (an exit scene's target).
+
+    Returns ``(path, side, edge_out, x0, t_exit, comes_back)``: the waypoints, the edge (-1 left, +1 right), the
+    centre's x where the box is wholly outside, the start's x, the frame it is out at, and whether it comes back."""
+    side = -1.0 if rng.random() < 0.5 else 1.0
+    edge_out = -w * grow if side < 0 else W + w * grow  # the centre where the box is wholly outside
+    x0 = float(np.clip(edge_out - side * speed * rng.uniform(25, 40), w * grow, W - w * grow))
+    y0 = float(rng.uniform(h * grow * 0.6 + 5, H - h * grow * 0.6 - 5))
+    t_exit = abs(edge_out - x0) / speed
+    comes_back = bool(rng.random() < 0.5)
+    if comes_back:
+        t_back = t_exit + int(rng.integers(15, 41))
+        x_in = edge_out - side * min(abs(edge_out - x0), 4.0 * w)
+        t_in = t_back + abs(edge_out - x_in) / speed
+        y_back = float(np.clip(y0 + rng.uniform(-20, 20), h * grow * 0.6 + 5, H - h * grow * 0.6 - 5))
+        path = ((0, x0, y0), (t_exit, edge_out, y0), (t_back, edge_out, y_back), (t_in, x_in, y_back),
+                (max(n_frames - 1, t_in + 1), x_in, y_back))
+    else:
+        path = ((0, x0, y0), (t_exit, edge_out, y0), (max(n_frames - 1, t_exit + 1), edge_out, y0))
+    return path, side, edge_out, x0, t_exit, comes_back
+
+
+def exit_walkers(rng: np.random.Generator, n_flow: int, n_frames: int, size: tuple[float, float], speed: float,
+                 x0: float, side: float, edge_out: float, t_exit: float, comes_back: bool, out=None) -> list:
+    """``(path, size)`` of ``n_flow`` look-alikes heading out through the exit edge of :func:`exit_path` behind the
+    target (2-6 target widths behind, at 0.7-1.2 times its speed) and, when the target does not come back, of one
+    more walking in through that edge at a drawn time. ``out(s)``: where a walker of size ``s`` ends (default the
+    target's ``edge_out``)."""
+    w, h = size
+    walkers = []
+    for _ in range(n_flow):
+        s = (w * float(rng.uniform(0.85, 1.15)), h * float(rng.uniform(0.85, 1.15)))
+        v = speed * float(rng.uniform(0.7, 1.2))
+        xs = float(np.clip(x0 - side * w * rng.uniform(2.0, 6.0), -0.4 * w, W + 0.4 * w))
+        ys = float(rng.uniform(s[1] * 0.6 + 5, H - s[1] * 0.6 - 5))
+        end = edge_out if out is None else out(s)
+        t = abs(end - xs) / v
+        walkers.append((((0, xs, ys), (t, end, ys), (max(n_frames - 1, t + 1), end, ys)), s))
+    if not comes_back:
+        s = (w * float(rng.uniform(0.85, 1.15)), h * float(rng.uniform(0.85, 1.15)))
+        t0 = float(t_exit + rng.integers(5, 40))
+        ys = float(rng.uniform(s[1] * 0.6 + 5, H - s[1] * 0.6 - 5))
+        x_in = edge_out - side * W * 0.5
+        t1 = t0 + abs(edge_out - x_in) / speed
+        walkers.append((((0, edge_out, ys), (t0, edge_out, ys), (t1, x_in, ys), (max(n_frames - 1, t1 + 1), x_in,
+                                                                               ys)), s))
+    return walkers
+
+
 def exit_scene(seed: int = 0, n_frames: int = 140, **draw) -> SceneSpec:
     """The target walks out through a side edge in a flow of look-alikes heading the same way.
 
@@ -208,40 +259,13 @@ def exit_scene(seed: int = 0, n_frames: int = 140, **draw) -> SceneSpec:
     nz = draw_nuisances(rng, distractors=(3, 3), **draw)  # the look-alikes' colours: similar hue
     w, h = nz["size"]
     speed = float(np.clip(nz["speed"], 1.5, 4.0))
-    side = -1.0 if rng.random() < 0.5 else 1.0
-    edge_out = -w if side < 0 else W + w  # centre fully outside
-    x0 = float(np.clip(edge_out - side * speed * rng.uniform(25, 40), w, W - w))
-    y = float(rng.uniform(h * 0.6 + 5, H - h * 0.6 - 5))
-    t_exit = abs(edge_out - x0) / speed
-    comes_back = bool(rng.random() < 0.5)
-    if comes_back:
-        t_back = t_exit + int(rng.integers(15, 41))
-        x_in = edge_out - side * min(abs(edge_out - x0), 4.0 * w)
-        t_in = t_back + abs(edge_out - x_in) / speed
-        y_back = float(np.clip(y + rng.uniform(-20, 20), h * 0.6 + 5, H - h * 0.6 - 5))
-        path = ((0, x0, y), (t_exit, edge_out, y), (t_back, edge_out, y_back), (t_in, x_in, y_back),
-                (max(n_frames - 1, t_in + 1), x_in, y_back))
-    else:
-        path = ((0, x0, y), (t_exit, edge_out, y), (n_frames - 1, edge_out, y))
+    path, side, edge_out, x0, t_exit, comes_back = exit_path(rng, n_frames, w, h, speed)
     tgt = Target(path=path, size=(w, h), colors=nz["colors"], texture=nz["texture"])
     hue_like = nz["distractor_colors"]
-    walkers = []
-    for k in range(int(rng.integers(1, 4))):
-        size = tuple(float(v) * rng.uniform(0.85, 1.15) for v in nz["size"])
-        v = speed * float(rng.uniform(0.7, 1.2))
-        xs = float(np.clip(x0 - side * w * rng.uniform(2.0, 6.0), -0.4 * w, W + 0.4 * w))
-        ys = float(rng.uniform(size[1] * 0.6 + 5, H - size[1] * 0.6 - 5))
-        walkers.append(Target(path=((0, xs, ys), (abs(edge_out - xs) / v, edge_out, ys),
-                                    (max(n_frames - 1, abs(edge_out - xs) / v + 1), edge_out, ys)),
-                              size=size, colors=hue_like[k], texture=nz["texture"]))
-    if not comes_back:  # a look-alike walks in through the exit edge
-        size = tuple(float(v) * rng.uniform(0.85, 1.15) for v in nz["size"])
-        t0 = float(t_exit + rng.integers(5, 40))
-        ys = float(rng.uniform(size[1] * 0.6 + 5, H - size[1] * 0.6 - 5))
-        x_in = edge_out - side * W * 0.5
-        walkers.append(Target(path=((0, edge_out, ys), (t0, edge_out, ys), (t0 + abs(edge_out - x_in) / speed, x_in, ys),
-                                    (max(n_frames - 1, t0 + abs(edge_out - x_in) / speed + 1), x_in, ys)),
-                              size=size, colors=hue_like[2], texture=nz["texture"]))
+    n_flow = int(rng.integers(1, 4))
+    colors = [hue_like[k] for k in range(n_flow)] + ([] if comes_back else [hue_like[2]])  # the last walks in
+    walkers = [Target(path=p, size=size, colors=c, texture=nz["texture"]) for c, (p, size) in
+               zip(colors, exit_walkers(rng, n_flow, n_frames, (w, h), speed, x0, side, edge_out, t_exit, comes_back))]
     nz = {**nz, "speed": speed, "comes_back": comes_back, "distractor_colors": tuple(t.colors for t in walkers)}
     return _spec(seed, n_frames, "exit", nz, [tgt, *walkers])
 
