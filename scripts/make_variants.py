@@ -17,6 +17,14 @@ With ``--h264 CRF`` a third folder, ``NAME-h264``, holds the colour frames encod
 factor (libx264, in memory) and decoded again, saved as PNG: a recorder's file instead of clean frames (needs
 PyAV, the ``mv`` extra).
 
+With ``--switch`` four copies are written instead, whose input switches between colour and grey mid-sequence (as a
+camera that turns to monochrome at dusk; docs/rules/input_switch_rule.txt), with n frames:
+
+* ``NAME-switch-after``: colour, grey from frame floor(n/3)+1 to the end (frame numbers from 1);
+* ``NAME-switch-before``: grey up to frame floor(n/3), colour after it;
+* ``NAME-switch-block``: colour, grey for frames floor(n/3)+1 .. floor(2n/3);
+* ``NAME-switch-random``: colour, each frame after the first grey with probability 0.2 (seeded by the name).
+
 Ground truth (``groundtruth_rect.txt``) is copied unchanged.
 """
 
@@ -63,11 +71,49 @@ def write_h264(seq, dest: Path, crf: int) -> None:
     copy_truth(seq, dest)
 
 
+SWITCH_KINDS = ("after", "before", "block", "random")
+
+
+def switch_grey_frames(kind: str, n: int, name: str) -> np.ndarray:
+    """Which of ``n`` frames (from index 0) a ``--switch`` copy of kind ``kind`` turns grey."""
+    i = np.arange(n)
+    third, two_thirds = n // 3, (2 * n) // 3
+    if kind == "after":
+        return i >= third
+    if kind == "before":
+        return i < third
+    if kind == "block":
+        return (i >= third) & (i < two_thirds)
+    if kind == "random":
+        grey = np.random.default_rng(zlib.crc32(f"{name}#switch".encode())).random(n) < 0.2
+        grey[0] = False
+        return grey
+    raise ValueError(f"unknown switch kind {kind!r}")
+
+
+def write_switch(seq, out: Path) -> list[str]:
+    """The four ``--switch`` copies of ``seq`` in ``out``; returns their names."""
+    n = len(seq.frames)
+    names = []
+    for kind in SWITCH_KINDS:
+        grey = switch_grey_frames(kind, n, seq.name)
+        dest = out / f"{seq.name}-switch-{kind}"
+        (dest / "img").mkdir(parents=True, exist_ok=True)
+        for i, path in enumerate(seq.frames):
+            img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if grey[i] else cv2.IMREAD_COLOR)
+            cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+        copy_truth(seq, dest)
+        names.append(dest.name)
+    return names
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("sequences", nargs="+")
     ap.add_argument("--out", required=True)
     ap.add_argument("--h264", type=int, metavar="CRF", help="only the H.264 copies (NAME-h264), at this CRF")
+    ap.add_argument("--switch", action="store_true", help="only the copies whose input switches between colour "
+                    "and grey mid-sequence (NAME-switch-after, -before, -block, -random)")
     ap.add_argument("--light-seeds", metavar="A-B", help="only grey + illumination copies, one per seed "
                     "(NAME-gray-light-sK, the lamp drawn afresh)")
     args = ap.parse_args()
@@ -77,6 +123,9 @@ def main() -> None:
         seq = read_sequence(spec)
         n = len(seq.frames)
         seed = zlib.crc32(seq.name.encode())
+        if args.switch:
+            print(f"{seq.name}: {n} frames -> " + ", ".join(f"{out}/{v}" for v in write_switch(seq, out)))
+            continue
         if args.h264 is not None:
             write_h264(seq, out / f"{seq.name}-h264", args.h264)
             print(f"{seq.name}: {n} frames -> {out}/{seq.name}-h264 (crf {args.h264})")

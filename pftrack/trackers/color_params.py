@@ -344,6 +344,11 @@ class ColorModelParams(Params):
         "values also take an estimate that stayed on the edge as the target slid out for an exit. An option: 0.95 "
         "raised fusion-pf's flag on the PETS views but missed its tune rule on false-lost, and on the report split "
         "lost a pedestrian lost near the edge while still in view (docs/robustness.md)."))
+    input_switch: int = param(0, ge=0, le=1000, doc=(
+        "Input that turns grey mid-sequence (a camera turning monochrome at dusk): after this many grey frames in a "
+        "row, colour features give way to grey ones, started on the grey copy of the last frame where the target "
+        "was seen (pftrack.trackers.input_switch); they stay if colour comes back. 0: the features chosen on the "
+        "first frame stay (docs/rules/input_switch_rule.txt)."))
     reenter_memory: int = param(0, ge=0, le=1000, doc=(
         "With reenter_border: the loss is also an exit when the estimate's box was less than half inside the frame "
         "on one of this many tracked frames before the loss was declared (the edge that box was beyond): a tracker "

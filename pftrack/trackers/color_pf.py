@@ -62,6 +62,7 @@ from .color_params import ColorModelParams
 from .color_pf_params import ColorPFParams
 from .color_search import SearchMixin
 from .distractors import DistractorMemory
+from .input_switch import InputSwitchMixin
 from .persistence import PersistenceMixin
 from .probation import ProbationMixin
 from .static_lookalikes import SceneReference, SceneTestMixin
@@ -75,7 +76,7 @@ Detector = Callable[[np.ndarray], Sequence]
 _ELL_COLS = np.array([X, Y, HX, HY])
 
 
-class ColorParticleFilter(LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixin, PersistenceMixin, SceneTestMixin,
+class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixin, PersistenceMixin, SceneTestMixin,
                           ColorHooks, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
@@ -224,6 +225,16 @@ class ColorParticleFilter(LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixi
         self.last_box = tuple(float(v) for v in box)
         self.last_score = 1.0
         return self._state(box=self.last_box, score=1.0, lost=False)
+
+    def _resume_search(self) -> None:
+        """Search on from the next frame, as after a declared loss (``input_switch`` started again on an earlier
+        frame while the target was lost)."""
+        self.mode = "searching"
+        self.loss.lost = True
+        self.last_score = 0.0
+        self._search_states = None
+        self._search_since = self.frame_index
+        self._last_search = None
 
     # ------------------------------------------------------------------ update
     def _update(self, frame: np.ndarray) -> TrackState:

@@ -113,6 +113,11 @@ class ColorPFParams(ColorModelParams):
         "against 0.537 and 0.734 against 0.613; the tune split +0.0019 +- 0.0017 mean AUC and re-acquired 61 / "
         "90 against 59 (color-pf), unchanged (fusion-pf); colour vanish scenes unchanged. Report split "
         "(reports/final_r8): within +-0.001, re-acquired 66 / 96 (the same) and 74 / 96 (73)."))
+    input_switch: int = param(0, ge=0, le=1000, doc=(
+        "See ColorModelParams.input_switch. Off for color-pf: on the tune real sequences' 20 copies whose input turns "
+        "grey mid-sequence, 1 gave mean AUC 0.501 against 0.486, short of its rule's 0.02 "
+        "(docs/rules/input_switch_rule.txt), though its false-lost rate pooled fell from 0.083 to 0.024; 1 for "
+        "fusion-pf and local-motion-pf. --param input_switch=1 turns it on."))
     reenter_memory: int = param(5, ge=0, le=1000, doc=(
         "See ColorModelParams.reenter_memory (0 there). 5 for color-pf and fusion-pf, chosen on the tune data under "
         "a rule stated before the runs (docs/rules/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled "

@@ -65,6 +65,11 @@ class FusionPFParams(ColorPFParams):
         "pooled lost recall 0.575 both; tune split mean AUC 0.7042 against 0.7041, re-acquired 78 of 90 both (15 "
         "and 18 gained the same 45; 15 cost the views 0.003). Report data, run once after: unchanged (windows 26 of "
         "36, views 0.668, split 78 of 96)."))
+    input_switch: int = param(1, ge=0, le=1000, doc=(
+        "See ColorModelParams.input_switch (0 there and for color-pf). 1 for fusion-pf, chosen on the tune data under "
+        "a rule stated before the runs (docs/rules/input_switch_rule.txt, docs/robustness.md): the tune real "
+        "sequences' 20 copies whose input turns grey mid-sequence, mean AUC 0.550 against 0.521, false-lost pooled "
+        "0.014 against 0.024 (3: 0.483). Input that never turns grey is tracked as before."))
     reenter_memory: int = param(5, ge=0, le=1000, doc=(
         "See ColorModelParams.reenter_memory (0 there). 5 for fusion-pf, chosen on the tune data under a rule stated "
         "before the runs (docs/rules/exit_memory_rule.txt, docs/robustness.md): PETS tune views' pooled lost recall "

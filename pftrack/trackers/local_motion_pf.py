@@ -87,6 +87,11 @@ class LocalMotionPFParams(ColorModelParams):
     lost_frames: int = param(2, ge=1, le=1000, doc=(
         "See ColorModelParams.lost_frames. 2, color-pf's value (with grey_check; acts on colour input as well): tune "
         "split false-lost 0.029 against 0.034 (mean over sequences)."))
+    input_switch: int = param(1, ge=0, le=1000, doc=(
+        "See ColorModelParams.input_switch (0 there and for color-pf). 1 for local-motion-pf, chosen on the tune data under "
+        "a rule stated before the runs (docs/rules/input_switch_rule.txt, docs/robustness.md): the tune real "
+        "sequences' 20 copies whose input turns grey mid-sequence, mean AUC 0.418 against 0.395, false-lost pooled "
+        "0.032 against 0.104 (3: 0.376). Input that never turns grey is tracked as before."))
     persist_frames: int = param(3, ge=0, le=1000, doc=(
         "See ColorModelParams.persist_frames (0 there). 3, color-pf's value (with grey_check; acts on colour input "
         "as well)."))

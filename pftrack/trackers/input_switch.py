@@ -1,0 +1,205 @@
+"""The input switching between colour and grey mid-sequence: the colour trackers choose their features again.
+
+The colour trackers choose their features from the first frame (:meth:`pftrack.cues.histogram_cue.ColorCue
+.adapt_to`): an RGB histogram on colour input, grey features on grey input (every channel equal). A camera that
+turns to monochrome mid-sequence (a day/night camera at dusk, an infrared mode, a black-and-white stretch) would
+otherwise hand a colour model grey frames, whose histograms fall on the grey diagonal: the loss test then calls a
+target in plain view lost. With ``input_switch = N`` (docs/rules/input_switch_rule.txt), once N frames in a row are
+grey the tracker starts again with grey features. It starts them on the grey copy of the frame before the switch,
+at that frame's box (the grey copy holds the same target at the same place), then tracks the new frame; if the
+target was lost there, on the grey copy of the last frame where it was not, and it goes on searching.
+
+Grey features stay when colour comes back: they read the grey levels of any frame, and starting colour features
+again mid-track cost more than it gained (docs/rules/input_switch_rule.txt).
+
+Grey frames before the switch (``input_switch`` > 1) are tracked with the colour features. A blank frame (a cut
+to black, a flash: its grey levels span fewer than :data:`BLANK_SPAN`) is no evidence either way.
+
+:func:`frame_is_grey` is :func:`pftrack.cues.intensity.is_gray`'s test (99 % of a lattice's pixels with every
+channel within ``tolerance`` of the others) on a sparser lattice, compiled with an early exit: a colour frame is
+told after its first few coloured samples, so the check costs a few microseconds a frame.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from .._numba import njit, numba_enabled
+from ..frames import as_bgr_uint8
+
+#: pixels of the lattice :func:`frame_is_grey` samples (about)
+CHECK_SAMPLES = 4096
+#: channel difference within which a pixel counts as grey (JPEG leaves a level or two on a grey source)
+GREY_TOLERANCE = 2
+
+
+def _lattice_stride(h: int, w: int, samples: int = CHECK_SAMPLES) -> int:
+    return max(1, int(math.sqrt(h * w / float(samples))))
+
+
+def _coloured_count_numpy(frame: np.ndarray, stride: int, tolerance: int, limit: int) -> int:
+    s = frame[::stride, ::stride].astype(np.int16)
+    d = np.maximum(np.abs(s[..., 0] - s[..., 1]), np.abs(s[..., 1] - s[..., 2]))
+    return min(int(np.count_nonzero(d > tolerance)), limit)
+
+
+@njit(cache=True)
+def _coloured_count_numba(frame, stride, tolerance, limit):  # pragma: no cover - compiled
+    h, w = frame.shape[0], frame.shape[1]
+    count = 0
+    for y in range(0, h, stride):
+        for x in range(0, w, stride):
+            b = np.int32(frame[y, x, 0])
+            g = np.int32(frame[y, x, 1])
+            r = np.int32(frame[y, x, 2])
+            if abs(b - g) > tolerance or abs(g - r) > tolerance:
+                count += 1
+                if count >= limit:
+                    return count
+    return count
+
+
+def frame_is_grey(frame: np.ndarray, *, tolerance: int = GREY_TOLERANCE, samples: int = CHECK_SAMPLES) -> bool:
+    """True when the BGR ``frame`` carries no colour: at most 1 % of a lattice of about ``samples`` pixels has a
+    channel more than ``tolerance`` from another (:func:`pftrack.cues.intensity.is_gray`'s 99th percentile)."""
+    if frame.ndim == 2 or frame.shape[2] == 1:
+        return True
+    h, w = frame.shape[:2]
+    stride = _lattice_stride(h, w, samples)
+    n = ((h + stride - 1) // stride) * ((w + stride - 1) // stride)
+    limit = int(0.01 * n) + 1  # more coloured samples than 1 %: a colour frame
+    if numba_enabled():
+        count = _coloured_count_numba(frame, stride, tolerance, limit)
+    else:
+        count = _coloured_count_numpy(frame, stride, tolerance, limit)
+    return count < limit
+
+
+#: a frame whose lattice spans fewer grey levels than this is blank (a cut to black, a flash): no evidence of a switch
+BLANK_SPAN = 16
+
+
+@njit(cache=True)
+def _span_numba(frame, stride, limit):  # pragma: no cover - compiled
+    h, w = frame.shape[0], frame.shape[1]
+    lo, hi = 255, 0
+    for y in range(0, h, stride):
+        for x in range(0, w, stride):
+            v = np.int32(frame[y, x, 1])
+            lo = min(lo, v)
+            hi = max(hi, v)
+            if hi - lo >= limit:
+                return hi - lo
+    return hi - lo
+
+
+def frame_is_blank(frame: np.ndarray, *, span: int = BLANK_SPAN, samples: int = CHECK_SAMPLES) -> bool:
+    """True when the green channel (the grey level of a grey frame) of a lattice of about ``samples`` pixels spans
+    fewer than ``span`` levels: a black or white frame, which says nothing of the camera's kind."""
+    g = frame if frame.ndim == 2 else frame[..., min(1, frame.shape[2] - 1)]
+    h, w = g.shape[:2]
+    stride = _lattice_stride(h, w, samples)
+    if numba_enabled() and frame.ndim == 3:
+        return _span_numba(frame, stride, span) < span
+    lattice = g[::stride, ::stride]
+    return int(lattice.max()) - int(lattice.min()) < span
+
+
+def grey_copy(frame: np.ndarray) -> np.ndarray:
+    """The BGR grey copy of ``frame`` (three equal channels), remembering its grey image
+    (:func:`pftrack.frames.grey_origin`)."""
+    if frame_is_grey(frame, samples=1 << 30):
+        return frame
+    return as_bgr_uint8(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
+
+
+class InputSwitch:
+    """When colour features should give way to grey ones, and where to start them (the module's bookkeeping).
+
+    ``after``: grey frames in a row before the switch. :meth:`observe` counts them; :meth:`record` keeps the frame
+    before the next one and the last frame where the target was not lost, with their boxes.
+    """
+
+    def __init__(self, after: int):
+        if after < 1:
+            raise ValueError(f"after must be at least 1, got {after!r}")
+        self.after = int(after)
+        self.pending = 0
+        self.prev: np.ndarray | None = None
+        self.prev_box: tuple | None = None
+        self.prev_lost = False
+        self.anchor: tuple[np.ndarray, tuple] | None = None
+
+    def observe(self, frame: np.ndarray) -> bool:
+        """True when ``frame`` completes ``after`` grey frames in a row: the switch is due (a blank frame neither
+        counts nor breaks the row)."""
+        if frame_is_grey(frame):
+            if not frame_is_blank(frame):
+                self.pending += 1
+        else:
+            self.pending = 0
+        return self.pending >= self.after
+
+    def record(self, frame: np.ndarray, box, lost: bool) -> None:
+        self.prev, self.prev_box, self.prev_lost = frame, tuple(float(v) for v in box), bool(lost)
+        if not lost:
+            self.anchor = (frame, self.prev_box)
+
+    def grey_start(self) -> tuple[np.ndarray, tuple, bool]:
+        """``(frame, box, lost)`` to start the grey features from: the grey copy of the frame before, with its box,
+        or, when the target was lost there, of the last frame where it was not (the first frame at the latest)."""
+        if not self.prev_lost:
+            return grey_copy(self.prev), self.prev_box, False
+        frame, box = self.anchor
+        return grey_copy(frame), box, True
+
+
+class InputSwitchMixin:
+    """``input_switch`` for a colour tracker: grey features once the input has turned grey (see the module
+    docstring). The tracker provides ``params.input_switch``, ``cue.color_space`` and ``_resume_search()``."""
+
+    _input: InputSwitch | None = None
+
+    def init(self, frame, box):
+        self._input = None
+        state = super().init(frame, box)
+        n = int(getattr(self.params, "input_switch", 0) or 0)
+        if n > 0 and self.cue.color_space != "gray":  # grey features read any frame's grey levels: they stay
+            self._input = InputSwitch(n)
+            self._input.record(as_bgr_uint8(frame, where="init frame"), state.box, False)
+        return state
+
+    def init_auto(self, *args, **kwargs):
+        self._input = None  # a given histogram is of one kind of input: its features stay
+        return super().init_auto(*args, **kwargs)
+
+    def init_detect(self, *args, **kwargs):
+        self._input = None
+        return super().init_detect(*args, **kwargs)
+
+    def update(self, frame):
+        guard = self._input
+        if guard is None or self._shape is None:
+            return super().update(frame)
+        frame = self._check_frame(frame)  # once more in Tracker.update: no copy of a BGR uint8 frame
+        if guard.observe(frame):  # colour to grey: start again on a grey copy, then track this frame
+            base, box, lost = guard.grey_start()
+            self._restart(base, box, lost)
+            self._input = None
+            state = super().update(frame)
+            return replace(state, info={**state.info, "input_switch": "grey"})
+        state = super().update(frame)
+        guard.record(frame, state.box, state.lost)
+        return state
+
+    def _restart(self, frame, box, lost: bool) -> None:
+        """Start again on ``frame`` at ``box`` (features for its kind), keeping the frame count."""
+        index = self.frame_index
+        super().init(frame, box)
+        self.frame_index = index
+        if lost:
+            self._resume_search()
