@@ -154,3 +154,40 @@ def test_a_switch_while_the_target_is_hidden_starts_from_where_it_was_seen_and_s
     assert t.frame_index == at
     # the grey features were started on the frame where the target was last seen, at its box there
     np.testing.assert_allclose(t.size, (states[seen - 1].box[2] / 2, states[seen - 1].box[3] / 2), rtol=1e-6)
+
+
+# ------------------------------------------------------------------ any tracker: grey_restart
+def test_grey_restart_wraps_any_tracker_without_turning_the_monitor_on():
+    from pftrack.eval.runner import parse_tracker_list
+    from pftrack.trackers.input_switch import GreyRestarted
+    from pftrack.trackers.monitor import Monitored
+
+    t = pftrack.create_tracker("meanshift", grey_restart=2)
+    assert isinstance(t, GreyRestarted) and t.after == 2
+    both = pftrack.create_tracker("meanshift", params={"grey_restart": 1, "monitor": True})
+    assert isinstance(both, Monitored) and isinstance(both.inner, GreyRestarted)
+    assert not isinstance(pftrack.create_tracker("meanshift"), GreyRestarted)
+    cotrain = pftrack.create_tracker("cotrain-pf")  # its default, chosen on the tune data
+    assert isinstance(cotrain, GreyRestarted) and cotrain.name == "cotrain-pf" and cotrain.params.margin > 0
+    assert hasattr(cotrain, "confidence_map")  # the tracker's own methods pass through
+    assert not isinstance(pftrack.create_tracker("cotrain-pf", grey_restart=0), GreyRestarted)
+    assert parse_tracker_list("meanshift[grey_restart=1]")[0].param_dict == {"grey_restart": "1"}
+
+
+def test_grey_restart_keeps_a_mean_shift_on_its_target_when_the_input_turns_grey():
+    frames, gt = _turning_grey(varied_scene(2100, n_frames=50, gray=0.0, illumination=0.0))
+    ious = {}
+    for n in (0, 1):
+        _, states = _run("meanshift", frames, gt, grey_restart=n)
+        ious[n] = frame_ious(np.array([s.box for s in states[SWITCH - 1:]]), gt[SWITCH:]).mean()
+        if n:
+            assert states[SWITCH - 1].info.get("input_switch") == "grey"
+    assert ious[0] < 0.3 and ious[1] >= 0.6
+
+
+def test_grey_restart_leaves_colour_input_as_it_was():
+    scene = Scene(varied_scene(2105, n_frames=25, gray=0.0))
+    frames, gt = scene.frames(), scene.groundtruth(0)
+    plain = _run("meanshift", frames, gt)[1]
+    wrapped = _run("meanshift", frames, gt, grey_restart=1)[1]
+    assert [s.box for s in plain] == [s.box for s in wrapped]

@@ -105,7 +105,7 @@ def _effective_params(cfg: TrackerConfig, protocol: str) -> dict | None:
 
             cls = MULTI_TRACKERS[cfg.name].Params
         else:
-            from ..trackers.monitor import split_wrapper_options, wrapper_options
+            from ..trackers.monitor import grey_restart_for, split_wrapper_options, wrapper_options
             from ..trackers.registry import get_spec
 
             spec = get_spec(cfg.name)
@@ -113,6 +113,9 @@ def _effective_params(cfg: TrackerConfig, protocol: str) -> dict | None:
             wrap = wrapper_options(dict(cfg.params))
             if wrap.monitor:  # the loss monitor's settings too (the keys of unmonitored runs are unchanged)
                 out["monitor"] = wrap.monitor_params().as_dict()
+            grey_restart = grey_restart_for(spec.cls, dict(cfg.params))
+            if grey_restart:
+                out["grey_restart"] = grey_restart
             return out
         return cls.from_mapping(dict(cfg.params)).as_dict()
     except Exception:  # noqa: BLE001 - invalid parameters are reported when the run starts

@@ -66,6 +66,8 @@ class Tracker(abc.ABC):
     name: ClassVar[str] = "tracker"
     Params: ClassVar[type[Params]] = Params
     stochastic: ClassVar[bool] = True
+    #: the default of the ``grey_restart`` option every tracker takes (pftrack.trackers.input_switch.GreyRestarted)
+    grey_restart: ClassVar[int] = 0
 
     def __init__(self, params: Params | None = None, *, rng: np.random.Generator | None = None,
                  seed: int | None = None):

@@ -30,6 +30,7 @@ import numpy as np
 
 from .._numba import njit, numba_enabled
 from ..frames import as_bgr_uint8
+from .base import Tracker
 
 #: pixels of the lattice :func:`frame_is_grey` samples (about)
 CHECK_SAMPLES = 4096
@@ -203,3 +204,52 @@ class InputSwitchMixin:
         self.frame_index = index
         if lost:
             self._resume_search()
+
+
+class GreyRestarted(Tracker):
+    """Any tracker started again on grey features once the input turns grey (the option ``grey_restart`` that every
+    tracker takes, :func:`pftrack.trackers.registry.create_tracker`).
+
+    Most trackers choose their features on the first frame, from a colour histogram or colour names to grey levels.
+    After ``after`` grey frames in a row this wrapper calls the tracker's ``init`` on the grey copy of the frame
+    before, at that frame's box, or, if the target was lost there, of the last frame where it was not; then it tracks
+    the new frame. Unlike the colour particle filters' own ``input_switch`` it cannot put a tracker back into its
+    search: a tracker started at a stale box follows what is there until its own loss test, if any, objects.
+    """
+
+    def __init__(self, inner: Tracker, after: int):
+        super().__init__(inner.params)
+        self.inner = inner
+        self.after = int(after)
+        self.name = inner.name  # transparent: the same tracker, its features chosen again
+        self.stochastic = inner.stochastic
+        self.state_names = getattr(inner, "state_names", ())
+        self._switch: InputSwitch | None = None
+
+    def __getattr__(self, name: str):
+        """What the wrapper does not hold is the tracker's (its confidence map, its models)."""
+        inner = self.__dict__.get("inner")
+        if inner is None:
+            raise AttributeError(name)
+        return getattr(inner, name)
+
+    def _init(self, frame: np.ndarray, box) -> object:
+        state = self.inner.init(frame, box)
+        self._switch = None if frame_is_grey(frame) else InputSwitch(self.after)
+        if self._switch is not None:
+            self._switch.record(frame, state.box, False)
+        return state
+
+    def _update(self, frame: np.ndarray) -> object:
+        switch = self._switch
+        if switch is None:
+            return self.inner.update(frame)
+        if switch.observe(frame):
+            base, box, _ = switch.grey_start()
+            self.inner.init(base, box)
+            self._switch = None
+            state = self.inner.update(frame)
+            return replace(state, info={**state.info, "input_switch": "grey"})
+        state = self.inner.update(frame)
+        switch.record(frame, state.box, state.lost)
+        return state

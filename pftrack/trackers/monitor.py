@@ -270,6 +270,12 @@ class WrapperOptions(Params):
         "With monitor_cues=fused, the structural score's features (MonitorParams.structure_features)."))
     monitor_grey_histogram: Literal["levels", "both"] = param("levels", doc=(
         "The monitor's histograms on grey input (MonitorParams.grey_histogram)."))
+    grey_restart: int = param(0, ge=0, le=1000, doc=(
+        "Input that turns grey mid-sequence: after this many grey frames in a row, a tracker that started on colour "
+        "frames is started again on the grey copy of the last frame where its target was seen, so that it chooses "
+        "grey features (pftrack.trackers.input_switch.GreyRestarted). The colour particle filters have their own "
+        "input_switch, which also goes on searching a lost target. Default 0 (off), but 1 for cotrain-pf, chosen "
+        "on the tune data (docs/rules/grey_restart_rule.txt); ten other trackers missed that rule."))
 
     def monitor_params(self) -> MonitorParams:
         """The loss monitor's parameters these options set."""
@@ -284,9 +290,16 @@ def wrapper_options(*sources: Mapping[str, Any] | None) -> WrapperOptions:
     for source in sources:
         if source:
             values.update({k: source[k] for k in WrapperOptions.__dataclass_fields__ if k in source})
-    if values and "monitor" not in values:
+    if any(k.startswith("monitor_") for k in values) and "monitor" not in values:
         values["monitor"] = True  # the monitor's own settings ask for it (monitor=false still turns it off)
     return split_wrapper_options(values)[0]
+
+
+def grey_restart_for(cls, *sources: Mapping[str, Any] | None) -> int:
+    """The ``grey_restart`` a tracker of class ``cls`` runs with: the value given last in ``sources``, or the class's
+    own default (``Tracker.grey_restart``)."""
+    given = [s["grey_restart"] for s in sources if s and "grey_restart" in s]
+    return WrapperOptions.from_mapping({"grey_restart": given[-1]}).grey_restart if given else int(cls.grey_restart)
 
 
 def split_wrapper_options(values: dict[str, Any]) -> tuple[WrapperOptions, dict[str, Any]]:

@@ -76,17 +76,19 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
 
     Every tracker also takes ``monitor=True`` (in ``params`` too): its boxes are judged by the colour PFs' loss
     test, which raises ``lost`` (:class:`~pftrack.trackers.monitor.Monitored`); ``monitor_cues="fused"`` adds
-    fusion-pf's structural score to that test.
+    fusion-pf's structural score to that test. ``grey_restart=N`` starts a tracker again on grey features once N
+    frames in a row are grey (:class:`~pftrack.trackers.input_switch.GreyRestarted`).
     """
     spec = get_spec(name)
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
         raise ParameterError(f"seed must be an integer >= 0 or None, got {seed!r}")
     if not spec.available():
         raise ParameterError(f"tracker '{name}' is not available in this installation")
-    from .monitor import Monitored, split_wrapper_options, wrapper_options
+    from .monitor import Monitored, grey_restart_for, split_wrapper_options, wrapper_options
 
     extras = {k: kwargs.pop(k) for k in list(kwargs) if k in spec.extra_kwargs}
     wrap = wrapper_options(None if isinstance(params, Params) else params, kwargs)
+    grey_restart = grey_restart_for(spec.cls, None if isinstance(params, Params) else params, kwargs)
     kwargs = split_wrapper_options(kwargs)[1]
     if isinstance(params, Params):
         if kwargs:
@@ -96,6 +98,10 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
     if not isinstance(params, spec.params_cls):
         raise ParameterError(f"tracker '{name}' takes {spec.params_cls.__name__}, got {type(params).__name__}")
     tracker = spec.cls(params, seed=seed, rng=rng, **extras)
+    if grey_restart:
+        from .input_switch import GreyRestarted
+
+        tracker = GreyRestarted(tracker, grey_restart)
     if not wrap.monitor:
         return tracker
     return Monitored(tracker, wrap.monitor_params())
