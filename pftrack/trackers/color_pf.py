@@ -76,8 +76,8 @@ Detector = Callable[[np.ndarray], Sequence]
 _ELL_COLS = np.array([X, Y, HX, HY])
 
 
-class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixin, PersistenceMixin, SceneTestMixin,
-                          ColorHooks, Tracker):
+class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixin, PersistenceMixin,
+                          SceneTestMixin, ColorHooks, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
     Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
