@@ -191,3 +191,26 @@ def test_grey_restart_leaves_colour_input_as_it_was():
     plain = _run("meanshift", frames, gt)[1]
     wrapped = _run("meanshift", frames, gt, grey_restart=1)[1]
     assert [s.box for s in plain] == [s.box for s in wrapped]
+
+
+def test_no_switch_on_the_bundled_clip_or_the_development_sequences():
+    """The check agrees with the first frame on real colour video (the bundled clip, every frame; every fourth frame of
+    the development sequences when they are at hand) and on their grey copies: input that never turns grey is
+    tracked as before."""
+    from pftrack.cli.track import demo_clip
+    from pftrack.io.sources import open_source
+
+    from .conftest import SHARED_DATA
+
+    with open_source(str(demo_clip()[0])) as source:
+        clip = list(source)
+    assert not any(frame_is_grey(f) for f in clip)
+    assert all(frame_is_grey(grey_copy(f)) and not frame_is_blank(grey_copy(f)) for f in clip[::10])
+    names = ("davis16_blackswan", "otb_couple", "otb_motorrolling", "tld_pedestrian2", "vot_bag")
+    folders = [SHARED_DATA / n for n in names if (SHARED_DATA / n).is_dir()]
+    for folder in folders:
+        paths = sorted((folder / "img").glob("*.jpg")) or sorted(folder.rglob("*.jpg"))
+        for p in paths[::4]:
+            f = cv2.imread(str(p), cv2.IMREAD_COLOR)
+            assert not frame_is_grey(f), p.name
+            assert frame_is_grey(_grey(f)), p.name
