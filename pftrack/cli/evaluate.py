@@ -146,6 +146,8 @@ def cmd_list(args) -> int:
         print(f"{spec.name:20s} {spec.summary}{avail}{plugin}")
         if args.name:
             for name, typ, default, doc in [*spec.params_cls.describe(), *WrapperOptions.describe()]:
+                if name == "grey_restart":  # a tracker may have its own default (Tracker.grey_restart)
+                    default = spec.cls.grey_restart
                 print(f"  {name} ({typ}, default {default!r})")
                 for line in textwrap.wrap(doc, 88):
                     print(f"      {line}")
