@@ -10,7 +10,8 @@
 #   report: otb_motorrolling, tld_pedestrian2, davis16_blackswan, davis16_car-shadow, their grey and grey+light
 #           variants, the people of PETS frames 201-400, freshly seeded synthetic scenes, seeds 100-107
 #           (never tuned on); and the PETS windows of frames 201-400, and the four real targets' windows
-#   both:   in a run of their own, the scenes cut from photographs (photo-vanish, photo-leave, photo-exit; a family
+#   both:   in a run of their own, each split's real sequences turning grey mid-sequence (make_variants.py --switch);
+#           in a run of their own, the scenes cut from photographs (photo-vanish, photo-leave, photo-exit; a family
 #           that shares no drawing with the synthetic scenes above): seeds 1000-1019 for tune, 0-19 for report
 #           (docs/rules/photo_scenes_rule.txt)
 #
@@ -68,4 +69,9 @@ for split in tune report; do
   "$PFTRACK" eval "$WORK/${split}_photo"/{photo-vanish,photo-leave,photo-exit} --trackers "$TRACKERS" \
     --seeds "$SEEDS" --workers 2 --quiet --report "$WORK/${split}_photo_eval" \
     --title "pftrack: $split split, photo scenes" > "$WORK/${split}_photo.md"
+  # the real sequences turning grey mid-sequence (make_variants.py --switch; docs/rules/input_switch_rule.txt)
+  [ -d "$WORK/${split}_switch" ] || "$PY" scripts/make_variants.py "$WORK/${split}_real"/* --switch \
+    --out "$WORK/${split}_switch" > /dev/null
+  "$PFTRACK" eval "$WORK/${split}_switch" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
+    --report "$WORK/${split}_switch_eval" --title "pftrack: $split split, turning grey" > "$WORK/${split}_switch.md"
 done
