@@ -214,26 +214,3 @@ def test_no_switch_on_the_bundled_clip_or_the_development_sequences():
             f = cv2.imread(str(p), cv2.IMREAD_COLOR)
             assert not frame_is_grey(f), p.name
             assert frame_is_grey(_grey(f)), p.name
-
-
-# ------------------------------------------------------------------ colour again: input_switch_back
-def test_colour_features_come_back_with_the_colour_when_asked():
-    scene = Scene(varied_scene(2107, n_frames=50, gray=0.0, illumination=0.0))
-    frames, gt = scene.frames(), scene.groundtruth(0)
-    frames = [_grey(f) if SWITCH <= i < 35 else f for i, f in enumerate(frames)]
-    t, states = _run("fusion-pf", frames, gt, input_switch_back=True)
-    assert states[SWITCH - 1].info.get("input_switch") == "grey"
-    assert states[35 - 1].info.get("input_switch") == "colour" and t.cue.color_space == "rgb"
-    assert t.frame_index == len(frames) - 1
-    ious = frame_ious(np.array([s.box for s in states[35:]]), gt[36:])
-    assert ious.mean() >= 0.5 and not any(s.lost for s in states[35:])
-    kept, _ = _run("fusion-pf", frames, gt)  # the default: grey features stay
-    assert kept.cue.color_space == "gray"
-
-
-def test_a_tracker_that_started_grey_keeps_grey_features_when_colour_comes():
-    scene = Scene(varied_scene(2108, n_frames=30, gray=0.0, illumination=0.0))
-    frames, gt = scene.frames(), scene.groundtruth(0)
-    frames = [_grey(f) if i < 10 else f for i, f in enumerate(frames)]
-    t, _ = _run("fusion-pf", frames, gt, input_switch_back=True)
-    assert t.cue.color_space == "gray"

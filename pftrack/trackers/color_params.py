@@ -349,11 +349,6 @@ class ColorModelParams(Params):
         "row, colour features give way to grey ones, started on the grey copy of the last frame where the target "
         "was seen (pftrack.trackers.input_switch); they stay if colour comes back. 0: the features chosen on the "
         "first frame stay (docs/rules/input_switch_rule.txt)."))
-    input_switch_back: bool = param(False, doc=(
-        "With input_switch, for a tracker that started on colour features: once as many colour frames in a row have "
-        "come back, colour features again, started on that frame at the box the grey features found (or, if the "
-        "target is lost, on the last colour frame where it was seen, searching on). False: grey features stay "
-        "(docs/rules/input_switch_back_rule.txt)."))
     reenter_memory: int = param(0, ge=0, le=1000, doc=(
         "With reenter_border: the loss is also an exit when the estimate's box was less than half inside the frame "
         "on one of this many tracked frames before the loss was declared (the edge that box was beyond): a tracker "

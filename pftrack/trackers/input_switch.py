@@ -145,11 +145,6 @@ class InputSwitch:
             self.pending = 0
         return self.pending >= self.after
 
-    def observe_colour(self, frame: np.ndarray) -> bool:
-        """On grey features: True when ``frame`` completes ``after`` colour frames in a row (input_switch_back)."""
-        self.pending = 0 if frame_is_grey(frame) else self.pending + 1
-        return self.pending >= self.after
-
     def record(self, frame: np.ndarray, box, lost: bool) -> None:
         self.prev, self.prev_box, self.prev_lost = frame, tuple(float(v) for v in box), bool(lost)
         if not lost:
@@ -171,7 +166,7 @@ class InputSwitchMixin:
     _input: InputSwitch | None = None
 
     def init(self, frame, box):
-        self._input, self._colour_anchor = None, None
+        self._input = None
         state = super().init(frame, box)
         n = int(getattr(self.params, "input_switch", 0) or 0)
         if n > 0 and self.cue.color_space != "gray":  # grey features read any frame's grey levels: they stay
@@ -180,51 +175,27 @@ class InputSwitchMixin:
         return state
 
     def init_auto(self, *args, **kwargs):
-        self._input, self._colour_anchor = None, None  # a given histogram is of one kind of input: its features stay
+        self._input = None  # a given histogram is of one kind of input: its features stay
         return super().init_auto(*args, **kwargs)
 
     def init_detect(self, *args, **kwargs):
-        self._input, self._colour_anchor = None, None
+        self._input = None
         return super().init_detect(*args, **kwargs)
-
-    _colour_anchor: tuple | None = None  # input_switch_back: the last colour frame with the target seen, and its box
 
     def update(self, frame):
         guard = self._input
         if guard is None or self._shape is None:
             return super().update(frame)
         frame = self._check_frame(frame)  # once more in Tracker.update: no copy of a BGR uint8 frame
-        if self._colour_anchor is not None:  # on grey features after a switch, waiting for colour (input_switch_back)
-            return self._update_grey_phase(guard, frame)
         if guard.observe(frame):  # colour to grey: start again on a grey copy, then track this frame
             base, box, lost = guard.grey_start()
-            anchor = guard.anchor
             self._restart(base, box, lost)
-            if getattr(self.params, "input_switch_back", False) and anchor is not None:
-                self._colour_anchor, guard.pending = anchor, 0
-            else:
-                self._input = None
+            self._input = None
             state = super().update(frame)
             return replace(state, info={**state.info, "input_switch": "grey"})
         state = super().update(frame)
         guard.record(frame, state.box, state.lost)
         return state
-
-    def _update_grey_phase(self, guard: InputSwitch, frame):
-        """Grey features after a switch: colour features again once colour has come back (input_switch_back)."""
-        state = super().update(frame)
-        if not guard.observe_colour(frame):
-            return state
-        anchor, self._colour_anchor = self._colour_anchor, None
-        if state.lost:  # from the last colour frame where the target was seen, and on searching
-            self._restart(anchor[0], anchor[1], True)
-        else:
-            self._restart(frame, state.box, False)
-        guard.pending = 0
-        guard.record(frame, state.box if not state.lost else anchor[1], state.lost)
-        if state.lost:
-            guard.anchor = anchor
-        return replace(state, info={**state.info, "input_switch": "colour"})
 
     def _restart(self, frame, box, lost: bool) -> None:
         """Start again on ``frame`` at ``box`` (features for its kind), keeping the frame count."""
