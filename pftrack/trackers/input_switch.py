@@ -15,8 +15,8 @@ again mid-track cost more than it gained (docs/rules/input_switch_rule.txt).
 Grey frames before the switch (``input_switch`` > 1) are tracked with the colour features. A blank frame (a cut
 to black, a flash: its grey levels span fewer than :data:`BLANK_SPAN`) is no evidence either way.
 
-:func:`frame_is_grey` is :func:`pftrack.cues.intensity.is_gray`'s test (99 % of a lattice's pixels with every
-channel within ``tolerance`` of the others) on a sparser lattice, compiled with an early exit: a colour frame is
+:func:`frame_is_grey` is :func:`pftrack.cues.intensity.is_gray` (99 % of a lattice's pixels with every channel
+within ``tolerance`` of the others, compiled with an early exit) on a lattice of about 4096 pixels: a colour frame is
 told after its first few coloured samples, so the check costs a few microseconds a frame.
 """
 
@@ -29,6 +29,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
+from ..cues.intensity import is_gray
 from ..frames import as_bgr_uint8
 from .base import Tracker
 
@@ -42,42 +43,9 @@ def _lattice_stride(h: int, w: int, samples: int = CHECK_SAMPLES) -> int:
     return max(1, int(math.sqrt(h * w / float(samples))))
 
 
-def _coloured_count_numpy(frame: np.ndarray, stride: int, tolerance: int, limit: int) -> int:
-    s = frame[::stride, ::stride].astype(np.int16)
-    d = np.maximum(np.abs(s[..., 0] - s[..., 1]), np.abs(s[..., 1] - s[..., 2]))
-    return min(int(np.count_nonzero(d > tolerance)), limit)
-
-
-@njit(cache=True)
-def _coloured_count_numba(frame, stride, tolerance, limit):  # pragma: no cover - compiled
-    h, w = frame.shape[0], frame.shape[1]
-    count = 0
-    for y in range(0, h, stride):
-        for x in range(0, w, stride):
-            b = np.int32(frame[y, x, 0])
-            g = np.int32(frame[y, x, 1])
-            r = np.int32(frame[y, x, 2])
-            if abs(b - g) > tolerance or abs(g - r) > tolerance:
-                count += 1
-                if count >= limit:
-                    return count
-    return count
-
-
 def frame_is_grey(frame: np.ndarray, *, tolerance: int = GREY_TOLERANCE, samples: int = CHECK_SAMPLES) -> bool:
-    """True when the BGR ``frame`` carries no colour: at most 1 % of a lattice of about ``samples`` pixels has a
-    channel more than ``tolerance`` from another (:func:`pftrack.cues.intensity.is_gray`'s 99th percentile)."""
-    if frame.ndim == 2 or frame.shape[2] == 1:
-        return True
-    h, w = frame.shape[:2]
-    stride = _lattice_stride(h, w, samples)
-    n = ((h + stride - 1) // stride) * ((w + stride - 1) // stride)
-    limit = int(0.01 * n) + 1  # more coloured samples than 1 %: a colour frame
-    if numba_enabled():
-        count = _coloured_count_numba(frame, stride, tolerance, limit)
-    else:
-        count = _coloured_count_numpy(frame, stride, tolerance, limit)
-    return count < limit
+    """:func:`pftrack.cues.intensity.is_gray` on a lattice of about ``samples`` pixels."""
+    return is_gray(frame, tolerance=tolerance, stride=_lattice_stride(frame.shape[0], frame.shape[1], samples))
 
 
 #: a frame whose lattice spans fewer grey levels than this is blank (a cut to black, a flash): no evidence of a switch
