@@ -16,7 +16,7 @@ from pftrack.cues.intensity import is_gray
 from pftrack.eval.metrics import frame_ious
 from pftrack.synth import Scene, hidden_frames
 from pftrack.synth.varied import vanish_scene, varied_scene
-from pftrack.trackers.input_switch import InputSwitch, frame_is_blank, frame_is_grey, grey_copy
+from pftrack.trackers.input_switch import ColourReturn, InputSwitch, frame_is_blank, frame_is_grey, grey_copy
 
 SWITCH = 20  # the first grey frame
 
@@ -154,6 +154,62 @@ def test_a_switch_while_the_target_is_hidden_starts_from_where_it_was_seen_and_s
     assert t.frame_index == at
     # the grey features were started on the frame where the target was last seen, at its box there
     np.testing.assert_allclose(t.size, (states[seen - 1].box[2] / 2, states[seen - 1].box[3] / 2), rtol=1e-6)
+
+
+# ------------------------------------------------------------------ input_switch_return
+def test_colour_return_waits_for_n_colour_frames_and_ignores_blank_ones():
+    rng = np.random.default_rng(3)
+    colour = (rng.random((60, 80, 3)) * 255).astype(np.uint8)
+    grey, white = _grey(colour), np.full_like(colour, 255)
+    back = ColourReturn(None, 2)
+    assert [back.observe(f) for f in (colour, grey, colour, white)] == [False] * 4  # grey broke the row
+    assert back.observe(colour)  # colour, white (no evidence), colour: two colour frames in a row
+
+
+def _switch_during_a_search(name="fusion-pf"):
+    """A vanish scene whose frames are grey for a block that starts while the tracker searches (frames, gt, at,
+    end): the target hidden from ``hid[0]``, the frames grey on ``at .. end - 1``."""
+    for seed in range(2110, 2140):
+        spec = vanish_scene(seed, n_frames=120, gray=0.0, illumination=0.0)
+        hid = np.flatnonzero(hidden_frames(spec))
+        if hid.size < 10 or hid[0] < 15:
+            continue
+        at, end = int(hid[0]) + 5, int(hid[0]) + 35
+        scene = Scene(spec)
+        frames = [_grey(f) if at <= i < end else f for i, f in enumerate(scene.frames())]
+        gt = scene.groundtruth(0)
+        _, states = _run(name, frames[:at], gt)
+        if states[-1].lost:
+            return frames, gt, at, end
+    pytest.skip("no scene with the loss declared before the switch")
+
+
+def _same(a, b):
+    assert a.box == b.box and a.lost == b.lost and a.score == b.score
+    np.testing.assert_array_equal(a.particles, b.particles)
+
+
+def test_a_switch_during_a_search_goes_on_by_colour_once_colour_returns():
+    frames, gt, at, end = _switch_during_a_search()
+    grey_only = _run("fusion-pf", frames, gt, input_switch_return=0)[1]  # grey features to the end
+    colour_only = _run("fusion-pf", frames, gt, input_switch=0)[1]  # no switch: colour features throughout
+    t, states = _run("fusion-pf", frames, gt, input_switch_return=1)
+    assert states[at - 1].info.get("input_switch") == "grey"
+    assert states[end - 1].info.get("input_switch") == "colour"
+    for k in range(end - 1):  # up to the frame before colour returns: the grey-featured tracker's output
+        _same(states[k], grey_only[k])
+    for k in range(end - 1, len(states)):  # from it: exactly the tracker that never switched
+        _same(states[k], colour_only[k])
+    assert t.cue.color_space == "rgb" and t._return is None and t._input is None
+    assert t.frame_index == len(frames) - 1
+
+
+def test_a_switch_while_tracking_is_unchanged_by_input_switch_return():
+    frames, gt = _turning_grey(varied_scene(2103, n_frames=50, gray=0.0, illumination=0.0))
+    runs = [_run("fusion-pf", frames, gt, input_switch_return=n) for n in (0, 1)]
+    assert runs[1][1][SWITCH - 1].info.get("input_switch") == "grey" and runs[1][0]._return is None
+    for a, b in zip(runs[0][1], runs[1][1]):
+        _same(a, b)
 
 
 # ------------------------------------------------------------------ any tracker: grey_restart

@@ -10,7 +10,12 @@ at that frame's box (the grey copy holds the same target at the same place), the
 target was lost there, on the grey copy of the last frame where it was not, and it goes on searching.
 
 Grey features stay when colour comes back: they read the grey levels of any frame, and starting colour features
-again mid-track cost more than it gained (docs/rules/input_switch_rule.txt).
+again mid-track cost more than it gained (docs/rules/input_switch_rule.txt). One case is set apart
+(``input_switch_return``, docs/rules/input_switch_return_rule.txt): a switch made while the target is lost. A grey
+search among look-alikes may never find the target again, or take a look-alike, where a colour search would find it
+once colour returns. So a copy of the tracker as it was, on colour features, goes on beside it with every frame
+(:class:`ColourReturn`), exactly as without the switch; once ``input_switch`` colour frames in a row have come, the
+tracker goes on as that copy.
 
 Grey frames before the switch (``input_switch`` > 1) are tracked with the colour features. A blank frame (a cut
 to black, a flash: its grey levels span fewer than :data:`BLANK_SPAN`) is no evidence either way.
@@ -22,6 +27,7 @@ told after its first few coloured samples, so the check costs a few microseconds
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import replace
 
@@ -127,14 +133,34 @@ class InputSwitch:
         return grey_copy(frame), box, True
 
 
+class ColourReturn:
+    """After a switch to grey features made while the target was lost (``input_switch_return``): the tracker on
+    colour features as it was at the switch (``twin``, fed every frame since, as without the switch), and the count
+    of colour frames in a row since."""
+
+    def __init__(self, twin: Tracker, after: int):
+        self.twin, self.after = twin, int(after)
+        self.pending = 0
+
+    def observe(self, frame: np.ndarray) -> bool:
+        """True when ``frame`` completes ``after`` colour frames in a row (a blank frame neither counts nor breaks
+        the row)."""
+        if not frame_is_grey(frame):
+            self.pending += 1
+        elif not frame_is_blank(frame):
+            self.pending = 0
+        return self.pending >= self.after
+
+
 class InputSwitchMixin:
     """``input_switch`` for a colour tracker: grey features once the input has turned grey (see the module
     docstring). The tracker provides ``params.input_switch``, ``cue.color_space`` and ``_resume_search()``."""
 
     _input: InputSwitch | None = None
+    _return: ColourReturn | None = None
 
     def init(self, frame, box):
-        self._input = None
+        self._input = self._return = None
         state = super().init(frame, box)
         n = int(getattr(self.params, "input_switch", 0) or 0)
         if n > 0 and self.cue.color_space != "gray":  # grey features read any frame's grey levels: they stay
@@ -143,20 +169,32 @@ class InputSwitchMixin:
         return state
 
     def init_auto(self, *args, **kwargs):
-        self._input = None  # a given histogram is of one kind of input: its features stay
+        self._input = self._return = None  # a given histogram is of one kind of input: its features stay
         return super().init_auto(*args, **kwargs)
 
     def init_detect(self, *args, **kwargs):
-        self._input = None
+        self._input = self._return = None
         return super().init_detect(*args, **kwargs)
 
     def update(self, frame):
         guard = self._input
-        if guard is None or self._shape is None:
+        if (guard is None and self._return is None) or self._shape is None:
             return super().update(frame)
         frame = self._check_frame(frame)  # once more in Tracker.update: no copy of a BGR uint8 frame
+        if guard is None:  # after a switch during a search (input_switch_return)
+            back = self._return
+            twin_state = back.twin.update(frame)
+            if not back.observe(frame):
+                return super().update(frame)
+            # colour is back: go on as the colour-featured tracker, which has searched on since the switch
+            self.__dict__.update(back.twin.__dict__)
+            return replace(twin_state, info={**twin_state.info, "input_switch": "colour"})
         if guard.observe(frame):  # colour to grey: start again on a grey copy, then track this frame
             base, box, lost = guard.grey_start()
+            self._input = None
+            if lost and int(getattr(self.params, "input_switch_return", 0) or 0):
+                self._return = ColourReturn(copy.deepcopy(self), guard.after)
+                self._return.twin.update(frame)
             self._restart(base, box, lost)
             self._input = None
             state = super().update(frame)
