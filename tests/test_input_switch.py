@@ -204,6 +204,18 @@ def test_a_switch_during_a_search_goes_on_by_colour_once_colour_returns():
     assert t.frame_index == len(frames) - 1
 
 
+def test_a_tracker_that_cannot_be_copied_keeps_grey_features():
+    frames, gt, at, end = _switch_during_a_search()
+    grey_only = _run("fusion-pf", frames, gt, input_switch_return=0)[1]
+    t = pftrack.create_tracker("fusion-pf", seed=0, params={"input_switch_return": 1})
+    t.init(frames[0], tuple(gt[0]))
+    t._native = cv2.createBackgroundSubtractorMOG2()  # a library object without a copy
+    states = [t.update(f) for f in frames[1:]]
+    assert t._return is None and t.cue.color_space == "gray"
+    for a, b in zip(states, grey_only):
+        _same(a, b)
+
+
 def test_a_switch_while_tracking_is_unchanged_by_input_switch_return():
     frames, gt = _turning_grey(varied_scene(2103, n_frames=50, gray=0.0, illumination=0.0))
     runs = [_run("fusion-pf", frames, gt, input_switch_return=n) for n in (0, 1)]

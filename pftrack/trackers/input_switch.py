@@ -193,8 +193,7 @@ class InputSwitchMixin:
             base, box, lost = guard.grey_start()
             self._input = None
             if lost and int(getattr(self.params, "input_switch_return", 0) or 0):
-                self._return = ColourReturn(copy.deepcopy(self), guard.after)
-                self._return.twin.update(frame)
+                self._return = self._colour_twin(frame, guard.after)
             self._restart(base, box, lost)
             self._input = None
             state = super().update(frame)
@@ -202,6 +201,17 @@ class InputSwitchMixin:
         state = super().update(frame)
         guard.record(frame, state.box, state.lost)
         return state
+
+    def _colour_twin(self, frame, after: int) -> ColourReturn | None:
+        """The copy of this tracker that searches on by colour (``input_switch_return``), fed ``frame``; None when
+        the tracker holds an object that cannot be copied (a library's native state): it then keeps grey features,
+        as with ``input_switch_return = 0``."""
+        try:
+            twin = copy.deepcopy(self)
+        except (TypeError, copy.Error, NotImplementedError):
+            return None
+        twin.update(frame)
+        return ColourReturn(twin, after)
 
     def _restart(self, frame, box, lost: bool) -> None:
         """Start again on ``frame`` at ``box`` (features for its kind), keeping the frame count."""
