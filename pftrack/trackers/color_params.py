@@ -350,10 +350,12 @@ class ColorModelParams(Params):
         "was seen (pftrack.trackers.input_switch); they stay if colour comes back. 0: the features chosen on the "
         "first frame stay (docs/rules/input_switch_rule.txt)."))
     input_switch_return: int = param(0, ge=0, le=1, doc=(
-        "With input_switch: when the switch to grey features comes while the target is lost, the colour frame where "
-        "it was last seen is kept, and once input_switch colour frames in a row come back the tracker starts colour "
-        "features again there and searches by colour, whatever the grey search found meanwhile; colour features "
-        "then stay. 0: grey features stay after any switch (docs/rules/input_switch_return_rule.txt)."))
+        "With input_switch: when the switch to grey features comes while the target is lost, a copy of the tracker "
+        "as it was (colour features, its model, its search) goes on with every frame beside the grey-featured one, "
+        "as without the switch; once input_switch colour frames in a row have come, the tracker goes on as that "
+        "copy, whatever the grey search found meanwhile, and keeps colour features. The copy costs a second "
+        "tracker's time per frame until then. 0: grey features stay after any switch "
+        "(docs/rules/input_switch_return_rule.txt)."))
     reenter_memory: int = param(0, ge=0, le=1000, doc=(
         "With reenter_border: the loss is also an exit when the estimate's box was less than half inside the frame "
         "on one of this many tracked frames before the loss was declared (the edge that box was beyond): a tracker "

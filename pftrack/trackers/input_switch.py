@@ -195,7 +195,6 @@ class InputSwitchMixin:
             if lost and int(getattr(self.params, "input_switch_return", 0) or 0):
                 self._return = self._colour_twin(frame, guard.after)
             self._restart(base, box, lost)
-            self._input = None
             state = super().update(frame)
             return replace(state, info={**state.info, "input_switch": "grey"})
         state = super().update(frame)
