@@ -11,6 +11,7 @@
 #           variants, the people of PETS frames 201-400, freshly seeded synthetic scenes, seeds 100-107
 #           (never tuned on); and the PETS windows of frames 201-400, and the four real targets' windows
 #   both:   in a run of their own, each split's real sequences turning grey mid-sequence (make_variants.py --switch);
+#           in another, the same copies of each split's synthetic vanish and leave scenes;
 #           in a run of their own, the scenes cut from photographs (photo-vanish, photo-leave, photo-exit; a family
 #           that shares no drawing with the synthetic scenes above): seeds 1000-1019 for tune, 0-19 for report
 #           (docs/rules/photo_scenes_rule.txt)
@@ -74,4 +75,15 @@ for split in tune report; do
     --out "$WORK/${split}_switch" > /dev/null
   "$PFTRACK" eval "$WORK/${split}_switch" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
     --report "$WORK/${split}_switch_eval" --title "pftrack: $split split, turning grey" > "$WORK/${split}_switch.md"
+  # the split's synthetic vanish and leave scenes turning grey: switches made during a search
+  # (docs/rules/input_switch_return_rule.txt)
+  if [ ! -d "$WORK/${split}_synth_switch" ]; then
+    for kind in vanish leave; do
+      "$PY" scripts/make_variants.py "$WORK/${split}_synth/$kind/$kind"-* --switch \
+        --out "$WORK/${split}_synth_switch" > /dev/null
+    done
+  fi
+  "$PFTRACK" eval "$WORK/${split}_synth_switch" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
+    --report "$WORK/${split}_synth_switch_eval" --title "pftrack: $split split, synthetic scenes turning grey" \
+    > "$WORK/${split}_synth_switch.md"
 done
