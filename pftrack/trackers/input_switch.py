@@ -92,7 +92,25 @@ def grey_copy(frame: np.ndarray) -> np.ndarray:
     return as_bgr_uint8(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
 
 
-class InputSwitch:
+class FrameRow:
+    """A count of frames of one kind in a row (``grey`` or colour): a frame of that kind counts, a frame of the other
+    kind breaks the row, and a blank grey frame (a cut to black, a flash) does neither."""
+
+    def __init__(self, after: int, grey: bool):
+        if after < 1:
+            raise ValueError(f"after must be at least 1, got {after!r}")
+        self.after, self.grey = int(after), bool(grey)
+        self.pending = 0
+
+    def observe(self, frame: np.ndarray) -> bool:
+        """True when ``frame`` completes ``after`` frames of the kind in a row."""
+        grey = frame_is_grey(frame)
+        if not (grey and frame_is_blank(frame)):
+            self.pending = self.pending + 1 if grey == self.grey else 0
+        return self.pending >= self.after
+
+
+class InputSwitch(FrameRow):
     """When colour features should give way to grey ones, and where to start them (the module's bookkeeping).
 
     ``after``: grey frames in a row before the switch. :meth:`observe` counts them; :meth:`record` keeps the frame
@@ -100,24 +118,11 @@ class InputSwitch:
     """
 
     def __init__(self, after: int):
-        if after < 1:
-            raise ValueError(f"after must be at least 1, got {after!r}")
-        self.after = int(after)
-        self.pending = 0
+        super().__init__(after, grey=True)
         self.prev: np.ndarray | None = None
         self.prev_box: tuple | None = None
         self.prev_lost = False
         self.anchor: tuple[np.ndarray, tuple] | None = None
-
-    def observe(self, frame: np.ndarray) -> bool:
-        """True when ``frame`` completes ``after`` grey frames in a row: the switch is due (a blank frame neither
-        counts nor breaks the row)."""
-        if frame_is_grey(frame):
-            if not frame_is_blank(frame):
-                self.pending += 1
-        else:
-            self.pending = 0
-        return self.pending >= self.after
 
     def record(self, frame: np.ndarray, box, lost: bool) -> None:
         self.prev, self.prev_box, self.prev_lost = frame, tuple(float(v) for v in box), bool(lost)
@@ -133,23 +138,14 @@ class InputSwitch:
         return grey_copy(frame), box, True
 
 
-class ColourReturn:
+class ColourReturn(FrameRow):
     """After a switch to grey features made while the target was lost (``input_switch_return``): the tracker on
     colour features as it was at the switch (``twin``, fed every frame since, as without the switch), and the count
     of colour frames in a row since."""
 
     def __init__(self, twin: Tracker, after: int):
-        self.twin, self.after = twin, int(after)
-        self.pending = 0
-
-    def observe(self, frame: np.ndarray) -> bool:
-        """True when ``frame`` completes ``after`` colour frames in a row (a blank frame neither counts nor breaks
-        the row)."""
-        if not frame_is_grey(frame):
-            self.pending += 1
-        elif not frame_is_blank(frame):
-            self.pending = 0
-        return self.pending >= self.after
+        super().__init__(after, grey=False)
+        self.twin = twin
 
 
 class InputSwitchMixin:
