@@ -87,8 +87,9 @@ def create_tracker(name: str, *, seed: int | None = None, rng: np.random.Generat
     from .monitor import Monitored, grey_restart_for, split_wrapper_options, wrapper_options
 
     extras = {k: kwargs.pop(k) for k in list(kwargs) if k in spec.extra_kwargs}
-    wrap = wrapper_options(None if isinstance(params, Params) else params, kwargs)
-    grey_restart = grey_restart_for(spec.cls, None if isinstance(params, Params) else params, kwargs)
+    mapping = None if isinstance(params, Params) else params  # wrapper options come with a mapping, not a Params
+    wrap = wrapper_options(mapping, kwargs)
+    grey_restart = grey_restart_for(spec.cls, mapping, kwargs)
     kwargs = split_wrapper_options(kwargs)[1]
     if isinstance(params, Params):
         if kwargs:
