@@ -405,6 +405,17 @@ class ColorModelParams(Params):
         "speed seen, from the prediction and from the last confident position. Such a look-alike is not "
         "acquired; it is remembered and followed, and the search picks its candidate among the other samples, "
         "for up to 6 times this many frames. 0: off."))
+    distractor_follow: float = param(1.0, gt=0, le=4, doc=(
+        "The distractor memory follows a look-alike to the best search sample within this many target sizes "
+        "(half-axes hx + hy) of where it was last seen, plus twice the target's speed for every frame since "
+        "(pftrack.trackers.distractors.follow_radius). Smaller: a look-alike passing close to the target coming "
+        "back does not hand its place in the memory over to the target."))
+    distractor_gradual: Literal["frames", "scores"] = param("frames", doc=(
+        "How the distractor memory tells a gradual loss (a target being covered or leaving where it was) from an "
+        "abrupt one (a jump, a cut: the target may be anywhere). 'frames': frames of doubt between the last "
+        "confident estimate and the loss. 'scores' (likelihood loss test): also when the score was already "
+        "falling, below 0.95 on the last confident frame or above 0.05 on the frame after it; only a fall from "
+        "sure to absent within one frame is abrupt (pftrack.trackers.distractors.score_gradual)."))
     grey_search_structure: bool = param(False, doc=(
         "With grey_check='fused' on grey input: the search ranks its samples by the same likelihood as the tracked "
         "particles, the histogram's and the structural cue's, instead of the histogram's alone (the candidate it "

@@ -61,7 +61,7 @@ from .color_likelihood import LikelihoodMixin
 from .color_params import ColorModelParams
 from .color_pf_params import ColorPFParams
 from .color_search import SearchMixin
-from .distractors import DistractorMemory
+from .distractors import DistractorMemory, score_gradual
 from .input_switch import InputSwitchMixin
 from .persistence import PersistenceMixin
 from .probation import ProbationMixin
@@ -110,7 +110,8 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
         self._structure_check: StructureCheck | None = None  # grey_check on grey input
         self._plain_loss: LossDetector | None = None  # the histogram's test while grey_check="fused" replaces it
         self._raw: np.ndarray | None = None  # the untransformed frame
-        self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames)  # look-alikes met during a loss
+        # look-alikes met during a loss
+        self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames, p.distractor_follow)
         # a confident frame: the scene's look-alikes (static_ncc)
         self._scene = SceneReference(p.static_ncc, p.static_quarters)
         warmup()
@@ -139,6 +140,8 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
         self._distractors.clear()
         self._scene.clear()
         self._confident_track: deque = deque(maxlen=6)  # (frame index, x, y) of the last confident estimates
+        self._score_track: deque = deque(maxlen=8)  # (frame index, score) of the last tracked frames
+        self._loss_falling = False  # the score was already falling at the current loss (distractor_gradual)
         self._exit_velocity = (0.0, 0.0)  # their mean displacement per frame when the loss was declared
         self._seen_levels: np.ndarray | None = None  # channel levels while the target was seen (relit_search)
         self._relit_at = -1  # the frame whose search was scored on the relit frame (relit_search)
@@ -185,6 +188,7 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
         self.loss.miss = 0
         self.loss.lost = False
         self._lost_at = None
+        self._loss_falling = False
         self._distractors.clear()
         self._persist_reset()
         self._confident_track.clear()  # a velocity is measured within one stretch of tracking
@@ -311,6 +315,7 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
             if p.edge_share > 0:  # the box's part outside the frame counts as background
                 s_e = toward_background(self.loss, s_e, inside / p.edge_share)
             lost_now, score = self.loss.step(s_e if ok and tot_e[0] > 0 else float("nan"))
+            self._score_track.append((self.frame_index, score))
             self.miss = self.loss.miss
             confident = self.loss.confident(s_e)
             info["llr"] = self.loss.llr
@@ -349,6 +354,8 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
             self.mode = "searching"
             self.loss.lost = True
             self._lost_at = self._confident_motion
+            self._loss_falling = (p.distractor_gradual == "scores" and self._lost_at is not None
+                                  and score_gradual(self._score_track, self._lost_at[0]))
             self._exit_velocity = displacement_rate(self._confident_track)
             self._search_states = None
             self._search_since = self.frame_index

@@ -62,11 +62,11 @@ def beyond_reach(xy, lost_at, frame_index: int, size: tuple[float, float], speed
                math.hypot(x - float(last[0]), y - float(last[1]))) > reach
 
 
-def follow_radius(size: tuple[float, float], speed: float, frames: int) -> float:
-    """How far a look-alike last seen ``frames`` frames ago can be now: a target size, plus twice the target's
-    own speed (at least 1 px a frame) for every frame since, at most four target sizes."""
+def follow_radius(size: tuple[float, float], speed: float, frames: int, base: float = 1.0) -> float:
+    """How far a look-alike last seen ``frames`` frames ago can be now: ``base`` target sizes, plus twice the
+    target's own speed (at least 1 px a frame) for every frame since, at most four target sizes."""
     reach = 2.0 * max(speed, 1.0) * max(frames, 0)
-    return min(float(size[0] + size[1]) + reach, 4.0 * float(size[0] + size[1]))
+    return min(base * float(size[0] + size[1]) + reach, 4.0 * float(size[0] + size[1]))
 
 
 def gradual(last_confident: int, declared: int, lost_frames: int) -> bool:
@@ -77,12 +77,31 @@ def gradual(last_confident: int, declared: int, lost_frames: int) -> bool:
     return declared - last_confident > lost_frames
 
 
+#: ``distractor_gradual="scores"``: a loss is abrupt only when the score fell from at least ``SURE`` on the last
+#: confident frame to at most ``1 - SURE`` on the next one.
+SURE = 0.95
+
+
+def score_gradual(scores, last_confident: int) -> bool:
+    """Was the score already falling when the target was lost?  ``scores``: ``(frame index, score)`` of the recent
+    tracked frames; ``last_confident``: the frame index of the last confident estimate.  False (abrupt) only when
+    the score was at least :data:`SURE` there and at most ``1 - SURE`` on the next frame: a target covered or
+    leaving where it was loses its score over frames, one that jumped or was cut away within one (a missing
+    frame counts as neither: False)."""
+    by_frame = {int(f): float(v) for f, v in scores}
+    before, after = by_frame.get(int(last_confident)), by_frame.get(int(last_confident) + 1)
+    if before is None or after is None or not (math.isfinite(before) and math.isfinite(after)):
+        return False
+    return before < SURE or after > 1.0 - SURE
+
+
 class DistractorMemory:
     """Positions of the look-alikes met during a loss (see the module docstring)."""
 
-    def __init__(self, record_frames: int, lost_frames: int):
+    def __init__(self, record_frames: int, lost_frames: int, follow: float = 1.0):
         self.record_frames = int(record_frames)
         self.lost_frames = int(lost_frames)
+        self.follow_base = float(follow)  # follow_radius's base, in target sizes
         self.items: list[list[float]] = []  # [x, y, frame index last seen]
 
     def clear(self) -> None:
@@ -111,7 +130,7 @@ class DistractorMemory:
         speed = math.hypot(*(float(v) for v in lost_at[2]))
         for item in self.items:
             near = np.hypot(xy[:, 0] - item[0], xy[:, 1] - item[1]) <= follow_radius(
-                size, speed, frame_index - int(item[2]))
+                size, speed, frame_index - int(item[2]), self.follow_base)
             usable = near & np.isfinite(rank)
             if usable.any():
                 j = int(np.flatnonzero(usable)[np.argmax(rank[usable])])
@@ -119,11 +138,14 @@ class DistractorMemory:
             mask |= near
         return mask
 
-    def vetoes(self, xy, frame_index: int, lost_at, size: tuple[float, float], since: int, track=()) -> bool:
+    def vetoes(self, xy, frame_index: int, lost_at, size: tuple[float, float], since: int, track=(), *,
+               falling: bool = False) -> bool:
         """Is the acquisition candidate at ``xy`` a look-alike rather than the target?  Records or follows it
         when it is.  ``lost_at``: ``(frame index, position, velocity)`` of the last confident estimate;
         ``size``: the searched half-axes; ``since``: the frame index at which the search began; ``track``: the
-        last confident ``(frame index, x, y)`` estimates before the loss (their :func:`peak_speed`)."""
+        last confident ``(frame index, x, y)`` estimates before the loss (their :func:`peak_speed`);
+        ``falling``: the score was already falling at the loss (:func:`score_gradual`), which makes the loss
+        gradual too."""
         if self.record_frames <= 0 or lost_at is None or self._expired(frame_index, since):
             return False
         x, y = float(xy[0]), float(xy[1])
@@ -131,12 +153,12 @@ class DistractorMemory:
         best, best_d = None, math.inf
         for item in self.items:
             d = math.hypot(x - item[0], y - item[1])
-            if d <= follow_radius(size, speed, frame_index - int(item[2])) and d < best_d:
+            if d <= follow_radius(size, speed, frame_index - int(item[2]), self.follow_base) and d < best_d:
                 best, best_d = item, d
         if best is not None:
             best[0], best[1], best[2] = x, y, frame_index  # the same look-alike, followed
             return True
-        if frame_index - since < self.record_frames and gradual(lost_at[0], since, self.lost_frames):
+        if frame_index - since < self.record_frames and (falling or gradual(lost_at[0], since, self.lost_frames)):
             if beyond_reach((x, y), lost_at, frame_index, size, peak_speed(track)):
                 self.items.append([x, y, float(frame_index)])
                 return True

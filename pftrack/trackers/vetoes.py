@@ -179,7 +179,7 @@ class VetoMixin:
         if check is not None and check.vetoes(self._structure_frame(frame), ell):
             return "structure"
         if self._distractors.vetoes(ell[:2], self.frame_index, self._lost_at, self.size, self._search_since,
-                                    self._confident_track):
+                                    self._confident_track, falling=self._loss_falling):
             return "distractor"
         return None
 
