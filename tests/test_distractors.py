@@ -8,7 +8,8 @@ import pytest
 import pftrack
 from pftrack.synth import vanish_scene
 from pftrack.filtering.dynamics import lost_prediction
-from pftrack.trackers.distractors import LIFE, DistractorMemory, beyond_reach, follow_radius, gradual, peak_speed
+from pftrack.trackers.distractors import (LIFE, DistractorMemory, beyond_reach, follow_radius, gradual, peak_speed,
+                                          score_gradual)
 
 from .conftest import lost_flag_run
 
@@ -33,6 +34,40 @@ def test_peak_speed_is_the_fastest_step():
 def test_gradual_needs_frames_of_doubt_before_the_loss():
     assert not gradual(40, 43, 3)  # confident, then three frames of absence evidence: a jump or a cut
     assert gradual(40, 44, 3)
+
+
+def test_score_gradual_tells_a_falling_score_from_a_fall_within_one_frame():
+    # vanish-046 (grey, fusion-pf): 1.00, 0.83 (the last confident frame), 0.14, 0.02 -- being covered
+    covered = [(44, 1.0), (45, 0.83), (46, 0.14), (47, 0.02)]
+    assert score_gradual(covered, 45)
+    # a teleport: sure, then absent on the next frame
+    jump = [(36, 1.0), (37, 1.0), (38, 0.018), (39, 0.018)]
+    assert not score_gradual(jump, 37)
+    assert score_gradual([(37, 1.0), (38, 0.2)], 37)  # sure, then only doubtful on the next frame
+    assert not score_gradual([(37, 0.9)], 37)  # the frame after it was not tracked: not read as falling
+    assert not score_gradual([(37, float("nan")), (38, 0.5)], 37)
+    assert not score_gradual([], 37)
+
+
+def test_a_falling_score_lets_the_memory_record_after_an_abrupt_count():
+    mem = DistractorMemory(10, lost_frames=3)
+    since = 43  # declared three frames after the last confident estimate: abrupt by the frames alone
+    assert not mem.vetoes((250.0, 60.0), 44, LOST_AT, SIZE, since)
+    assert mem.vetoes((250.0, 60.0), 44, LOST_AT, SIZE, since, falling=True)
+    assert len(mem.items) == 1
+
+
+def test_follow_base_narrows_what_counts_as_the_remembered_look_alike():
+    assert follow_radius(SIZE, 2.0, 1, base=0.5) == pytest.approx(12.5 + 4.0)
+    wide, narrow = DistractorMemory(10, lost_frames=3), DistractorMemory(10, lost_frames=3, follow=0.5)
+    for mem in (wide, narrow):
+        assert mem.vetoes((250.0, 60.0), 46, LOST_AT, SIZE, 45)
+        assert mem.vetoes((250.0, 60.0), 55, LOST_AT, SIZE, 45)  # seen again, the last frame it may record
+    # past the recording window, the target comes out 23 px from the look-alike seen on the frame before
+    assert wide.vetoes((230.0, 72.0), 56, LOST_AT, SIZE, 45)
+    assert wide.items[0][:2] == [230.0, 72.0]  # the memory now holds the target's place
+    assert not narrow.vetoes((230.0, 72.0), 56, LOST_AT, SIZE, 45)
+    assert narrow.items[0][:2] == [250.0, 60.0]
 
 
 def test_reach_counts_the_prediction_the_last_position_and_the_speed():
