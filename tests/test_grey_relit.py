@@ -87,3 +87,36 @@ def test_light_gain_of_blocks_takes_a_change_of_the_whole_view_only():
     assert light_gain(ref, light_levels(half, "blocks")) is None
     whole = light_gain(light_levels(f), light_levels(half))  # the whole frame's medians read it as light
     assert whole.shape == (3,) and np.all(whole > 1.05)
+
+
+def test_still_blocks_tell_a_change_of_the_light_from_a_moving_camera():
+    """``relit_gain="still"``: a gain leaves every block's layout as it was (read back as light); the same view
+    shifted by a moving camera keeps its levels but changes every block's layout (no light read), though the
+    blocks' levels agree; something passing through two blocks leaves the other seven to read the light."""
+    import cv2
+    from pftrack.cues.intensity import light_gain, light_levels, light_thumbnail, still_blocks
+
+    rng = np.random.default_rng(1)
+    base = cv2.GaussianBlur(rng.integers(0, 256, (300, 420, 3)).astype(np.float32), (0, 0), 12)
+    base = cv2.normalize(base, None, 60, 190, cv2.NORM_MINMAX)
+    f = base[:240, :330].astype(np.uint8)
+    ref_levels, ref_thumb = light_levels(f, "still"), light_thumbnail(f)
+    assert ref_thumb.shape == (30, 41)
+    dim = (f * np.array([0.6, 0.7, 0.8])).astype(np.uint8)
+    still = still_blocks(ref_thumb, light_thumbnail(dim))
+    assert still.all()
+    np.testing.assert_allclose(light_gain(ref_levels, light_levels(dim, "still"), still=still),
+                               [1 / 0.6, 1 / 0.7, 1 / 0.8], rtol=0.03)
+    moved = base[40:280, 60:390].astype(np.uint8)  # the camera turned: the same texture, 40 and 60 px on
+    assert still_blocks(ref_thumb, light_thumbnail(moved)).sum() < 6
+    assert light_gain(ref_levels, light_levels(moved, "still"), still=still_blocks(ref_thumb,
+                                                                                     light_thumbnail(moved))) is None
+    passing = dim.copy()  # within two of the thumbnail's blocks (rows 0-80 and 80-160, columns 0-104 and 104-216)
+    passing[:76, :100] = 255
+    passing[84:156, 110:210] = 0
+    still = still_blocks(ref_thumb, light_thumbnail(passing))
+    assert still.sum() == 7 and not still[0] and not still[4]
+    np.testing.assert_allclose(light_gain(ref_levels, light_levels(passing, "still"), still=still),
+                               [1 / 0.6, 1 / 0.7, 1 / 0.8], rtol=0.03)
+    flat = np.full_like(f, 100)
+    assert not still_blocks(light_thumbnail(flat), light_thumbnail(flat)).any()  # nothing to compare

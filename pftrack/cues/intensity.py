@@ -297,7 +297,7 @@ def channel_levels(frame: np.ndarray, *, stride: int = 4) -> np.ndarray:
 
 def light_levels(frame: np.ndarray, mode: str = "frame") -> np.ndarray:
     """The light of a BGR frame as the relit search reads it: the frame's channel levels (``"frame"``, ``(3,)``), or
-    those of each block of a 3 x 3 grid (``"blocks"``, ``(9, 3)``; :func:`light_gain`)."""
+    those of each block of a 3 x 3 grid (``"blocks"`` and ``"still"``, ``(9, 3)``; :func:`light_gain`)."""
     if mode == "frame":
         return channel_levels(frame, stride=16)
     h, w = frame.shape[:2]
@@ -305,20 +305,59 @@ def light_levels(frame: np.ndarray, mode: str = "frame") -> np.ndarray:
                      for i in range(3) for j in range(3)])
 
 
-def light_gain(reference: np.ndarray, current: np.ndarray, *, tol: float = 0.05, share: float = 2 / 3
-               ) -> np.ndarray | None:
+def light_gain(reference: np.ndarray, current: np.ndarray, *, tol: float = 0.05, share: float = 2 / 3,
+               still: np.ndarray | None = None) -> np.ndarray | None:
     """Per-channel gain ``(3,)`` that brings the light ``current`` back to ``reference`` (:func:`light_levels`).
 
     For whole-frame levels, their ratio. For blocks, the median of the blocks' ratios, and only when at least
     ``share`` of the blocks agree with it within ``tol`` in every channel: a change of the light moves the whole
     view alike, while something passing through one part of it (a car, a walker) moves that part alone, and is
-    not a change of the light (None)."""
+    not a change of the light (None).  With ``still`` (``(B,)`` bool, :func:`still_blocks`), only the blocks whose
+    layout is unchanged are read, and ``share`` of all the blocks must be such and agree: a camera that moves
+    changes the layout of every block, whatever their levels do."""
     r = np.asarray(reference, np.float64) / np.asarray(current, np.float64)
     if r.ndim == 1:
         return r
+    need = share * len(r)
+    if still is not None:
+        r = r[np.asarray(still, dtype=bool)]
+        if len(r) == 0 or len(r) < need:
+            return None
     g = np.median(r, axis=0)
     agree = np.all(np.abs(r / g - 1.0) <= tol, axis=1)
-    return g if float(agree.mean()) >= share else None
+    return g if float(agree.sum()) >= need else None
+
+
+#: :func:`still_blocks`: a block whose thumbnail correlates at least this much with the reference's keeps its layout.
+STILL_NCC = 0.8
+
+
+def light_thumbnail(frame: np.ndarray) -> np.ndarray:
+    """A grey thumbnail of a frame at 1/8 of its size (at least 9 x 9 pixels), float64: the layout that
+    :func:`still_blocks` compares, blind to the fine texture and noise a change of the light leaves alone."""
+    g = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY) if frame.ndim == 3 else frame
+    h, w = g.shape[:2]
+    return cv2.resize(g, (max(w // 8, 9), max(h // 8, 9)), interpolation=cv2.INTER_AREA).astype(np.float64)
+
+
+def still_blocks(reference: np.ndarray, current: np.ndarray, *, ncc: float = STILL_NCC) -> np.ndarray:
+    """``(9,)`` bool: which blocks of a 3 x 3 grid of two thumbnails (:func:`light_thumbnail`, same shape) keep their
+    layout, their normalised correlation at least ``ncc``.  The correlation ignores a gain and an offset, so a
+    change of the light leaves a block still; a moving camera, or something passing through the block, does not.
+    A flat block (no layout to compare) is not still."""
+    a, b = np.asarray(reference, np.float64), np.asarray(current, np.float64)
+    if a.shape != b.shape:
+        return np.zeros(9, dtype=bool)
+    h, w = a.shape
+    out = np.zeros(9, dtype=bool)
+    for i in range(3):
+        for j in range(3):
+            x = a[i * h // 3:(i + 1) * h // 3, j * w // 3:(j + 1) * w // 3].ravel()
+            y = b[i * h // 3:(i + 1) * h // 3, j * w // 3:(j + 1) * w // 3].ravel()
+            x, y = x - x.mean(), y - y.mean()
+            d = math.sqrt(float(x @ x) * float(y @ y))
+            out[3 * i + j] = d > 1e-9 and float(x @ y) / d >= ncc
+    return out
 
 
 def gain_maps(reference: np.ndarray, current: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from ..cues.color import reachable_roi
-from ..cues.intensity import light_levels
+from ..cues.intensity import light_levels, light_thumbnail
 from ..filtering.dynamics import HX, HY, X, Y
 from ..geometry import background_grid
 
@@ -91,3 +91,5 @@ class LikelihoodMixin:
         self._since_bg = 0
         if self.params.relit_search != "off" and frame.ndim == 3 and self.cue.color_space == "rgb":
             self._seen_levels = light_levels(frame, self.params.relit_gain)  # the light while the target is seen
+            if self.params.relit_gain == "still":
+                self._seen_thumb = light_thumbnail(frame)  # and the view's layout then (relit_gain="still")

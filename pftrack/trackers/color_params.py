@@ -314,11 +314,13 @@ class ColorModelParams(Params):
         "gain undone (von Kries): a target whose colours drifted with the light while it was hidden is "
         "re-acquired. 'replace' scores the relit frame only; 'max' the better of relit and raw (twice the "
         "search's cost). Tracking is unchanged (fusion-pf has its own relit_colour)."))
-    relit_gain: Literal["frame", "blocks"] = param("frame", doc=(
+    relit_gain: Literal["frame", "blocks", "still"] = param("frame", doc=(
         "How the relit search reads the light: 'frame', the ratio of the whole frame's channel medians; "
         "'blocks', the median ratio of a 3 x 3 grid of blocks, taken as a change of the light only when two "
         "thirds of the blocks agree with it within 5 % (cues.intensity.light_gain): content passing through "
-        "part of the view (cars, walkers in a narrow window) is then not mistaken for light."))
+        "part of the view (cars, walkers in a narrow window) is then not mistaken for light; 'still', the same "
+        "over the blocks whose grey layout is unchanged (thumbnail NCC >= 0.8, cues.intensity.still_blocks), "
+        "two thirds of all blocks: a moving camera is not mistaken for light either."))
     grey_relit_shift: int = param(0, ge=0, le=8, doc=(
         "k > 0: on grey input the search scores each sample by the best of its grey histogram's coefficients with "
         "the model's intensity bins shifted by -k..k (cues.intensity.shifted_rho): a target whose own light "

@@ -144,6 +144,7 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
         self._loss_falling = False  # the score was already falling at the current loss (distractor_gradual)
         self._exit_velocity = (0.0, 0.0)  # their mean displacement per frame when the loss was declared
         self._seen_levels: np.ndarray | None = None  # channel levels while the target was seen (relit_search)
+        self._seen_thumb: np.ndarray | None = None  # and the view's grey thumbnail then (relit_gain="still")
         self._relit_at = -1  # the frame whose search was scored on the relit frame (relit_search)
         self.regions: np.ndarray | None = None
         self._search_states: np.ndarray | None = None
