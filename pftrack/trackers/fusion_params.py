@@ -235,7 +235,9 @@ class FusionPFParams(ColorPFParams):
         "'max' re-acquired 387 against 377 of 432 tune reappearances in colour scenes, but after real exits (tune "
         "views and windows) the flag's pooled recall fell 0.625 -> 0.598, since a window's channel medians move "
         "with what passes through it; with relit_gain='blocks' the recall held but 3 re-acquisitions of 33 were "
-        "lost (docs/robustness.md). relit_colour above does the same for the one candidate the structure backs."))
+        "lost; with relit_gain='still' the exits were untouched and 390 of 432 re-acquired, but one tune return came "
+        "a frame past the 15-frame window (docs/robustness.md). relit_colour above does the same for the one "
+        "candidate the structure backs."))
     probation_llr: float = param(15.0, ge=0, le=50, doc=(
         "See ColorModelParams.probation_llr (0, off, there; 15 for color-pf). 15 for fusion-pf, with probation_frames "
         "60, chosen on the tune data (docs/robustness.md, 'fusion-pf doubts a weak re-acquisition'): on the 568 tune "
