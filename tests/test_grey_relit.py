@@ -91,8 +91,8 @@ def test_light_gain_of_blocks_takes_a_change_of_the_whole_view_only():
 
 def test_still_blocks_tell_a_change_of_the_light_from_a_moving_camera():
     """``relit_gain="still"``: a gain leaves every block's layout as it was (read back as light); the same view
-    shifted by a moving camera keeps its levels but changes every block's layout (no light read), though the
-    blocks' levels agree; something passing through two blocks leaves the other seven to read the light."""
+    shifted by a moving camera changes the layout of most blocks (no light read); something passing through two
+    blocks leaves the other seven to read the light."""
     import cv2
     from pftrack.cues.intensity import light_gain, light_levels, light_thumbnail, still_blocks
 
@@ -120,3 +120,18 @@ def test_still_blocks_tell_a_change_of_the_light_from_a_moving_camera():
                                [1 / 0.6, 1 / 0.7, 1 / 0.8], rtol=0.03)
     flat = np.full_like(f, 100)
     assert not still_blocks(light_thumbnail(flat), light_thumbnail(flat)).any()  # nothing to compare
+
+
+def test_fusion_pf_relit_search_with_still_blocks_reacquires_a_target_hidden_while_the_light_dims():
+    """Tune-side draw ``vanish-011``: the whole frame darkens to about 0.56 while the target is hidden. Searched
+    under the light of the frame it was last seen in (``relit_search="max"``, ``relit_gain="still"``), the target
+    is re-acquired; on the raw frame it is not found within 15 frames of coming out."""
+    from pftrack.synth import vanish_scene
+
+    from .conftest import lost_flag_run
+
+    spec = vanish_scene(11)
+    off = lost_flag_run(spec, "fusion-pf")
+    lit = lost_flag_run(spec, "fusion-pf", relit_search="max", relit_gain="still")
+    assert lit.reappearances == 1 and lit.reacquired == 1 and lit.recall == 1.0
+    assert lit.covered_frames >= off.covered_frames + 15
