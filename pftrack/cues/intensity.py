@@ -345,6 +345,8 @@ def still_blocks(reference: np.ndarray, current: np.ndarray, *, ncc: float = STI
     layout, their normalised correlation at least ``ncc``.  The correlation ignores a gain and an offset, so a
     change of the light leaves a block still; a moving camera, or something passing through the block, does not.
     A flat block (no layout to compare) is not still."""
+    if reference is None:
+        return np.zeros(9, dtype=bool)
     a, b = np.asarray(reference, np.float64), np.asarray(current, np.float64)
     if a.shape != b.shape:
         return np.zeros(9, dtype=bool)
@@ -358,6 +360,14 @@ def still_blocks(reference: np.ndarray, current: np.ndarray, *, ncc: float = STI
             d = math.sqrt(float(x @ x) * float(y @ y))
             out[3 * i + j] = d > 1e-9 and float(x @ y) / d >= ncc
     return out
+
+
+def frame_light_gain(levels: np.ndarray, thumb: np.ndarray | None, frame: np.ndarray, mode: str = "frame"
+                     ) -> np.ndarray | None:
+    """The gain that brings ``frame``'s light back to a reference read by :func:`light_levels` (``levels``) and, for
+    ``mode="still"``, :func:`light_thumbnail` (``thumb``): :func:`light_gain`, over the still blocks in that mode."""
+    still = still_blocks(thumb, light_thumbnail(frame)) if mode == "still" else None
+    return light_gain(levels, light_levels(frame, mode), still=still)
 
 
 def gain_maps(reference: np.ndarray, current: np.ndarray) -> np.ndarray:
