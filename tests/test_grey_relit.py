@@ -120,6 +120,12 @@ def test_still_blocks_tell_a_change_of_the_light_from_a_moving_camera():
                                [1 / 0.6, 1 / 0.7, 1 / 0.8], rtol=0.03)
     flat = np.full_like(f, 100)
     assert not still_blocks(light_thumbnail(flat), light_thumbnail(flat)).any()  # nothing to compare
+    assert not still_blocks(None, ref_thumb).any()  # no reference kept
+    from pftrack.cues.intensity import frame_light_gain
+    np.testing.assert_allclose(frame_light_gain(ref_levels, ref_thumb, dim, "still"), [1 / 0.6, 1 / 0.7, 1 / 0.8],
+                               rtol=0.03)
+    assert frame_light_gain(ref_levels, ref_thumb, moved, "still") is None
+    np.testing.assert_allclose(frame_light_gain(light_levels(f), None, dim), [1 / 0.6, 1 / 0.7, 1 / 0.8], rtol=0.03)
 
 
 def test_fusion_pf_relit_search_with_still_blocks_reacquires_a_target_hidden_while_the_light_dims():
