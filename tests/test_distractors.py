@@ -146,3 +146,19 @@ def test_grey_vanish_scene_the_look_alike_is_not_taken_for_the_target(tracker, s
     off = lost_flag_run(spec, tracker, distractor_frames=0, static_ncc=0.0)
     assert on.reacquired == on.reappearances == 1 and on.recall >= 0.9
     assert off.reacquired == 0 and off.recall <= 0.3
+
+
+def test_falling_score_and_narrow_follow_on_a_grey_vanish_scene():
+    """Tune-side draw ``vanish-046`` (grey; options ``distractor_gradual``, ``distractor_follow``): the score falls
+    over three frames as the target is covered, with no frame of doubt by the frame count, so by default the memory
+    does not act, a look-alike far away is taken and the flag stays down while the target is hidden. Read from the
+    falling score, the look-alike is refused and the flag stays up; with the default follow radius the remembered
+    look-alike is handed over to the target when the two pass close, and the target is refused too; with half of
+    it the target is re-acquired."""
+    spec = vanish_scene(46)
+    off = lost_flag_run(spec, "fusion-pf")
+    scores = lost_flag_run(spec, "fusion-pf", distractor_gradual="scores")
+    narrow = lost_flag_run(spec, "fusion-pf", distractor_gradual="scores", distractor_follow=0.5)
+    assert off.recall <= 0.1
+    assert scores.recall == 1.0 and scores.reacquired == 0
+    assert narrow.recall == 1.0 and narrow.reacquired == narrow.reappearances == 1
