@@ -30,6 +30,7 @@ import numpy as np
 from .._numba import njit, numba_enabled
 from ..frames import grey_origin
 from .gray_kernels import exact_gray_available, gray_bins, lattice_levels_gradients
+from .lk import ncc as patch_ncc
 
 
 def _coloured_count_numpy(frame: np.ndarray, stride: int, tolerance: int, limit: int) -> int:
@@ -354,11 +355,8 @@ def still_blocks(reference: np.ndarray, current: np.ndarray, *, ncc: float = STI
     out = np.zeros(9, dtype=bool)
     for i in range(3):
         for j in range(3):
-            x = a[i * h // 3:(i + 1) * h // 3, j * w // 3:(j + 1) * w // 3].ravel()
-            y = b[i * h // 3:(i + 1) * h // 3, j * w // 3:(j + 1) * w // 3].ravel()
-            x, y = x - x.mean(), y - y.mean()
-            d = math.sqrt(float(x @ x) * float(y @ y))
-            out[3 * i + j] = d > 1e-9 and float(x @ y) / d >= ncc
+            rows, cols = slice(i * h // 3, (i + 1) * h // 3), slice(j * w // 3, (j + 1) * w // 3)
+            out[3 * i + j] = patch_ncc(a[None, rows, cols], b[None, rows, cols])[0] >= ncc  # flat: 0
     return out
 
 

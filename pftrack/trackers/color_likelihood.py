@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from ..cues.color import reachable_roi
-from ..cues.intensity import light_levels, light_thumbnail
+from ..cues.intensity import frame_light_gain, light_levels, light_thumbnail
 from ..filtering.dynamics import HX, HY, X, Y
 from ..geometry import background_grid
 
@@ -93,3 +93,12 @@ class LikelihoodMixin:
             self._seen_levels = light_levels(frame, self.params.relit_gain)  # the light while the target is seen
             if self.params.relit_gain == "still":
                 self._seen_thumb = light_thumbnail(frame)  # and the view's layout then (relit_gain="still")
+
+    def _frame_gain(self, frame: np.ndarray, ref: np.ndarray):
+        """The frame's gain against the light ``ref`` kept above (``frame_light_gain``), read once a frame: the
+        search's refined layer and its rival test score more samples on the same frame."""
+        c = self._gain_cache
+        if c is None or c[0] != self.frame_index or c[1] is not ref:
+            c = self._gain_cache = (self.frame_index, ref,
+                                    frame_light_gain(ref, self._seen_thumb, frame, self.params.relit_gain))
+        return c[2]

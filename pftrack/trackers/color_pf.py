@@ -145,6 +145,7 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
         self._exit_velocity = (0.0, 0.0)  # their mean displacement per frame when the loss was declared
         self._seen_levels: np.ndarray | None = None  # channel levels while the target was seen (relit_search)
         self._seen_thumb: np.ndarray | None = None  # and the view's grey thumbnail then (relit_gain="still")
+        self._gain_cache = None  # (frame index, reference levels, gain) of the relit search's reading
         self._relit_at = -1  # the frame whose search was scored on the relit frame (relit_search)
         self.regions: np.ndarray | None = None
         self._search_states: np.ndarray | None = None
@@ -316,7 +317,8 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
             if p.edge_share > 0:  # the box's part outside the frame counts as background
                 s_e = toward_background(self.loss, s_e, inside / p.edge_share)
             lost_now, score = self.loss.step(s_e if ok and tot_e[0] > 0 else float("nan"))
-            self._score_track.append((self.frame_index, score))
+            if p.distractor_gradual == "scores":
+                self._score_track.append((self.frame_index, score))
             self.miss = self.loss.miss
             confident = self.loss.confident(s_e)
             info["llr"] = self.loss.llr

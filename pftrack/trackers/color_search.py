@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..cues.color import reachable_roi
-from ..cues.intensity import frame_light_gain, gain_maps, shifted_rho
+from ..cues.intensity import gain_maps, shifted_rho
 from ..cues.lk import gray_of
 from ..errors import ParameterError
 from ..filtering.dynamics import HX, HY, X, Y, lost_prediction, reappearance_log_prior
@@ -285,7 +285,7 @@ class SearchMixin:
         is still recognised."""
         ref = self._seen_levels
         if self.params.relit_search != "off" and ref is not None and frame.ndim == 3 and self.cue.color_space == "rgb":
-            g = frame_light_gain(ref, self._seen_thumb, frame, self.params.relit_gain)
+            g = self._frame_gain(frame, ref)
             if g is not None and np.any(np.abs(g - 1.0) >= 0.05):  # the light changed (5 % dead zone)
                 h, w = self._shape
                 roi = reachable_roi(ell, w, h)
