@@ -69,6 +69,11 @@ def test_cli_line_follows_the_segment(tmp_path):
     assert np.allclose(rows["dy"], [s[1] for s in shifts], atol=0.3)
     assert np.all(rows["A"] > 0.5) and np.ptp(rows["A"]) < 0.35 * rows["A"].mean()  # same vessel under the line
     assert (tmp_path / "v.mp4").stat().st_size > 0
+    # the tripwire's form of a line gives the same curve
+    out2 = tmp_path / "curve2.csv"
+    assert main(["densitometry", str(folder), "--box", "80,40,40,50", "--line", "88,65;112,65", "--out", str(out2),
+                 "--quiet"]) == 0
+    assert out2.read_text() == out.read_text()
 
 
 def test_cli_bad_input_exits_2(tmp_path, capsys):
@@ -78,6 +83,8 @@ def test_cli_bad_input_exits_2(tmp_path, capsys):
     out = tmp_path / "c.csv"
     assert main(["densitometry", str(folder), "--box", "80,40,40,50", "--line", "88,65,900,65", "--out", str(out)]) == 2
     assert "outside" in capsys.readouterr().err and not out.exists()
+    assert main(["densitometry", str(folder), "--box", "80,40,40,50", "--line", "88,65;112", "--out", str(out)]) == 2
+    assert "4 numbers" in capsys.readouterr().err and not out.exists()
     assert main(["densitometry", str(tmp_path / "missing"), "--box", "1,1,5,5", "--line", "1,1,4,4",
                  "--out", str(out)]) == 2
 

@@ -16,7 +16,8 @@ def add_densitometry(sub) -> None:
                                    "statistics (CSV, one row per frame, flushed).")
     p.add_argument("source", help="video file, frame folder, OTB/VOT folder or camera index")
     p.add_argument("--box", required=True, help="template window X,Y,W,H (around the artery segment)")
-    p.add_argument("--line", required=True, help="cross-sectional line X1,Y1,X2,Y2 in the first frame")
+    p.add_argument("--line", required=True,
+                   help="cross-sectional line X1,Y1,X2,Y2 in the first frame (or X1,Y1;X2,Y2, as tripwire takes it)")
     p.add_argument("--template-frame", type=int, default=1,
                    help="frame (from 1) where --box and --line are given, e.g. the end of the contrast injection; "
                         "frames before it are tracked backwards from it (rows are written as computed: that "
@@ -50,11 +51,11 @@ def cmd_densitometry(args) -> int:
     if args.width < 1:
         raise ParameterError("--width must be >= 1")
     try:
-        line = [float(v) for v in args.line.replace(" ", ",").split(",") if v]
+        line = [float(v) for v in args.line.replace(" ", ",").replace(";", ",").split(",") if v]
     except ValueError:
-        raise BoxError(f"line must be X1,Y1,X2,Y2 (4 numbers), got {args.line!r}") from None
+        raise BoxError(f"line must be X1,Y1,X2,Y2 or X1,Y1;X2,Y2 (4 numbers), got {args.line!r}") from None
     if len(line) != 4:
-        raise BoxError(f"line must be X1,Y1,X2,Y2 (4 numbers), got {args.line!r}")
+        raise BoxError(f"line must be X1,Y1,X2,Y2 or X1,Y1;X2,Y2 (4 numbers), got {args.line!r}")
     tracker = create_tracker("template", params={"metric": args.metric, **parse_param_assignments(args.param)})
     box = parse_box(args.box)
     prepare_output(args.out)
