@@ -25,7 +25,11 @@ camera that turns to monochrome at dusk; docs/rules/input_switch_rule.txt), with
 * ``NAME-switch-block``: colour, grey for frames floor(n/3)+1 .. floor(2n/3);
 * ``NAME-switch-random``: colour, each frame after the first grey with probability 0.2 (seeded by the name).
 
-Ground truth (``groundtruth_rect.txt``) is copied unchanged.
+With ``--scale F`` one copy is written instead, ``NAME-xF``: every colour frame resized by the factor F (area
+averaging when shrinking, bilinear when enlarging; JPEG quality 92) and the ground truth scaled with it, for the
+same targets at another resolution (a smaller or a larger target in pixels).
+
+Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``.
 """
 
 from __future__ import annotations
@@ -69,6 +73,19 @@ def write_h264(seq, dest: Path, crf: int) -> None:
     for i, f in enumerate(frames):
         cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.png"), f)
     copy_truth(seq, dest)
+
+
+def write_scaled(seq, dest: Path, factor: float) -> None:
+    """``seq``'s colour frames resized by ``factor``, with its ground truth scaled alike, as an OTB folder."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    interp = cv2.INTER_AREA if factor < 1 else cv2.INTER_LINEAR
+    for i, path in enumerate(seq.frames):
+        img = cv2.resize(cv2.imread(str(path), cv2.IMREAD_COLOR), None, fx=factor, fy=factor, interpolation=interp)
+        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+    write_groundtruth(dest / "groundtruth_rect.txt", seq.groundtruth * factor)
+    for extra in ("ATTRIBUTION.md", "provenance.json"):
+        if (seq.path / extra).is_file():
+            shutil.copy(seq.path / extra, dest / extra)
 
 
 SWITCH_KINDS = ("after", "before", "block", "random")
@@ -116,7 +133,11 @@ def main() -> None:
                     "and grey mid-sequence (NAME-switch-after, -before, -block, -random)")
     ap.add_argument("--light-seeds", metavar="A-B", help="only grey + illumination copies, one per seed "
                     "(NAME-gray-light-sK, the lamp drawn afresh)")
+    ap.add_argument("--scale", type=float, metavar="F", help="only a copy resized by the factor F (NAME-xF), "
+                    "its ground truth scaled alike")
     args = ap.parse_args()
+    if args.scale is not None and not args.scale > 0:
+        ap.error(f"--scale must be a positive factor, got {args.scale}")
     light_seeds = parse_seeds(args.light_seeds) if args.light_seeds else None
     out = Path(args.out)
     for spec in args.sequences:
@@ -125,6 +146,10 @@ def main() -> None:
         seed = zlib.crc32(seq.name.encode())
         if args.switch:
             print(f"{seq.name}: {n} frames -> " + ", ".join(f"{out}/{v}" for v in write_switch(seq, out)))
+            continue
+        if args.scale is not None:
+            write_scaled(seq, out / f"{seq.name}-x{args.scale:g}", args.scale)
+            print(f"{seq.name}: {n} frames -> {out}/{seq.name}-x{args.scale:g}")
             continue
         if args.h264 is not None:
             write_h264(seq, out / f"{seq.name}-h264", args.h264)
