@@ -1,4 +1,5 @@
-"""scripts/make_variants.py: grey and grey + illumination copies, and fresh draws of the lamp (--light-seeds)."""
+"""scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds), and
+resized copies (--scale)."""
 
 from __future__ import annotations
 
@@ -52,3 +53,19 @@ def test_light_seeds_write_only_fresh_lamps_each_its_own(tmp_path):
     # the same seed gives the same copy again
     _run(str(seq), "--light-seeds", "1", "--out", str(tmp_path / "c"))
     assert np.array_equal(_frames(tmp_path / "c" / "tiny-gray-light-s1"), s1)
+
+
+def test_scale_writes_one_resized_copy_with_its_truth_scaled(tmp_path):
+    seq = _otb(tmp_path)
+    gt = read_sequence(seq).groundtruth.copy()
+    gt[2] = np.nan  # an absent frame stays absent
+    write_groundtruth(seq / "groundtruth_rect.txt", gt)
+    for f, name, size in ((0.5, "tiny-x0.5", (24, 32)), (2.0, "tiny-x2", (96, 128))):
+        _run(str(seq), "--scale", str(f), "--out", str(tmp_path / "s"))
+        copy = read_sequence(tmp_path / "s" / name)
+        assert len(copy.frames) == 6 and cv2.imread(str(copy.frames[0])).shape == size + (3,)
+        np.testing.assert_allclose(copy.groundtruth, gt * f)
+    assert sorted(p.name for p in (tmp_path / "s").iterdir()) == ["tiny-x0.5", "tiny-x2"]
+    bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--scale", "0", "--out", str(tmp_path / "z")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "positive" in bad.stderr
