@@ -222,6 +222,18 @@ def test_otb_folder_with_two_targets_gives_two_sequences(tmp_path):
     assert sum(r.split(",")[1] in ("Jogging.1", "Jogging.2", "Other") for r in rows[1:]) == 3
 
 
+def test_eval_refuses_two_sequences_of_one_name_and_says_which(tmp_path, capsys):
+    from pftrack.cli import main
+
+    for part in ("a", "b"):
+        write_frames(tmp_path / part / "walk" / "img", 3, size=(64, 48))
+        (tmp_path / part / "walk" / "groundtruth_rect.txt").write_text("5,5,10,10\n" * 3)
+    assert main(["eval", str(tmp_path / "a"), str(tmp_path / "b"), "--trackers", "template", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "'walk'" in err and str(tmp_path / "a" / "walk") in err and str(tmp_path / "b" / "walk") in err
+    assert len(err.strip().splitlines()) == 1
+
+
 def test_lasot_and_got10k_folders(tmp_path):
     """LaSOT: frames in img/, groundtruth.txt, and full_occlusion.txt / out_of_view.txt (one line of 0/1 flags);
     GOT-10k: frames beside groundtruth.txt and absence.label (a flag a line).  The flags give the absent frames."""

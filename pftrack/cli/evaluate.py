@@ -87,9 +87,12 @@ def cmd_eval(args) -> int:
             seqs.append(seq)
     if not seqs:
         raise SourceError(f"no sequences with {'MOTChallenge' if mot else 'single-object'} ground truth to evaluate")
-    names = [s.name for s in seqs]
-    if len(set(names)) != len(names):
-        raise SourceError("two sequences share a name; evaluate them separately")
+    seen: dict[str, Path] = {}
+    for s in seqs:
+        if s.name in seen:
+            raise SourceError(f"two sequences share the name {s.name!r} ({seen[s.name]} and {s.path}): results are "
+                              "kept by name; rename one folder or evaluate them separately")
+        seen[s.name] = s.path
     if args.doc:
         prepare_output(args.doc)
     report_dir = Path(args.report) if args.report else None
