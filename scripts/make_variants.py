@@ -58,9 +58,9 @@ def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
     return (gain * (0.55 + 0.9 * np.exp(-r2))).astype(np.float32)
 
 
-def copy_truth(seq, dest: Path) -> None:
-    """The ground truth (and attribution) of ``seq`` into the OTB folder ``dest``."""
-    write_groundtruth(dest / "groundtruth_rect.txt", seq.groundtruth)
+def copy_truth(seq, dest: Path, scale: float = 1.0) -> None:
+    """The ground truth (times ``scale``) and attribution of ``seq`` into the OTB folder ``dest``."""
+    write_groundtruth(dest / "groundtruth_rect.txt", seq.groundtruth if scale == 1.0 else seq.groundtruth * scale)
     for extra in ("ATTRIBUTION.md", "provenance.json"):
         if (seq.path / extra).is_file():
             shutil.copy(seq.path / extra, dest / extra)
@@ -82,10 +82,7 @@ def write_scaled(seq, dest: Path, factor: float) -> None:
     for i, path in enumerate(seq.frames):
         img = cv2.resize(cv2.imread(str(path), cv2.IMREAD_COLOR), None, fx=factor, fy=factor, interpolation=interp)
         cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
-    write_groundtruth(dest / "groundtruth_rect.txt", seq.groundtruth * factor)
-    for extra in ("ATTRIBUTION.md", "provenance.json"):
-        if (seq.path / extra).is_file():
-            shutil.copy(seq.path / extra, dest / extra)
+    copy_truth(seq, dest, factor)
 
 
 SWITCH_KINDS = ("after", "before", "block", "random")
