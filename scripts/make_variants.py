@@ -29,7 +29,11 @@ With ``--scale F`` one copy is written instead, ``NAME-xF``: every colour frame 
 averaging when shrinking, bilinear when enlarging; JPEG quality 92) and the ground truth scaled with it, for the
 same targets at another resolution (a smaller or a larger target in pixels).
 
-Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``.
+With ``--stride K`` one copy is written instead, ``NAME-sK``: frames 1, 1 + K, 1 + 2K, ... of the sequence with
+their ground truth rows, for the same targets at a K times lower frame rate (K times the motion between frames).
+The frames are copied as they are, not re-encoded.
+
+Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale`` and ``--stride``.
 """
 
 from __future__ import annotations
@@ -58,9 +62,11 @@ def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
     return (gain * (0.55 + 0.9 * np.exp(-r2))).astype(np.float32)
 
 
-def copy_truth(seq, dest: Path, scale: float = 1.0) -> None:
-    """The ground truth (times ``scale``) and attribution of ``seq`` into the OTB folder ``dest``."""
-    write_groundtruth(dest / "groundtruth_rect.txt", seq.groundtruth if scale == 1.0 else seq.groundtruth * scale)
+def copy_truth(seq, dest: Path, scale: float = 1.0, stride: int = 1) -> None:
+    """The ground truth (times ``scale``, every ``stride``-th row from the first) and attribution of ``seq`` into
+    the OTB folder ``dest``."""
+    gt = seq.groundtruth[::stride]
+    write_groundtruth(dest / "groundtruth_rect.txt", gt if scale == 1.0 else gt * scale)
     for extra in ("ATTRIBUTION.md", "provenance.json"):
         if (seq.path / extra).is_file():
             shutil.copy(seq.path / extra, dest / extra)
@@ -83,6 +89,17 @@ def write_scaled(seq, dest: Path, factor: float) -> None:
         img = cv2.resize(cv2.imread(str(path), cv2.IMREAD_COLOR), None, fx=factor, fy=factor, interpolation=interp)
         cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
     copy_truth(seq, dest, factor)
+
+
+def write_strided(seq, dest: Path, stride: int) -> int:
+    """Every ``stride``-th frame of ``seq`` from the first, copied as it is and numbered afresh, with its ground truth
+    rows, as an OTB folder; returns the number of frames written."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    kept = seq.frames[::stride]
+    for i, path in enumerate(kept):
+        shutil.copy(path, dest / "img" / f"{i + 1:04d}{Path(path).suffix.lower()}")
+    copy_truth(seq, dest, stride=stride)
+    return len(kept)
 
 
 SWITCH_KINDS = ("after", "before", "block", "random")
@@ -132,9 +149,13 @@ def main() -> None:
                     "(NAME-gray-light-sK, the lamp drawn afresh)")
     ap.add_argument("--scale", type=float, metavar="F", help="only a copy resized by the factor F (NAME-xF), "
                     "its ground truth scaled alike")
+    ap.add_argument("--stride", type=int, metavar="K", help="only a copy of every K-th frame (NAME-sK), a K times "
+                    "lower frame rate")
     args = ap.parse_args()
     if args.scale is not None and not args.scale > 0:
         ap.error(f"--scale must be a positive factor, got {args.scale}")
+    if args.stride is not None and args.stride < 1:
+        ap.error(f"--stride must be a whole number of at least 1, got {args.stride}")
     light_seeds = parse_seeds(args.light_seeds) if args.light_seeds else None
     out = Path(args.out)
     for spec in args.sequences:
@@ -147,6 +168,10 @@ def main() -> None:
         if args.scale is not None:
             write_scaled(seq, out / f"{seq.name}-x{args.scale:g}", args.scale)
             print(f"{seq.name}: {n} frames -> {out}/{seq.name}-x{args.scale:g}")
+            continue
+        if args.stride is not None:
+            kept = write_strided(seq, out / f"{seq.name}-s{args.stride}", args.stride)
+            print(f"{seq.name}: {kept} of {n} frames -> {out}/{seq.name}-s{args.stride}")
             continue
         if args.h264 is not None:
             write_h264(seq, out / f"{seq.name}-h264", args.h264)

@@ -1,5 +1,5 @@
-"""scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds), and
-resized copies (--scale)."""
+"""scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds),
+resized copies (--scale) and copies at a lower frame rate (--stride)."""
 
 from __future__ import annotations
 
@@ -69,3 +69,23 @@ def test_scale_writes_one_resized_copy_with_its_truth_scaled(tmp_path):
     bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--scale", "0", "--out", str(tmp_path / "z")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "positive" in bad.stderr
+
+
+def test_stride_keeps_every_kth_frame_as_it_is_with_its_truth_rows(tmp_path):
+    seq = _otb(tmp_path, n=7)
+    gt = read_sequence(seq).groundtruth.copy()
+    gt[:, 0] += np.arange(7)  # a box that moves, so a row taken from the wrong frame shows
+    gt[4] = np.nan  # an absent frame stays absent
+    write_groundtruth(seq / "groundtruth_rect.txt", gt)
+    _run(str(seq), "--stride", "2", "--out", str(tmp_path / "s"))
+    copy = read_sequence(tmp_path / "s" / "tiny-s2")
+    assert [p.name for p in copy.frames] == ["0001.png", "0002.png", "0003.png", "0004.png"]
+    np.testing.assert_array_equal(copy.groundtruth, gt[[0, 2, 4, 6]])
+    original = read_sequence(seq).frames
+    for k, p in enumerate(copy.frames):  # the same bytes as frames 1, 3, 5, 7
+        assert p.read_bytes() == original[2 * k].read_bytes()
+    _run(str(seq), "--stride", "1", "--out", str(tmp_path / "one"))
+    np.testing.assert_array_equal(read_sequence(tmp_path / "one" / "tiny-s1").groundtruth, gt)
+    bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--stride", "0", "--out", str(tmp_path / "z")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "stride" in bad.stderr
