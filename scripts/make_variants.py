@@ -31,7 +31,8 @@ same targets at another resolution (a smaller or a larger target in pixels).
 
 With ``--stride K`` one copy is written instead, ``NAME-sK``: frames 1, 1 + K, 1 + 2K, ... of the sequence with
 their ground truth rows, for the same targets at a K times lower frame rate (K times the motion between frames).
-The frames are copied as they are, not re-encoded.
+The frames are copied as they are, not re-encoded; a ``meta.json`` goes along with its frame numbers (``hidden``,
+``unannotated``) renumbered and its per-frame lists taken at the kept frames.
 
 Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale`` and ``--stride``.
 """
@@ -39,6 +40,7 @@ Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``
 from __future__ import annotations
 
 import argparse
+import json
 import shutil
 import zlib
 from pathlib import Path
@@ -49,6 +51,7 @@ import numpy as np
 from pftrack.cli.common import parse_seeds
 from pftrack.io.codec import h264_round_trip
 from pftrack.io.datasets import read_sequence, write_groundtruth
+from pftrack.io.sequence import read_meta
 
 
 def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
@@ -99,6 +102,15 @@ def write_strided(seq, dest: Path, stride: int) -> int:
     for i, path in enumerate(kept):
         shutil.copy(path, dest / "img" / f"{i + 1:04d}{Path(path).suffix.lower()}")
     copy_truth(seq, dest, stride=stride)
+    meta = read_meta(seq.path)
+    if meta:  # frame numbers (from 1) of the kept frames renumbered, per-frame lists taken at the kept frames
+        for key in ("hidden", "unannotated"):
+            if key in meta:
+                meta[key] = [(k - 1) // stride + 1 for k in meta[key] if (k - 1) % stride == 0]
+        for key, value in meta.items():
+            if isinstance(value, list) and len(value) == len(seq.frames) and key not in ("hidden", "unannotated"):
+                meta[key] = value[::stride]
+        (dest / "meta.json").write_text(json.dumps(meta) + "\n", encoding="utf-8")
     return len(kept)
 
 

@@ -3,6 +3,7 @@ resized copies (--scale) and copies at a lower frame rate (--stride)."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -77,8 +78,14 @@ def test_stride_keeps_every_kth_frame_as_it_is_with_its_truth_rows(tmp_path):
     gt[:, 0] += np.arange(7)  # a box that moves, so a row taken from the wrong frame shows
     gt[4] = np.nan  # an absent frame stays absent
     write_groundtruth(seq / "groundtruth_rect.txt", gt)
+    meta = {"kind": "mot-person", "hidden": [2, 3], "unannotated": [5, 6], "visible": [1, 0.5, 0, 0, 1, 1, 0.9]}
+    (seq / "meta.json").write_text(json.dumps(meta), encoding="utf-8")
     _run(str(seq), "--stride", "2", "--out", str(tmp_path / "s"))
     copy = read_sequence(tmp_path / "s" / "tiny-s2")
+    # frame 3 (hidden) and 5 (unannotated) are kept as frames 2 and 3; frames 2 and 6 are dropped
+    assert json.loads((tmp_path / "s" / "tiny-s2" / "meta.json").read_text()) == {
+        "kind": "mot-person", "hidden": [2], "unannotated": [3], "visible": [1, 0, 1, 0.9]}
+    assert copy.absent.tolist() == [False, True, False, False]
     assert [p.name for p in copy.frames] == ["0001.png", "0002.png", "0003.png", "0004.png"]
     np.testing.assert_array_equal(copy.groundtruth, gt[[0, 2, 4, 6]])
     original = read_sequence(seq).frames
