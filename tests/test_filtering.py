@@ -190,3 +190,32 @@ def test_reappearance_log_prior_is_the_mixture_relative_to_uniform():
     np.testing.assert_allclose(capped, np.minimum(raw, 0.0))
     # eps = 1: no preference anywhere
     np.testing.assert_allclose(reappearance_log_prior(pos, (50.0, 40.0), sd, area, 1.0, cap=False), 0.0, atol=1e-12)
+
+
+def test_wide_proposal_widens_the_position_steps_of_a_random_share_only():
+    from pftrack.filtering.dynamics import widen_position_noise
+
+    noise = np.random.default_rng(1).standard_normal((20000, 7))
+    before = noise.copy()
+    widen_position_noise(noise, np.random.default_rng(2), 0.2, 3.0)
+    changed = np.any(noise != before, axis=1)
+    assert 0.18 < changed.mean() < 0.22  # about the share asked for, drawn at random
+    np.testing.assert_array_equal(noise[changed][:, :2], 3.0 * before[changed][:, :2])  # x and y only, times 3
+    np.testing.assert_array_equal(noise[:, 2:], before[:, 2:])
+    np.testing.assert_array_equal(noise[~changed], before[~changed])
+    # a step of 3.5 noise spreads: about 0.05 % of Gaussian steps reach it, a fifth of 24 % with the wide share
+    far = np.abs(noise[:, 0]) > 3.5
+    assert 0.03 < far.mean() < 0.06 and (np.abs(before[:, 0]) > 3.5).mean() < 0.002
+
+
+def test_wide_proposal_off_draws_as_before_and_on_spreads_the_set():
+    states = np.zeros((400, 7))
+    states[:, 4:6] = 10.0
+    std = np.array([2.0, 2.0, 0.1, 0.1, 0.0, 0.0, 0.0])
+    plain, off, on = states.copy(), states.copy(), states.copy()
+    ConstantVelocityScale().propagate(plain, std, np.random.default_rng(5))
+    ConstantVelocityScale(wide_fraction=0.0, wide_factor=3.0).propagate(off, std, np.random.default_rng(5))
+    np.testing.assert_array_equal(plain, off)  # off: the same random stream, the same samples
+    region = ConstantVelocityScale(wide_fraction=0.25, wide_factor=4.0).propagate(on, std, np.random.default_rng(5))
+    assert np.abs(on[:, 0]).max() > 2 * np.abs(plain[:, 0]).max()
+    assert region[0] <= on[:, 0].min() - 10.0 + 1e-9  # the quantised region reaches the wide samples' ellipses

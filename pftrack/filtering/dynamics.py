@@ -49,8 +49,10 @@ class ConstantVelocityScale:
     state_names = STATE_NAMES_7
 
     def __init__(self, *, min_half_axis: float = 2.0, max_half_axis: float = 1e5, max_scale_rate: float = 0.1,
-                 scale_damping: float = 1.0):
+                 scale_damping: float = 1.0, wide_fraction: float = 0.0, wide_factor: float = 1.0):
         self.scale_damping = float(scale_damping)
+        self.wide_fraction = float(wide_fraction)
+        self.wide_factor = float(wide_factor)
         self.min_half_axis = float(min_half_axis)
         self.max_half_axis = float(max_half_axis)
         self.max_scale_rate = float(max_scale_rate)
@@ -78,6 +80,8 @@ class ConstantVelocityScale:
         if self._noise is None or self._noise.shape != states.shape:
             self._noise = np.empty_like(states)
         rng.standard_normal(out=self._noise)
+        if self.wide_fraction > 0.0 and self.wide_factor != 1.0:
+            widen_position_noise(self._noise, rng, self.wide_fraction, self.wide_factor)
         w, h = frame_size if frame_size is not None else (0.0, 0.0)
         return propagate_cv_scale(states, self._noise, noise_std, damping=self.scale_damping,
                                   min_half_axis=self.min_half_axis, max_half_axis=self.max_half_axis,
@@ -94,6 +98,16 @@ class ConstantVelocityScale:
         a = np.eye(7)
         a[X, VX] = a[Y, VY] = 1.0
         return a
+
+
+def widen_position_noise(noise: np.ndarray, rng: np.random.Generator, fraction: float, factor: float) -> np.ndarray:
+    """A heavy-tailed proposal: multiply the position noise (columns ``X``, ``Y``) of a random ``fraction`` of the
+    rows of standard-normal ``noise`` by ``factor``, in place (a two-component Gaussian mixture on the position
+    step, each sample's component drawn afresh each frame); returns ``noise``."""
+    wide = rng.random(noise.shape[0]) < fraction
+    noise[wide, X] *= factor
+    noise[wide, Y] *= factor
+    return noise
 
 
 class NCVRandomWalk:

@@ -424,7 +424,8 @@ class ColorPF(ColorParticleFilter):
         super().__init__(params, rng=rng, seed=seed, detector=detector)
         p = self.params
         self.dynamics = ConstantVelocityScale(min_half_axis=p.min_half_axis, max_scale_rate=p.max_scale_rate,
-                                              scale_damping=p.scale_damping)
+                                              scale_damping=p.scale_damping, wide_fraction=p.wide_fraction,
+                                              wide_factor=p.wide_factor)
 
     def _noise_std(self, hx: float, hy: float) -> np.ndarray:
         p = self.params

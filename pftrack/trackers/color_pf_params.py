@@ -137,6 +137,13 @@ class ColorPFParams(ColorModelParams):
         "(scale-invariant). The paper leaves it open."))
     velocity_noise: float = param(0.1, ge=0, le=10, doc=(
         "Std of the noise on the velocity (vx, vy) per frame, as a fraction of the mean half-axis."))
+    wide_fraction: float = param(0.0, ge=0, le=1, doc=(
+        "A heavy-tailed proposal for abrupt motion (a jerky camera, a low frame rate): each frame this share of "
+        "the samples, drawn at random, takes wide_factor times the position noise of Eq. 9, so the set reaches a "
+        "target that moved several noise spreads between two frames; the others move as usual. 0 (default): "
+        "off, the paper's Gaussian."))
+    wide_factor: float = param(3.0, ge=1, le=20, doc=(
+        "With wide_fraction > 0: the factor on the position noise of the wide samples."))
     size_noise: float = param(0.0, ge=0, le=1, doc=(
         "Std of independent noise on the half-axes Hx, Hy, as a fraction of each half-axis. 0 (default) "
         "changes the size only through adot, which keeps the aspect ratio."))
