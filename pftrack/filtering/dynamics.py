@@ -43,6 +43,10 @@ class ConstantVelocityScale:
     The paper leaves the bounds open; we clip half-axes to
     ``[min_half_axis, max_half_axis]`` and ``|adot| <= max_scale_rate`` so that a
     scale random walk can never collapse a region to nothing or explode.
+
+    With ``wide_fraction > 0`` the position part of ``w`` is heavy-tailed: each call a random
+    ``wide_fraction`` of the samples take ``wide_factor`` times its standard deviation
+    (:func:`widen_position_noise`), for targets that jump between frames. Off by default.
     """
 
     dim = 7
