@@ -56,6 +56,7 @@ from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..geometry import Box, box_to_ellipse, displacement_rate, ellipse_box, in_frame_fraction
 from .base import Tracker, TrackState
+from .camera_motion import CameraMotionMixin
 from .color_hooks import ColorHooks
 from .color_likelihood import LikelihoodMixin
 from .color_params import ColorModelParams
@@ -412,7 +413,7 @@ class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMi
                           state_names=self.state_names, info=info or {})
 
 
-class ColorPF(ColorParticleFilter):
+class ColorPF(CameraMotionMixin, ColorParticleFilter):
     """The adaptive colour-based particle filter (see the module docstring)."""
 
     name = "color-pf"
@@ -443,9 +444,19 @@ class ColorPF(ColorParticleFilter):
         std[_ELL_COLS] = self._noise_std(est[HX], est[HY])[_ELL_COLS]
         return std
 
+    def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        self._camera_start(frame)
+        return super()._init(frame, box)
+
+    def _update(self, frame: np.ndarray) -> TrackState:
+        self._camera_frame(frame)
+        return super()._update(frame)
+
     def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:
         est = self.estimate
         fh, fw = self._shape
+        if self.params.camera_motion:
+            self._camera_apply(states)
         return self.dynamics.propagate(states, self._noise_std(est[HX], est[HY]), self.rng, frame_size=(fw, fh))
 
     def _clip_states(self, states: np.ndarray) -> None:

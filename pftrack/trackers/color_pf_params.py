@@ -144,6 +144,13 @@ class ColorPFParams(ColorModelParams):
         "off, the paper's Gaussian."))
     wide_factor: float = param(3.0, ge=1, le=20, doc=(
         "With wide_fraction > 0: the factor on the position noise of the wide samples."))
+    camera_motion: bool = param(False, doc=(
+        "Move every sample by the camera's translation since the last frame before the dynamics (Eq. 9) spread "
+        "them, read from the two frames' integral projections (pftrack.cues.camera_shift): for a hand-held camera "
+        "or a low frame rate. A static camera gives no shift. False (default): off."))
+    camera_max_shift: float = param(0.15, gt=0, le=0.5, doc=(
+        "With camera_motion: the largest shift searched, as a fraction of the frame's width (along x) and height "
+        "(along y)."))
     size_noise: float = param(0.0, ge=0, le=1, doc=(
         "Std of independent noise on the half-axes Hx, Hy, as a fraction of each half-axis. 0 (default) "
         "changes the size only through adot, which keeps the aspect ratio."))

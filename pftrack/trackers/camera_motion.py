@@ -1,0 +1,53 @@
+"""Samples moved with the camera (``camera_motion``): a mixin of the colour particle filters.
+
+Each tracked frame the camera's translation since the previous frame is read from the two frames' integral
+projections (:mod:`pftrack.cues.camera_shift`) and added to every sample's position before the dynamics (Eq. 9 of
+Nummiaro et al.) spread them. A hand-held camera or a low frame rate moves the whole view by more than the dynamics'
+noise; a static camera gives no shift, and nothing is spread wider, so a target leaving the view is not replaced by
+a look-alike further off (``docs/robustness.md``, "The same targets at a lower frame rate").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..cues.camera_shift import camera_shift, frame_profiles, lattice_step
+
+X, Y = 0, 1
+
+
+class CameraMotionMixin:
+    """Keeps the previous frame's projections and the shift of the current frame (``params.camera_motion``)."""
+
+    _camera_prev: tuple[np.ndarray, np.ndarray] | None = None
+    _camera_move: tuple[float, float] = (0.0, 0.0)
+
+    def _camera_start(self, frame: np.ndarray) -> None:
+        """Take the first frame's projections (on ``init``)."""
+        self._camera_move = (0.0, 0.0)
+        self._camera_prev = self._camera_profiles(frame) if self.params.camera_motion else None
+
+    def _camera_profiles(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        h, w = frame.shape[:2]
+        return frame_profiles(frame, lattice_step(h, w))
+
+    def _camera_frame(self, frame: np.ndarray) -> None:
+        """Read this frame's shift from the last frame's projections (every frame, so that the shift is always
+        that of one frame); it is applied only when the samples are propagated."""
+        if not self.params.camera_motion:
+            return
+        cur = self._camera_profiles(frame)
+        move = (0.0, 0.0)
+        if self._camera_prev is not None:
+            h, w = frame.shape[:2]
+            f = self.params.camera_max_shift
+            move = camera_shift(self._camera_prev, cur, max_shift=(f * w, f * h), step=lattice_step(h, w))
+        self._camera_prev, self._camera_move = cur, move
+
+    def _camera_apply(self, states: np.ndarray) -> None:
+        """Move the samples' centres by this frame's shift (in place)."""
+        dx, dy = self._camera_move
+        if dx:
+            states[:, X] += dx
+        if dy:
+            states[:, Y] += dy
