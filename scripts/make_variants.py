@@ -34,7 +34,12 @@ their ground truth rows, for the same targets at a K times lower frame rate (K t
 The frames are copied as they are, not re-encoded; a ``meta.json`` goes along with its frame numbers (``hidden``,
 ``unannotated``) renumbered and its per-frame lists taken at the kept frames.
 
-Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale`` and ``--stride``.
+With ``--shake PX`` one copy is written instead, ``NAME-shakePX``: each frame is the original cut by PX pixels on
+every side and moved by up to PX pixels along each axis (integer offsets drawn per frame from the sequence name; none
+on the first frame), as a hand-held camera shakes, with the ground truth moved alike (NaN where a box falls wholly
+outside the cut). JPEG quality 92.
+
+Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``, ``--stride`` and ``--shake``.
 """
 
 from __future__ import annotations
@@ -114,6 +119,40 @@ def write_strided(seq, dest: Path, stride: int) -> int:
     return len(kept)
 
 
+def shake_offsets(n: int, px: int, name: str) -> np.ndarray:
+    """``(n, 2)`` integer offsets ``(dx, dy)`` in ``[-px, px]`` of a ``--shake`` copy, drawn from the sequence name;
+    the first frame's is ``(0, 0)``."""
+    off = np.random.default_rng(zlib.crc32(f"{name}#shake".encode())).integers(-px, px + 1, size=(n, 2))
+    off[0] = 0
+    return off
+
+
+def write_shaken(seq, dest: Path, px: int) -> None:
+    """``seq``'s colour frames cut by ``px`` on every side at a per-frame offset (a shaking camera), with the ground
+    truth moved alike, as an OTB folder."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    off = shake_offsets(len(seq.frames), px, seq.name)
+    for i, path in enumerate(seq.frames):
+        img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        h, w = img.shape[:2]
+        x0, y0 = px + off[i, 0], px + off[i, 1]
+        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img[y0:h - 2 * px + y0, x0:w - 2 * px + x0],
+                    [cv2.IMWRITE_JPEG_QUALITY, 92])
+    gt = np.array(seq.groundtruth, dtype=np.float64).copy()
+    m = min(len(gt), len(off))
+    gt[:m, 0] -= px + off[:m, 0]
+    gt[:m, 1] -= px + off[:m, 1]
+    if len(seq.frames):
+        h, w = cv2.imread(str(seq.frames[0]), cv2.IMREAD_UNCHANGED).shape[:2]
+        out = (gt[:, 0] + gt[:, 2] <= 0) | (gt[:, 1] + gt[:, 3] <= 0) | (gt[:, 0] >= w - 2 * px) | \
+              (gt[:, 1] >= h - 2 * px)
+        gt[out] = np.nan
+    write_groundtruth(dest / "groundtruth_rect.txt", gt)
+    for extra in ("ATTRIBUTION.md", "provenance.json", "meta.json"):
+        if (seq.path / extra).is_file():
+            shutil.copy(seq.path / extra, dest / extra)
+
+
 SWITCH_KINDS = ("after", "before", "block", "random")
 
 
@@ -161,11 +200,15 @@ def main() -> None:
                     "(NAME-gray-light-sK, the lamp drawn afresh)")
     ap.add_argument("--scale", type=float, metavar="F", help="only a copy resized by the factor F (NAME-xF), "
                     "its ground truth scaled alike")
+    ap.add_argument("--shake", type=int, metavar="PX", help="only a copy seen by a shaking camera (NAME-shakePX): "
+                    "cut by PX on every side and moved by up to PX each frame")
     ap.add_argument("--stride", type=int, metavar="K", help="only a copy of every K-th frame (NAME-sK), a K times "
                     "lower frame rate")
     args = ap.parse_args()
     if args.scale is not None and not args.scale > 0:
         ap.error(f"--scale must be a positive factor, got {args.scale}")
+    if args.shake is not None and args.shake < 1:
+        ap.error(f"--shake must be a whole number of pixels of at least 1, got {args.shake}")
     if args.stride is not None and args.stride < 1:
         ap.error(f"--stride must be a whole number of at least 1, got {args.stride}")
     light_seeds = parse_seeds(args.light_seeds) if args.light_seeds else None
@@ -180,6 +223,10 @@ def main() -> None:
         if args.scale is not None:
             write_scaled(seq, out / f"{seq.name}-x{args.scale:g}", args.scale)
             print(f"{seq.name}: {n} frames -> {out}/{seq.name}-x{args.scale:g}")
+            continue
+        if args.shake is not None:
+            write_shaken(seq, out / f"{seq.name}-shake{args.shake}", args.shake)
+            print(f"{seq.name}: {n} frames -> {out}/{seq.name}-shake{args.shake}")
             continue
         if args.stride is not None:
             kept = write_strided(seq, out / f"{seq.name}-s{args.stride}", args.stride)

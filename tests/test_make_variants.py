@@ -1,8 +1,9 @@
 """scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds),
-resized copies (--scale) and copies at a lower frame rate (--stride)."""
+resized copies (--scale), copies at a lower frame rate (--stride) and through a shaking camera (--shake)."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import subprocess
 import sys
@@ -96,3 +97,36 @@ def test_stride_keeps_every_kth_frame_as_it_is_with_its_truth_rows(tmp_path):
     bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--stride", "0", "--out", str(tmp_path / "z")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "stride" in bad.stderr
+
+
+def test_shake_cuts_each_frame_at_its_offset_and_moves_the_truth_alike(tmp_path):
+    spec = importlib.util.spec_from_file_location("make_variants", SCRIPT)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    off = script.shake_offsets(6, 3, "tiny")
+    assert off[0].tolist() == [0, 0] and np.abs(off).max() <= 3 and np.any(off[1:] != 0)
+    seq = _otb(tmp_path, n=6)
+    yy, xx = np.mgrid[0:48, 0:64]
+    smooth = np.dstack([3 * xx, 4 * yy, 128 + 90 * np.sin(xx / 4.0) * np.cos(yy / 5.0)]).astype(np.uint8)
+    for p in read_sequence(seq).frames:  # smooth frames with structure: JPEG keeps each pixel within a few levels
+        cv2.imwrite(str(p), smooth)
+    gt = read_sequence(seq).groundtruth.copy()
+    gt[3] = [3 + off[3, 0] + 58.5, 10.0, 2.0, 2.0]  # just right of frame 4's cut: wholly outside it
+    write_groundtruth(seq / "groundtruth_rect.txt", gt)
+    _run(str(seq), "--shake", "3", "--out", str(tmp_path / "k"))
+    copy = read_sequence(tmp_path / "k" / "tiny-shake3")
+    for i, p in enumerate(copy.frames):
+        x0, y0 = 3 + off[i, 0], 3 + off[i, 1]
+        cut = cv2.imread(str(p), cv2.IMREAD_COLOR).astype(float)
+        assert cut.shape == (42, 58, 3)
+        err = np.abs(cut - smooth[y0:y0 + 42, x0:x0 + 58]).mean()
+        assert err < 2  # the same pixels, through JPEG
+        if np.any(off[i] != 0):  # and not those of the frame's centre cut
+            assert np.abs(cut - smooth[3:45, 3:61]).mean() > 2 * err
+    moved = gt.copy()
+    moved[:, :2] -= 3 + off
+    moved[3] = np.nan
+    np.testing.assert_allclose(copy.groundtruth, moved)
+    bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--shake", "0", "--out", str(tmp_path / "z")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "shake" in bad.stderr
