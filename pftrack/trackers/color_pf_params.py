@@ -141,13 +141,15 @@ class ColorPFParams(ColorModelParams):
         "A heavy-tailed proposal for abrupt motion (a jerky camera, a low frame rate): each frame this share of "
         "the samples, drawn at random, takes wide_factor times the position noise of Eq. 9, so the set reaches a "
         "target that moved several noise spreads between two frames; the others move as usual. 0 (default): "
-        "off, the paper's Gaussian."))
+        "off, the paper's Gaussian; 0.1 and 0.2 failed docs/rules/wide_proposal_rule.txt (docs/robustness.md)."))
     wide_factor: float = param(3.0, ge=1, le=20, doc=(
         "With wide_fraction > 0: the factor on the position noise of the wide samples."))
     camera_motion: bool = param(False, doc=(
         "Move every sample by the camera's translation since the last frame before the dynamics (Eq. 9) spread "
         "them, read from the two frames' integral projections (pftrack.cues.camera_shift): for a hand-held camera "
-        "or a low frame rate. A static camera gives no shift. False (default): off."))
+        "or a low frame rate. A static camera gives no shift. False (default): off; it failed "
+        "docs/rules/camera_motion_rule.txt and camera_shake_rule.txt (docs/robustness.md, 'Through a shaking "
+        "camera')."))
     camera_max_shift: float = param(0.15, gt=0, le=0.5, doc=(
         "With camera_motion: the largest shift searched, as a fraction of the frame's width (along x) and height "
         "(along y)."))
