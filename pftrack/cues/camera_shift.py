@@ -99,6 +99,7 @@ def profile_shift(a: np.ndarray, b: np.ndarray, max_shift: int, *, min_gain: flo
     return _refine(_shift_costs_numpy(da[:n], db[:n], m), m, min_gain)
 
 
+@njit(cache=True)
 def _refine(costs: np.ndarray, m: int, min_gain: float) -> float:
     """The sub-pixel shift at the least of ``costs`` (shifts ``-m .. m``), or 0 when it is not below ``min_gain``
     times the cost of no shift."""
@@ -145,17 +146,7 @@ def _profile_shift_numba(a, b, max_shift, min_gain):  # pragma: no cover - compi
     m = min(max_shift, n // 2)
     if m < 1 or not np.any(da != 0.0) or not np.any(db != 0.0):
         return 0.0
-    costs = _shift_costs(da[:n], db[:n], m)
-    best = int(np.argmin(costs))
-    if not costs[best] < min_gain * costs[m]:
-        return 0.0
-    shift = float(best - m)
-    if 0 < best < 2 * m:
-        c0, c1, c2 = costs[best - 1], costs[best], costs[best + 1]
-        den = c0 - 2.0 * c1 + c2
-        if den > 1e-12:
-            shift += 0.5 * (c0 - c2) / den
-    return shift
+    return _refine(_shift_costs(da[:n], db[:n], m), m, min_gain)
 
 
 def _shift_costs_numpy(da: np.ndarray, db: np.ndarray, m: int) -> np.ndarray:
