@@ -132,18 +132,18 @@ def write_shaken(seq, dest: Path, px: int) -> None:
     truth moved alike, as an OTB folder."""
     (dest / "img").mkdir(parents=True, exist_ok=True)
     off = shake_offsets(len(seq.frames), px, seq.name)
+    h = w = 0
     for i, path in enumerate(seq.frames):
         img = cv2.imread(str(path), cv2.IMREAD_COLOR)
         h, w = img.shape[:2]
         x0, y0 = px + off[i, 0], px + off[i, 1]
         cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img[y0:h - 2 * px + y0, x0:w - 2 * px + x0],
                     [cv2.IMWRITE_JPEG_QUALITY, 92])
-    gt = np.array(seq.groundtruth, dtype=np.float64).copy()
+    gt = np.array(seq.groundtruth, dtype=np.float64)
     m = min(len(gt), len(off))
     gt[:m, 0] -= px + off[:m, 0]
     gt[:m, 1] -= px + off[:m, 1]
-    if len(seq.frames):
-        h, w = cv2.imread(str(seq.frames[0]), cv2.IMREAD_UNCHANGED).shape[:2]
+    if len(seq.frames):  # the frames' size, as read above (one size for the whole sequence)
         out = (gt[:, 0] + gt[:, 2] <= 0) | (gt[:, 1] + gt[:, 3] <= 0) | (gt[:, 0] >= w - 2 * px) | \
               (gt[:, 1] >= h - 2 * px)
         gt[out] = np.nan

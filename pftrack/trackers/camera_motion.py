@@ -12,8 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..cues.camera_shift import camera_shift, frame_profiles, lattice_step
-
-X, Y = 0, 1
+from ..filtering.dynamics import X, Y
 
 
 class CameraMotionMixin:
