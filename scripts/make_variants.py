@@ -39,6 +39,16 @@ every side and moved by up to PX pixels along each axis (integer offsets drawn p
 on the first frame), as a hand-held camera shakes, with the ground truth moved alike (NaN where a box falls wholly
 outside the cut). JPEG quality 92.
 
+With ``--blur PX`` one copy is written instead, ``NAME-blurPX``: every frame after the first is, with probability 1/2,
+smeared by a straight motion-blur kernel (a line of length drawn in [PX/2, PX] pixels at an angle drawn in [0, 180)
+degrees; both drawn per frame from the sequence name), as a camera that jerks or a target that darts now and then.
+JPEG quality 92.
+
+With ``--dim G`` one copy is written instead, ``NAME-dimG-noiseSD``: every colour frame times the gain G, plus
+Gaussian noise of standard deviation SD grey levels on each pixel and channel (``--noise SD``, default 3; drawn from
+the sequence name), rounded and clipped: a camera at night without gain, whose colours crowd into the bottom
+levels. JPEG quality 92.
+
 Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``, ``--stride`` and ``--shake``.
 """
 
@@ -153,6 +163,55 @@ def write_shaken(seq, dest: Path, px: int) -> None:
             shutil.copy(seq.path / extra, dest / extra)
 
 
+def blur_kernels(n: int, px: int, name: str) -> list[np.ndarray | None]:
+    """The ``--blur`` copy's kernel for each of ``n`` frames (``None``: the frame is kept sharp; never the first): a
+    normalised line of length in [px/2, px] at an angle in [0, 180) degrees, drawn from the sequence name."""
+    rng = np.random.default_rng(zlib.crc32(f"{name}#blur".encode()))
+    draws = rng.random((n, 3))
+    kernels: list[np.ndarray | None] = []
+    for i, (u, v, a) in enumerate(draws):
+        if i == 0 or u >= 0.5:
+            kernels.append(None)
+            continue
+        length = max(2, int(round(px / 2 + v * (px - px / 2))))
+        size = 2 * (int(np.ceil((length - 1) / 2)) + 1) + 1  # odd, with a margin: the line's middle is the centre
+        c = (size - 1) / 2
+        d = np.array([np.cos(np.pi * a), np.sin(np.pi * a)])
+        yy, xx = np.mgrid[0:size, 0:size].astype(np.float64) - c
+        along = np.clip(xx * d[0] + yy * d[1], -(length - 1) / 2, (length - 1) / 2)
+        dist = np.hypot(xx - along * d[0], yy - along * d[1])  # to the segment of length - 1 through the centre
+        k = np.maximum(0.0, 1.0 - dist).astype(np.float32)  # an anti-aliased line one pixel wide
+        kernels.append(k / k.sum())
+    return kernels
+
+
+def write_blurred(seq, dest: Path, px: int) -> int:
+    """``seq``'s colour frames, about half of them motion-blurred (``blur_kernels``), as an OTB folder; returns the
+    number of blurred frames."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    kernels = blur_kernels(len(seq.frames), px, seq.name)
+    for i, path in enumerate(seq.frames):
+        img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        if kernels[i] is not None:
+            img = cv2.filter2D(img, -1, kernels[i], borderType=cv2.BORDER_REFLECT)
+        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+    copy_truth(seq, dest)
+    return sum(k is not None for k in kernels)
+
+
+def write_dim(seq, dest: Path, gain: float, noise: float) -> None:
+    """``seq``'s colour frames times ``gain`` plus Gaussian noise of ``noise`` levels (a dark, noisy camera), as an
+    OTB folder."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(zlib.crc32(f"{seq.name}#dim".encode()))
+    for i, path in enumerate(seq.frames):
+        img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * gain
+        img += rng.normal(0.0, noise, img.shape).astype(np.float32)
+        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), np.clip(np.rint(img), 0, 255).astype(np.uint8),
+                    [cv2.IMWRITE_JPEG_QUALITY, 92])
+    copy_truth(seq, dest)
+
+
 SWITCH_KINDS = ("after", "before", "block", "random")
 
 
@@ -204,7 +263,19 @@ def main() -> None:
                     "cut by PX on every side and moved by up to PX each frame")
     ap.add_argument("--stride", type=int, metavar="K", help="only a copy of every K-th frame (NAME-sK), a K times "
                     "lower frame rate")
+    ap.add_argument("--blur", type=int, metavar="PX", help="only a copy with about half its frames motion-blurred "
+                    "(NAME-blurPX), by lines of PX/2 to PX pixels")
+    ap.add_argument("--dim", type=float, metavar="G", help="only a dark, noisy copy (NAME-dimG-noiseSD): the frames "
+                    "times G plus Gaussian noise (--noise)")
+    ap.add_argument("--noise", type=float, default=3.0, metavar="SD", help="the --dim copy's noise, in grey levels "
+                    "(default 3)")
     args = ap.parse_args()
+    if args.blur is not None and args.blur < 2:
+        ap.error(f"--blur must be a whole number of pixels of at least 2, got {args.blur}")
+    if args.dim is not None and not 0 < args.dim <= 1:
+        ap.error(f"--dim must be a gain in (0, 1], got {args.dim}")
+    if not args.noise >= 0:
+        ap.error(f"--noise must be at least 0, got {args.noise}")
     if args.scale is not None and not args.scale > 0:
         ap.error(f"--scale must be a positive factor, got {args.scale}")
     if args.shake is not None and args.shake < 1:
@@ -227,6 +298,15 @@ def main() -> None:
         if args.shake is not None:
             write_shaken(seq, out / f"{seq.name}-shake{args.shake}", args.shake)
             print(f"{seq.name}: {n} frames -> {out}/{seq.name}-shake{args.shake}")
+            continue
+        if args.blur is not None:
+            blurred = write_blurred(seq, out / f"{seq.name}-blur{args.blur}", args.blur)
+            print(f"{seq.name}: {n} frames ({blurred} blurred) -> {out}/{seq.name}-blur{args.blur}")
+            continue
+        if args.dim is not None:
+            name = f"{seq.name}-dim{args.dim:g}-noise{args.noise:g}"
+            write_dim(seq, out / name, args.dim, args.noise)
+            print(f"{seq.name}: {n} frames -> {out}/{name}")
             continue
         if args.stride is not None:
             kept = write_strided(seq, out / f"{seq.name}-s{args.stride}", args.stride)

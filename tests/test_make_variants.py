@@ -1,5 +1,6 @@
 """scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds),
-resized copies (--scale), copies at a lower frame rate (--stride) and through a shaking camera (--shake)."""
+resized copies (--scale), copies at a lower frame rate (--stride), through a shaking camera (--shake), with
+motion blur (--blur) and from a dark, noisy camera (--dim, --noise)."""
 
 from __future__ import annotations
 
@@ -26,6 +27,13 @@ def _otb(root: Path, n: int = 6) -> Path:
         cv2.imwrite(str(seq / "img" / f"{i + 1:04d}.png"), rng.integers(60, 200, (48, 64, 3), dtype=np.uint8))
     write_groundtruth(seq / "groundtruth_rect.txt", np.tile([10.0, 12.0, 20.0, 16.0], (n, 1)))
     return seq
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("make_variants", SCRIPT)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    return script
 
 
 def _run(*args: str) -> None:
@@ -100,9 +108,7 @@ def test_stride_keeps_every_kth_frame_as_it_is_with_its_truth_rows(tmp_path):
 
 
 def test_shake_cuts_each_frame_at_its_offset_and_moves_the_truth_alike(tmp_path):
-    spec = importlib.util.spec_from_file_location("make_variants", SCRIPT)
-    script = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(script)
+    script = _script()
     off = script.shake_offsets(6, 3, "tiny")
     assert off[0].tolist() == [0, 0] and np.abs(off).max() <= 3 and np.any(off[1:] != 0)
     seq = _otb(tmp_path, n=6)
@@ -130,3 +136,46 @@ def test_shake_cuts_each_frame_at_its_offset_and_moves_the_truth_alike(tmp_path)
     bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--shake", "0", "--out", str(tmp_path / "z")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "shake" in bad.stderr
+
+
+def test_blur_smears_about_half_the_frames_along_a_line_and_keeps_the_truth(tmp_path):
+    kernels = _script().blur_kernels(200, 8, "tiny")
+    assert kernels[0] is None and 70 < sum(k is not None for k in kernels) < 130
+    for k in kernels:
+        if k is not None:  # a normalised line through the centre, 4 to 8 px long and about one pixel wide
+            assert abs(k.sum() - 1) < 1e-6 and k.shape[0] % 2 == 1 and k[k.shape[0] // 2, k.shape[1] // 2] > 0
+            yy, xx = np.mgrid[0:k.shape[0], 0:k.shape[1]] - (k.shape[0] - 1) / 2
+            cov = np.cov(np.stack([xx.ravel(), yy.ravel()]), aweights=k.ravel(), bias=True)
+            spread_along, spread_across = np.sqrt(np.linalg.eigvalsh(cov))[::-1]
+            assert 4 / np.sqrt(12) - 0.3 < spread_along < 8 / np.sqrt(12) + 0.3 and spread_across < 0.5
+    seq = _otb(tmp_path, n=12)
+    _run(str(seq), "--blur", "8", "--out", str(tmp_path / "b"))
+    copy, orig = _frames(tmp_path / "b" / "tiny-blur8"), _frames(seq)
+    blurred = [k is not None for k in _script().blur_kernels(12, 8, "tiny")]
+    for i in range(12):  # the random texture loses most of its contrast where blurred, keeps it (through JPEG) else
+        assert (copy[i].std() < 0.7 * orig[i].std()) == blurred[i]
+    np.testing.assert_array_equal(read_sequence(tmp_path / "b" / "tiny-blur8").groundtruth,
+                                  read_sequence(seq).groundtruth)
+    bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--blur", "1", "--out", str(tmp_path / "z")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "blur" in bad.stderr
+
+
+def test_dim_darkens_every_frame_and_adds_the_noise_asked(tmp_path):
+    seq = _otb(tmp_path, n=4)
+    flat = np.full((48, 64, 3), 200, np.uint8)
+    for p in read_sequence(seq).frames:
+        cv2.imwrite(str(p), flat)
+    _run(str(seq), "--dim", "0.25", "--noise", "4", "--out", str(tmp_path / "d"))
+    copy = read_sequence(tmp_path / "d" / "tiny-dim0.25-noise4")
+    for p in copy.frames:
+        img = cv2.imread(str(p), cv2.IMREAD_COLOR).astype(float)
+        assert abs(img.mean() - 50) < 1.5 and 2.0 < img.std() < 5.0  # 200 x 0.25, noise of 4 levels through JPEG
+    np.testing.assert_array_equal(copy.groundtruth, read_sequence(seq).groundtruth)
+    _run(str(seq), "--dim", "0.5", "--noise", "0", "--out", str(tmp_path / "e"))
+    img = cv2.imread(str(read_sequence(tmp_path / "e" / "tiny-dim0.5-noise0").frames[0]), cv2.IMREAD_COLOR)
+    assert np.abs(img.astype(float) - 100).max() <= 1
+    for bad_args in (["--dim", "0"], ["--dim", "1.5"], ["--dim", "0.5", "--noise", "-1"]):
+        bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), *bad_args, "--out", str(tmp_path / "z")],
+                             capture_output=True, text=True)
+        assert bad.returncode == 2 and ("dim" in bad.stderr or "noise" in bad.stderr)
