@@ -25,7 +25,7 @@ from ..errors import ParameterError
 from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, reachable_roi
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
-from .quantize import make_lut, quantize, quantize_region, shift_form
+from .quantize import level_gain, make_lut, quantize, quantize_region, shift_form, stretched_lut
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Default grey features: intensity bins, orientation bins (plus one "flat" bin).
@@ -117,18 +117,26 @@ class ColorCue:
         ``"equalize"`` equalises each channel's histogram over the frame.
     parts : 1, or 2 for two-part histograms (:func:`~pftrack.cues.color.ellipse_histograms`): the features of the
         rows above and below each ellipse's centre in separate halves of ``n_bins`` (``feature_bins`` each).
+    dark_stretch : RGB features of a dark camera: when the initialisation frame's bright end
+        (:func:`~pftrack.cues.quantize.level_gain`) needs a gain of at least this to reach level 255, the bins are
+        spread over the levels the camera uses (:func:`~pftrack.cues.quantize.stretched_lut`, ``level_gain`` holds
+        the gain; at most 8); 0: never (the bins of Nummiaro et al., over 0-255).
     """
 
     def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
                  kernel: KernelName = "nummiaro", max_pixels: int = 0, *,
                  gray_bins: tuple[int, int] = DEFAULT_GRAY_BINS, gradient_threshold: float = 40.0,
-                 fallback: ColorSpace = "rgb", normalize: str = "none", parts: int = 1):
+                 fallback: ColorSpace = "rgb", normalize: str = "none", parts: int = 1, dark_stretch: float = 0.0):
         if parts not in (1, 2):
             raise ValueError(f"parts must be 1 or 2, got {parts!r}")
         self.parts = int(parts)
         if normalize not in ("none", "gain", "adaptive", "equalize"):
             raise ValueError(f"unknown colour normalisation {normalize!r}")
         self.normalize = normalize
+        if not dark_stretch >= 0:
+            raise ValueError(f"dark_stretch must be >= 0, got {dark_stretch!r}")
+        self.dark_stretch = float(dark_stretch)
+        self.level_gain = 1.0
         self._ref_levels: np.ndarray | None = None
         if color_space not in FEATURE_SPACES:
             raise ValueError(f"unknown colour space {color_space!r}")
@@ -156,6 +164,8 @@ class ColorCue:
         """
         if self.requested == "auto":
             self._set_space("gray" if is_gray(frame) else self.fallback)
+        if self.color_space == "rgb" and (self.dark_stretch > 0 or self.level_gain != 1.0):
+            self._fit_levels(frame)
         if self.color_space == "rgb" and self.normalize in ("gain", "adaptive") and frame.ndim == 3:
             self._ref_levels = channel_levels(frame)
         return self.color_space
@@ -177,6 +187,16 @@ class ColorCue:
                 self.lut = self.mapped_lut(gain_maps(self._ref_levels, self._levels))
             else:
                 self.lut = self.mapped_lut(channel_equalization_maps(frame))
+
+    def _fit_levels(self, frame: np.ndarray) -> None:
+        """``dark_stretch``: the RGB bins over the levels ``frame`` uses when it is dark enough, else 0-255."""
+        lut = make_lut("rgb", self.bins)
+        g = level_gain(frame) if self.dark_stretch > 0 and frame.ndim == 3 else 1.0
+        self.level_gain = g if g >= self.dark_stretch else 1.0
+        if self.level_gain != 1.0:
+            lut = stretched_lut(lut, self.level_gain)
+        self.lut = self._base_lut = lut
+        self._shifts = shift_form(lut)
 
     def mapped_lut(self, maps: np.ndarray) -> np.ndarray:
         """The RGB quantisation table after per-channel value maps ``(3, 256)`` (bin = base_lut[c][map_c[v]]),

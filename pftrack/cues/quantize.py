@@ -98,3 +98,20 @@ def quantize_region(frame: np.ndarray, x0: int, y0: int, x1: int, y1: int, lut: 
         h, w = out.shape
         return _quantize_shift(frame.reshape(frame.shape[0], -1), int(x0), int(y0), h, w, *shifts, out)
     return quantize(frame[y0:y1, x0:x1], lut, out)
+
+
+def level_gain(frame: np.ndarray, *, percentile: float = 99.5, max_gain: float = 8.0, stride: int = 4) -> float:
+    """The gain that brings a frame's bright end (its ``percentile`` over every channel of a ``stride`` lattice) to
+    level 255, at most ``max_gain`` and at least 1: how much of the 0-255 range a dark camera leaves unused."""
+    sample = np.asarray(frame)[::stride, ::stride]
+    if sample.size == 0:
+        return 1.0
+    top = float(np.percentile(sample, percentile))
+    return float(min(max_gain, max(1.0, 255.0 / max(top, 1.0))))
+
+
+def stretched_lut(lut: np.ndarray, gain: float) -> np.ndarray:
+    """The table ``lut`` (``(3, 256)``) applied to levels times ``gain`` (rounded, at most 255): the same bins spread
+    over the levels a dark frame uses, ``stretched[c][v] = lut[c][min(255, round(gain * v))]``."""
+    v = np.minimum(255, np.rint(np.arange(256) * float(gain))).astype(np.intp)
+    return np.ascontiguousarray(np.asarray(lut)[:, v])

@@ -45,6 +45,12 @@ class ColorModelParams(Params):
         "initialisation frame (per-channel medians of the frame, von Kries adaptation); 'adaptive' relative to "
         "a reference that follows the confident frames at normalize_rate and freezes while the target is "
         "unseen; 'equalize' equalises each channel over the frame; 'none' uses raw colours (the paper)."))
+    dark_stretch: float = param(0.0, ge=0, le=8, doc=(
+        "RGB features of a dark camera: when the initialisation frame's bright end (its 99.5th percentile over "
+        "the channels) needs a gain of at least this to reach level 255, the 8x8x8 bins are spread over the "
+        "levels the camera uses (gain at most 8; pftrack.cues.quantize.level_gain), so that a night camera's "
+        "colours do not crowd into the lowest two or three bins of each channel. 0: never (the paper's bins over "
+        "0-255). Frames of ordinary exposure reach 228-255 there and are never stretched at 2."))
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
         "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
         "on."))
