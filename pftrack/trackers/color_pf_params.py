@@ -31,6 +31,12 @@ class ColorPFParams(ColorModelParams):
         "unchanged (mean AUC 0.572, 80 of 90, views' pooled lost recall 0.211); 20 frames re-acquired 44. fusion-pf "
         "failed the rule on the views (0.511 against 0.575). Report data, run once after the choice: windows 23 of "
         "36 both, views 0.597 against 0.595, split mean AUC 0.588 both, re-acquired 75 against 76 of 96."))
+    dark_stretch: float = param(2.0, ge=0, le=8, doc=(
+        "See ColorModelParams.dark_stretch (off there and for local-motion-pf). 2 for color-pf and fusion-pf, "
+        "chosen under a rule stated before its runs (docs/rules/dark_stretch_rule.txt, docs/robustness.md): on 21 "
+        "dark tune copies never run before (PETS people at gain 0.3 / noise 3 and 0.2 / 5, real sequences at "
+        "0.2 / 5) mean AUC 0.438 against 0.371 (color-pf 0.343 against 0.195); the tune split, views and windows "
+        "identical run for run (no frame there is dark enough)."))
     lost_frames: int = param(2, ge=1, le=1000, doc=(
         "'A couple of frames' (§6) of absence evidence before the target is declared lost. 2 for color-pf, "
         "chosen on the tune split (docs/robustness.md): against 3, lost recall 0.828 against 0.791, false-lost "
