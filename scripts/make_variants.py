@@ -47,7 +47,9 @@ JPEG quality 92.
 With ``--dim G`` one copy is written instead, ``NAME-dimG-noiseSD``: every colour frame times the gain G, plus
 Gaussian noise of standard deviation SD grey levels on each pixel and channel (``--noise SD``, default 3; drawn from
 the sequence name), rounded and clipped: a camera at night without gain, whose colours crowd into the bottom
-levels. JPEG quality 92.
+levels. JPEG quality 92. With ``--lamps K`` as well (``NAME-dimG-noiseSD-lampsK``), K street lamps light the scene:
+fixed glows with a saturated core, 2 % of the frame's diagonal in radius, warm or white, placed away from the
+target's path (drawn from the name).
 
 Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``, ``--stride`` and ``--shake``.
 """
@@ -199,13 +201,42 @@ def write_blurred(seq, dest: Path, px: int) -> int:
     return sum(k is not None for k in kernels)
 
 
-def write_dim(seq, dest: Path, gain: float, noise: float) -> None:
-    """``seq``'s colour frames times ``gain`` plus Gaussian noise of ``noise`` levels (a dark, noisy camera), as an
-    OTB folder."""
+def lamp_field(h: int, w: int, k: int, name: str, boxes: np.ndarray | None = None) -> np.ndarray:
+    """``(h, w, 3)`` light added by ``k`` lamps of a ``--lamps`` copy (street lamps at night): each a glow of level
+    up to 2 x 255 (a saturated core) with a radius of 2 % of the frame's diagonal, warm or white, at a place drawn from
+    the sequence name where it lies over the target's box (``boxes``, x y w h per frame) on at most 10 % of the frames."""
+    rng = np.random.default_rng(zlib.crc32(f"{name}#lamps".encode()))
+    r = 0.02 * float(np.hypot(h, w))
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    out = np.zeros((h, w, 3), np.float32)
+    gt = None if boxes is None else np.asarray(boxes, dtype=np.float64)
+    for _ in range(k):
+        for _attempt in range(200):
+            cx, cy = rng.uniform(0, w), rng.uniform(0, h)
+            if gt is None or not len(gt):
+                break
+            near = ((gt[:, 0] - 2 * r < cx) & (cx < gt[:, 0] + gt[:, 2] + 2 * r) & (gt[:, 1] - 2 * r < cy)
+                    & (cy < gt[:, 1] + gt[:, 3] + 2 * r))
+            if near.mean() <= 0.1:
+                break
+        colour = np.array([0.55, 0.8, 1.0] if rng.random() < 0.5 else [1.0, 1.0, 1.0], np.float32)
+        glow = 2.0 * 255.0 * np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (r * r))
+        out += glow[..., None] * colour
+    return out
+
+
+def write_dim(seq, dest: Path, gain: float, noise: float, lamps: int = 0) -> None:
+    """``seq``'s colour frames times ``gain`` plus Gaussian noise of ``noise`` levels (a dark, noisy camera), and the
+    light of ``lamps`` street lamps (:func:`lamp_field`), as an OTB folder."""
     (dest / "img").mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(zlib.crc32(f"{seq.name}#dim".encode()))
+    light = None
     for i, path in enumerate(seq.frames):
         img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * gain
+        if lamps:
+            if light is None:
+                light = lamp_field(img.shape[0], img.shape[1], lamps, seq.name, seq.groundtruth)
+            img += light
         img += rng.normal(0.0, noise, img.shape).astype(np.float32)
         cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), np.clip(np.rint(img), 0, 255).astype(np.uint8),
                     [cv2.IMWRITE_JPEG_QUALITY, 92])
@@ -269,6 +300,8 @@ def main() -> None:
                     "times G plus Gaussian noise (--noise)")
     ap.add_argument("--noise", type=float, default=3.0, metavar="SD", help="the --dim copy's noise, in grey levels "
                     "(default 3)")
+    ap.add_argument("--lamps", type=int, default=0, metavar="K", help="the --dim copy lit by K street lamps "
+                    "(NAME-dimG-noiseSD-lampsK; default 0)")
     args = ap.parse_args()
     if args.blur is not None and args.blur < 2:
         ap.error(f"--blur must be a whole number of pixels of at least 2, got {args.blur}")
@@ -276,6 +309,8 @@ def main() -> None:
         ap.error(f"--dim must be a gain in (0, 1], got {args.dim}")
     if not args.noise >= 0:
         ap.error(f"--noise must be at least 0, got {args.noise}")
+    if args.lamps < 0 or (args.lamps and args.dim is None):
+        ap.error(f"--lamps must be a whole number of at least 0, with --dim, got {args.lamps}")
     if args.scale is not None and not args.scale > 0:
         ap.error(f"--scale must be a positive factor, got {args.scale}")
     if args.shake is not None and args.shake < 1:
@@ -304,8 +339,8 @@ def main() -> None:
             print(f"{seq.name}: {n} frames ({blurred} blurred) -> {out}/{seq.name}-blur{args.blur}")
             continue
         if args.dim is not None:
-            name = f"{seq.name}-dim{args.dim:g}-noise{args.noise:g}"
-            write_dim(seq, out / name, args.dim, args.noise)
+            name = f"{seq.name}-dim{args.dim:g}-noise{args.noise:g}" + (f"-lamps{args.lamps}" if args.lamps else "")
+            write_dim(seq, out / name, args.dim, args.noise, args.lamps)
             print(f"{seq.name}: {n} frames -> {out}/{name}")
             continue
         if args.stride is not None:

@@ -121,12 +121,15 @@ class ColorCue:
         (:func:`~pftrack.cues.quantize.level_gain`) needs a gain of at least this to reach level 255, the bins are
         spread over the levels the camera uses (:func:`~pftrack.cues.quantize.stretched_lut`, ``level_gain`` holds
         the gain; at most 8); 0: never (the bins of Nummiaro et al., over 0-255).
+    dark_percentile : the percentile of the frame's levels (every channel) that ``dark_stretch`` brings to 255; the
+        brighter rest (lamps, headlights) falls into the top bins.
     """
 
     def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
                  kernel: KernelName = "nummiaro", max_pixels: int = 0, *,
                  gray_bins: tuple[int, int] = DEFAULT_GRAY_BINS, gradient_threshold: float = 40.0,
-                 fallback: ColorSpace = "rgb", normalize: str = "none", parts: int = 1, dark_stretch: float = 0.0):
+                 fallback: ColorSpace = "rgb", normalize: str = "none", parts: int = 1, dark_stretch: float = 0.0,
+                 dark_percentile: float = 99.5):
         if parts not in (1, 2):
             raise ValueError(f"parts must be 1 or 2, got {parts!r}")
         self.parts = int(parts)
@@ -136,6 +139,9 @@ class ColorCue:
         if not dark_stretch >= 0:
             raise ValueError(f"dark_stretch must be >= 0, got {dark_stretch!r}")
         self.dark_stretch = float(dark_stretch)
+        if not 50 <= dark_percentile <= 100:
+            raise ValueError(f"dark_percentile must be in [50, 100], got {dark_percentile!r}")
+        self.dark_percentile = float(dark_percentile)
         self.level_gain = 1.0
         self._ref_levels: np.ndarray | None = None
         if color_space not in FEATURE_SPACES:
@@ -191,7 +197,7 @@ class ColorCue:
     def _fit_levels(self, frame: np.ndarray) -> None:
         """``dark_stretch``: the RGB bins over the levels ``frame`` uses when it is dark enough, else 0-255."""
         lut = make_lut("rgb", self.bins)
-        g = level_gain(frame) if self.dark_stretch > 0 and frame.ndim == 3 else 1.0
+        g = level_gain(frame, percentile=self.dark_percentile) if self.dark_stretch > 0 and frame.ndim == 3 else 1.0
         self.level_gain = g if g >= self.dark_stretch else 1.0
         if self.level_gain != 1.0:
             lut = stretched_lut(lut, self.level_gain)

@@ -51,6 +51,9 @@ class ColorModelParams(Params):
         "levels the camera uses (gain at most 8; pftrack.cues.quantize.level_gain), so that a night camera's "
         "colours do not crowd into the lowest two or three bins of each channel. 0: never (the paper's bins over "
         "0-255). Frames of ordinary exposure reach 228-255 there and are never stretched at 2."))
+    dark_percentile: float = param(99.5, ge=50, le=100, doc=(
+        "dark_stretch: the percentile of the initialisation frame's levels (every channel, every fourth pixel) "
+        "that the gain brings to 255; the brighter rest (lamps, headlights) falls into the top bins."))
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
         "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
         "on."))
