@@ -88,3 +88,17 @@ def test_a_dark_noisy_camera_is_tracked_better_with_the_stretched_bins(name, gai
     stretch = [_dim_run(s, name) for s in seeds]  # the default: 2
     assert np.mean(stretch) > np.mean(plain) + gain, (plain, stretch)
     assert np.mean(stretch) > 0.85, stretch
+
+
+def test_a_lower_percentile_stretches_a_dark_frame_with_lamps():
+    rng = np.random.default_rng(2)
+    night = rng.integers(0, 60, (100, 120, 3)).astype(np.uint8)
+    night[:6, :40] = 255  # 2 % of the frame: lamps
+    high, low = ColorCue("auto", dark_stretch=2.0), ColorCue("auto", dark_stretch=2.0, dark_percentile=95.0)
+    high.adapt_to(night)
+    low.adapt_to(night)
+    assert high.level_gain == 1.0  # the 99.5th percentile is a lamp's
+    assert low.level_gain > 3.5
+    for bad in (40.0, 101.0):
+        with pytest.raises(ValueError):
+            ColorCue("rgb", dark_stretch=2.0, dark_percentile=bad)

@@ -179,3 +179,23 @@ def test_dim_darkens_every_frame_and_adds_the_noise_asked(tmp_path):
         bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), *bad_args, "--out", str(tmp_path / "z")],
                              capture_output=True, text=True)
         assert bad.returncode == 2 and ("dim" in bad.stderr or "noise" in bad.stderr)
+
+
+def test_lamps_light_a_dark_copy_away_from_the_target(tmp_path):
+    script = _script()
+    boxes = np.tile([100.0, 60.0, 40.0, 80.0], (30, 1))
+    light = script.lamp_field(240, 320, 3, "tiny", boxes)
+    assert light.shape == (240, 320, 3) and light.max() > 255  # saturated cores
+    r = 0.02 * np.hypot(240, 320)
+    bright = light.max(axis=2) > 100
+    x, y, w, h = boxes[0]
+    assert not bright[int(y - r):int(y + h + r), int(x - r):int(x + w + r)].any()  # none over the target
+    assert 0.002 < bright.mean() < 0.05
+    np.testing.assert_array_equal(light, script.lamp_field(240, 320, 3, "tiny", boxes))  # drawn from the name
+    seq = _otb(tmp_path, n=3)
+    _run(str(seq), "--dim", "0.3", "--lamps", "4", "--out", str(tmp_path / "n"))
+    f = cv2.imread(str(read_sequence(tmp_path / "n" / "tiny-dim0.3-noise3-lamps4").frames[0]), cv2.IMREAD_COLOR)
+    assert np.percentile(f, 99.5) > 200 and np.median(f) < 70  # lamps in a dark frame
+    bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--lamps", "2", "--out", str(tmp_path / "z")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "lamps" in bad.stderr
