@@ -102,3 +102,15 @@ def test_a_lower_percentile_stretches_a_dark_frame_with_lamps():
     for bad in (40.0, 101.0):
         with pytest.raises(ValueError):
             ColorCue("rgb", dark_stretch=2.0, dark_percentile=bad)
+
+
+def test_region_quantised_by_a_stretched_table_on_the_frame_rows_equals_the_generic_path():
+    from pftrack.cues.quantize import quantize_region
+
+    rng = np.random.default_rng(3)
+    frame = rng.integers(0, 256, (57, 83, 3)).astype(np.uint8)
+    table = stretched_lut(make_lut("rgb", (8, 8, 8)), 2.7)
+    for x0, y0, x1, y1 in ((0, 0, 83, 57), (5, 7, 40, 30), (70, 50, 83, 57), (3, 3, 4, 4)):
+        out = np.empty((y1 - y0, x1 - x0), np.uint16)
+        quantize_region(frame, x0, y0, x1, y1, table, out)
+        np.testing.assert_array_equal(out, quantize(np.ascontiguousarray(frame[y0:y1, x0:x1]), table))

@@ -89,14 +89,31 @@ def _quantize_shift(rows, x0, y0, h, w, s0, s1, s2, t0, t1, t2, out):
     return out
 
 
+@njit
+def _quantize_rows(rows, x0, y0, h, w, l0, l1, l2, out):
+    """:func:`quantize` of the ``h x w`` region at ``(x0, y0)`` of a BGR uint8 frame given as its ``(H, W*3)``
+    rows, by the three channels' tables ``l0, l1, l2`` (contiguous): a third faster than indexing the 3-D
+    region, for tables that have no shift form (a stretched or relit table)."""
+    for j in range(h):
+        seg = rows[y0 + j, 3 * x0:3 * (x0 + w)]
+        o = out[j]
+        for i in range(w):
+            o[i] = l0[seg[3 * i]] + l1[seg[3 * i + 1]] + l2[seg[3 * i + 2]]
+    return out
+
+
 def quantize_region(frame: np.ndarray, x0: int, y0: int, x1: int, y1: int, lut: np.ndarray, out: np.ndarray,
                     shifts: tuple[int, int, int, int, int, int] | None = None) -> np.ndarray:
-    """:func:`quantize` of ``frame[y0:y1, x0:x1]`` into ``out`` (its shape); with ``shifts`` (the table's
-    :func:`shift_form`) and a contiguous uint8 BGR frame, the same numbers by shifts."""
-    if (shifts is not None and numba_enabled() and x0 >= 0 and y0 >= 0 and frame.ndim == 3 and frame.shape[2] == 3
+    """:func:`quantize` of ``frame[y0:y1, x0:x1]`` into ``out`` (its shape); with a contiguous uint8 BGR frame
+    the same numbers on its rows: by shifts with ``shifts`` (the table's :func:`shift_form`), else by the table."""
+    if (numba_enabled() and x0 >= 0 and y0 >= 0 and frame.ndim == 3 and frame.shape[2] == 3
             and frame.dtype == np.uint8 and frame.flags.c_contiguous):
         h, w = out.shape
-        return _quantize_shift(frame.reshape(frame.shape[0], -1), int(x0), int(y0), h, w, *shifts, out)
+        rows = frame.reshape(frame.shape[0], -1)
+        if shifts is not None:
+            return _quantize_shift(rows, int(x0), int(y0), h, w, *shifts, out)
+        if lut.dtype == np.uint16 and lut.flags.c_contiguous:
+            return _quantize_rows(rows, int(x0), int(y0), h, w, lut[0], lut[1], lut[2], out)
     return quantize(frame[y0:y1, x0:x1], lut, out)
 
 

@@ -32,7 +32,7 @@ class ColorPFParams(ColorModelParams):
         "failed the rule on the views (0.511 against 0.575). Report data, run once after the choice: windows 23 of "
         "36 both, views 0.597 against 0.595, split mean AUC 0.588 both, re-acquired 75 against 76 of 96."))
     dark_stretch: float = param(2.0, ge=0, le=8, doc=(
-        "See ColorModelParams.dark_stretch (off there and for local-motion-pf). 2 for color-pf and fusion-pf, "
+        "See ColorModelParams.dark_stretch (off there). 2 for color-pf and fusion-pf (and local-motion-pf), "
         "chosen under a rule stated before its runs (docs/rules/dark_stretch_rule.txt, docs/robustness.md): on 21 "
         "dark tune copies never run before (PETS people at gain 0.3 / noise 3 and 0.2 / 5, real sequences at "
         "0.2 / 5) mean AUC 0.438 against 0.371 (color-pf 0.343 against 0.195); the tune split, views and windows "
