@@ -7,7 +7,9 @@
 ``OUT/pets_tune/pets_tune`` holds frames 1-200 and ``OUT/pets_report/pets_report`` frames 201-400, each as
 ``img1/`` (links to the dataset's frames), ``gt/gt.txt`` (the annotation of those frames, renumbered) and
 ``seqinfo.ini``: each half is tracked from a fresh start, as a recording that begins there. scripts/grey_foreground.py
-writes grey copies the same way (:func:`write_halves` with a conversion).
+writes grey copies the same way (:func:`write_halves` with a conversion). With ``--dim G`` the halves are written as
+from a dark, noisy camera under the prefix ``dark`` (every frame times G plus Gaussian noise of ``--noise SD``
+levels, seeded; as scripts/make_variants.py --dim).
 """
 
 from __future__ import annotations
@@ -53,8 +55,22 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", default="../shared/data")
     ap.add_argument("--out", default="reports/mot_halves")
+    ap.add_argument("--dim", type=float, metavar="G", help="dark, noisy copies (prefix 'dark'): frames times G")
+    ap.add_argument("--noise", type=float, default=3.0, metavar="SD", help="--dim's noise in grey levels (3)")
     args = ap.parse_args()
-    for half, folder in write_halves(Path(args.data) / "pets09_s2l1_dev", Path(args.out)).items():
+    convert, prefix = None, "pets"
+    if args.dim is not None:
+        if not 0 < args.dim <= 1 or args.noise < 0:
+            ap.error(f"--dim must be in (0, 1] and --noise at least 0, got {args.dim} and {args.noise}")
+        rng = np.random.default_rng(5)
+
+        def convert(frame):
+            x = frame.astype(np.float32) * args.dim + rng.normal(0, args.noise, frame.shape).astype(np.float32)
+            return np.clip(np.rint(x), 0, 255).astype(np.uint8)
+
+        prefix = "dark"
+    for half, folder in write_halves(Path(args.data) / "pets09_s2l1_dev", Path(args.out), prefix=prefix,
+                                     convert=convert).items():
         print(f"{half}: {folder}")
 
 
