@@ -139,7 +139,7 @@ def _disc_integral(hx=30.0, hy=50.0, size=200):
 
 def test_elliptic_contrast_peaks_near_the_true_size_where_the_box_contrast_shrinks():
     """An elliptic object of probability 1 on 0: the box contrast peaks at 0.8-0.85 of the size (the box's corners
-    are background), the elliptic one within 5 % of it (docs/robustness.md)."""
+    are background), the elliptic one and the ellipse against the box's ring within 5 % of it (docs/robustness.md)."""
     from pftrack.cues.contrast import _strips_sum, contrast_scores_ellipses
 
     ii, p = _disc_integral()
@@ -149,6 +149,8 @@ def test_elliptic_contrast_peaks_near_the_true_size_where_the_box_contrast_shrin
     elliptic = contrast_scores_ellipses(ii, 0, 0, ell, ring=0.5, shape="ellipse")
     assert 0.78 <= scales[np.argmax(box)] <= 0.88
     assert 0.94 <= scales[np.argmax(elliptic)] <= 1.05
+    in_box = contrast_scores_ellipses(ii, 0, 0, ell, ring=0.5, shape="ellipse-box")
+    assert 0.94 <= scales[np.argmax(in_box)] <= 1.05  # the ellipse against the box's ring: the corners in neither
     s, a = _strips_sum(ii, 100.0, 100.0, 30.0, 50.0, 8, 0.5)
     assert abs(a - np.pi * 30 * 50) < 0.05 * np.pi * 30 * 50 and s / a > 0.95  # the strips cover the ellipse
     with pytest.raises(ValueError, match="shape"):
@@ -156,6 +158,7 @@ def test_elliptic_contrast_peaks_near_the_true_size_where_the_box_contrast_shrin
 
 
 def test_contrast_shape_is_an_option_of_fusion_pf():
+    assert pftrack.create_tracker("fusion-pf", contrast_shape="ellipse-box").params.contrast_shape == "ellipse-box"
     t = pftrack.create_tracker("fusion-pf", contrast_shape="ellipse")
     assert t.params.contrast_shape == "ellipse" and pftrack.create_tracker("fusion-pf").params.contrast_shape == "box"
     with pytest.raises(pftrack.ParameterError):

@@ -219,6 +219,9 @@ def _contrast_one(ii, x0, y0, bx, by, bw, bh, ring, outside):
 
 #: horizontal strips that approximate an ellipse in :func:`contrast_scores_ellipses` with ``shape="ellipse"``
 ELLIPSE_STRIPS = 8
+#: Strips of the ellipse against its box's ring (``shape="ellipse-box"``): with 8, a strip's ends past the ellipse
+#: pull its peak to 0.94-0.96 of an ideal ellipse's size, with 16 to 0.96-0.97.
+ELLIPSE_BOX_STRIPS = 16
 
 
 @njit
@@ -259,18 +262,41 @@ def _contrast_ellipses_strips(ii, ox, oy, pitch, ell, ring, outside, k, out):
     return out
 
 
+@njit
+def _contrast_ellipses_in_boxes(ii, ox, oy, pitch, ell, ring, outside, k, out):
+    """The mean over each ellipse (as strips, :func:`_strips_sum`) against the rectangular ring around its bounding
+    box (the box grown by ``ring`` times its size on each side, minus the box): the corners between the ellipse and
+    its box count in neither mean."""
+    for n in range(ell.shape[0]):
+        cx, cy = (ell[n, 0] - ox) / pitch, (ell[n, 1] - oy) / pitch
+        hx, hy = max(ell[n, 2] / pitch, 0.5), max(ell[n, 3] / pitch, 0.5)
+        s_in, a_in = _strips_sum(ii, cx, cy, hx, hy, k, outside)
+        xa, xb = int(np.rint(cx - hx)), int(np.rint(cx + hx))
+        ya, yb = int(np.rint(cy - hy)), int(np.rint(cy + hy))
+        xb, yb = max(xb, xa + 1), max(yb, ya + 1)
+        rx, ry = max(int(np.rint(2.0 * ring * hx)), 1), max(int(np.rint(2.0 * ring * hy)), 1)
+        s_box, a_box = _clipped_sum(ii, xa, ya, xb, yb, outside)
+        s_out, a_out = _clipped_sum(ii, xa - rx, ya - ry, xb + rx, yb + ry, outside)
+        out[n] = s_in / max(a_in, 1.0) - (s_out - s_box) / max(a_out - a_box, 1.0)
+    return out
+
+
 def contrast_scores_ellipses(integral: np.ndarray, x0: int, y0: int, ellipses: np.ndarray, *, ring: float = 0.5,
                              outside: float = 0.5, pitch: int = 1, shape: str = "box") -> np.ndarray:
     """:func:`contrast_scores` of the bounding boxes of ellipses ``(N, 4)`` ``(cx, cy, hx, hy)`` (the same numbers,
     compiled in one pass when Numba is enabled); with ``shape="ellipse"`` the mean over each ellipse against the
     elliptic annulus around it, each taken as :data:`ELLIPSE_STRIPS` strips of the integral image (a box's
-    corners are background around an elliptic target, which pulls the box contrast toward smaller boxes)."""
+    corners are background around an elliptic target, which pulls the box contrast toward smaller boxes); with
+    ``shape="ellipse-box"`` the mean over the ellipse against the box's rectangular ring (the corners in neither)."""
     ell = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
     if shape == "ellipse":
         return _contrast_ellipses_strips(integral, float(x0), float(y0), float(pitch), ell, float(ring),
                                          float(outside), ELLIPSE_STRIPS, np.empty(ell.shape[0]))
+    if shape == "ellipse-box":
+        return _contrast_ellipses_in_boxes(integral, float(x0), float(y0), float(pitch), ell, float(ring),
+                                           float(outside), ELLIPSE_BOX_STRIPS, np.empty(ell.shape[0]))
     if shape != "box":
-        raise ValueError(f"shape must be 'box' or 'ellipse', got {shape!r}")
+        raise ValueError(f"shape must be 'box', 'ellipse' or 'ellipse-box', got {shape!r}")
     if not numba_enabled():
         from ..geometry import ellipse_to_box
 

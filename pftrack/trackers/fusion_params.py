@@ -141,11 +141,12 @@ class FusionPFParams(ColorPFParams):
     ring: float = param(0.5, gt=0, le=3, doc=(
         "Width of the surrounding ring on each side, as a fraction of the box size (for the contrast and the "
         "surround colour counts)."))
-    contrast_shape: Literal["box", "ellipse"] = param("box", doc=(
+    contrast_shape: Literal["box", "ellipse", "ellipse-box"] = param("box", doc=(
         "Where a particle's contrast is scored: 'box', its bounding box against the rectangular ring around it; "
         "'ellipse', the ellipse against the elliptic annulus (half-axes 1 + 2 ring times), each read from the "
         "integral image as horizontal strips. A box's corners are background around an elliptic target, which "
-        "pulls the box contrast toward smaller boxes (docs/robustness.md)."))
+        "pulls the box contrast toward smaller boxes (docs/robustness.md); 'ellipse-box', the ellipse against the "
+        "box's rectangular ring (the corners between them in neither)."))
     contrast_alpha: float = param(0.02, ge=0, le=1, doc=(
         "Learning rate of the object and surround colour counts, updated with the colour model's gate."))
     motion: bool = param(False, doc=(
