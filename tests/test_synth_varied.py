@@ -119,6 +119,20 @@ def test_synth_gray_option_greys_each_seed_and_keeps_its_other_nuisances(tmp_pat
     assert main(["synth", "vanish", "--gray", "1.5", "--out", str(tmp_path / "c")]) == 2
 
 
+def test_synth_length_writes_scenes_of_that_many_frames_for_the_untimed_kinds(tmp_path):
+    from pftrack.cli import main
+
+    assert main(["synth", "varied", "--seeds", "7", "--length", "40", "--out", str(tmp_path / "v")]) == 0
+    seq = read_sequence(tmp_path / "v" / "varied-007")
+    assert len(seq.frames) == 40 and len(seq.groundtruth) == 40
+    spec = varied_scene(7, n_frames=40)
+    np.testing.assert_allclose(seq.groundtruth, np.array([tr.boxes[0] for _, tr in Scene(spec)]), atol=1e-3)
+    assert main(["synth", "simple", "--seeds", "1", "--length", "25", "--out", str(tmp_path / "s")]) == 0
+    assert len(read_sequence(tmp_path / "s" / "simple-001").frames) == 25
+    assert main(["synth", "vanish", "--length", "40", "--out", str(tmp_path / "x")]) == 2  # timed: not free
+    assert main(["synth", "varied", "--length", "1", "--out", str(tmp_path / "x")]) == 2
+
+
 def test_grey_frames_given_as_one_channel_or_three_give_the_same_track():
     """A one-channel grey source is kept as such inside (pftrack.frames.grey_origin): the same levels and the same
     track as its three-channel copy, for both colour trackers, through a loss and a search."""

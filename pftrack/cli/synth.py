@@ -8,6 +8,10 @@ from pathlib import Path
 from .common import counted, parse_seeds
 
 
+#: Scenes whose length is free (a target wandering, nothing timed): ``pftrack synth KIND --length N``.
+LENGTH_SCENES = ("simple", "varied")
+
+
 def add_synth(sub) -> None:
     from ..synth import SCENES
     from ..synth.photo import PHOTO_SCENES
@@ -63,6 +67,9 @@ def add_synth(sub) -> None:
                    help="probability that a scene is grey (the scenes with drawn nuisances: "
                         f"{', '.join(DRAWN_NUISANCE_SCENES + tuple(PHOTO_SCENES))}; default 0.3). The other nuisances "
                         "of a seed stay the same, so --gray 1 gives each seed's scene in grey")
+    p.add_argument("--length", type=int, default=None, metavar="N",
+                   help=f"frames per scene of {', '.join(LENGTH_SCENES)} (default: the generator's; a long scene "
+                        "shows slow drift, docs/robustness.md)")
     p.set_defaults(func=cmd_synth)
 
 
@@ -128,6 +135,12 @@ def cmd_synth(args) -> int:
         if not 0.0 <= args.gray <= 1.0:
             raise ParameterError(f"--gray is a probability in [0, 1], got {args.gray}")
         draw["gray"] = args.gray
+    if args.length is not None:
+        if args.kind not in LENGTH_SCENES:
+            raise ParameterError(f"--length applies to the scenes {', '.join(LENGTH_SCENES)}, not {args.kind!r}")
+        if args.length < 2:
+            raise ParameterError(f"--length must be at least 2 frames, got {args.length}")
+        draw["n_frames"] = args.length
     if args.kind == "twocam":
         from ..errors import SourceError
         from ..io.datasets import detect_layout
