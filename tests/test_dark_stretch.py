@@ -114,3 +114,16 @@ def test_region_quantised_by_a_stretched_table_on_the_frame_rows_equals_the_gene
         out = np.empty((y1 - y0, x1 - x0), np.uint16)
         quantize_region(frame, x0, y0, x1, y1, table, out)
         np.testing.assert_array_equal(out, quantize(np.ascontiguousarray(frame[y0:y1, x0:x1]), table))
+
+
+def test_a_given_histogram_keeps_the_bins_over_0_255_on_a_dark_frame():
+    """init_auto takes a histogram made by the caller, of the frames as they are: no stretch, even after a tracker
+    was started on a dark frame from a box."""
+    rng = np.random.default_rng(4)
+    dark = rng.integers(0, 60, (80, 100, 3)).astype(np.uint8)
+    t = pftrack.create_tracker("color-pf", seed=0)
+    t.init(dark, (30, 20, 20, 30))
+    assert t.cue.level_gain > 4
+    t.init_auto(dark, np.ones(t.cue.n_bins), (20, 30))
+    assert t.cue.level_gain == 1.0
+    np.testing.assert_array_equal(t.cue.lut, make_lut("rgb", (8, 8, 8)))

@@ -163,15 +163,17 @@ class ColorCue:
         self._eq_lut = np.arange(256, dtype=np.uint8)
         self._set_space(fallback if color_space == "auto" else color_space)
 
-    def adapt_to(self, frame: np.ndarray) -> str:
+    def adapt_to(self, frame: np.ndarray, *, levels: bool = True) -> str:
         """Choose the features from the input (``"auto"``): grey features on a grey frame.
 
-        Called by the trackers on their initialisation frame; returns the space in use.
+        Called by the trackers on their initialisation frame; returns the space in use. With ``levels=False`` the
+        RGB bins stay over 0-255 whatever ``dark_stretch`` (a histogram given by the caller is of the frames as
+        they are).
         """
         if self.requested == "auto":
             self._set_space("gray" if is_gray(frame) else self.fallback)
         if self.color_space == "rgb" and (self.dark_stretch > 0 or self.level_gain != 1.0):
-            self._fit_levels(frame)
+            self._fit_levels(frame if levels else None)
         if self.color_space == "rgb" and self.normalize in ("gain", "adaptive") and frame.ndim == 3:
             self._ref_levels = channel_levels(frame)
         return self.color_space
@@ -194,10 +196,12 @@ class ColorCue:
             else:
                 self.lut = self.mapped_lut(channel_equalization_maps(frame))
 
-    def _fit_levels(self, frame: np.ndarray) -> None:
-        """``dark_stretch``: the RGB bins over the levels ``frame`` uses when it is dark enough, else 0-255."""
+    def _fit_levels(self, frame: np.ndarray | None) -> None:
+        """``dark_stretch``: the RGB bins over the levels ``frame`` uses when it is dark enough, else (or with no
+        frame) over 0-255."""
         lut = make_lut("rgb", self.bins)
-        g = level_gain(frame, percentile=self.dark_percentile) if self.dark_stretch > 0 and frame.ndim == 3 else 1.0
+        use = frame is not None and self.dark_stretch > 0 and frame.ndim == 3
+        g = level_gain(frame, percentile=self.dark_percentile) if use else 1.0
         self.level_gain = g if g >= self.dark_stretch else 1.0
         if self.level_gain != 1.0:
             lut = stretched_lut(lut, self.level_gain)

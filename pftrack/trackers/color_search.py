@@ -85,7 +85,7 @@ class SearchMixin:
         if regions is not None:
             fh, fw = self._shape
             self.regions = np.array([validate_box(r, fw, fh) for r in regions], dtype=np.float64).reshape(-1, 4)
-        self.cue.adapt_to(frame)
+        self.cue.adapt_to(frame, levels=False)  # the given histogram's bins: over 0-255 (no dark_stretch)
         self.cue.new_frame(frame)
         self._background_stats(frame, None)
         self.loss.reset(1.0, sd=0.2)  # no target history yet: a vague prior on its score
