@@ -49,7 +49,8 @@ Gaussian noise of standard deviation SD grey levels on each pixel and channel (`
 the sequence name), rounded and clipped: a camera at night without gain, whose colours crowd into the bottom
 levels. JPEG quality 92. With ``--lamps K`` as well (``NAME-dimG-noiseSD-lampsK``), K street lamps light the scene:
 fixed glows with a saturated core, 2 % of the frame's diagonal in radius, warm or white, placed away from the
-target's path (drawn from the name).
+target's path (drawn from the name). With ``--ramp N`` (``NAME-dimG-noiseSD-rampN``) the gain rises linearly from G on
+the first frame to 1 at frame N + 1: a camera whose exposure settles, or lights coming on.
 
 Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``, ``--stride`` and ``--shake``.
 """
@@ -225,14 +226,21 @@ def lamp_field(h: int, w: int, k: int, name: str, boxes: np.ndarray | None = Non
     return out
 
 
-def write_dim(seq, dest: Path, gain: float, noise: float, lamps: int = 0) -> None:
+def ramp_gain(i: int, gain: float, ramp: int) -> float:
+    """The gain of frame ``i`` (from 0) of a ``--dim G --ramp N`` copy: ``G`` on the first frame, rising linearly to 1
+    at frame ``N`` and staying there; ``G`` throughout without a ramp (``N = 0``)."""
+    return gain if ramp <= 0 else gain + (1.0 - gain) * min(1.0, i / ramp)
+
+
+def write_dim(seq, dest: Path, gain: float, noise: float, lamps: int = 0, ramp: int = 0) -> None:
     """``seq``'s colour frames times ``gain`` plus Gaussian noise of ``noise`` levels (a dark, noisy camera), and the
-    light of ``lamps`` street lamps (:func:`lamp_field`), as an OTB folder."""
+    light of ``lamps`` street lamps (:func:`lamp_field`), as an OTB folder; with ``ramp`` the gain rises to 1 over
+    that many frames (:func:`ramp_gain`)."""
     (dest / "img").mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(zlib.crc32(f"{seq.name}#dim".encode()))
     light = None
     for i, path in enumerate(seq.frames):
-        img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * gain
+        img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * ramp_gain(i, gain, ramp)
         if lamps:
             if light is None:
                 light = lamp_field(img.shape[0], img.shape[1], lamps, seq.name, seq.groundtruth)
@@ -302,6 +310,8 @@ def main() -> None:
                     "(default 3)")
     ap.add_argument("--lamps", type=int, default=0, metavar="K", help="the --dim copy lit by K street lamps "
                     "(NAME-dimG-noiseSD-lampsK; default 0)")
+    ap.add_argument("--ramp", type=int, default=0, metavar="N", help="the --dim copy's gain rises from G to 1 over "
+                    "the first N frames (NAME-dimG-noiseSD-rampN; default 0: no ramp)")
     args = ap.parse_args()
     if args.blur is not None and args.blur < 2:
         ap.error(f"--blur must be a whole number of pixels of at least 2, got {args.blur}")
@@ -311,6 +321,8 @@ def main() -> None:
         ap.error(f"--noise must be at least 0, got {args.noise}")
     if args.lamps < 0 or (args.lamps and args.dim is None):
         ap.error(f"--lamps must be a whole number of at least 0, with --dim, got {args.lamps}")
+    if args.ramp < 0 or (args.ramp and args.dim is None):
+        ap.error(f"--ramp must be a whole number of at least 0, with --dim, got {args.ramp}")
     if args.scale is not None and not args.scale > 0:
         ap.error(f"--scale must be a positive factor, got {args.scale}")
     if args.shake is not None and args.shake < 1:
@@ -339,8 +351,9 @@ def main() -> None:
             print(f"{seq.name}: {n} frames ({blurred} blurred) -> {out}/{seq.name}-blur{args.blur}")
             continue
         if args.dim is not None:
-            name = f"{seq.name}-dim{args.dim:g}-noise{args.noise:g}" + (f"-lamps{args.lamps}" if args.lamps else "")
-            write_dim(seq, out / name, args.dim, args.noise, args.lamps)
+            name = (f"{seq.name}-dim{args.dim:g}-noise{args.noise:g}" + (f"-lamps{args.lamps}" if args.lamps else "")
+                    + (f"-ramp{args.ramp}" if args.ramp else ""))
+            write_dim(seq, out / name, args.dim, args.noise, args.lamps, args.ramp)
             print(f"{seq.name}: {n} frames -> {out}/{name}")
             continue
         if args.stride is not None:

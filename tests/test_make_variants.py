@@ -12,6 +12,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 
 from pftrack.io.datasets import read_sequence, write_groundtruth
 
@@ -199,3 +200,20 @@ def test_lamps_light_a_dark_copy_away_from_the_target(tmp_path):
     bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--lamps", "2", "--out", str(tmp_path / "z")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "lamps" in bad.stderr
+
+
+def test_ramp_raises_the_gain_to_one_over_its_frames(tmp_path):
+    script = _script()
+    assert script.ramp_gain(0, 0.4, 10) == 0.4 and script.ramp_gain(5, 0.4, 10) == pytest.approx(0.7)
+    assert script.ramp_gain(10, 0.4, 10) == 1.0 and script.ramp_gain(50, 0.4, 10) == 1.0
+    assert script.ramp_gain(7, 0.4, 0) == 0.4  # no ramp: the gain throughout
+    seq = _otb(tmp_path, n=6)
+    flat = np.full((48, 64, 3), 200, np.uint8)
+    for p in read_sequence(seq).frames:
+        cv2.imwrite(str(p), flat)
+    _run(str(seq), "--dim", "0.5", "--noise", "0", "--ramp", "4", "--out", str(tmp_path / "r"))
+    copy = _frames(tmp_path / "r" / "tiny-dim0.5-noise0-ramp4")
+    np.testing.assert_allclose(copy.mean(axis=(1, 2)), [100, 125, 150, 175, 200, 200], atol=1.0)
+    bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--ramp", "3", "--out", str(tmp_path / "z")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "ramp" in bad.stderr
