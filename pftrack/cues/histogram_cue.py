@@ -26,6 +26,7 @@ from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histog
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
 from .quantize import level_gain, make_lut, quantize, quantize_region, shift_form, stretched_lut
+from .still_gain import reference_lattice, still_gain
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Default grey features: intensity bins, orientation bins (plus one "flat" bin).
@@ -114,7 +115,9 @@ class ColorCue:
         ``"adaptive"`` is ``"gain"`` with a reference that follows the frames the tracker is
         confident on (:meth:`confirm`) and freezes otherwise, so a lighting change that
         happens while the target is hidden is undone when it reappears;
-        ``"equalize"`` equalises each channel's histogram over the frame.
+        ``"equalize"`` equalises each channel's histogram over the frame; ``"still"`` divides each channel by the
+        frame's gain against the initialisation frame measured on the same pixels while the view is still
+        (:func:`~pftrack.cues.still_gain.still_gain`; held while it moves), with the 5 % dead zone of ``"adaptive"``.
     parts : 1, or 2 for two-part histograms (:func:`~pftrack.cues.color.ellipse_histograms`): the features of the
         rows above and below each ellipse's centre in separate halves of ``n_bins`` (``feature_bins`` each).
     dark_stretch : RGB features of a dark camera: when the initialisation frame's bright end
@@ -133,7 +136,7 @@ class ColorCue:
         if parts not in (1, 2):
             raise ValueError(f"parts must be 1 or 2, got {parts!r}")
         self.parts = int(parts)
-        if normalize not in ("none", "gain", "adaptive", "equalize"):
+        if normalize not in ("none", "gain", "adaptive", "equalize", "still"):
             raise ValueError(f"unknown colour normalisation {normalize!r}")
         self.normalize = normalize
         if not dark_stretch >= 0:
@@ -176,6 +179,11 @@ class ColorCue:
             self._fit_levels(frame if levels else None)
         if self.color_space == "rgb" and self.normalize in ("gain", "adaptive") and frame.ndim == 3:
             self._ref_levels = channel_levels(frame)
+        if self.normalize == "still":
+            ok = self.color_space == "rgb" and frame.ndim == 3 and frame.dtype == np.uint8
+            self._still_ref = reference_lattice(frame) if ok else None
+            self._still_gain = np.ones(3)
+            self.lut = self._base_lut
         return self.color_space
 
     def new_frame(self, frame: np.ndarray, *, gray: np.ndarray | None = None) -> None:
@@ -184,6 +192,17 @@ class ColorCue:
         if self.color_space == "gray":
             self._eq_lut = equalization_lut(frame, gray=gray)
         elif self.color_space == "rgb" and self.normalize != "none" and frame.ndim == 3:
+            if self.normalize == "still":
+                ref = getattr(self, "_still_ref", None)
+                g = still_gain(ref, frame) if ref is not None else None
+                if g is not None:
+                    self._still_gain = g
+                gains = getattr(self, "_still_gain", np.ones(3))
+                if np.all(np.abs(gains - 1.0) < 0.05):
+                    self.lut = self._base_lut
+                else:
+                    self.lut = self.mapped_lut(gain_maps(np.ones(3), gains))
+                return
             if self.normalize in ("gain", "adaptive"):
                 self._levels = channel_levels(frame)
                 if self._ref_levels is None:

@@ -40,11 +40,15 @@ class ColorModelParams(Params):
         "(mean AUC 0.698 against 0.690) but raised the flag on far fewer of the frames after real exits among "
         "look-alike walkers (0.16 against 0.40); on the report data, run once, it was as good or better on both "
         "(docs/robustness.md)."))
-    color_normalize: Literal["none", "gain", "adaptive", "equalize"] = param("none", doc=(
+    color_normalize: Literal["none", "gain", "adaptive", "equalize", "still"] = param("none", doc=(
         "RGB features under changing light: 'gain' divides each channel by its gain relative to the "
         "initialisation frame (per-channel medians of the frame, von Kries adaptation); 'adaptive' relative to "
         "a reference that follows the confident frames at normalize_rate and freezes while the target is "
-        "unseen; 'equalize' equalises each channel over the frame; 'none' uses raw colours (the paper)."))
+        "unseen; 'equalize' equalises each channel over the frame; 'still' divides each channel by the frame's "
+        "gain against the initialisation frame, measured on the same pixels (the median of their log-ratios) and "
+        "taken only while the view is still (their median absolute deviation at most 0.1), held otherwise "
+        "(pftrack.cues.still_gain; an exposure that settles, lights coming on); 'none' uses raw colours (the "
+        "paper)."))
     dark_stretch: float = param(0.0, ge=0, le=8, doc=(
         "RGB features of a dark camera: when the initialisation frame's bright end (its 99.5th percentile over "
         "the channels) needs a gain of at least this to reach level 255, the 8x8x8 bins are spread over the "

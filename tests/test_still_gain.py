@@ -1,0 +1,80 @@
+"""``color_normalize="still"``: the frame's gain against the first frame measured on the same pixels of a still view
+(``pftrack.cues.still_gain``), undone in the colour quantisation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.cues.histogram_cue import ColorCue
+from pftrack.cues.still_gain import reference_lattice, still_gain
+from pftrack.eval.metrics import per_frame_iou
+from pftrack.synth.scenes import Scene
+from pftrack.synth.varied import varied_scene
+
+
+def _scene(seed=0, shape=(240, 320)):
+    rng = np.random.default_rng(seed)
+    small = rng.integers(30, 200, (shape[0] // 8, shape[1] // 8, 3)).astype(np.float32)
+    import cv2
+
+    return cv2.resize(small, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
+
+
+def _u8(x):
+    return np.clip(np.rint(x), 0, 255).astype(np.uint8)
+
+
+def test_gain_of_a_still_view_is_found_per_channel_and_a_moved_view_gives_none():
+    rng = np.random.default_rng(1)
+    base = _scene(1)
+    ref = reference_lattice(_u8(base))
+    assert np.array_equal(still_gain(ref, _u8(base)), np.ones(3))  # no change: exactly 1
+    lit = _u8(base * np.array([1.5, 1.2, 0.7]) + rng.normal(0, 2, base.shape))
+    np.testing.assert_allclose(still_gain(ref, lit), [1.5, 1.2, 0.7], rtol=0.012)
+    walker = base.copy()
+    walker[40:160, 60:140] = 250 - walker[40:160, 60:140]  # a target over about 12 % of the view
+    np.testing.assert_allclose(still_gain(ref, _u8(walker * 1.3)), 1.3, rtol=0.012)
+    assert still_gain(ref, _u8(np.roll(base, 9, axis=1))) is None  # a pan: the log-ratios spread
+    assert still_gain(ref, _u8(base[:200])) is None  # another size
+    assert still_gain(ref, _u8(base)[..., 0]) is None  # not BGR
+
+
+def test_cue_quantises_a_brightened_still_frame_as_the_first_one():
+    base = _u8(_scene(2) * 0.6)
+    bright = _u8(base.astype(np.float32) * 1.8)
+    plain, still = ColorCue("rgb"), ColorCue("rgb", normalize="still")
+    for cue in (plain, still):
+        cue.adapt_to(base)
+        cue.new_frame(base)
+    roi = (0, 0, 320, 240)
+    first = plain.prepare(base, roi).bins.copy()
+    assert still.lut is still._base_lut  # no change on the first frame: the table of shifts
+    still.new_frame(bright)
+    plain.new_frame(bright)
+    assert np.mean(still.prepare(bright, roi).bins == first) > 0.9
+    assert np.mean(plain.prepare(bright, roi).bins == first) < 0.3
+    still.new_frame(_u8(np.roll(bright, 11, axis=0)))  # the view moves: the last gain is held
+    np.testing.assert_allclose(still._still_gain, 1.8, rtol=0.02)
+    with pytest.raises(ValueError):
+        ColorCue("rgb", normalize="sometimes")
+
+
+def _ramp_run(seed: int, normalize: str) -> float:
+    """Mean IoU of color-pf on a varied colour scene whose exposure rises from 0.5 to 1 over 25 frames."""
+    spec = varied_scene(seed, n_frames=50, gray=0.0, illumination=0.0, distractors=(1, 2))
+    frames, truth = [], []
+    for t, (img, tr) in enumerate(Scene(spec)):
+        frames.append(_u8(img.astype(np.float32) * (0.5 + 0.5 * min(1.0, t / 25))))
+        truth.append(tr.boxes[0])
+    tracker = pftrack.create_tracker("color-pf", seed=0, color_normalize=normalize)
+    tracker.init(frames[0], tuple(truth[0]))
+    boxes = [truth[0]] + [tracker.update(f).box for f in frames[1:]]
+    return float(np.nanmean(per_frame_iou(np.array(boxes), np.array(truth))))
+
+
+def test_an_exposure_that_settles_is_tracked_better_with_the_still_gain():
+    plain = [_ramp_run(s, "none") for s in range(5)]
+    still = [_ramp_run(s, "still") for s in range(5)]
+    assert np.mean(still) > np.mean(plain) + 0.05, (plain, still)
