@@ -93,7 +93,8 @@ def still_gain(ref: np.ndarray, frame: np.ndarray, *, stride: int = 16, max_mad:
     above ``max_mad``), too few pixels counted, or the frame's size does not match."""
     if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
         return None
-    if (frame.shape[0] + stride - 1) // stride != ref.shape[0] or (frame.shape[1] + stride - 1) // stride != ref.shape[1]:
+    rows, cols = (frame.shape[0] + stride - 1) // stride, (frame.shape[1] + stride - 1) // stride
+    if (rows, cols) != ref.shape[:2]:
         return None
     hist = _log_ratio_hist(ref, frame, int(stride), LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64))
     gains = np.empty(3)
