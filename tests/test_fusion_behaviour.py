@@ -96,10 +96,12 @@ def test_fusion_pf_follows_camouflaged_targets_that_colour_cannot_see():
     with_s, without, lost_share = [], [], []
     for seed in range(6):
         spec = camouflage_scene(seed, n_frames=60)
-        err, lost = _track(spec, seed)
+        # the colour bins without the still view's gain: these scenes' light drifts, and with the gain undone the
+        # colour cue alone follows five of the six (below)
+        err, lost = _track(spec, seed, color_normalize="none")
         with_s.append(np.median(err))
         lost_share.append(lost.mean())
-        err0, _ = _track(spec, seed, structure=False)
+        err0, _ = _track(spec, seed, structure=False, color_normalize="none")
         without.append(np.median(err0))
     with_s, without = np.array(with_s), np.array(without)
     assert np.all(with_s < 3.0), with_s
@@ -206,8 +208,9 @@ def test_relit_colour_reacquires_a_target_whose_colours_drifted_while_hidden(see
     from .conftest import lost_flag_run
 
     spec = vanish_scene(seed)
-    on = lost_flag_run(spec, "fusion-pf", seed)
-    off = lost_flag_run(spec, "fusion-pf", seed, relit_colour=False)
+    # the colour bins without the still view's gain, which undoes the drift on its own (fusion-pf's default since)
+    on = lost_flag_run(spec, "fusion-pf", seed, color_normalize="none")
+    off = lost_flag_run(spec, "fusion-pf", seed, relit_colour=False, color_normalize="none")
     assert on.reappearances == off.reappearances == 1
     assert (on.reacquired, off.reacquired) == (1, 0)
     assert on.recall == pytest.approx(off.recall) and on.false_rate <= off.false_rate + 1e-9

@@ -78,3 +78,17 @@ def test_an_exposure_that_settles_is_tracked_better_with_the_still_gain():
     plain = [_ramp_run(s, "none") for s in range(5)]
     still = [_ramp_run(s, "still") for s in range(5)]
     assert np.mean(still) > np.mean(plain) + 0.05, (plain, still)
+
+
+@pytest.mark.parametrize("seed", [326, 418])
+def test_fusion_pf_default_reacquires_a_target_whose_light_drifted_while_hidden_without_the_relit_score(seed):
+    """The vanish scenes of ``relit_colour``'s test (a global light drift while the target is hidden): the still
+    view's gain, fusion-pf's default, undoes the drift in the colour bins, so the target is re-acquired even
+    without the relit colour score."""
+    from pftrack.synth import vanish_scene
+
+    from .conftest import lost_flag_run
+
+    assert pftrack.create_tracker("fusion-pf").params.color_normalize == "still"
+    run = lost_flag_run(vanish_scene(seed), "fusion-pf", seed, relit_colour=False)
+    assert run.reappearances == 1 and run.reacquired == 1

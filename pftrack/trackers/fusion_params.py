@@ -91,6 +91,14 @@ class FusionPFParams(ColorPFParams):
     grey_check: Literal["off", "structure"] = param("off", doc=(
         "See ColorModelParams.grey_check: off for fusion-pf, whose structural cue already scores every particle "
         "and enters its loss test."))
+    color_normalize: Literal["none", "gain", "adaptive", "equalize", "still"] = param("still", doc=(
+        "See ColorModelParams.color_normalize ('none' there and for color-pf). 'still' for fusion-pf: the frame's "
+        "gain against the first frame, measured on the same pixels while the view is still, undone in the colour "
+        "bins. Chosen under a rule stated before its runs (docs/rules/still_gain_rule.txt, docs/robustness.md): 21 "
+        "tune copies whose exposure settles, never run before, mean AUC 0.412 against 0.306; the tune split 0.706 "
+        "against 0.705 (real sequences 0.584 both, re-acquired 79 against 80 of 90), views and windows' lost recall "
+        "0.610 against 0.611, re-acquired 52 against 53 of 66. color-pf failed the rule on the views and windows' "
+        "returns (40 against 48)."))
     contrast: bool = param(True, doc=(
         "Multiply in the background-aware contrast likelihood exp(contrast_gain * c), c = mean foreground "
         "probability inside the box minus in the surrounding ring."))
