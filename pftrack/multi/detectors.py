@@ -29,6 +29,7 @@ import cv2
 import numpy as np
 
 from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground
+from ..cues.quantize import level_gain
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
 from ..params import Params, param
@@ -140,6 +141,11 @@ class MOG2DetectorParams(Params):
     learning_rate: float = param(-1.0, ge=-1, le=1, doc="MOG2 learning rate (-1: automatic, 1/history).")
     split_aspect: float = param(0.0, ge=0, le=10, doc=(
         "Expected width/height of one object (0.4 for people); wider blobs are split (0: never)."))
+    dark_stretch: float = param(0.0, ge=0, le=8, doc=(
+        "A dark camera: when the first frame's bright end (its 99.5th percentile, pftrack.cues.quantize.level_gain) "
+        "needs a gain of at least this to reach level 255, every reduced frame is multiplied by that gain (at most 8) "
+        "before MOG2, whose floor on each pixel's variance would otherwise hide a person's contrast, which falls with "
+        "the light while the floor does not. 0: never."))
     grey_shadow_threshold: float = param(GREY_SHADOW_THRESHOLD, ge=0, le=1, doc=(
         "MOG2's shadow threshold on grey frames, where its shadow test cannot tell a cast shadow from an object up "
         "to twice as dark as the ground (it has no colour to compare): a darker pixel is a shadow only when its "
@@ -154,6 +160,7 @@ class MOG2Detector:
 
     def __init__(self, params: MOG2DetectorParams | None = None):
         self.foreground = None
+        self.gain: float | None = None  # dark_stretch's gain, set on the first frame
         self.params = params or MOG2DetectorParams()
         p = self.params
         self._sub = Foreground(p.history, p.var_threshold, grey_shadow_threshold=p.grey_shadow_threshold)
@@ -163,7 +170,11 @@ class MOG2Detector:
     def _reduced(self, frame: np.ndarray) -> np.ndarray:
         f = as_bgr_uint8(frame)
         d = self.params.downscale
-        return cv2.resize(f, (f.shape[1] // d, f.shape[0] // d), interpolation=cv2.INTER_AREA) if d > 1 else f
+        f = cv2.resize(f, (f.shape[1] // d, f.shape[0] // d), interpolation=cv2.INTER_AREA) if d > 1 else f
+        if self.gain is None:  # the first frame decides (dark_stretch)
+            g = level_gain(f) if self.params.dark_stretch > 0 else 1.0
+            self.gain = g if g >= self.params.dark_stretch else 1.0
+        return cv2.convertScaleAbs(f, alpha=self.gain) if self.gain != 1.0 else f
 
     def prime(self, frames) -> None:
         """Start the background from the first ``frames`` of the stream, their moving pixels replaced by the
