@@ -29,6 +29,8 @@ from .quantize import level_gain, make_lut, quantize, quantize_region, shift_for
 from .still_gain import reference_lattice, still_gain
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
+#: Gains within this of 1 leave the raw colours ("adaptive" and "still"): no jitter from the gain's estimate.
+GAIN_DEAD_ZONE = 0.05
 #: Default grey features: intensity bins, orientation bins (plus one "flat" bin).
 DEFAULT_GRAY_BINS = (16, 8)
 
@@ -147,6 +149,8 @@ class ColorCue:
         self.dark_percentile = float(dark_percentile)
         self.level_gain = 1.0
         self._ref_levels: np.ndarray | None = None
+        self._still_ref: np.ndarray | None = None  # "still": the initialisation frame's lattice
+        self._still_gain = np.ones(3)  # "still": the last gain measured on a still view
         if color_space not in FEATURE_SPACES:
             raise ValueError(f"unknown colour space {color_space!r}")
         if fallback not in DEFAULT_BINS:
@@ -193,22 +197,18 @@ class ColorCue:
             self._eq_lut = equalization_lut(frame, gray=gray)
         elif self.color_space == "rgb" and self.normalize != "none" and frame.ndim == 3:
             if self.normalize == "still":
-                ref = getattr(self, "_still_ref", None)
-                g = still_gain(ref, frame) if ref is not None else None
-                if g is not None:
+                g = still_gain(self._still_ref, frame) if self._still_ref is not None else None
+                if g is not None and not np.array_equal(g, self._still_gain):  # else the table in use stays
                     self._still_gain = g
-                gains = getattr(self, "_still_gain", np.ones(3))
-                if np.all(np.abs(gains - 1.0) < 0.05):
-                    self.lut = self._base_lut
-                else:
-                    self.lut = self.mapped_lut(gain_maps(np.ones(3), gains))
+                    self.lut = (self._base_lut if np.all(np.abs(g - 1.0) < GAIN_DEAD_ZONE)
+                                else self.mapped_lut(gain_maps(np.ones(3), g)))
                 return
             if self.normalize in ("gain", "adaptive"):
                 self._levels = channel_levels(frame)
                 if self._ref_levels is None:
                     self._ref_levels = self._levels.copy()
                 gains = self._ref_levels / self._levels
-                if self.normalize == "adaptive" and np.all(np.abs(gains - 1.0) < 0.05):
+                if self.normalize == "adaptive" and np.all(np.abs(gains - 1.0) < GAIN_DEAD_ZONE):
                     self.lut = self._base_lut  # within the dead zone: raw colours (no jitter from the medians)
                     return
                 self.lut = self.mapped_lut(gain_maps(self._ref_levels, self._levels))
