@@ -211,7 +211,8 @@ def report_markdown(synth: list[Measurement], real: list[Measurement], *, refere
             ratio = m.update / peer.update if peer and peer.update > 0 else float("nan")
             lines.append(f"| `{m.tracker}` | {_fmt(m.update)} | {_fmt(m.e2e)} | {_fmt(ratio, 1)} |")
         lines.append("")
-        for key, label in (("particles", "particles N (640x480, 50x50)"), ("target", "target side in px (640x480, N=100)"),
+        for key, label in (("particles", "particles N (640x480, 50x50)"),
+                           ("target", "target side in px (640x480, N=100)"),
                            ("frame", "frame size (50x50, N=100)")):
             rows = {}
             vals = []
@@ -243,13 +244,15 @@ def report_markdown(synth: list[Measurement], real: list[Measurement], *, refere
         trackers = list(dict.fromkeys(m.tracker for m in real))
         by = {(m.tracker, m.config["sequence"]): m for m in real}
         lines += ["## Real sequences: update fps (end-to-end fps)", "",
-                  "| tracker | " + " | ".join(seqs) + f" | median | × {reference_peer} |", "|" + "---|" * (len(seqs) + 3)]
+                  "| tracker | " + " | ".join(seqs) + f" | median | × {reference_peer} |",
+                  "|" + "---|" * (len(seqs) + 3)]
         for t in trackers:
             ups = [by[(t, s)].update for s in seqs]
             ratios = [by[(t, s)].update / by[(reference_peer, s)].update for s in seqs
                       if (reference_peer, s) in by and by[(reference_peer, s)].update > 0]
             lines.append(f"| `{t}` | " + " | ".join(f"{_fmt(by[(t, s)].update)} ({_fmt(by[(t, s)].e2e)})" for s in seqs)
-                         + f" | {_fmt(statistics.median(ups))} | {_fmt(statistics.median(ratios), 1) if ratios else '–'} |")
+                         + f" | {_fmt(statistics.median(ups))} | "
+                         + f"{_fmt(statistics.median(ratios), 1) if ratios else '–'} |")
         lines.append("")
     return "\n".join(lines)
 

@@ -303,7 +303,8 @@ def main() -> None:
             print(f"| {rs} | {r[rs]['ess']:.2f} | {r[rs]['centre_error_mean_of_medians']:.2f} | "
                   f"{r[rs]['centre_error_median_of_medians']:.2f} | {r[rs]['auc']:.3f} |")
         dd = r["centre_error_difference"]
-        print(f"\npaired difference (seir - multinomial): {dd['mean']:+.2f} +- {dd['se']:.2f} px over {r['runs']} runs; "
+        print(f"\npaired difference (seir - multinomial): {dd['mean']:+.2f} +- {dd['se']:.2f} px "
+              f"over {r['runs']} runs; "
               f"seir lower in {dd['seir_lower']}, higher in {dd['seir_higher']} (by more than 0.1 px)")
     if a.json:
         Path(a.json).parent.mkdir(parents=True, exist_ok=True)

@@ -119,7 +119,8 @@ def glitch(seeds: list[int]) -> dict:
         k = r["k"][g0:g0 + 4]
         drops.append(float(np.mean(np.sum(k < 0.75, axis=0) >= 2)))
         errs.append(float(np.median(np.hypot(*(r["pos"][g0 + 6] - sc.points[g0 + 6]).T))))
-    return {"points_with_k_drop_on_2_of_4": float(np.mean(drops)), "median_error_2_frames_after": float(np.median(errs))}
+    return {"points_with_k_drop_on_2_of_4": float(np.mean(drops)),
+            "median_error_2_frames_after": float(np.median(errs))}
 
 
 def stereo_table(seeds: list[int]) -> dict:
@@ -191,7 +192,8 @@ def pets(data: Path, halves=((1, 200), (201, 400))) -> dict:
                         if n >= p["exit"]:
                             bx, by, bw, bh = box_at[n]
                             est = np.median(s.pos[s.source != 2], axis=0) if (s.source != 2).any() else s.pos[0]
-                            inside = (bx + 0.1 * bw <= est[0] <= bx + 0.9 * bw) and (by + 0.1 * bh <= est[1] <= by + 0.9 * bh)
+                            inside = ((bx + 0.1 * bw <= est[0] <= bx + 0.9 * bw)
+                                      and (by + 0.1 * bh <= est[1] <= by + 0.9 * bh))
                             ok &= bool(inside)
                             if n == p["exit"] + 5:
                                 at5.append(bool(bx <= est[0] <= bx + bw and by <= est[1] <= by + bh))
@@ -232,7 +234,8 @@ def pets_figure(data: Path, path: Path) -> None:
                 track.append(np.median(s.pos, axis=0))
             track = np.array(track)
             ax.plot(track[:, 0], track[:, 1], "-", color=colour, lw=1.5, label=method if p is passes[0] else None)
-        gt_c = np.array([[box[n][0] + box[n][2] / 2, box[n][1] + box[n][3] / 2] for n in range(p["init"], p["exit"] + 11)])
+        gt_c = np.array([[box[n][0] + box[n][2] / 2, box[n][1] + box[n][3] / 2]
+                         for n in range(p["init"], p["exit"] + 11)])
         ax.plot(gt_c[:, 0], gt_c[:, 1], ":", color="white", lw=1, label="GT box centre" if p is passes[0] else None)
     ax.axvspan(*POST_X, color="yellow", alpha=0.15)
     ax.set_axis_off()

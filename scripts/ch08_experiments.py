@@ -94,7 +94,8 @@ def run(video: Path, gt: np.ndarray, out: Path, *args) -> dict:
 def activity(video: Path) -> dict:
     out = {}
     mvs = [(f.mvs, f.y.shape) for f in iter_mv_frames(video)]
-    for name, kw in (("none", {}), ("far", {"weighted": True, "penalty": False}), ("near", {"weighted": True, "penalty": True})):
+    for name, kw in (("none", {}), ("far", {"weighted": True, "penalty": False}),
+                     ("near", {"weighted": True, "penalty": True})):
         sig = np.array([motion_sigma(m, s[1], s[0], **kw) for m, s in mvs])
         from scipy.ndimage import median_filter
 

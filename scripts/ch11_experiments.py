@@ -233,7 +233,8 @@ def main() -> None:
         print(name)
         for k, v in sorted(table.items()):
             prec = "   -  " if v["precision"] is None else f"{v['precision']:.3f}"
-            print(f"  {k:28s} links {v['links']:.3f}  precision {prec}  rank-1 {v['rank1']:.3f}  (n = {v['handovers']}, "
+            print(f"  {k:28s} links {v['links']:.3f}  precision {prec}  rank-1 {v['rank1']:.3f}  "
+                  f"(n = {v['handovers']}, "
                   f"scene std {v['links_scene_std']:.3f})")
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(json.dumps(res, indent=1) + "\n", encoding="utf-8")

@@ -96,7 +96,8 @@ def main() -> None:
     for key in ["lmeds_refined", "lmeds_printed", "least_squares", "lmeds_refined_10pc_mismatch",
                 "lmeds_printed_10pc_mismatch", "least_squares_10pc_mismatch", "half_room"]:
         print(f"  {key:30s} LRF worst {agg(key, 'lrf_max_translation_m') * 1000:7.1f} mm "
-              f"{agg(key, 'lrf_max_rotation_rad'):.4f} rad | cameras mean {agg(key, 'camera_mean_mm', np.mean):6.1f} mm "
+              f"{agg(key, 'lrf_max_rotation_rad'):.4f} rad | "
+              f"cameras mean {agg(key, 'camera_mean_mm', np.mean):6.1f} mm "
               f"max {agg(key, 'camera_max_mm', np.mean):6.1f} mm | failed cams "
               f"{sum(r[key]['cameras_failed'] for r in rows)}")
     man_mean = np.mean([np.mean([c["mean_mm"] for c in r["manual_cameras"]]) for r in rows])

@@ -145,8 +145,10 @@ def part_lcurve(out):
             es.append(e_s)
             Vt, _ = sc.truth(n, tr.V0)
             ve.append(np.sqrt(np.mean(np.sum((st.info["mesh"] - Vt) ** 2, 1))))
-        rows.append({"lam": lam, "E_D": float(np.mean(ed)), "E_S": float(np.mean(es)), "vertex_rmse": float(np.mean(ve))})
-        print(f"lcurve lam={lam:g}: E_D {np.mean(ed):.3e} E_S {np.mean(es):.3e} vertex RMSE {np.mean(ve):.3f}", flush=True)
+        rows.append({"lam": lam, "E_D": float(np.mean(ed)), "E_S": float(np.mean(es)),
+                     "vertex_rmse": float(np.mean(ve))})
+        print(f"lcurve lam={lam:g}: E_D {np.mean(ed):.3e} E_S {np.mean(es):.3e} "
+              f"vertex RMSE {np.mean(ve):.3f}", flush=True)
     x = np.log10([r["E_D"] for r in rows])
     y = np.log10(np.maximum([r["E_S"] for r in rows], 1e-30))
     dx, dy = np.gradient(x), np.gradient(y)

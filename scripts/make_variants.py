@@ -205,7 +205,8 @@ def write_blurred(seq, dest: Path, px: int) -> int:
 def lamp_field(h: int, w: int, k: int, name: str, boxes: np.ndarray | None = None) -> np.ndarray:
     """``(h, w, 3)`` light added by ``k`` lamps of a ``--lamps`` copy (street lamps at night): each a glow of level
     up to 2 x 255 (a saturated core) with a radius of 2 % of the frame's diagonal, warm or white, at a place drawn from
-    the sequence name where it lies over the target's box (``boxes``, x y w h per frame) on at most 10 % of the frames."""
+    the sequence name where it lies over the target's box (``boxes``, x y w h per frame) on at most 10 % of the
+    frames."""
     rng = np.random.default_rng(zlib.crc32(f"{name}#lamps".encode()))
     r = 0.02 * float(np.hypot(h, w))
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)

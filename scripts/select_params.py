@@ -82,7 +82,8 @@ def main(argv=None) -> int:
               "| combination | mean AUC | " + " | ".join(names) + " |", "|" + "---|" * (len(names) + 2)]
     for i in np.argsort(-table.mean(axis=1)):
         mark = " **(chosen)**" if i == best else ""
-        lines.append(f"| `{labels[i]}`{mark} | {table[i].mean():.3f} | " + " | ".join(f"{v:.3f}" for v in table[i]) + " |")
+        lines.append(f"| `{labels[i]}`{mark} | {table[i].mean():.3f} | "
+                     + " | ".join(f"{v:.3f}" for v in table[i]) + " |")
     text = "\n".join(lines) + "\n"
     print(text)
     if args.out:

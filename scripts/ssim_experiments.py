@@ -54,7 +54,8 @@ def rmse43(runs: list[np.ndarray], gt: np.ndarray) -> tuple[float, float]:
 
 
 def table5(sequences: dict[str, tuple[list, np.ndarray]], seeds: int) -> list[str]:
-    lines = ["| sequence | " + " | ".join(f"{c} mean" for c in CUES) + " | " + " | ".join(f"{c} std" for c in CUES) + " |",
+    lines = ["| sequence | " + " | ".join(f"{c} mean" for c in CUES) + " | "
+             + " | ".join(f"{c} std" for c in CUES) + " |",
              "|" + "---|" * (2 * len(CUES) + 1)]
     for name, (frames, gt) in sequences.items():
         means, stds = [], []
@@ -171,7 +172,8 @@ def main() -> None:
             seq = read_sequence(data / name)
             seqs[name] = ([read_image(p) for p in seq.frames], seq.groundtruth)
     out = ["## Table 5 analogue: cues in the same particle filter", "",
-           f"RMSE (eq. 43, upper-left corner, px) over {args.seeds} seeds; mean and std over frames. Best mean in bold.",
+           f"RMSE (eq. 43, upper-left corner, px) over {args.seeds} seeds; mean and std over frames. "
+           "Best mean in bold.",
            ""]
     out += table5(seqs, args.seeds)
     out += ["", "## Fig. 6 analogue: 20 particles, fast mover", ""] + fig6(args.seeds)

@@ -120,7 +120,8 @@ def test_the_command_prints_the_separations_of_a_sequence_folder(mod, tmp_path):
     np.savetxt(seq / "groundtruth_rect.txt", truth, fmt="%.2f", delimiter=",")
     out = tmp_path / "acq.json"
     script = Path(mod.__file__)
-    run = subprocess.run([sys.executable, str(script), str(tmp_path), "--tracker", "color-pf[reenter_border=0;static_ncc=0]",
+    run = subprocess.run([sys.executable, str(script), str(tmp_path),
+                          "--tracker", "color-pf[reenter_border=0;static_ncc=0]",
                           "--seeds", "0", "--json", str(out)], capture_output=True, text=True, check=True)
     assert "ROC AUC" in run.stdout and "elsewhere at the loss" in run.stdout and "passed the acquisition" in run.stdout
     recs = json.loads(out.read_text())

@@ -49,7 +49,8 @@ def test_reacquisitions_are_split_by_scene_colour(tmp_path):
 def test_reacquisitions_are_split_by_scene_light(tmp_path):
     scenes = tmp_path / "synth"
     for name, nz in [("vanish-000", {"gray": False, "illumination": None}),
-                     ("vanish-001", {"gray": False, "illumination": [0.5, 0.5, 0.5], "illumination_target_only": False}),
+                     ("vanish-001", {"gray": False, "illumination": [0.5, 0.5, 0.5],
+                                     "illumination_target_only": False}),
                      ("vanish-002", {"gray": True, "illumination": [1.4, 1.3, 1.5], "illumination_target_only": True})]:
         d = scenes / "vanish" / name
         d.mkdir(parents=True)

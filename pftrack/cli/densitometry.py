@@ -10,7 +10,8 @@ from .common import close_all, counted, progress
 
 
 def add_densitometry(sub) -> None:
-    p = sub.add_parser("densitometry", help="grey-level curve along a line that follows a tracked segment (book ch. 14)",
+    p = sub.add_parser("densitometry",
+                       help="grey-level curve along a line that follows a tracked segment (book ch. 14)",
                        description="Track the segment in --box with template matching, translate --line with it and "
                                    "write per frame the line, A(t) of eq. (1), the vessel edges and the profile's "
                                    "statistics (CSV, one row per frame, flushed).")

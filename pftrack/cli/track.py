@@ -20,7 +20,8 @@ def add_track(sub) -> None:
     p.add_argument("--target", type=target_id, metavar="ID", help=(
         "the ground truth to start from (instead of --box): a track id of a MOTChallenge folder's gt/gt.txt, or "
         "the N of an OTB folder's groundtruth_rect.N.txt; tracking starts on that target's first annotated frame"))
-    p.add_argument("--tracker", default=DEFAULT_TRACKER, help=f"tracker name (default {DEFAULT_TRACKER}; see 'pftrack list')")
+    p.add_argument("--tracker", default=DEFAULT_TRACKER,
+                   help=f"tracker name (default {DEFAULT_TRACKER}; see 'pftrack list')")
     p.add_argument("--out", default="track.csv", help="CSV output (default track.csv)")
     p.add_argument("--json-out", help="also write JSON Lines (one object per frame, with particles summary)")
     p.add_argument("--video-out", help="annotated video output (ellipse, particles, trajectory)")
@@ -183,8 +184,10 @@ def cmd_demo(args) -> int:
     scores = ope_scores(rows[:, 1:5], gt, bounds=res["frame_size"])
     print(f"pftrack demo: {res['frames']} frames of the bundled clip 'Crossing' (OTB) with {args.tracker}")
     if res["warmup_seconds"] > 1.0:
-        print(f"  compiled kernels {res['warmup_seconds']:.1f} s before timing (first run; cached on disk for the next)")
-    print(f"  update speed     {res['update_fps']:.0f} fps ({res['end_to_end_fps']:.0f} fps end to end, decode included)")
+        print(f"  compiled kernels {res['warmup_seconds']:.1f} s before timing "
+              "(first run; cached on disk for the next)")
+    print(f"  update speed     {res['update_fps']:.0f} fps "
+          f"({res['end_to_end_fps']:.0f} fps end to end, decode included)")
     print(f"  OTB success AUC  {scores.auc:.3f}   precision@20px {scores.precision:.3f}")
     print(f"  results          {csv_path}  (frame,x,y,w,h,score,lost)")
     print(f"  annotated video  {video_path}")

@@ -69,7 +69,8 @@ def lk_flow(prev_gray: np.ndarray, gray: np.ndarray, pts: np.ndarray, cfg: LKCon
     if len(pts) == 0:
         return np.zeros((0, 2)), np.zeros(0, dtype=bool)
     h, w = gray.shape[:2]
-    inside0 = np.isfinite(pts).all(1) & (pts[:, 0] >= 0) & (pts[:, 0] <= w - 1) & (pts[:, 1] >= 0) & (pts[:, 1] <= h - 1)
+    inside0 = (np.isfinite(pts).all(1) & (pts[:, 0] >= 0) & (pts[:, 0] <= w - 1)
+               & (pts[:, 1] >= 0) & (pts[:, 1] <= h - 1))
     if not inside0.any():
         return np.full_like(pts, np.nan), np.zeros(len(pts), dtype=bool)
     # LK only needs the pyramid around the points: crop both frames to their bounding box plus the

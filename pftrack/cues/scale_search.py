@@ -32,7 +32,8 @@ def scale_candidates(ellipse, ratios: np.ndarray, shifts: np.ndarray) -> np.ndar
     return np.column_stack([ex, ey, ax, ay])
 
 
-def best_ratio(scores: np.ndarray, ratios: np.ndarray, n_shifts: int, margin: float = 0.0) -> tuple[float, float, float]:
+def best_ratio(scores: np.ndarray, ratios: np.ndarray, n_shifts: int,
+               margin: float = 0.0) -> tuple[float, float, float]:
     """From the ``(R*S,)`` NCC of :func:`scale_candidates`: ``(ratio, its score, the score at ratio 1)``.
 
     Each ratio scores the best of its shifts. A ratio other than 1 is taken only when it beats ratio 1
@@ -52,7 +53,8 @@ def vertex_ratio(scores: np.ndarray, step: float, n_shifts: int, margin: float =
 
     Noise in the scores then moves the size by a fraction of a step, around zero, instead of a whole step.
     A response that is not concave (no maximum between the outer ratios) takes the better outer ratio
-    when it beats ratio 1 by more than ``margin``, else keeps the size. Returns ``(ratio, best score, score at ratio 1)``."""
+    when it beats ratio 1 by more than ``margin``, else keeps the size. Returns
+    ``(ratio, best score, score at ratio 1)``."""
     lo, mid, hi = (float(v) for v in np.asarray(scores, dtype=np.float64).reshape(3, n_shifts).max(axis=1))
     x = vertex_offset(lo, mid, hi, margin)
     return float(np.exp(x * np.log1p(step))), max(lo, mid, hi), mid

@@ -214,7 +214,8 @@ def _ascent(gray, gx, gy, tmpl, cx, cy, s, max_iter, c1, c2):
 
 
 def dssim_ascent(gray: np.ndarray, gx: np.ndarray | None, gy: np.ndarray | None, template: np.ndarray, center, *,
-                 scale: float = 1.0, max_iter: int = 20, c1: float = C1, c2: float = C2) -> tuple[float, float, float, int]:
+                 scale: float = 1.0, max_iter: int = 20, c1: float = C1,
+                 c2: float = C2) -> tuple[float, float, float, int]:
     """DSSIM (Table 3) from ``center``: returns ``(cx, cy, S, iterations)`` (global SSIM, eq. 21).
 
     ``gx, gy`` are the image's gradient images; with ``None`` the gradient at each sampled point is the

@@ -201,7 +201,8 @@ def corner_distance(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     p, g = _clean_pred(pred[ok]), gt[ok]
     d = 0.0
     for cx, cy in ((0, 0), (1, 0), (0, 1), (1, 1)):
-        d = d + np.hypot(p[:, 0] + cx * p[:, 2] - g[:, 0] - cx * g[:, 2], p[:, 1] + cy * p[:, 3] - g[:, 1] - cy * g[:, 3])
+        d = d + np.hypot(p[:, 0] + cx * p[:, 2] - g[:, 0] - cx * g[:, 2],
+                         p[:, 1] + cy * p[:, 3] - g[:, 1] - cy * g[:, 3])
     out[ok] = d / 4.0
     return out
 

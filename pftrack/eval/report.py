@@ -198,7 +198,8 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
     if peer is not None:
         head += [f"× {peer.removeprefix('opencv-').upper()}"]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    order = sorted(agg["trackers"], key=lambda t: -np.nan_to_num(agg["overall"][t]["auc"], nan=-1)) if ope else agg["trackers"]
+    order = (sorted(agg["trackers"], key=lambda t: -np.nan_to_num(agg["overall"][t]["auc"], nan=-1)) if ope
+             else agg["trackers"])
     for t in order:
         o = agg["overall"][t]
         row = [f"`{t}`"]
@@ -259,7 +260,8 @@ def _plots(records: list[dict], out: Path) -> list[str]:
     ope = [r for r in records if _one_pass([r["protocol"]]) and r.get("success")]
     if ope:
         for kind, xs, key, xl in (("success", THRESHOLDS, "success", "overlap threshold"),
-                                  ("precision", PRECISION_THRESHOLDS, "precision_curve", "location error threshold (px)")):
+                                  ("precision", PRECISION_THRESHOLDS, "precision_curve",
+                                   "location error threshold (px)")):
             fig, ax = plt.subplots(figsize=(6, 4.5), dpi=100)
             for t in trackers:
                 curves = [np.array([_num(v) for v in r[key]]) for r in ope if r["tracker"] == t]

@@ -103,7 +103,9 @@ def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int
         cost = cost + np.float32(penalty * n_pix) * sq
     _, _, (bx, by), _ = cv2.minMaxLoc(cost)
     exact = ssd[by, bx] <= 1e-6 * n_pix
-    dx = parabola_peak(-cost[by, bx - 1], -cost[by, bx], -cost[by, bx + 1]) if 0 < bx < cost.shape[1] - 1 and not exact else 0.0
-    dy = parabola_peak(-cost[by - 1, bx], -cost[by, bx], -cost[by + 1, bx]) if 0 < by < cost.shape[0] - 1 and not exact else 0.0
+    dx = (parabola_peak(-cost[by, bx - 1], -cost[by, bx], -cost[by, bx + 1])
+          if 0 < bx < cost.shape[1] - 1 and not exact else 0.0)
+    dy = (parabola_peak(-cost[by - 1, bx], -cost[by, bx], -cost[by + 1, bx])
+          if 0 < by < cost.shape[0] - 1 and not exact else 0.0)
     v = sign * np.array([sx0 + bx + dx - x0, sy0 + by + dy - y0])
     return v, float(ssd[by, bx]) / n_pix

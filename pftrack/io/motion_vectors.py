@@ -284,7 +284,8 @@ def block_energy_at(y_cur: np.ndarray, y_prev: np.ndarray, fwd: np.ndarray, bloc
     y0 = np.minimum(np.floor(py).astype(np.int64), h - 2)
     tx, ty = px - x0, py - y0
     yp = y_prev.astype(np.float64)
-    ref = ((1 - ty) * ((1 - tx) * yp[y0, x0] + tx * yp[y0, x0 + 1]) + ty * ((1 - tx) * yp[y0 + 1, x0] + tx * yp[y0 + 1, x0 + 1]))
+    ref = ((1 - ty) * ((1 - tx) * yp[y0, x0] + tx * yp[y0, x0 + 1])
+           + ty * ((1 - tx) * yp[y0 + 1, x0] + tx * yp[y0 + 1, x0 + 1]))
     E[bi, bj] = np.sum((cur - ref) ** 2, axis=1)
     return E
 

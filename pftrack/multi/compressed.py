@@ -52,8 +52,8 @@ class CDParams(Params):
     tau_d: float = param(8192.0, ge=0, doc="Frame-difference energy per 4x4 block for refine='difference'.")
     trim: bool = param(True, doc=(
         "With refine='difference' and shape='blocks': a frame difference marks the object where it was and where "
-        "it is, so each group's box is cut back on its trailing side by the object's displacement, the median vector of the "
-        "group's moving blocks (PETS frames 1-200: MOTA 0.02 -> 0.10)."))
+        "it is, so each group's box is cut back on its trailing side by the object's displacement, the median vector "
+        "of the group's moving blocks (PETS frames 1-200: MOTA 0.02 -> 0.10)."))
     min_speed: float = param(1.0, ge=0, doc=(
         "Blocks whose vector is shorter than this (pixels) count as zero motion: the encoder's sub-pixel vectors on "
         "static texture are noise (1.0 chosen on PETS frames 1-200)."))
@@ -301,7 +301,8 @@ class TemporalRefiner:
                 x0, y0 = int(box[0] // BLOCK), int(box[1] // BLOCK)
                 x1, y1 = x0 + max(round(box[2] / BLOCK), 1), y0 + max(round(box[3] / BLOCK), 1)
                 mask[max(y0, 0):min(y1, I), max(x0, 0):min(x1, J)] = True
-                kept.append(Group(box, mask, float(np.degrees(np.arctan2(np.sin(ang).mean(), np.cos(ang).mean())) % 360),
+                heading = float(np.degrees(np.arctan2(np.sin(ang).mean(), np.cos(ang).mean())) % 360)
+                kept.append(Group(box, mask, heading,
                                   float(np.mean([m.energy for m in members])),
                                   tuple(float(v) for v in np.mean([m.velocity for m in members], axis=0)),
                                   int(mask.sum())))
@@ -322,7 +323,8 @@ class CDObject:
 def similarity(d1: float, e1: float, d2: float, e2: float, mode: str = "default") -> float:
     """Eq. (12): dissimilarity of direction and energy on log scales."""
     if mode == "faithful":
-        return abs(np.log10(max(d1, 1.0)) - np.log10(max(d2, 1.0))) * abs(np.log10(max(e1, 1.0)) - np.log10(max(e2, 1.0)))
+        return (abs(np.log10(max(d1, 1.0)) - np.log10(max(d2, 1.0)))
+                * abs(np.log10(max(e1, 1.0)) - np.log10(max(e2, 1.0))))
     dth = abs((d1 - d2 + 180.0) % 360.0 - 180.0)
     return (1.0 + dth / 180.0) * abs(np.log10(1.0 + e1) - np.log10(1.0 + e2))
 
@@ -406,8 +408,8 @@ class CDTracker:
         for q in list(new_active.values()):            # a merged group splits (gamma = 1)
             if not q.partners or not leftovers:
                 continue
-            near = [j for j in leftovers if self._overlap(groups[j].box, q.prev.box if q.prev is not None else q.group.box,
-                                                          2 * self.p.occ_margin + 8)]
+            last = q.prev.box if q.prev is not None else q.group.box
+            near = [j for j in leftovers if self._overlap(groups[j].box, last, 2 * self.p.occ_margin + 8)]
             if not near:
                 continue
             cands = [self.waiting[lab] for lab in q.partners if lab in self.waiting] + [q]

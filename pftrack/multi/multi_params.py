@@ -50,7 +50,8 @@ class MultiPFParams(Params):
         "Weight of the foreground cue: mean of the detector's foreground mask inside a particle's box minus in "
         "its surrounding ring (the same contrast form as the colour contrast). It lets several targets share "
         "one merged blob while the colour models tell them apart. 0 disables it."))
-    position_noise: float = param(0.1, ge=0, le=10, doc="Std of the position noise xi_x (Eq. 4), fraction of the box width.")
+    position_noise: float = param(0.1, ge=0, le=10, doc=(
+        "Std of the position noise xi_x (Eq. 4), fraction of the box width."))
     velocity_noise: float = param(0.05, ge=0, le=10, doc="Std of the speed noise xi_xdot, fraction of the box width.")
     size_noise: float = param(0.02, ge=0, le=1, doc="Std of the size noise xi_w, fraction of the size.")
     size_rate_noise: float = param(0.005, ge=0, le=1, doc="Std of the size-rate noise xi_wdot, fraction of the size.")
@@ -102,14 +103,16 @@ class MultiPFParams(Params):
     appearance_weight: float = param(1.0, ge=0, le=100, doc=(
         "Weight of the colour dissimilarity 1 - rho(q_track, p_detection) beside 1 - IoU in the association cost "
         "(Hungarian assignment among the pairs with IoU >= match_iou); 0 associates by overlap alone."))
-    birth_frames: int = param(3, ge=1, le=1000, doc="k: frames a detection must stay unexplained before a track is born.")
+    birth_frames: int = param(3, ge=1, le=1000, doc=(
+        "k: frames a detection must stay unexplained before a track is born."))
     max_misses: int = param(12, ge=1, le=10_000, doc="m: a track dies after this many frames without a detection.")
     max_occluded: int = param(40, ge=1, le=10_000, doc="... or this many while it is occluded or in a group.")
     report_misses: int = param(1, ge=0, le=10_000, doc=(
         "Tracks are reported while they matched a detection within this many frames, or are in a group (or "
         "occluded, with report_occluded)."))
     min_size: float = param(6.0, gt=0, doc="Smallest box side (pixels) of a track.")
-    exit_fraction: float = param(0.4, ge=0, le=1, doc="A track whose box is less than this fraction inside the image dies.")
+    exit_fraction: float = param(0.4, ge=0, le=1, doc=(
+        "A track whose box is less than this fraction inside the image dies."))
     identify: bool = param(False, doc=(
         "Book ch. 1 identification: a new track takes the identity of an ended one when their upper/lower-body "
         "colour and spatial features are similar enough (pftrack.multi.identify; reconstructed Eqs. 16-19)."))

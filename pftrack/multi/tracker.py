@@ -338,7 +338,8 @@ class MultiPF:
         if p.appearance_weight > 0:  # the colour term of the detections some track may take (the others cost 1e6)
             cols = np.flatnonzero(gate.any(axis=0))
             sq = np.sqrt(np.stack([self._histogram(frame, dets[j, :4]) for j in cols]))
-            rho = (np.stack([t.sqrt_q for t in live])[:, None, :] * sq[None, :, :]).sum(axis=-1)  # no BLAS: reproducible
+            # no BLAS: reproducible
+            rho = (np.stack([t.sqrt_q for t in live])[:, None, :] * sq[None, :, :]).sum(axis=-1)
             cost[:, cols] = cost[:, cols] + p.appearance_weight * (1.0 - rho)
         rows, cols = linear_sum_assignment(np.where(gate, cost, 1e6))
         for r, c in zip(rows, cols):
@@ -495,5 +496,6 @@ def create_multi_tracker(name: str = "multi-pf", *, seed: int | None = None, det
     try:
         cls = MULTI_TRACKERS[name]
     except KeyError:
-        raise ParameterError(f"unknown multi-target tracker '{name}'; choose from {', '.join(MULTI_TRACKERS)}") from None
+        raise ParameterError(
+            f"unknown multi-target tracker '{name}'; choose from {', '.join(MULTI_TRACKERS)}") from None
     return cls(cls.Params.from_mapping(params), seed=seed, detector_fn=detector_fn)

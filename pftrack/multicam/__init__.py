@@ -12,6 +12,7 @@ from .handover import (
 )
 
 __all__ = ["FEATURES", "TrackAppearance", "apply_btf_hist", "apply_btf_image", "btf_from_hists", "cbtf",
-           "cooccur_threshold", "describe_tracks", "fit_btf", "link_tracks", "mbtf", "new_threshold", "region_histograms",
+           "cooccur_threshold", "describe_tracks", "fit_btf", "link_tracks", "mbtf", "new_threshold",
+           "region_histograms",
            "similarity",
            "similarity_matrix"]

@@ -47,8 +47,10 @@ class GraphCutParams(Params):
         "Histogram update rate (0 = the chapter's fixed model; 0.05 drifted into the background on davis16_dog: J 0.61 "
         "against 0.69)."))
     bkg_distance: bool = param(True, doc="Symmetric temporal seeding: also the distance transform of the background.")
-    soft_seeds: bool = param(True, doc="Seed from the distance transform (Table 3); False = hard seeds on the previous mask.")
-    lost_area: float = param(0.1, gt=0, le=1, doc="Lost when the mask's area falls below this fraction of the initial area.")
+    soft_seeds: bool = param(True, doc=(
+        "Seed from the distance transform (Table 3); False = hard seeds on the previous mask."))
+    lost_area: float = param(0.1, gt=0, le=1, doc=(
+        "Lost when the mask's area falls below this fraction of the initial area."))
     lost_support: float = param(0.25, ge=0, le=1, doc=(
         "Lost when the mask's colour support (mean object-histogram value H_obj/max over its pixels) falls below "
         "this fraction of the first mask's: the temporal seeds alone can hold a mask on a frame that no longer "

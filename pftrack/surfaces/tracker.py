@@ -50,7 +50,8 @@ class MeshParams(Params):
         "Warp per cell: affine triangles (Eqs. 8-10) or bilinear quads (Eq. 11); 'dense': one displacement and one "
         "shading ratio per pixel (Eq. 7), solved by preconditioned conjugate gradients (dense_solver), with rows x "
         "cols only the reported mesh."))
-    photometric: bool = param(True, doc="Estimate the multiplicative photometric warp (Eq. 2); off = classical optical flow.")
+    photometric: bool = param(True, doc=(
+        "Estimate the multiplicative photometric warp (Eq. 2); off = classical optical flow."))
     lam: float = param(0.005, ge=0, le=1e4, doc=(
         "Smoothness weight lambda of Eq. (25), with E_D the mean Huber residual on [0, 1] intensities and E_S the mean "
         "squared directional-Laplacian row (displacements in pixels)."))
@@ -71,7 +72,8 @@ class MeshParams(Params):
         "('amg', needs PyAMG: the [dense] extra) or by sparse LU factors ('lu'); 'direct': sparse LU of every step "
         "(exact, slow); 'auto': lu up to 250 000 pixels per pyramid level (measured 2.2x faster than amg up to "
         "221 000), amg above when PyAMG is installed (lu's memory grows faster than the region's)."))
-    velocity: bool = param(False, doc="Start each frame from a constant-velocity prediction of d instead of the last d.")
+    velocity: bool = param(False, doc=(
+        "Start each frame from a constant-velocity prediction of d instead of the last d."))
     reference: Literal["model", "previous"] = param("model", doc=(
         "'model': every frame is registered onto the first frame's model image I_0, the chapter's analysis by "
         "synthesis (§5.5), so errors do not accumulate. 'previous': frame-to-frame chaining, the variant the chapter "

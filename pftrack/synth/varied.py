@@ -166,7 +166,8 @@ def leave_scene(seed: int = 0, n_frames: int = 140, **draw) -> SceneSpec:
     # comes back in (same side) and walks back towards the centre
     t_in = t_back + abs(edge_out - x0) * 0.6 / speed
     path = ((0, x0, y), (t_exit, edge_out, y), (t_back, edge_out, y + rng.uniform(-20, 20)),
-            (t_in, edge_out - side * abs(edge_out - x0) * 0.6, y), (n_frames - 1, edge_out - side * abs(edge_out - x0) * 0.6, y))
+            (t_in, edge_out - side * abs(edge_out - x0) * 0.6, y),
+            (n_frames - 1, edge_out - side * abs(edge_out - x0) * 0.6, y))
     tgt = Target(path=path, size=(w, h), colors=nz["colors"], texture=nz["texture"])
     nz = {**nz, "speed": speed, "out_frames": out_frames}
     return _spec(seed, n_frames, "leave", nz, [tgt, *_distractors(rng, nz, n_frames, avoid=(x0, y))])

@@ -70,7 +70,8 @@ def walkers_scene(seed: int = 0, *, shape=(240, 320), n_frames: int = 200, fps: 
     else:
         a = rng.uniform(np.pi / 8, 3 * np.pi / 8) * rng.choice([-1, 1])
         half = 0.4 * min(w, h) / max(abs(np.cos(a)), abs(np.sin(a))) * 0.8
-        line = np.array([[cx - half * np.cos(a), cy - half * np.sin(a)], [cx + half * np.cos(a), cy + half * np.sin(a)]])
+        line = np.array([[cx - half * np.cos(a), cy - half * np.sin(a)],
+                         [cx + half * np.cos(a), cy + half * np.sin(a)]])
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     g = rng.uniform(-0.25, 0.25, 2)
     bg = np.clip(rng.normal(110, 10, (h, w, 3)), 0, 255).astype(np.float32)
@@ -92,7 +93,8 @@ def walkers_scene(seed: int = 0, *, shape=(240, 320), n_frames: int = 200, fps: 
             x0, y0 = foot[0] - sw / 2, foot[1] - sh
             if x0 > w or x0 + sw < 0 or y0 > h or y0 + sh < 0:
                 continue
-            cv2.ellipse(canvas, (int(round(foot[0] + 0.2 * sw)), int(round(foot[1]))), (int(0.6 * sw), max(2, sh // 14)),
+            cv2.ellipse(canvas, (int(round(foot[0] + 0.2 * sw)), int(round(foot[1]))),
+                        (int(0.6 * sw), max(2, sh // 14)),
                         0, 0, 360, tuple(float(c) * 0.7 for c in bg[min(h - 1, max(0, int(foot[1]))),
                                                                      min(w - 1, max(0, int(foot[0])))]), -1)
             paste_sprite(canvas, wk["sprite"], float(x0), float(y0))

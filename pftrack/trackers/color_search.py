@@ -71,7 +71,8 @@ class SearchMixin:
         frame = as_bgr_uint8(frame, where="init frame")
         hist = np.asarray(histogram, dtype=np.float64).ravel()
         if hist.size != self.cue.n_bins or not np.all(np.isfinite(hist)) or hist.min() < 0 or hist.sum() <= 0:
-            raise ParameterError(f"histogram must have {self.cue.n_bins} finite non-negative values with a positive sum")
+            raise ParameterError(
+                f"histogram must have {self.cue.n_bins} finite non-negative values with a positive sum")
         w, h = (float(v) for v in size)
         if not (w > 0 and h > 0 and math.isfinite(w) and math.isfinite(h)):
             raise ParameterError(f"size must be a positive (w, h), got {size!r}")

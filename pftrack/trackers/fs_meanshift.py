@@ -49,7 +49,8 @@ class FSMeanShiftParams(Params):
         "Candidate features (§1.1): the chapter's R, G, B, H, S, r, g, orient, plus 'Ieq' (the grey level after the "
         "frame's histogram equalisation, robust to lighting changes; chosen on the tune split, where it lifted "
         "switching's grey+lighting AUC from 0.26 to 0.32). candidates=R/G/B/H/S/r/g/orient is the literal chapter."))
-    bins: int = param(12, ge=2, le=64, doc="m, bins per feature (ch. 6 L5504, L5541; orientation gets a 13th flat bin).")
+    bins: int = param(12, ge=2, le=64, doc=(
+        "m, bins per feature (ch. 6 L5504, L5541; orientation gets a 13th flat bin)."))
     n_features: int = param(2, ge=1, le=3, doc=(
         "Features in the joint histogram (Eq. 16). The chapter uses 2; 1 or 3 'gave worse performances' (C6.4)."))
     partner: Literal["single", "joint"] = param("joint", doc=(
@@ -72,7 +73,8 @@ class FSMeanShiftParams(Params):
         "most discriminative part. Chosen on the tune split (55 sequences): switching 0.641 vs 0.574 (paired +0.067 "
         "+- 0.021), fs-meanshift 0.588 vs 0.477 (+0.111 +- 0.027); on 67 fresh synthetic scenes of neither split "
         "switching +0.073 +- 0.021. A radius of 1 at steps of a tenth of the box: +0.033."))
-    refine_step: float = param(0.05, gt=0, le=0.5, doc="Grid step of refine_radius, as a fraction of the box (>= 1 px).")
+    refine_step: float = param(0.05, gt=0, le=0.5, doc=(
+        "Grid step of refine_radius, as a fraction of the box (>= 1 px)."))
     search_scale: float = param(2.5, ge=1.2, le=6, doc="R_b of Eq. 17: the search region is the box times this.")
     ring_inner: float = param(1.1, ge=1, le=3, doc="Background ring for Eq. 12: from the box times this ...")
     ring_outer: float = param(2.0, ge=1.2, le=5, doc="... to the box times this (ch06.md §1.3, proposed).")

@@ -229,6 +229,7 @@ class KeypointAMS(ReducedFrames, Tracker):
         self.both_fail = self.both_fail + 1 if (not a_ok and not b_ok) else 0
         lost = self.both_fail >= p.lost_frames
         return TrackState(box=hull(self.v_obj), score=float(np.clip(rho_obj, 0, 1)), lost=lost,
-                          info={"chosen": chosen, "rho1": rho1, "rho2": rho2, "rho": rho_obj, "inliers": res["n_inliers"],
+                          info={"chosen": chosen, "rho1": rho1, "rho2": rho2, "rho": rho_obj,
+                                "inliers": res["n_inliers"],
                                 "a_reinit": not a_ok, "b_reinit": not b_ok, "theta": self.v_obj[4],
                                 "updates": self.learner.updates})

@@ -83,7 +83,8 @@ class PointParams(Params):
     learn_gate: float = param(0.15, gt=0, doc="flow accepted with eps >= learn_gate * max(|v_{N-1}|, v_floor) moves "
                                              "the point but the RLS learns the prediction instead (a half-covered "
                                              "window at the obstacle's edge must not teach the filter a wrong "
-                                             "velocity); a huge value (1e9) learns every accepted flow, as the book does")
+                                             "velocity); a huge value (1e9) learns every accepted flow, as the "
+                                             "book does")
     learn_after: int = param(3, ge=1, doc="flow accepted but kept from learning this many frames in a row is learnt "
                                           "from then on: an edge biases one or two frames, a real change of "
                                           "velocity persists and the filter must follow it")

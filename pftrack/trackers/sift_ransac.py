@@ -237,7 +237,8 @@ class SiftRansacCore:
         xy, desc = kp.detect(gray, area, upsample=self.upsample(area))
         inside = (kp.points_in_ellipse(xy, *v) if self.p.fg_ellipse else kp.points_in_rotated_box(xy, *v))
         in_box = kp.points_in_rotated_box(xy, *v)
-        self.PF = kp.PointSet(xy[inside], desc[inside], np.zeros(int(inside.sum())), np.zeros(int(inside.sum()), np.int64))
+        n_in = int(inside.sum())
+        self.PF = kp.PointSet(xy[inside], desc[inside], np.zeros(n_in), np.zeros(n_in, np.int64))
         ring = ~in_box
         self.PB = kp.PointSet(xy[ring], desc[ring], np.zeros(int(ring.sum())), np.zeros(int(ring.sum()), np.int64))
 

@@ -51,7 +51,8 @@ class TemplateParams(Params):
     template_pixels: int = param(1600, ge=64, le=1_000_000, doc=(
         "Speed bound: the template keeps the box's aspect with at most this many pixels; larger boxes are "
         "matched on a coarser grid (template and window sampled alike)."))
-    mi_bins: int = param(32, ge=2, le=256, doc="Grey-level bins of the mutual-information criteria (fixed binning, 0-255).")
+    mi_bins: int = param(32, ge=2, le=256, doc=(
+        "Grey-level bins of the mutual-information criteria (fixed binning, 0-255)."))
     template_update: float = param(0.0, ge=0, le=1, doc=(
         "Rate of the template update t <- (1 - a) t + a p on frames that are not lost; 0 keeps the chapter's "
         "fixed template (its updated variant drifts after one bad match)."))
