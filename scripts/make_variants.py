@@ -52,7 +52,15 @@ fixed glows with a saturated core, 2 % of the frame's diagonal in radius, warm o
 target's path (drawn from the name). With ``--ramp N`` (``NAME-dimG-noiseSD-rampN``) the gain rises linearly from G on
 the first frame to 1 at frame N + 1: a camera whose exposure settles, or lights coming on.
 
-Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``, ``--stride`` and ``--shake``.
+With ``--zoom Z`` one copy is written instead, ``NAME-zoomZ``: a camera that zooms steadily about the first frame's
+target centre, so that the target's size changes Z times over the sequence (Z > 1: zooming in, from the full view
+to a Z times magnified one; Z < 1: zooming out, from a 1/Z times magnified view to the full one). Frame i shows the
+view magnified m_i times, m_i geometric between the two ends, cut where it lies in the frame and resampled
+bilinearly to the frame's size (JPEG quality 92); the ground truth goes through the same map (NaN where a box falls
+wholly outside the view). A zoom is a change of scale that every target of the sequence undergoes at once.
+
+Ground truth (``groundtruth_rect.txt``) is copied unchanged, but for ``--scale``, ``--stride``, ``--shake`` and
+``--zoom``.
 """
 
 from __future__ import annotations
@@ -160,6 +168,47 @@ def write_shaken(seq, dest: Path, px: int) -> None:
         out = (gt[:, 0] + gt[:, 2] <= 0) | (gt[:, 1] + gt[:, 3] <= 0) | (gt[:, 0] >= w - 2 * px) | \
               (gt[:, 1] >= h - 2 * px)
         gt[out] = np.nan
+    write_groundtruth(dest / "groundtruth_rect.txt", gt)
+    for extra in ("ATTRIBUTION.md", "provenance.json", "meta.json"):
+        if (seq.path / extra).is_file():
+            shutil.copy(seq.path / extra, dest / extra)
+
+
+def zoom_views(n: int, zoom: float, centre: tuple[float, float], size: tuple[int, int]) -> np.ndarray:
+    """``(n, 3)`` rows ``(m, x0, y0)`` of a ``--zoom`` copy: frame i shows the original's pixels ``(x, y)`` at
+    ``((x - x0) m, (y - y0) m)``; ``m`` geometric from 1 to ``zoom`` (from ``1 / zoom`` to 1 when ``zoom < 1``), the
+    view of ``w / m`` by ``h / m`` pixels centred on ``centre`` and moved inside the frame of ``size = (w, h)``."""
+    w, h = size
+    lo, hi = (1.0, zoom) if zoom >= 1 else (1.0 / zoom, 1.0)
+    m = lo * (hi / lo) ** (np.arange(n) / max(n - 1, 1))
+    x0 = np.clip(centre[0] - w / (2 * m), 0.0, w - w / m)
+    y0 = np.clip(centre[1] - h / (2 * m), 0.0, h - h / m)
+    return np.stack([m, x0, y0], axis=1)
+
+
+def write_zoomed(seq, dest: Path, zoom: float) -> None:
+    """``seq``'s colour frames seen through a steady zoom (:func:`zoom_views`) about the first frame's target centre,
+    with the ground truth mapped alike, as an OTB folder."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    gt = np.array(seq.groundtruth, dtype=np.float64)
+    first = gt[np.isfinite(gt).all(axis=1)]
+    h, w = cv2.imread(str(seq.frames[0]), cv2.IMREAD_COLOR).shape[:2]
+    centre = (first[0, 0] + first[0, 2] / 2, first[0, 1] + first[0, 3] / 2) if len(first) else (w / 2, h / 2)
+    views = zoom_views(len(seq.frames), zoom, centre, (w, h))
+    for i, path in enumerate(seq.frames):
+        m, x0, y0 = views[i]
+        # output pixel centre u shows the original at x0 + (u + 0.5) / m - 0.5 (pixel centres at integers)
+        a = np.array([[m, 0.0, (0.5 - x0) * m - 0.5], [0.0, m, (0.5 - y0) * m - 0.5]])
+        img = cv2.warpAffine(cv2.imread(str(path), cv2.IMREAD_COLOR), a, (w, h), flags=cv2.INTER_LINEAR,
+                             borderMode=cv2.BORDER_REPLICATE)
+        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+    k = min(len(gt), len(views))
+    m, x0, y0 = views[:k, 0], views[:k, 1], views[:k, 2]
+    gt[:k, 0] = (gt[:k, 0] - x0) * m
+    gt[:k, 1] = (gt[:k, 1] - y0) * m
+    gt[:k, 2:4] *= m[:, None]
+    out = (gt[:, 0] + gt[:, 2] <= 0) | (gt[:, 1] + gt[:, 3] <= 0) | (gt[:, 0] >= w) | (gt[:, 1] >= h)
+    gt[out] = np.nan
     write_groundtruth(dest / "groundtruth_rect.txt", gt)
     for extra in ("ATTRIBUTION.md", "provenance.json", "meta.json"):
         if (seq.path / extra).is_file():
@@ -313,7 +362,11 @@ def main() -> None:
                     "(NAME-dimG-noiseSD-lampsK; default 0)")
     ap.add_argument("--ramp", type=int, default=0, metavar="N", help="the --dim copy's gain rises from G to 1 over "
                     "the first N frames (NAME-dimG-noiseSD-rampN; default 0: no ramp)")
+    ap.add_argument("--zoom", type=float, metavar="Z", help="only a copy through a steady zoom (NAME-zoomZ) that "
+                    "changes the target's size Z times over the sequence (Z > 1 in, Z < 1 out)")
     args = ap.parse_args()
+    if args.zoom is not None and not (0.25 <= args.zoom <= 4 and args.zoom != 1):
+        ap.error(f"--zoom must be a factor in [0.25, 4] other than 1, got {args.zoom}")
     if args.blur is not None and args.blur < 2:
         ap.error(f"--blur must be a whole number of pixels of at least 2, got {args.blur}")
     if args.dim is not None and not 0 < args.dim <= 1:
@@ -342,6 +395,10 @@ def main() -> None:
         if args.scale is not None:
             write_scaled(seq, out / f"{seq.name}-x{args.scale:g}", args.scale)
             print(f"{seq.name}: {n} frames -> {out}/{seq.name}-x{args.scale:g}")
+            continue
+        if args.zoom is not None:
+            write_zoomed(seq, out / f"{seq.name}-zoom{args.zoom:g}", args.zoom)
+            print(f"{seq.name}: {n} frames -> {out}/{seq.name}-zoom{args.zoom:g}")
             continue
         if args.shake is not None:
             write_shaken(seq, out / f"{seq.name}-shake{args.shake}", args.shake)

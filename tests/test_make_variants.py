@@ -1,6 +1,6 @@
 """scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds),
 resized copies (--scale), copies at a lower frame rate (--stride), through a shaking camera (--shake), with
-motion blur (--blur) and from a dark, noisy camera (--dim, --noise)."""
+motion blur (--blur), from a dark, noisy camera (--dim, --noise) and through a steady zoom (--zoom)."""
 
 from __future__ import annotations
 
@@ -217,3 +217,51 @@ def test_ramp_raises_the_gain_to_one_over_its_frames(tmp_path):
     bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--ramp", "3", "--out", str(tmp_path / "z")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "ramp" in bad.stderr
+
+
+def _bright_box(img: np.ndarray) -> np.ndarray:
+    """x, y, w, h (pixel edges) of the pixels above mid-grey, with half-covered edge pixels counted by level."""
+    g = img.astype(float) / 255.0
+    cols, rows = g.max(axis=0), g.max(axis=1)
+    x = np.flatnonzero(cols > 0.5)
+    y = np.flatnonzero(rows > 0.5)
+    return np.array([x[0], y[0], x[-1] + 1 - x[0], y[-1] + 1 - y[0]], dtype=float)
+
+
+@pytest.mark.parametrize("zoom", [2.0, 0.5])
+def test_zoom_maps_the_frames_and_the_truth_alike(tmp_path, zoom):
+    script = _script()
+    v = script.zoom_views(5, zoom, (30.0, 20.0), (64, 48))
+    m = v[:, 0]
+    np.testing.assert_allclose(m[-1] / m[0], zoom)  # the target's size changes `zoom` times
+    assert min(m) == pytest.approx(1.0) and np.all(np.diff(np.log(m)) == pytest.approx(np.log(zoom) / 4))
+    # the view stays inside the frame
+    assert np.all(v[:, 1] >= 0) and np.all(v[:, 1] + 64 / m <= 64 + 1e-9) and np.all(v[:, 2] + 48 / m <= 48 + 1e-9)
+    # frames: black with a white 16 x 12 box at (22, 14), not moving; the copy's box follows the truth's
+    seq = tmp_path / "box"
+    (seq / "img").mkdir(parents=True)
+    frame = np.zeros((48, 64, 3), np.uint8)
+    frame[14:26, 22:38] = 255
+    for i in range(5):
+        cv2.imwrite(str(seq / "img" / f"{i + 1:04d}.png"), frame)
+    write_groundtruth(seq / "groundtruth_rect.txt", np.tile([22.0, 14.0, 16.0, 12.0], (5, 1)))
+    _run(str(seq), "--zoom", f"{zoom:g}", "--out", str(tmp_path / "z"))
+    copy = read_sequence(tmp_path / "z" / f"box-zoom{zoom:g}")
+    assert len(copy.frames) == 5
+    for i, p in enumerate(copy.frames):
+        seen = _bright_box(cv2.imread(str(p), cv2.IMREAD_GRAYSCALE))
+        np.testing.assert_allclose(seen, copy.groundtruth[i], atol=1.5)
+        np.testing.assert_allclose(copy.groundtruth[i, 2:], np.array([16.0, 12.0]) * m[i], rtol=1e-3)
+    bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--zoom", "1", "--out", str(tmp_path / "x")],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "zoom" in bad.stderr
+
+
+def test_zoom_drops_the_truth_of_a_box_the_view_leaves_out(tmp_path):
+    seq = _otb(tmp_path, n=4)
+    gt = np.tile([10.0, 12.0, 20.0, 16.0], (4, 1))
+    gt[3] = [0.0, 0.0, 6.0, 6.0]  # top-left corner: out of a view magnified about the first box's centre
+    write_groundtruth(seq / "groundtruth_rect.txt", gt)
+    _run(str(seq), "--zoom", "3", "--out", str(tmp_path / "z"))
+    out = read_sequence(tmp_path / "z" / "tiny-zoom3").groundtruth
+    assert np.isfinite(out[:3]).all() and np.isnan(out[3]).all()
