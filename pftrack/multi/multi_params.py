@@ -31,6 +31,10 @@ class MultiPFParams(Params):
         "never. 2, chosen under a rule stated before its runs (docs/rules/mog2_dark_stretch_rule.txt, docs/mot.md): "
         "the PETS tune half from a dark camera (gain 0.2, noise 5), MOTA 0.342 against 0.057, IDF1 0.412 against "
         "0.323; the ordinary tune half identical run for run."))
+    dark_denoise: float = param(0.0, ge=0, le=255, doc=(
+        "mog2 under dark_stretch: its frames are smoothed (3 x 3 Gaussian) before the stretch when the first frame's "
+        "noise times the gain exceeds this many grey levels (pftrack.multi.detectors.MOG2DetectorParams."
+        "dark_denoise); 0: never."))
     bootstrap_frames: int = param(0, ge=0, le=10_000, doc=(
         "mog2: the caller (pftrack mot, pftrack eval) reads this many first frames ahead and the detector's "
         "background starts from them with their moving pixels replaced by the per-pixel median (MultiPF.prime, "

@@ -103,8 +103,8 @@ class MultiPF:
             self.detector = as_detector(detector_fn)
         else:
             extra = {"split_aspect": p.object_aspect} if p.detector in ("mog2", "motion") else {}
-            extra |= {"grey_shadow_threshold": p.grey_shadow_threshold, "dark_stretch": p.dark_stretch} \
-                if p.detector == "mog2" else {}
+            extra |= {"grey_shadow_threshold": p.grey_shadow_threshold, "dark_stretch": p.dark_stretch,
+                      "dark_denoise": p.dark_denoise} if p.detector == "mog2" else {}
             self.detector = create_detector(p.detector, **extra)
         # frames the caller reads ahead for prime() (a detector that learns a background)
         self.bootstrap_frames = p.bootstrap_frames if hasattr(self.detector, "prime") else 0
