@@ -84,7 +84,7 @@ def cmd_tripwire(args) -> int:
     import cv2
 
     from ..errors import ParameterError, SourceError
-    from ..events.tripwire import TrackerlessTripwire, TripwireParams, estimate_radius
+    from ..events.tripwire import TrackerlessTripwire, TripwireParams, dark_levels, estimate_radius
     from ..io.sinks import VideoSink, _TextSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..params import parse_param_assignments
@@ -123,8 +123,10 @@ def cmd_tripwire(args) -> int:
             if number >= 10 * fps:
                 break
         source.close()
-        tau = TripwireParams.from_mapping({k: v for k, v in extra.items() if k != "radius"}).bgs_grey_shadow_threshold
-        extra["radius"] = estimate_radius(calib, line, grey_shadow_threshold=tau)
+        early = TripwireParams.from_mapping({k: v for k, v in extra.items() if k != "radius"})
+        gain, smooth = dark_levels(calib[0], early) if calib else (1.0, False)
+        extra["radius"] = estimate_radius(calib, line, grey_shadow_threshold=early.bgs_grey_shadow_threshold,
+                                          gain=gain, smooth=smooth)
         del calib
         source = open_source(args.source)
     params = TripwireParams.from_mapping(extra)

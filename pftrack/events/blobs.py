@@ -274,15 +274,20 @@ def label_stats(labels: np.ndarray) -> np.ndarray:
 
 
 def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_area: int = 60,
-                    default: float = 12.0, grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD) -> float:
+                    default: float = 12.0, grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD,
+                    gain: float = 1.0, smooth: bool = False) -> float:
     """``--radius auto`` (ch10.md §1.2, proposed): half the median short side of the foreground blobs whose
     centroids lie within ``near`` px of the wire, over the given frames (e.g. the first 10 s); the foreground is
-    the tripwire's (MOG2, ``grey_shadow_threshold`` as its ``bgs_grey_shadow_threshold``)."""
+    the tripwire's (MOG2, ``grey_shadow_threshold`` as its ``bgs_grey_shadow_threshold``; the frames smoothed and
+    multiplied by ``gain`` as its ``dark_denoise`` and ``dark_stretch`` decide, :func:`~pftrack.events.tripwire.
+    dark_levels`)."""
     pts = np.asarray(polyline, dtype=np.float64)
     bgs = Foreground(500, 16.0, grey_shadow_threshold=grey_shadow_threshold)
     kernel = np.ones((3, 3), np.uint8)
     sides = []
     for frame in frames:
+        if gain != 1.0:
+            frame = cv2.convertScaleAbs(cv2.GaussianBlur(frame, (3, 3), 0) if smooth else frame, alpha=gain)
         fg = cv2.morphologyEx(bgs.apply(frame), cv2.MORPH_OPEN, kernel)
         n, _, stats, cent = cv2.connectedComponentsWithStats(fg)
         if n <= 1:

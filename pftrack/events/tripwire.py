@@ -34,14 +34,15 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..cues.foreground import Foreground
+from ..cues.foreground import Foreground, noise_sigma
+from ..cues.quantize import level_gain
 from .blobs import FootCrossings, estimate_radius
 from .geometry import PatchLayout, build_patches
 from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
 from .timing import CrossingTimer
 from .tripwire_params import TripwireParams
 
-__all__ = ["CrossingEvent", "TrackerlessTripwire", "TripwireParams", "estimate_radius"]
+__all__ = ["CrossingEvent", "TrackerlessTripwire", "TripwireParams", "dark_levels", "estimate_radius"]
 
 
 @dataclass
@@ -87,6 +88,18 @@ class _Patch:
     armed: bool = True      # may fire (refractory)
 
 
+def dark_levels(frame: np.ndarray, p: TripwireParams) -> tuple[float, bool]:
+    """``(gain, smooth)`` of ``dark_stretch`` and ``dark_denoise`` on a first frame: the level gain when it reaches
+    ``dark_stretch`` (else 1), and whether the frame's noise times that gain exceeds ``dark_denoise``."""
+    if p.faithful or p.dark_stretch <= 0:
+        return 1.0, False
+    f = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR) if frame.ndim == 2 else frame
+    g = level_gain(f)
+    if g < p.dark_stretch:
+        return 1.0, False
+    return g, p.dark_denoise > 0 and noise_sigma(f) * g > p.dark_denoise
+
+
 class TrackerlessTripwire:
     """``process(frame, frame_number)`` → the crossings found on that frame.
 
@@ -127,6 +140,8 @@ class TrackerlessTripwire:
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
         if p.bgs == "mog2":
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold)
+        self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
+        self._denoise = False
         self._prev_gray: np.ndarray | None = None
         self._prev2_gray: np.ndarray | None = None
         self._kernel = np.ones((3, 3), np.uint8)
@@ -161,9 +176,13 @@ class TrackerlessTripwire:
         return cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._kernel)
 
     def process(self, frame: np.ndarray, number: int) -> list[CrossingEvent]:
+        if self._gain is None:  # the first frame decides (dark_stretch, dark_denoise)
+            self._gain, self._denoise = dark_levels(frame, self.params)
         roi = frame[self.y0:self.y1, self.x0:self.x1]
         if roi.ndim == 2:
             roi = cv2.cvtColor(roi, cv2.COLOR_GRAY2BGR)
+        if self._gain != 1.0:
+            roi = cv2.convertScaleAbs(cv2.GaussianBlur(roi, (3, 3), 0) if self._denoise else roi, alpha=self._gain)
         if self._held is None:
             return self._process(roi, number)
         self._held.append((roi.copy(), number))
