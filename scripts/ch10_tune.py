@@ -9,7 +9,7 @@ of each family, and the mean over the families:
 
 * ``pets``: PETS 2009 S2.L1 frames 1-200 only (the report frames are not processed), the four lines of
   scripts/ch10_experiments.py, ``--radius auto`` as there, strides 1, 2 and 3 (three families);
-* ``walkers``: ``pftrack synth walkers`` seeds 0-9 (one family);
+* ``walkers``: ``pftrack synth walkers`` seeds 0-9 (one family; ``--walker-seeds`` for others);
 * ``traffic``: ``pftrack synth traffic-sparse`` and ``traffic-dense`` seeds 0-2 at stride 1, the book's timing
   (``timing=match``; ``bgs_history=100`` for dense), as scripts/ch10_experiments.py runs them (two families).
 
@@ -30,10 +30,17 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from ch10_experiments import PETS_LINES, add, ntt, score, summarise  # noqa: E402
 
+from pftrack.cli.common import parse_seeds  # noqa: E402
 from pftrack.events.eval import track_crossings  # noqa: E402
 from pftrack.events.geometry import parse_polyline  # noqa: E402
-from pftrack.events.tripwire import TripwireParams, estimate_radius  # noqa: E402
+from pftrack.events.tripwire import TripwireParams, dark_levels, estimate_radius  # noqa: E402
 from pftrack.io.datasets import read_sequence  # noqa: E402
+
+
+def _radius(frames, line, kw: dict) -> float:
+    """``--radius auto`` on the frames as the tripwire of the setting ``kw`` sees them (``dark_stretch``)."""
+    gain, smooth = dark_levels(frames[0], TripwireParams(**kw))
+    return estimate_radius(frames, line, gain=gain, smooth=smooth)
 
 
 def _pets(args) -> dict:
@@ -45,9 +52,9 @@ def _pets(args) -> dict:
     acc: dict = {}
     for text in PETS_LINES:
         line = parse_polyline(text)
-        r = estimate_radius(sub[:max(1, 70 // stride)], line)
         truth = track_crossings(seq.mot_gt, line, hysteresis=5)
         for v in values:
+            r = _radius(sub[:max(1, 70 // stride)], line, {**fixed, key: v})
             ev, _ = ntt(sub, numbers, line, 7.0, stride, radius=r, **fixed, **{key: v})
             add(acc, f"pets stride {stride} | {v}", score([(e.frame, e.direction) for e in ev], truth, 1, 200))
     return acc
@@ -60,9 +67,9 @@ def _walkers(args) -> dict:
     sc = walkers_scene(seed)
     truth = track_crossings(sc.tracks, sc.wire, hysteresis=3)
     numbers = list(range(1, len(sc.frames) + 1))
-    r = estimate_radius(sc.frames[:int(10 * sc.fps)], sc.wire)
     acc: dict = {}
     for v in values:
+        r = _radius(sc.frames[:int(10 * sc.fps)], sc.wire, {**fixed, key: v})
         ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, radius=r, **fixed, **{key: v})
         add(acc, f"walkers | {v}", score([(e.frame, e.direction) for e in ev], truth, 0, 1e9))
     return acc
@@ -89,6 +96,7 @@ def main() -> None:
     ap.add_argument("values", help="comma-separated values to try beside the default")
     ap.add_argument("--families", default="pets,walkers,traffic")
     ap.add_argument("--data", default="../shared/data")
+    ap.add_argument("--walker-seeds", default="0-9", metavar="A-B", help="the walkers family's seeds (default 0-9)")
     ap.add_argument("--with", dest="fixed", action="append", default=[], metavar="KEY=VALUE",
                     help="another setting for every row (repeatable)")
     args = ap.parse_args()
@@ -106,7 +114,7 @@ def main() -> None:
         if "pets" in fams:
             jobs += [ex.submit(_pets, (args.data, s, args.param, values, fixed)) for s in (1, 2, 3)]
         if "walkers" in fams:
-            jobs += [ex.submit(_walkers, (s, args.param, values, fixed)) for s in range(10)]
+            jobs += [ex.submit(_walkers, (s, args.param, values, fixed)) for s in parse_seeds(args.walker_seeds)]
         if "traffic" in fams:
             jobs += [ex.submit(_traffic, (k, s, args.param, values, fixed)) for k in ("sparse", "dense")
                      for s in range(3)]
