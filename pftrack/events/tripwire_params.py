@@ -32,15 +32,18 @@ class TripwireParams(Params):
         "replaced by the per-pixel median (pftrack.cues.foreground.still_frames), then they are processed (0: off; "
         "MOG2 alone takes the first frames' objects for background). An option: 4 s found 80 of the PETS tune "
         "frames' 96 crossings at strides 1-3 against 74, at mean F1 0.825 against 0.817, short of its rule"))
-    dark_stretch: float = param(0.0, ge=0, le=8, doc=(
+    dark_stretch: float = param(2.5, ge=0, le=8, doc=(
         "a dark camera: when the first frame's bright end (its 99.5th percentile, pftrack.cues.quantize.level_gain) "
         "needs a gain of at least this to reach level 255, the wire's neighbourhood is multiplied by that gain (at "
         "most 8) on every frame before anything else, as pftrack mot's detector does (MOG2's floor on a pixel's "
-        "variance and the 8 x 8 x 8 colour bins are made for the full range); 0: never"))
-    dark_denoise: float = param(0.0, ge=0, le=255, doc=(
+        "variance and the 8 x 8 x 8 colour bins are made for the full range); 0: never. 2.5 with dark_denoise "
+        "8.66, chosen under docs/rules/tripwire_dark_rule2.txt (docs/tripwire.md): three dark cameras of the PETS "
+        "tune half never run before, F1 0.776 against 0.584 over strides 1-3; the six tune families and 20 fresh "
+        "walker scenes identical (2 failed the first rule: mid-grey synthetic scenes were stretched)"))
+    dark_denoise: float = param(8.66, ge=0, le=255, doc=(
         "under dark_stretch: when the first frame's noise (pftrack.cues.foreground.noise_sigma) times the gain "
         "exceeds this many grey levels, the neighbourhood is smoothed by a 3 x 3 Gaussian before the stretch; 0: "
-        "never (8.66, the spread of MOG2's variance ceiling, is pftrack mot's default)"))
+        "never. 8.66 = sqrt(75), the spread of MOG2's variance ceiling, as pftrack mot's default"))
     diff_threshold: int = param(25, ge=1, le=255, doc="grey-level threshold of the frame difference")
     fg_ratio: float = param(0.3, gt=0, le=1, doc="foreground fraction of a disc that makes the patch foreground")
     contact: Literal["any", "bottom"] = param("any", doc=(
