@@ -303,3 +303,57 @@ def test_tripwire_cli_radius_auto_and_overlay_video(tmp_path, capsys):
     n_video = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
     cap.release()
     assert n_video == len(range(0, len(sc.frames), 2))
+
+
+def test_dark_levels_stretch_a_dark_camera_and_smooth_a_noisy_one():
+    from pftrack.events.tripwire import dark_levels
+
+    p = TripwireParams()
+    bright = np.full((60, 80, 3), 120, np.uint8)
+    bright[10:20, 10:20] = 250
+    assert dark_levels(bright, p) == (1.0, False)
+    flat = np.full((60, 80, 3), 20, np.uint8)  # dark and clean: stretched, not smoothed
+    g, smooth = dark_levels(flat, p)
+    assert g == pytest.approx(8.0) and not smooth
+    noisy = np.clip(np.rint(flat + np.random.default_rng(0).normal(0, 4, flat.shape)), 0, 255).astype(np.uint8)
+    g, smooth = dark_levels(noisy, p)
+    assert 5 < g <= 8 and smooth  # noise of 4 levels times a gain above 5: more than MOG2 can model
+    assert dark_levels(noisy, TripwireParams(faithful=True)) == (1.0, False)
+    assert dark_levels(noisy, TripwireParams(dark_stretch=0)) == (1.0, False)
+    grey = np.full((60, 80), 20, np.uint8)  # one channel
+    assert dark_levels(grey, p)[0] == pytest.approx(8.0)
+
+
+def test_trackerless_tripwire_counts_movers_seen_by_a_dark_noisy_camera():
+    """The two movers at a fifth of the light with noise of 5 levels: both crossings are found with the defaults
+    (the neighbourhood smoothed, then stretched), none without the stretch or without the smoothing."""
+    wire, frames = _two_movers()
+    rng = np.random.default_rng(7)
+    dark = [np.clip(np.rint(f * 0.2 + rng.normal(0, 5, f.shape)), 0, 255).astype(np.uint8) for f in frames]
+
+    def crossings(**kw):
+        tw = TrackerlessTripwire(wire, dark[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50, **kw))
+        ev = []
+        for n, f in enumerate(dark, 1):
+            ev += tw.process(f, n)
+        return sorted((e.direction, e.frame) for e in ev)
+
+    found = crossings()
+    assert [d for d, _ in found] == [-1, 1], found
+    assert 26 <= dict((d, f) for d, f in found)[1] <= 31  # the foot point crosses at frame 29
+    assert crossings(dark_stretch=0.0) == [] and crossings(dark_denoise=0.0) == []
+
+
+def test_radius_auto_reads_the_frames_as_the_tripwire_sees_them():
+    import cv2
+
+    from pftrack.events.tripwire import estimate_radius
+
+    wire, frames = _two_movers()
+    rng = np.random.default_rng(7)
+    dark = [np.clip(np.rint(f * 0.2 + rng.normal(0, 5, f.shape)), 0, 255).astype(np.uint8) for f in frames[:60]]
+    g = 5.0
+    seen = [cv2.convertScaleAbs(cv2.GaussianBlur(f, (3, 3), 0), alpha=g) for f in dark]
+    r = estimate_radius(dark, wire, min_area=30, gain=g, smooth=True)
+    assert r == estimate_radius(seen, wire, min_area=30)
+    assert 10 <= r <= 16  # half the short side of a disc of radius 14
