@@ -27,6 +27,7 @@ import cv2
 import numpy as np
 
 from .intensity import is_gray
+from .quantize import level_gain
 
 __all__ = ["BOOTSTRAP_DIFF", "GREY_SHADOW_THRESHOLD", "OPENCV_SHADOW_THRESHOLD", "Foreground", "still_frames"]
 
@@ -54,6 +55,8 @@ def still_frames(frames, diff: float = BOOTSTRAP_DIFF) -> np.ndarray:
 #: MOG2's ceiling on a pixel's variance (OpenCV's default varMax, grey levels squared): noise with a larger spread is
 #: more than its background model can learn
 MOG2_VAR_MAX = 75.0
+#: the default noise limit of ``dark_denoise`` (pftrack mot's detector, the tripwire): sqrt(MOG2_VAR_MAX), 8.66 levels
+DARK_NOISE_LIMIT = round(float(np.sqrt(MOG2_VAR_MAX)), 2)
 
 _LAPLACE_PAIR = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], dtype=np.float32)
 
@@ -69,6 +72,29 @@ def noise_sigma(frame: np.ndarray) -> float:
         return 0.0
     r = cv2.filter2D(y.astype(np.float32), -1, _LAPLACE_PAIR)[1:-1, 1:-1]
     return float(np.sqrt(np.pi / 2.0) * np.abs(r).mean() / 6.0)
+
+
+def dark_levels(frame: np.ndarray, stretch: float, denoise: float) -> tuple[float, bool]:
+    """``(gain, smooth)`` for a camera whose first frame is ``frame`` (BGR or grey): the level gain that brings its
+    bright end to 255 (:func:`~pftrack.cues.quantize.level_gain`) when it is at least ``stretch`` (else 1; ``stretch``
+    0: never), and whether the frame's noise (:func:`noise_sigma`) times that gain exceeds ``denoise`` levels
+    (``denoise`` 0: never). The ``dark_stretch`` and ``dark_denoise`` of pftrack mot's detector and of the
+    tripwire; :func:`apply_levels` applies them to every frame."""
+    if stretch <= 0:
+        return 1.0, False
+    f = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR) if frame.ndim == 2 else frame
+    g = level_gain(f)
+    if g < stretch:
+        return 1.0, False
+    return g, denoise > 0 and noise_sigma(f) * g > denoise
+
+
+def apply_levels(frame: np.ndarray, gain: float, smooth: bool) -> np.ndarray:
+    """``frame`` smoothed by a 3 x 3 Gaussian when ``smooth``, then multiplied by ``gain`` (saturated to uint8);
+    the frame itself when ``gain`` is 1 (:func:`dark_levels`)."""
+    if gain == 1.0:
+        return frame
+    return cv2.convertScaleAbs(cv2.GaussianBlur(frame, (3, 3), 0) if smooth else frame, alpha=gain)
 
 
 class Foreground:

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground
+from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground, apply_levels
 from .geometry import _segments, polyline_project
 
 __all__ = ["FootCrossings", "FootEvent", "estimate_radius", "label_stats"]
@@ -286,9 +286,7 @@ def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_are
     kernel = np.ones((3, 3), np.uint8)
     sides = []
     for frame in frames:
-        if gain != 1.0:
-            frame = cv2.convertScaleAbs(cv2.GaussianBlur(frame, (3, 3), 0) if smooth else frame, alpha=gain)
-        fg = cv2.morphologyEx(bgs.apply(frame), cv2.MORPH_OPEN, kernel)
+        fg = cv2.morphologyEx(bgs.apply(apply_levels(frame, gain, smooth)), cv2.MORPH_OPEN, kernel)
         n, _, stats, cent = cv2.connectedComponentsWithStats(fg)
         if n <= 1:
             continue

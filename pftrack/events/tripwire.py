@@ -34,8 +34,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ..cues.foreground import Foreground, noise_sigma
-from ..cues.quantize import level_gain
+from ..cues import foreground as _fg
+from ..cues.foreground import Foreground, apply_levels
 from .blobs import FootCrossings, estimate_radius
 from .geometry import PatchLayout, build_patches
 from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
@@ -89,15 +89,9 @@ class _Patch:
 
 
 def dark_levels(frame: np.ndarray, p: TripwireParams) -> tuple[float, bool]:
-    """``(gain, smooth)`` of ``dark_stretch`` and ``dark_denoise`` on a first frame: the level gain when it reaches
-    ``dark_stretch`` (else 1), and whether the frame's noise times that gain exceeds ``dark_denoise``."""
-    if p.faithful or p.dark_stretch <= 0:
-        return 1.0, False
-    f = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR) if frame.ndim == 2 else frame
-    g = level_gain(f)
-    if g < p.dark_stretch:
-        return 1.0, False
-    return g, p.dark_denoise > 0 and noise_sigma(f) * g > p.dark_denoise
+    """``(gain, smooth)`` of ``dark_stretch`` and ``dark_denoise`` on a first frame
+    (:func:`pftrack.cues.foreground.dark_levels`); ``(1, False)`` when ``faithful``."""
+    return (1.0, False) if p.faithful else _fg.dark_levels(frame, p.dark_stretch, p.dark_denoise)
 
 
 class TrackerlessTripwire:
@@ -181,8 +175,7 @@ class TrackerlessTripwire:
         roi = frame[self.y0:self.y1, self.x0:self.x1]
         if roi.ndim == 2:
             roi = cv2.cvtColor(roi, cv2.COLOR_GRAY2BGR)
-        if self._gain != 1.0:
-            roi = cv2.convertScaleAbs(cv2.GaussianBlur(roi, (3, 3), 0) if self._denoise else roi, alpha=self._gain)
+        roi = apply_levels(roi, self._gain, self._denoise)
         if self._held is None:
             return self._process(roi, number)
         self._held.append((roi.copy(), number))

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from ..cues.foreground import GREY_SHADOW_THRESHOLD
+from ..cues.foreground import DARK_NOISE_LIMIT, GREY_SHADOW_THRESHOLD
 from ..params import Params, param
 
 __all__ = ["TripwireParams"]
@@ -40,7 +40,7 @@ class TripwireParams(Params):
         "8.66, chosen under docs/rules/tripwire_dark_rule2.txt (docs/tripwire.md): three dark cameras of the PETS "
         "tune half never run before, F1 0.776 against 0.584 over strides 1-3; the six tune families and 20 fresh "
         "walker scenes identical (2 failed the first rule: mid-grey synthetic scenes were stretched)"))
-    dark_denoise: float = param(8.66, ge=0, le=255, doc=(
+    dark_denoise: float = param(DARK_NOISE_LIMIT, ge=0, le=255, doc=(
         "under dark_stretch: when the first frame's noise (pftrack.cues.foreground.noise_sigma) times the gain "
         "exceeds this many grey levels, the neighbourhood is smoothed by a 3 x 3 Gaussian before the stretch; 0: "
         "never. 8.66 = sqrt(75), the spread of MOG2's variance ceiling, as pftrack mot's default"))

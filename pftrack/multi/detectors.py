@@ -28,8 +28,7 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground, noise_sigma
-from ..cues.quantize import level_gain
+from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground, apply_levels, dark_levels
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
 from ..params import Params, param
@@ -149,9 +148,9 @@ class MOG2DetectorParams(Params):
     dark_denoise: float = param(0.0, ge=0, le=255, doc=(
         "Under dark_stretch, a camera's noise is stretched with its frames. When the first reduced frame's noise "
         "(pftrack.cues.foreground.noise_sigma) times the gain exceeds this many grey levels, every reduced frame is "
-        "smoothed by a 3 x 3 Gaussian before the stretch (its noise falls to about a third). 0: never; the candidate "
-        "8.66 = sqrt(75), the spread of MOG2's ceiling on a pixel's variance (MOG2_VAR_MAX), above which the noise is "
-        "more than its background model can learn."))
+        "smoothed by a 3 x 3 Gaussian before the stretch (its noise falls to about a third). 0: never (multi-pf "
+        "passes 8.66 = sqrt(75), pftrack.cues.foreground.DARK_NOISE_LIMIT: the spread of MOG2's ceiling on a "
+        "pixel's variance, above which the noise is more than its background model can learn)."))
     grey_shadow_threshold: float = param(GREY_SHADOW_THRESHOLD, ge=0, le=1, doc=(
         "MOG2's shadow threshold on grey frames, where its shadow test cannot tell a cast shadow from an object up "
         "to twice as dark as the ground (it has no colour to compare): a darker pixel is a shadow only when its "
@@ -179,13 +178,8 @@ class MOG2Detector:
         d = self.params.downscale
         f = cv2.resize(f, (f.shape[1] // d, f.shape[0] // d), interpolation=cv2.INTER_AREA) if d > 1 else f
         if self.gain is None:  # the first frame decides (dark_stretch, dark_denoise)
-            g = level_gain(f) if self.params.dark_stretch > 0 else 1.0
-            self.gain = g if g >= self.params.dark_stretch else 1.0
-            limit = self.params.dark_denoise
-            self.denoise = self.gain != 1.0 and limit > 0 and noise_sigma(f) * self.gain > limit
-        if self.gain == 1.0:
-            return f
-        return cv2.convertScaleAbs(cv2.GaussianBlur(f, (3, 3), 0) if self.denoise else f, alpha=self.gain)
+            self.gain, self.denoise = dark_levels(f, self.params.dark_stretch, self.params.dark_denoise)
+        return apply_levels(f, self.gain, self.denoise)
 
     def prime(self, frames) -> None:
         """Start the background from the first ``frames`` of the stream, their moving pixels replaced by the

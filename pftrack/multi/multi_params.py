@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from ..cues.foreground import GREY_SHADOW_THRESHOLD
+from ..cues.foreground import DARK_NOISE_LIMIT, GREY_SHADOW_THRESHOLD
 from ..params import Params, param
 
 __all__ = ["MultiPFParams"]
@@ -31,7 +31,7 @@ class MultiPFParams(Params):
         "never. 2, chosen under a rule stated before its runs (docs/rules/mog2_dark_stretch_rule.txt, docs/mot.md): "
         "the PETS tune half from a dark camera (gain 0.2, noise 5), MOTA 0.342 against 0.057, IDF1 0.412 against "
         "0.323; the ordinary tune half identical run for run."))
-    dark_denoise: float = param(8.66, ge=0, le=255, doc=(
+    dark_denoise: float = param(DARK_NOISE_LIMIT, ge=0, le=255, doc=(
         "mog2 under dark_stretch: its frames are smoothed (3 x 3 Gaussian) before the stretch when the first frame's "
         "noise times the gain exceeds this many grey levels (pftrack.multi.detectors.MOG2DetectorParams."
         "dark_denoise); 0: never. 8.66 = sqrt(75), the spread of MOG2's ceiling on a pixel's variance, chosen under "
