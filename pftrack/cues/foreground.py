@@ -27,6 +27,7 @@ import cv2
 import numpy as np
 
 from .intensity import is_gray
+from .noise import noise_sigma
 from .quantize import level_gain
 
 __all__ = ["BOOTSTRAP_DIFF", "GREY_SHADOW_THRESHOLD", "OPENCV_SHADOW_THRESHOLD", "Foreground", "still_frames"]
@@ -57,21 +58,6 @@ def still_frames(frames, diff: float = BOOTSTRAP_DIFF) -> np.ndarray:
 MOG2_VAR_MAX = 75.0
 #: the default noise limit of ``dark_denoise`` (pftrack mot's detector, the tripwire): sqrt(MOG2_VAR_MAX), 8.66 levels
 DARK_NOISE_LIMIT = round(float(np.sqrt(MOG2_VAR_MAX)), 2)
-
-_LAPLACE_PAIR = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], dtype=np.float32)
-
-
-def noise_sigma(frame: np.ndarray) -> float:
-    """Standard deviation of a frame's additive noise in grey levels, by Immerkaer's fast estimate ("Fast noise
-    variance estimation", CVIU 64(2), 1996): the mean absolute response of the difference of two Laplacians, which
-    cancels on smooth image structure, times sqrt(pi / 2) / 6. Edges and texture raise it a little (a clean PETS
-    frame reads 4-5 levels at half size); on a flat frame with Gaussian noise it is the noise's deviation."""
-    f = np.asarray(frame)
-    y = cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) if f.ndim == 3 else f
-    if y.shape[0] < 3 or y.shape[1] < 3:
-        return 0.0
-    r = cv2.filter2D(y.astype(np.float32), -1, _LAPLACE_PAIR)[1:-1, 1:-1]
-    return float(np.sqrt(np.pi / 2.0) * np.abs(r).mean() / 6.0)
 
 
 def dark_levels(frame: np.ndarray, stretch: float, denoise: float) -> tuple[float, bool]:

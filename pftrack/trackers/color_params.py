@@ -58,6 +58,13 @@ class ColorModelParams(Params):
     dark_percentile: float = param(99.5, ge=50, le=100, doc=(
         "dark_stretch: the percentile of the initialisation frame's levels (every channel, every fourth pixel) "
         "that the gain brings to 255; the brighter rest (lamps, headlights) falls into the top bins."))
+    denoise: float = param(0.0, ge=0, le=255, doc=(
+        "A noisy camera: when the noise that differs between the first two frames (pftrack.cues.noise."
+        "temporal_noise, grey levels) exceeds this, the tracker starts again on the smoothed first frame and every "
+        "frame is smoothed by a denoise_kernel Gaussian before its features are read (pftrack.trackers.denoise). "
+        "Clean cameras read 0-2.6 levels, white noise of 12 levels after JPEG 7.9-9.8. 0: never (the paper)."))
+    denoise_kernel: int = param(5, ge=3, le=15, doc=(
+        "denoise: the side of the Gaussian kernel (odd; OpenCV's sigma for that size, 1.1 at 5)."))
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
         "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
         "on."))
@@ -456,5 +463,7 @@ class ColorModelParams(Params):
         if self.bins and len(self.bins) != 3:
             raise ParameterError(f"parameter 'bins' must have 3 values (one per channel), got {self.bins}")
         check_gray_bins(self.gray_bins)
+        if self.denoise_kernel % 2 == 0:
+            raise ParameterError(f"parameter 'denoise_kernel' must be odd, got {self.denoise_kernel}")
         if self.histogram_parts > 1 and self.grey_relit_shift > 0:
             raise ParameterError("grey_relit_shift shifts the bins of one-part histograms: use histogram_parts=1")

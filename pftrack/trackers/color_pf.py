@@ -62,6 +62,7 @@ from .color_likelihood import LikelihoodMixin
 from .color_params import ColorModelParams
 from .color_pf_params import ColorPFParams
 from .color_search import SearchMixin
+from .denoise import NoiseGateMixin
 from .distractors import DistractorMemory, score_gradual
 from .input_switch import InputSwitchMixin
 from .persistence import PersistenceMixin
@@ -77,8 +78,8 @@ Detector = Callable[[np.ndarray], Sequence]
 _ELL_COLS = np.array([X, Y, HX, HY])
 
 
-class ColorParticleFilter(InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixin, PersistenceMixin,
-                          SceneTestMixin, ColorHooks, Tracker):
+class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixin,
+                          PersistenceMixin, SceneTestMixin, ColorHooks, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
     Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
