@@ -9,6 +9,8 @@ Two estimates, both from the difference of two Laplacians that cancels on smooth
   normal median 0.6745 times 6 sqrt(2). Texture that stays put cancels in the difference and moving parts are a
   minority the median ignores, so it reads the noise that changes from frame to frame: 0-2.6 levels on the
   project's clean real and synthetic sequences, 7.9-9.8 on copies with white noise of 12 levels after JPEG.
+
+Both read the frame's grey conversion: independent noise of deviation s in each of B, G and R reads 0.67 s.
 """
 
 from __future__ import annotations

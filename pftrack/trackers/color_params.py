@@ -62,7 +62,10 @@ class ColorModelParams(Params):
         "A noisy camera: when the noise that differs between the first two frames (pftrack.cues.noise."
         "temporal_noise, grey levels) exceeds this, the tracker starts again on the smoothed first frame and every "
         "frame is smoothed by a denoise_kernel Gaussian before its features are read (pftrack.trackers.denoise). "
-        "Clean cameras read 0-2.6 levels, white noise of 12 levels after JPEG 7.9-9.8. 0: never (the paper)."))
+        "Clean cameras read 0-2.6 levels, white noise of 12 levels after JPEG 7.9-9.8. 0: never (the paper). "
+        "An option: at 5 and at 7.5 it failed its rules on noisy tune copies (fusion-pf +0.004 and +0.001 mean AUC, "
+        "color-pf +0.011 and +0.005, +0.015 asked): it helps the real sequences at 14-16 levels of noise and "
+        "hurts the small PETS walkers (docs/robustness.md)."))
     denoise_kernel: int = param(5, ge=3, le=15, doc=(
         "denoise: the side of the Gaussian kernel (odd; OpenCV's sigma for that size, 1.1 at 5)."))
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
