@@ -52,6 +52,11 @@ fixed glows with a saturated core, 2 % of the frame's diagonal in radius, warm o
 target's path (drawn from the name). With ``--ramp N`` (``NAME-dimG-noiseSD-rampN``) the gain rises linearly from G on
 the first frame to 1 at frame N + 1: a camera whose exposure settles, or lights coming on.
 
+With ``--haze H`` one copy is written instead, ``NAME-hazeH-noiseSD``: every colour frame seen through a uniform
+haze, ``(1 - H)`` times the frame plus ``H`` times a bright, slightly bluish airlight (each channel in [215, 245],
+drawn from the name), plus the noise of ``--noise``; fog, smoke, a dirty or misted lens, glare on a window. The
+levels crowd into the top part of the range with their contrast cut to ``1 - H``. JPEG quality 92.
+
 With ``--zoom Z`` one copy is written instead, ``NAME-zoomZ``: a camera that zooms steadily about the first frame's
 target centre, so that the target's size changes Z times over the sequence (Z > 1: zooming in, from the full view
 to a Z times magnified one; Z < 1: zooming out, from a 1/Z times magnified view to the full one). Frame i shows the
@@ -301,6 +306,27 @@ def write_dim(seq, dest: Path, gain: float, noise: float, lamps: int = 0, ramp: 
     copy_truth(seq, dest)
 
 
+def airlight(name: str) -> np.ndarray:
+    """The haze's colour (B, G, R levels) for the sequence ``name``: a bright grey with a slight blue cast, each
+    channel drawn from the name in [215, 245] and ordered B >= G >= R."""
+    rng = np.random.default_rng(zlib.crc32(f"{name}#haze".encode()))
+    return np.sort(rng.uniform(215.0, 245.0, 3))[::-1].astype(np.float32)
+
+
+def write_hazy(seq, dest: Path, haze: float, noise: float) -> None:
+    """``seq``'s colour frames seen through a uniform haze: ``(1 - haze)`` times the frame plus ``haze`` times the
+    :func:`airlight`, plus Gaussian noise of ``noise`` levels (drawn from the name), as an OTB folder."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(zlib.crc32(f"{seq.name}#hazenoise".encode()))
+    veil = haze * airlight(seq.name)
+    for i, path in enumerate(seq.frames):
+        img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * (1.0 - haze) + veil
+        img += rng.normal(0.0, noise, img.shape).astype(np.float32)
+        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), np.clip(np.rint(img), 0, 255).astype(np.uint8),
+                    [cv2.IMWRITE_JPEG_QUALITY, 92])
+    copy_truth(seq, dest)
+
+
 SWITCH_KINDS = ("after", "before", "block", "random")
 
 
@@ -356,8 +382,10 @@ def main() -> None:
                     "(NAME-blurPX), by lines of PX/2 to PX pixels")
     ap.add_argument("--dim", type=float, metavar="G", help="only a dark, noisy copy (NAME-dimG-noiseSD): the frames "
                     "times G plus Gaussian noise (--noise)")
-    ap.add_argument("--noise", type=float, default=3.0, metavar="SD", help="the --dim copy's noise, in grey levels "
-                    "(default 3)")
+    ap.add_argument("--haze", type=float, metavar="H", help="only a hazy copy (NAME-hazeH-noiseSD): the frames "
+                    "times 1 - H plus H times a bright, bluish airlight, plus Gaussian noise (--noise)")
+    ap.add_argument("--noise", type=float, default=3.0, metavar="SD", help="the --dim or --haze copy's noise, in "
+                    "grey levels (default 3)")
     ap.add_argument("--lamps", type=int, default=0, metavar="K", help="the --dim copy lit by K street lamps "
                     "(NAME-dimG-noiseSD-lampsK; default 0)")
     ap.add_argument("--ramp", type=int, default=0, metavar="N", help="the --dim copy's gain rises from G to 1 over "
@@ -371,6 +399,10 @@ def main() -> None:
         ap.error(f"--blur must be a whole number of pixels of at least 2, got {args.blur}")
     if args.dim is not None and not 0 < args.dim <= 1:
         ap.error(f"--dim must be a gain in (0, 1], got {args.dim}")
+    if args.haze is not None and not 0 < args.haze < 1:
+        ap.error(f"--haze must be a fraction in (0, 1), got {args.haze}")
+    if args.haze is not None and args.dim is not None:
+        ap.error("--haze and --dim write different copies: give one")
     if not args.noise >= 0:
         ap.error(f"--noise must be at least 0, got {args.noise}")
     if args.lamps < 0 or (args.lamps and args.dim is None):
@@ -412,6 +444,11 @@ def main() -> None:
             name = (f"{seq.name}-dim{args.dim:g}-noise{args.noise:g}" + (f"-lamps{args.lamps}" if args.lamps else "")
                     + (f"-ramp{args.ramp}" if args.ramp else ""))
             write_dim(seq, out / name, args.dim, args.noise, args.lamps, args.ramp)
+            print(f"{seq.name}: {n} frames -> {out}/{name}")
+            continue
+        if args.haze is not None:
+            name = f"{seq.name}-haze{args.haze:g}-noise{args.noise:g}"
+            write_hazy(seq, out / name, args.haze, args.noise)
             print(f"{seq.name}: {n} frames -> {out}/{name}")
             continue
         if args.stride is not None:

@@ -1,6 +1,7 @@
 """scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds),
 resized copies (--scale), copies at a lower frame rate (--stride), through a shaking camera (--shake), with
-motion blur (--blur), from a dark, noisy camera (--dim, --noise) and through a steady zoom (--zoom)."""
+motion blur (--blur), from a dark, noisy camera (--dim, --noise), through haze (--haze) and through a steady zoom
+(--zoom)."""
 
 from __future__ import annotations
 
@@ -180,6 +181,27 @@ def test_dim_darkens_every_frame_and_adds_the_noise_asked(tmp_path):
         bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), *bad_args, "--out", str(tmp_path / "z")],
                              capture_output=True, text=True)
         assert bad.returncode == 2 and ("dim" in bad.stderr or "noise" in bad.stderr)
+
+
+def test_haze_veils_every_frame_with_a_bright_bluish_airlight(tmp_path):
+    seq = _otb(tmp_path, n=3)
+    base = np.zeros((48, 64, 3), np.uint8)
+    base[:, 32:] = 200
+    for p in read_sequence(seq).frames:
+        cv2.imwrite(str(p), base)
+    _run(str(seq), "--haze", "0.6", "--noise", "0", "--out", str(tmp_path / "h"))
+    copy = read_sequence(tmp_path / "h" / "tiny-haze0.6-noise0")
+    np.testing.assert_array_equal(copy.groundtruth, read_sequence(seq).groundtruth)
+    for p in copy.frames:
+        img = cv2.imread(str(p), cv2.IMREAD_COLOR).astype(float)
+        dark, bright = img[:, 4:28].mean(axis=(0, 1)), img[:, 36:60].mean(axis=(0, 1))
+        assert np.all((dark > 0.6 * 215 - 2) & (dark < 0.6 * 245 + 2))  # black becomes the veil alone
+        assert dark[0] >= dark[1] - 1 >= dark[2] - 2  # bluish: B >= G >= R
+        assert np.allclose(bright - dark, 0.4 * 200, atol=3)  # the contrast cut to 1 - H
+    for bad_args in (["--haze", "0"], ["--haze", "1"], ["--haze", "0.5", "--dim", "0.5"]):
+        bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), *bad_args, "--out", str(tmp_path / "z")],
+                             capture_output=True, text=True)
+        assert bad.returncode == 2 and "haze" in bad.stderr
 
 
 def test_lamps_light_a_dark_copy_away_from_the_target(tmp_path):
