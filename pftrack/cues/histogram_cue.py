@@ -25,7 +25,7 @@ from ..errors import ParameterError
 from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, reachable_roi
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
-from .quantize import level_gain, make_lut, quantize, quantize_region, shift_form, stretched_lut
+from .quantize import level_gain, level_range, make_lut, quantize, quantize_region, shift_form, stretched_lut
 from .still_gain import reference_lattice, still_gain
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
@@ -128,13 +128,17 @@ class ColorCue:
         the gain; at most 8); 0: never (the bins of Nummiaro et al., over 0-255).
     dark_percentile : the percentile of the frame's levels (every channel) that ``dark_stretch`` brings to 255; the
         brighter rest (lamps, headlights) falls into the top bins.
+    haze_stretch : RGB features of a hazy camera (fog, a misted lens): when the initialisation frame is not dark
+        enough for ``dark_stretch`` but its levels between the ``100 - dark_percentile`` and ``dark_percentile``
+        percentiles span at most 255 / ``haze_stretch``, the bins are spread over that span
+        (:func:`~pftrack.cues.quantize.level_range`; ``level_offset`` holds its bottom); 0: never.
     """
 
     def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
                  kernel: KernelName = "nummiaro", max_pixels: int = 0, *,
                  gray_bins: tuple[int, int] = DEFAULT_GRAY_BINS, gradient_threshold: float = 40.0,
                  fallback: ColorSpace = "rgb", normalize: str = "none", parts: int = 1, dark_stretch: float = 0.0,
-                 dark_percentile: float = 99.5):
+                 dark_percentile: float = 99.5, haze_stretch: float = 0.0):
         if parts not in (1, 2):
             raise ValueError(f"parts must be 1 or 2, got {parts!r}")
         self.parts = int(parts)
@@ -147,7 +151,11 @@ class ColorCue:
         if not 50 <= dark_percentile <= 100:
             raise ValueError(f"dark_percentile must be in [50, 100], got {dark_percentile!r}")
         self.dark_percentile = float(dark_percentile)
+        if not haze_stretch >= 0:
+            raise ValueError(f"haze_stretch must be >= 0, got {haze_stretch!r}")
+        self.haze_stretch = float(haze_stretch)
         self.level_gain = 1.0
+        self.level_offset = 0.0
         self._ref_levels: np.ndarray | None = None
         self._still_ref: np.ndarray | None = None  # "still": the initialisation frame's lattice
         self._still_gain = np.ones(3)  # "still": the last gain measured on a still view
@@ -179,7 +187,7 @@ class ColorCue:
         """
         if self.requested == "auto":
             self._set_space("gray" if is_gray(frame) else self.fallback)
-        if self.color_space == "rgb" and (self.dark_stretch > 0 or self.level_gain != 1.0):
+        if self.color_space == "rgb" and (self.dark_stretch > 0 or self.haze_stretch > 0 or self.level_gain != 1.0):
             self._fit_levels(frame if levels else None)
         if self.color_space == "rgb" and self.normalize in ("gain", "adaptive") and frame.ndim == 3:
             self._ref_levels = channel_levels(frame)
@@ -216,14 +224,19 @@ class ColorCue:
                 self.lut = self.mapped_lut(channel_equalization_maps(frame))
 
     def _fit_levels(self, frame: np.ndarray | None) -> None:
-        """``dark_stretch``: the RGB bins over the levels ``frame`` uses when it is dark enough, else (or with no
-        frame) over 0-255."""
+        """``dark_stretch`` and ``haze_stretch``: the RGB bins over the levels ``frame`` uses when it is dark or hazy
+        enough, else (or with no frame) over 0-255."""
         lut = make_lut("rgb", self.bins)
-        use = frame is not None and self.dark_stretch > 0 and frame.ndim == 3
-        g = level_gain(frame, percentile=self.dark_percentile) if use else 1.0
+        colour = frame is not None and frame.ndim == 3
+        g = level_gain(frame, percentile=self.dark_percentile) if colour and self.dark_stretch > 0 else 1.0
         self.level_gain = g if g >= self.dark_stretch else 1.0
+        self.level_offset = 0.0
+        if self.level_gain == 1.0 and colour and self.haze_stretch > 0:
+            g, lo = level_range(frame, percentile=self.dark_percentile)
+            if g >= self.haze_stretch:
+                self.level_gain, self.level_offset = g, lo
         if self.level_gain != 1.0:
-            lut = stretched_lut(lut, self.level_gain)
+            lut = stretched_lut(lut, self.level_gain, self.level_offset)
         self.lut = self._base_lut = lut
         self._shifts = shift_form(lut)
 

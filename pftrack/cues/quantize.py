@@ -127,8 +127,21 @@ def level_gain(frame: np.ndarray, *, percentile: float = 99.5, max_gain: float =
     return float(min(max_gain, max(1.0, 255.0 / max(top, 1.0))))
 
 
-def stretched_lut(lut: np.ndarray, gain: float) -> np.ndarray:
-    """The table ``lut`` (``(3, 256)``) applied to levels times ``gain`` (rounded, at most 255): the same bins spread
-    over the levels a dark frame uses, ``stretched[c][v] = lut[c][min(255, round(gain * v))]``."""
-    v = np.minimum(255, np.rint(np.arange(256) * float(gain))).astype(np.intp)
+def level_range(frame: np.ndarray, *, percentile: float = 99.5, max_gain: float = 8.0,
+                stride: int = 4) -> tuple[float, float]:
+    """``(gain, offset)`` that bring a frame's dark end (its ``100 - percentile`` percentile over every channel of a
+    ``stride`` lattice) to level 0 and its bright end (its ``percentile``) to 255: ``v -> gain * (v - offset)``, the
+    gain at least 1 and at most ``max_gain``. How much of the 0-255 range a hazy camera leaves unused."""
+    sample = np.asarray(frame)[::stride, ::stride]
+    if sample.size == 0:
+        return 1.0, 0.0
+    lo, hi = (float(v) for v in np.percentile(sample, [100.0 - percentile, percentile]))
+    return float(min(max_gain, max(1.0, 255.0 / max(hi - lo, 1.0)))), lo
+
+
+def stretched_lut(lut: np.ndarray, gain: float, offset: float = 0.0) -> np.ndarray:
+    """The table ``lut`` (``(3, 256)``) applied to levels minus ``offset`` times ``gain`` (rounded, within 0-255): the
+    same bins spread over the levels a dark or hazy frame uses,
+    ``stretched[c][v] = lut[c][clip(round(gain * (v - offset)), 0, 255)]``."""
+    v = np.clip(np.rint((np.arange(256) - float(offset)) * float(gain)), 0, 255).astype(np.intp)
     return np.ascontiguousarray(np.asarray(lut)[:, v])

@@ -68,6 +68,13 @@ class ColorModelParams(Params):
         "hurts the small PETS walkers (docs/robustness.md)."))
     denoise_kernel: int = param(5, ge=3, le=15, doc=(
         "denoise: the side of the Gaussian kernel (odd; OpenCV's sigma for that size, 1.1 at 5)."))
+    haze_stretch: float = param(0.0, ge=0, le=8, doc=(
+        "RGB features of a hazy camera (fog, smoke, a misted lens): when the initialisation frame is not dark "
+        "enough for dark_stretch but its levels between the 0.5th and 99.5th percentiles (dark_percentile) span at "
+        "most 255 / haze_stretch, the 8x8x8 bins are spread over that span (pftrack.cues.quantize.level_range), so "
+        "that a veiled scene's colours do not crowd into the top three or four bins of each channel. 0: never. "
+        "Clean real frames span a gain of 1.0-1.21 (windows cut into one part of a scene up to 1.65); a uniform haze "
+        "of half the light 1.96-2.45."))
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
         "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
         "on."))
