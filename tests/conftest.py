@@ -33,6 +33,23 @@ def shared_sequence(name: str) -> Path:
     return path
 
 
+def bundled_clip() -> tuple[list[np.ndarray], np.ndarray]:
+    """The frames of the demo's bundled real clip (OTB 'Crossing', a tune-split sequence) and its ground truth."""
+    import cv2
+
+    from pftrack.cli.track import demo_clip
+
+    video, gt_path = demo_clip()
+    cap = cv2.VideoCapture(str(video))
+    frames = []
+    while True:
+        ok, f = cap.read()
+        if not ok:
+            break
+        frames.append(f)
+    return frames, np.loadtxt(gt_path)
+
+
 @functools.lru_cache(maxsize=32)
 def _render(spec):
     scene = Scene(spec)

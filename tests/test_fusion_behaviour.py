@@ -3,7 +3,6 @@ scenes, the bundled clip, automatic initialisation and relit colour."""
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import pytest
 
@@ -11,6 +10,7 @@ import pftrack
 from pftrack.geometry import center_error
 from pftrack.synth import Scene, camouflage_scene, leave_scene, vanish_scene
 
+from .conftest import bundled_clip
 from .test_structure_fusion import _texture
 
 
@@ -134,18 +134,9 @@ def test_fused_lost_flag_as_a_detector_over_varied_scenes(kind, seeds, min_recal
 def test_bundled_clip_has_no_false_lost_frames():
     """The demo's real clip (OTB 'Crossing', a tune-split sequence): a car passing behind the walker drops the
     structural score for a few frames; the fused test must not call the visible target lost."""
-    from pftrack.cli.track import demo_clip
     from pftrack.geometry import iou
 
-    video, gt_path = demo_clip()
-    cap = cv2.VideoCapture(str(video))
-    frames = []
-    while True:
-        ok, f = cap.read()
-        if not ok:
-            break
-        frames.append(f)
-    gt = np.loadtxt(gt_path)
+    frames, gt = bundled_clip()
     t = pftrack.create_tracker("fusion-pf", seed=0)
     t.init(frames[0], tuple(gt[0]))
     states = [t.update(f) for f in frames[1:]]
