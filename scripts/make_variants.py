@@ -57,6 +57,10 @@ haze, ``(1 - H)`` times the frame plus ``H`` times a bright, slightly bluish air
 drawn from the name), plus the noise of ``--noise``; fog, smoke, a dirty or misted lens, glare on a window. The
 levels crowd into the top part of the range with their contrast cut to ``1 - H``. JPEG quality 92.
 
+With ``--cast S`` one copy is written instead, ``NAME-castS``: from frame floor(n/3)+1 (frame numbers from 1) to the
+end, the blue and red channels times ``1 - S`` and ``1 + S`` (a warm cast) or the reverse (a cool one; drawn from the
+name), green as it is: a camera's automatic white balance that jumps, or daylight giving way to lamps. JPEG 92.
+
 With ``--zoom Z`` one copy is written instead, ``NAME-zoomZ``: a camera that zooms steadily about the first frame's
 target centre, so that the target's size changes Z times over the sequence (Z > 1: zooming in, from the full view
 to a Z times magnified one; Z < 1: zooming out, from a 1/Z times magnified view to the full one). Frame i shows the
@@ -327,6 +331,26 @@ def write_hazy(seq, dest: Path, haze: float, noise: float) -> None:
     copy_truth(seq, dest)
 
 
+def cast_gains(name: str, strength: float) -> np.ndarray:
+    """The ``--cast`` copy's channel gains (B, G, R) for the sequence ``name``: a warm cast (B ``1 - S``, R ``1 + S``) or
+    a cool one (the reverse), drawn from the name; green unchanged."""
+    warm = np.random.default_rng(zlib.crc32(f"{name}#cast".encode())).random() < 0.5
+    s = strength if warm else -strength
+    return np.array([1.0 - s, 1.0, 1.0 + s], np.float32)
+
+
+def write_cast(seq, dest: Path, strength: float) -> None:
+    """``seq``'s colour frames with the :func:`cast_gains` applied from frame floor(n/3) (from 0) on, as an OTB
+    folder: a white balance that jumps a third of the way through."""
+    (dest / "img").mkdir(parents=True, exist_ok=True)
+    gains, start = cast_gains(seq.name, strength), len(seq.frames) // 3
+    for i, path in enumerate(seq.frames):
+        img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * (gains if i >= start else 1.0)
+        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), np.clip(np.rint(img), 0, 255).astype(np.uint8),
+                    [cv2.IMWRITE_JPEG_QUALITY, 92])
+    copy_truth(seq, dest)
+
+
 SWITCH_KINDS = ("after", "before", "block", "random")
 
 
@@ -390,6 +414,8 @@ def main() -> None:
                     "(NAME-dimG-noiseSD-lampsK; default 0)")
     ap.add_argument("--ramp", type=int, default=0, metavar="N", help="the --dim copy's gain rises from G to 1 over "
                     "the first N frames (NAME-dimG-noiseSD-rampN; default 0: no ramp)")
+    ap.add_argument("--cast", type=float, metavar="S", help="only a copy whose white balance jumps a third of the "
+                    "way through (NAME-castS): blue and red times 1 -/+ S, warm or cool")
     ap.add_argument("--zoom", type=float, metavar="Z", help="only a copy through a steady zoom (NAME-zoomZ) that "
                     "changes the target's size Z times over the sequence (Z > 1 in, Z < 1 out)")
     args = ap.parse_args()
@@ -401,6 +427,8 @@ def main() -> None:
         ap.error(f"--dim must be a gain in (0, 1], got {args.dim}")
     if args.haze is not None and not 0 < args.haze < 1:
         ap.error(f"--haze must be a fraction in (0, 1), got {args.haze}")
+    if args.cast is not None and not 0 < args.cast <= 0.6:
+        ap.error(f"--cast must be a strength in (0, 0.6], got {args.cast}")
     if args.haze is not None and args.dim is not None:
         ap.error("--haze and --dim write different copies: give one")
     if not args.noise >= 0:
@@ -450,6 +478,10 @@ def main() -> None:
             name = f"{seq.name}-haze{args.haze:g}-noise{args.noise:g}"
             write_hazy(seq, out / name, args.haze, args.noise)
             print(f"{seq.name}: {n} frames -> {out}/{name}")
+            continue
+        if args.cast is not None:
+            write_cast(seq, out / f"{seq.name}-cast{args.cast:g}", args.cast)
+            print(f"{seq.name}: {n} frames -> {out}/{seq.name}-cast{args.cast:g}")
             continue
         if args.stride is not None:
             kept = write_strided(seq, out / f"{seq.name}-s{args.stride}", args.stride)

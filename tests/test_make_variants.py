@@ -1,7 +1,7 @@
 """scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds),
 resized copies (--scale), copies at a lower frame rate (--stride), through a shaking camera (--shake), with
-motion blur (--blur), from a dark, noisy camera (--dim, --noise), through haze (--haze) and through a steady zoom
-(--zoom)."""
+motion blur (--blur), from a dark, noisy camera (--dim, --noise), through haze (--haze), with a white balance that jumps (--cast) and
+through a steady zoom (--zoom)."""
 
 from __future__ import annotations
 
@@ -202,6 +202,24 @@ def test_haze_veils_every_frame_with_a_bright_bluish_airlight(tmp_path):
         bad = subprocess.run([sys.executable, str(SCRIPT), str(seq), *bad_args, "--out", str(tmp_path / "z")],
                              capture_output=True, text=True)
         assert bad.returncode == 2 and "haze" in bad.stderr
+
+
+def test_cast_jumps_the_white_balance_a_third_of_the_way_through(tmp_path):
+    seq = _otb(tmp_path, n=6)
+    _run(str(seq), "--cast", "0.3", "--out", str(tmp_path / "c"))
+    copy = read_sequence(tmp_path / "c" / "tiny-cast0.3")
+    np.testing.assert_array_equal(copy.groundtruth, read_sequence(seq).groundtruth)
+    gains = _script().cast_gains("tiny", 0.3)
+    assert gains[1] == 1.0 and sorted(np.round(gains[[0, 2]], 6)) == [0.7, 1.3]
+    for i, (orig, new) in enumerate(zip(read_sequence(seq).frames, copy.frames)):
+        a = cv2.imread(str(orig), cv2.IMREAD_COLOR).astype(float).mean(axis=(0, 1))
+        b = cv2.imread(str(new), cv2.IMREAD_COLOR).astype(float).mean(axis=(0, 1))
+        expect = a * gains if i >= 2 else a  # frames 3-6 (from 1) of six: floor(6/3) + 1 on
+        assert np.allclose(b, expect, atol=2.0), (i, b, expect)
+    for bad in ("0", "0.7", "-0.2"):
+        res = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--cast", bad, "--out", str(tmp_path / "z")],
+                             capture_output=True, text=True)
+        assert res.returncode == 2 and "cast" in res.stderr
 
 
 def test_lamps_light_a_dark_copy_away_from_the_target(tmp_path):
