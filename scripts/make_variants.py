@@ -77,6 +77,7 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
+import sys
 import zlib
 from pathlib import Path
 
@@ -88,6 +89,10 @@ from pftrack.io.codec import h264_round_trip
 from pftrack.io.datasets import read_sequence, write_groundtruth
 from pftrack.io.sequence import read_meta
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from variant_photometric import (airlight, cast_gains, copy_truth, lamp_field, ramp_gain, write_cast,  # noqa: E402,F401
+                                 write_dim, write_hazy, write_jpeg)
+
 
 def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
     rng = np.random.default_rng(rng_seed)
@@ -98,16 +103,6 @@ def light_field(t: float, h: int, w: int, rng_seed: int) -> np.ndarray:
     r2 = ((xx - cx) ** 2 + (yy - cy) ** 2) / (0.35 * max(h, w)) ** 2
     gain = 1.0 - 0.6 * np.sin(np.pi * t)  # 1 -> 0.4 -> 1
     return (gain * (0.55 + 0.9 * np.exp(-r2))).astype(np.float32)
-
-
-def copy_truth(seq, dest: Path, scale: float = 1.0, stride: int = 1) -> None:
-    """The ground truth (times ``scale``, every ``stride``-th row from the first) and attribution of ``seq`` into
-    the OTB folder ``dest``."""
-    gt = seq.groundtruth[::stride]
-    write_groundtruth(dest / "groundtruth_rect.txt", gt if scale == 1.0 else gt * scale)
-    for extra in ("ATTRIBUTION.md", "provenance.json"):
-        if (seq.path / extra).is_file():
-            shutil.copy(seq.path / extra, dest / extra)
 
 
 def write_h264(seq, dest: Path, crf: int) -> None:
@@ -125,7 +120,7 @@ def write_scaled(seq, dest: Path, factor: float) -> None:
     interp = cv2.INTER_AREA if factor < 1 else cv2.INTER_LINEAR
     for i, path in enumerate(seq.frames):
         img = cv2.resize(cv2.imread(str(path), cv2.IMREAD_COLOR), None, fx=factor, fy=factor, interpolation=interp)
-        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+        write_jpeg(dest, i, img)
     copy_truth(seq, dest, factor)
 
 
@@ -167,8 +162,7 @@ def write_shaken(seq, dest: Path, px: int) -> None:
         img = cv2.imread(str(path), cv2.IMREAD_COLOR)
         h, w = img.shape[:2]
         x0, y0 = px + off[i, 0], px + off[i, 1]
-        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img[y0:h - 2 * px + y0, x0:w - 2 * px + x0],
-                    [cv2.IMWRITE_JPEG_QUALITY, 92])
+        write_jpeg(dest, i, img[y0:h - 2 * px + y0, x0:w - 2 * px + x0])
     gt = np.array(seq.groundtruth, dtype=np.float64)
     m = min(len(gt), len(off))
     gt[:m, 0] -= px + off[:m, 0]
@@ -210,7 +204,7 @@ def write_zoomed(seq, dest: Path, zoom: float) -> None:
         a = np.array([[m, 0.0, (0.5 - x0) * m - 0.5], [0.0, m, (0.5 - y0) * m - 0.5]])
         img = cv2.warpAffine(cv2.imread(str(path), cv2.IMREAD_COLOR), a, (w, h), flags=cv2.INTER_LINEAR,
                              borderMode=cv2.BORDER_REPLICATE)
-        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+        write_jpeg(dest, i, img)
     k = min(len(gt), len(views))
     m, x0, y0 = views[:k, 0], views[:k, 1], views[:k, 2]
     gt[:k, 0] = (gt[:k, 0] - x0) * m
@@ -255,100 +249,9 @@ def write_blurred(seq, dest: Path, px: int) -> int:
         img = cv2.imread(str(path), cv2.IMREAD_COLOR)
         if kernels[i] is not None:
             img = cv2.filter2D(img, -1, kernels[i], borderType=cv2.BORDER_REFLECT)
-        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+        write_jpeg(dest, i, img)
     copy_truth(seq, dest)
     return sum(k is not None for k in kernels)
-
-
-def lamp_field(h: int, w: int, k: int, name: str, boxes: np.ndarray | None = None) -> np.ndarray:
-    """``(h, w, 3)`` light added by ``k`` lamps of a ``--lamps`` copy (street lamps at night): each a glow of level
-    up to 2 x 255 (a saturated core) with a radius of 2 % of the frame's diagonal, warm or white, at a place drawn from
-    the sequence name where it lies over the target's box (``boxes``, x y w h per frame) on at most 10 % of the
-    frames."""
-    rng = np.random.default_rng(zlib.crc32(f"{name}#lamps".encode()))
-    r = 0.02 * float(np.hypot(h, w))
-    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
-    out = np.zeros((h, w, 3), np.float32)
-    gt = None if boxes is None else np.asarray(boxes, dtype=np.float64)
-    for _ in range(k):
-        for _attempt in range(200):
-            cx, cy = rng.uniform(0, w), rng.uniform(0, h)
-            if gt is None or not len(gt):
-                break
-            near = ((gt[:, 0] - 2 * r < cx) & (cx < gt[:, 0] + gt[:, 2] + 2 * r) & (gt[:, 1] - 2 * r < cy)
-                    & (cy < gt[:, 1] + gt[:, 3] + 2 * r))
-            if near.mean() <= 0.1:
-                break
-        colour = np.array([0.55, 0.8, 1.0] if rng.random() < 0.5 else [1.0, 1.0, 1.0], np.float32)
-        glow = 2.0 * 255.0 * np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (r * r))
-        out += glow[..., None] * colour
-    return out
-
-
-def ramp_gain(i: int, gain: float, ramp: int) -> float:
-    """The gain of frame ``i`` (from 0) of a ``--dim G --ramp N`` copy: ``G`` on the first frame, rising linearly to 1
-    at frame ``N`` and staying there; ``G`` throughout without a ramp (``N = 0``)."""
-    return gain if ramp <= 0 else gain + (1.0 - gain) * min(1.0, i / ramp)
-
-
-def write_dim(seq, dest: Path, gain: float, noise: float, lamps: int = 0, ramp: int = 0) -> None:
-    """``seq``'s colour frames times ``gain`` plus Gaussian noise of ``noise`` levels (a dark, noisy camera), and the
-    light of ``lamps`` street lamps (:func:`lamp_field`), as an OTB folder; with ``ramp`` the gain rises to 1 over
-    that many frames (:func:`ramp_gain`)."""
-    (dest / "img").mkdir(parents=True, exist_ok=True)
-    rng = np.random.default_rng(zlib.crc32(f"{seq.name}#dim".encode()))
-    light = None
-    for i, path in enumerate(seq.frames):
-        img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * ramp_gain(i, gain, ramp)
-        if lamps:
-            if light is None:
-                light = lamp_field(img.shape[0], img.shape[1], lamps, seq.name, seq.groundtruth)
-            img += light
-        img += rng.normal(0.0, noise, img.shape).astype(np.float32)
-        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), np.clip(np.rint(img), 0, 255).astype(np.uint8),
-                    [cv2.IMWRITE_JPEG_QUALITY, 92])
-    copy_truth(seq, dest)
-
-
-def airlight(name: str) -> np.ndarray:
-    """The haze's colour (B, G, R levels) for the sequence ``name``: a bright grey with a slight blue cast, each
-    channel drawn from the name in [215, 245] and ordered B >= G >= R."""
-    rng = np.random.default_rng(zlib.crc32(f"{name}#haze".encode()))
-    return np.sort(rng.uniform(215.0, 245.0, 3))[::-1].astype(np.float32)
-
-
-def write_hazy(seq, dest: Path, haze: float, noise: float) -> None:
-    """``seq``'s colour frames seen through a uniform haze: ``(1 - haze)`` times the frame plus ``haze`` times the
-    :func:`airlight`, plus Gaussian noise of ``noise`` levels (drawn from the name), as an OTB folder."""
-    (dest / "img").mkdir(parents=True, exist_ok=True)
-    rng = np.random.default_rng(zlib.crc32(f"{seq.name}#hazenoise".encode()))
-    veil = haze * airlight(seq.name)
-    for i, path in enumerate(seq.frames):
-        img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * (1.0 - haze) + veil
-        img += rng.normal(0.0, noise, img.shape).astype(np.float32)
-        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), np.clip(np.rint(img), 0, 255).astype(np.uint8),
-                    [cv2.IMWRITE_JPEG_QUALITY, 92])
-    copy_truth(seq, dest)
-
-
-def cast_gains(name: str, strength: float) -> np.ndarray:
-    """The ``--cast`` copy's channel gains (B, G, R) for the sequence ``name``: a warm cast (B ``1 - S``, R ``1 + S``) or
-    a cool one (the reverse), drawn from the name; green unchanged."""
-    warm = np.random.default_rng(zlib.crc32(f"{name}#cast".encode())).random() < 0.5
-    s = strength if warm else -strength
-    return np.array([1.0 - s, 1.0, 1.0 + s], np.float32)
-
-
-def write_cast(seq, dest: Path, strength: float) -> None:
-    """``seq``'s colour frames with the :func:`cast_gains` applied from frame floor(n/3) (from 0) on, as an OTB
-    folder: a white balance that jumps a third of the way through."""
-    (dest / "img").mkdir(parents=True, exist_ok=True)
-    gains, start = cast_gains(seq.name, strength), len(seq.frames) // 3
-    for i, path in enumerate(seq.frames):
-        img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * (gains if i >= start else 1.0)
-        cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), np.clip(np.rint(img), 0, 255).astype(np.uint8),
-                    [cv2.IMWRITE_JPEG_QUALITY, 92])
-    copy_truth(seq, dest)
 
 
 SWITCH_KINDS = ("after", "before", "block", "random")
@@ -381,7 +284,7 @@ def write_switch(seq, out: Path) -> list[str]:
         (dest / "img").mkdir(parents=True, exist_ok=True)
         for i, path in enumerate(seq.frames):
             img = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if grey[i] else cv2.IMREAD_COLOR)
-            cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+            write_jpeg(dest, i, img)
         copy_truth(seq, dest)
         names.append(dest.name)
     return names
@@ -501,7 +404,7 @@ def main() -> None:
                 if lamp is not None:
                     f = light_field(i / max(n - 1, 1), img.shape[0], img.shape[1], lamp)
                     img = np.clip(img.astype(np.float32) * f, 0, 255).astype(np.uint8)
-                cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
+                write_jpeg(dest, i, img)
             copy_truth(seq, dest)
         print(f"{seq.name}: {n} frames -> " + ", ".join(f"{out}/{seq.name}-{v}" for v, _ in variants))
 
