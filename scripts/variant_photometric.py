@@ -115,3 +115,8 @@ def write_cast(seq, dest: Path, strength: float) -> None:
         img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * (gains if i >= start else 1.0)
         write_jpeg(dest, i, img)
     copy_truth(seq, dest)
+
+
+if __name__ == "__main__":
+    raise SystemExit("variant_photometric.py is a module of make_variants.py: run "
+                     "`python scripts/make_variants.py --help`")
