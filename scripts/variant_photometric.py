@@ -14,9 +14,11 @@ from pftrack.io.datasets import write_groundtruth
 
 
 def write_jpeg(dest: Path, i: int, img: np.ndarray) -> None:
-    """Frame ``i`` (from 0) of the OTB folder ``dest``: ``img`` (float levels) rounded, clipped to 0-255, JPEG 92."""
-    cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), np.clip(np.rint(img), 0, 255).astype(np.uint8),
-                [cv2.IMWRITE_JPEG_QUALITY, 92])
+    """Frame ``i`` (from 0) of the OTB folder ``dest`` as JPEG 92: ``img`` as it is when 8-bit, else its levels
+    rounded and clipped to 0-255."""
+    if img.dtype != np.uint8:
+        img = np.clip(np.rint(img), 0, 255).astype(np.uint8)
+    cv2.imwrite(str(dest / "img" / f"{i + 1:04d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 92])
 
 
 def copy_truth(seq, dest: Path, scale: float = 1.0, stride: int = 1) -> None:
@@ -99,8 +101,8 @@ def write_hazy(seq, dest: Path, haze: float, noise: float) -> None:
 
 
 def cast_gains(name: str, strength: float) -> np.ndarray:
-    """The ``--cast`` copy's channel gains (B, G, R) for the sequence ``name``: a warm cast (B ``1 - S``, R ``1 + S``) or
-    a cool one (the reverse), drawn from the name; green unchanged."""
+    """The ``--cast`` copy's channel gains (B, G, R) for the sequence ``name``: a warm cast (B ``1 - S``,
+    R ``1 + S``) or a cool one (the reverse), drawn from the name; green unchanged."""
     warm = np.random.default_rng(zlib.crc32(f"{name}#cast".encode())).random() < 0.5
     s = strength if warm else -strength
     return np.array([1.0 - s, 1.0, 1.0 + s], np.float32)

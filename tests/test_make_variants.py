@@ -1,7 +1,7 @@
 """scripts/make_variants.py: grey and grey + illumination copies, fresh draws of the lamp (--light-seeds),
 resized copies (--scale), copies at a lower frame rate (--stride), through a shaking camera (--shake), with
-motion blur (--blur), from a dark, noisy camera (--dim, --noise), through haze (--haze), with a white balance that jumps (--cast) and
-through a steady zoom (--zoom)."""
+motion blur (--blur), from a dark, noisy camera (--dim, --noise), through haze (--haze), with a white balance that
+jumps (--cast) and through a steady zoom (--zoom)."""
 
 from __future__ import annotations
 
