@@ -26,7 +26,7 @@ from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histog
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
 from .quantize import level_gain, level_range, make_lut, quantize, quantize_region, shift_form, stretched_lut
-from .still_gain import reference_lattice, still_gain
+from .still_gain import JUMP_MAX_MAD, frame_jump, reference_lattice, still_gain
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Gains within this of 1 leave the raw colours ("adaptive" and "still"): no jitter from the gain's estimate.
@@ -132,13 +132,19 @@ class ColorCue:
         enough for ``dark_stretch`` but its levels between the ``100 - dark_percentile`` and ``dark_percentile``
         percentiles span at most 255 / ``haze_stretch``, the bins are spread over that span
         (:func:`~pftrack.cues.quantize.level_range`; ``level_offset`` holds its bottom); 0: never.
+    cast_jump : RGB features under a white balance that jumps: a frame whose chromatic jump against the previous
+        frame (the largest minus the smallest of the channels' median log-ratios,
+        :func:`~pftrack.cues.still_gain.frame_jump`) is at least this, every channel's MAD at most
+        ``JUMP_MAX_MAD``, multiplies a per-channel gain by the jump's, and the bins undo that gain (with ``"still"``,
+        times the gain held from the last still view, which a new still view's gain replaces); with ``normalize``
+        ``"none"`` or ``"still"`` only. 0: never.
     """
 
     def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
                  kernel: KernelName = "nummiaro", max_pixels: int = 0, *,
                  gray_bins: tuple[int, int] = DEFAULT_GRAY_BINS, gradient_threshold: float = 40.0,
                  fallback: ColorSpace = "rgb", normalize: str = "none", parts: int = 1, dark_stretch: float = 0.0,
-                 dark_percentile: float = 99.5, haze_stretch: float = 0.0):
+                 dark_percentile: float = 99.5, haze_stretch: float = 0.0, cast_jump: float = 0.0):
         if parts not in (1, 2):
             raise ValueError(f"parts must be 1 or 2, got {parts!r}")
         self.parts = int(parts)
@@ -154,6 +160,13 @@ class ColorCue:
         if not haze_stretch >= 0:
             raise ValueError(f"haze_stretch must be >= 0, got {haze_stretch!r}")
         self.haze_stretch = float(haze_stretch)
+        if not cast_jump >= 0:
+            raise ValueError(f"cast_jump must be >= 0, got {cast_jump!r}")
+        if cast_jump > 0 and normalize not in ("none", "still"):
+            raise ValueError(f"cast_jump works with normalize 'none' or 'still', not {normalize!r}")
+        self.cast_jump = float(cast_jump)
+        self._cast_prev: np.ndarray | None = None  # cast_jump: the previous frame's lattice
+        self._cast_gain = np.ones(3)  # cast_jump: the product of the jumps since the start (or the last still view)
         self.level_gain = 1.0
         self.level_offset = 0.0
         self._ref_levels: np.ndarray | None = None
@@ -191,11 +204,16 @@ class ColorCue:
             self._fit_levels(frame if levels else None)
         if self.color_space == "rgb" and self.normalize in ("gain", "adaptive") and frame.ndim == 3:
             self._ref_levels = channel_levels(frame)
+        ok = self.color_space == "rgb" and frame.ndim == 3 and frame.dtype == np.uint8
         if self.normalize == "still":
-            ok = self.color_space == "rgb" and frame.ndim == 3 and frame.dtype == np.uint8
             self._still_ref = reference_lattice(frame) if ok else None
             self._still_gain = np.ones(3)
             self.lut = self._base_lut
+        if self.cast_jump > 0:
+            self._cast_prev = reference_lattice(frame) if ok else None
+            self._cast_gain = np.ones(3)
+            if self.normalize == "none" and self.color_space == "rgb":
+                self.lut = self._base_lut
         return self.color_space
 
     def new_frame(self, frame: np.ndarray, *, gray: np.ndarray | None = None) -> None:
@@ -203,13 +221,20 @@ class ColorCue:
         features, or the lighting normalisation of the RGB bins (``gray``: the frame's grey image, if at hand)."""
         if self.color_space == "gray":
             self._eq_lut = equalization_lut(frame, gray=gray)
-        elif self.color_space == "rgb" and self.normalize != "none" and frame.ndim == 3:
+        elif self.color_space == "rgb" and frame.ndim == 3 and (self.normalize != "none" or self.cast_jump > 0):
+            jumped = self.cast_jump > 0 and self._follow_cast(frame)
+            if self.normalize == "none":
+                if jumped:
+                    self._gain_lut(self._cast_gain)
+                return
             if self.normalize == "still":
                 g = still_gain(self._still_ref, frame) if self._still_ref is not None else None
-                if g is not None and not np.array_equal(g, self._still_gain):  # else the table in use stays
-                    self._still_gain = g
-                    self.lut = (self._base_lut if np.all(np.abs(g - 1.0) < GAIN_DEAD_ZONE)
-                                else self.mapped_lut(gain_maps(np.ones(3), g)))
+                if g is not None:  # a still view: its gain against the first frame holds every jump before it
+                    if not np.array_equal(g, self._still_gain) or not np.all(self._cast_gain == 1.0):
+                        self._still_gain, self._cast_gain = g, np.ones(3)
+                        self._gain_lut(g)  # else the table in use stays
+                elif jumped:
+                    self._gain_lut(self._still_gain * self._cast_gain)
                 return
             if self.normalize in ("gain", "adaptive"):
                 self._levels = channel_levels(frame)
@@ -222,6 +247,25 @@ class ColorCue:
                 self.lut = self.mapped_lut(gain_maps(self._ref_levels, self._levels))
             else:
                 self.lut = self.mapped_lut(channel_equalization_maps(frame))
+
+    def _gain_lut(self, g: np.ndarray) -> None:
+        """The RGB table that undoes a per-channel gain ``g`` of the frame (none within the dead zone)."""
+        self.lut = (self._base_lut if np.all(np.abs(g - 1.0) < GAIN_DEAD_ZONE)
+                    else self.mapped_lut(gain_maps(np.ones(3), g)))
+
+    def _follow_cast(self, frame: np.ndarray) -> bool:
+        """``cast_jump``: compare the frame with the previous one; True when a jump changed the cast gain."""
+        if frame.dtype != np.uint8:
+            return False
+        lat = reference_lattice(frame)
+        prev, self._cast_prev = self._cast_prev, lat
+        if prev is None or prev.shape != lat.shape:
+            return False
+        med, mad = frame_jump(prev, lat, max_mad=JUMP_MAX_MAD)
+        if med.max() - med.min() < self.cast_jump or mad.max() > JUMP_MAX_MAD:
+            return False
+        self._cast_gain = self._cast_gain * np.exp(med)
+        return True
 
     def _fit_levels(self, frame: np.ndarray | None) -> None:
         """``dark_stretch`` and ``haze_stretch``: the RGB bins over the levels ``frame`` uses when it is dark or hazy

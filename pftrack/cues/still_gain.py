@@ -25,6 +25,9 @@ LOW, HIGH = 12, 240
 #: Log-ratios counted in ``HIST_BINS`` bins of about 0.01 over ``[-SPAN, SPAN]`` (a gain from 1/20 to 20).
 SPAN = 3.0
 HIST_BINS = 601  # odd: a log-ratio of 0 (no change) falls at a bin centre
+#: :func:`frame_jump` read as a jump of the light (``cast_jump``) only when every channel's MAD is at most this: a
+#: hand-held camera's consecutive frames read 0.02-0.29, a fast swing 0.5 (docs/rules/cast_jump_rule.txt)
+JUMP_MAX_MAD = 0.4
 
 _LOG = np.log(np.maximum(np.arange(256, dtype=np.float64), 1.0))
 
@@ -105,3 +108,20 @@ def still_gain(ref: np.ndarray, frame: np.ndarray, *, stride: int = 16, max_mad:
             return None
         gains[c] = math.exp(stats[0])
     return gains
+
+
+def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Per-channel median log-ratio ``(3,)`` of a frame's lattice against the previous frame's (both
+    :func:`reference_lattice` of BGR uint8 frames, same stride), and the MADs ``(3,)`` (the walk stops just above
+    ``max_mad``). Channels with no pixel counted read 0 and MAD inf.
+
+    A white balance that switches between the two frames scales each channel by its own factor: the medians are
+    their logs and differ between channels (a chromatic jump); camera motion and walkers spread the log-ratios
+    about 0 without moving the channels' medians apart."""
+    hist = _log_ratio_hist(prev, lattice, 1, LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64))
+    med, mad, stats = np.zeros(3), np.full(3, np.inf), np.empty(3)
+    for c in range(3):
+        _median_and_mad(hist[c], SPAN, float(max_mad), stats)
+        if stats[2] > 0:
+            med[c], mad[c] = stats[0], stats[1]
+    return med, mad

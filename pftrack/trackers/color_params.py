@@ -75,6 +75,14 @@ class ColorModelParams(Params):
         "that a veiled scene's colours do not crowd into the top three or four bins of each channel. 0: never. "
         "Clean real frames span a gain of 1.0-1.21 (windows cut into one part of a scene up to 1.65); a uniform haze "
         "of half the light 1.96-2.45."))
+    cast_jump: float = param(0.0, ge=0, le=3, doc=(
+        "RGB features under a white balance that jumps (a cloud, a door opening onto lamps, daylight to tungsten): "
+        "a frame whose chromatic jump against the previous frame (the largest minus the smallest of the channels' "
+        "median log-ratios on a lattice of every 16th pixel, pftrack.cues.still_gain.frame_jump) is at least this, "
+        "with the log-ratios' MADs at most 0.4, multiplies a per-channel gain by the jump's, which the 8x8x8 bins "
+        "undo from then on (with color_normalize='still' together with the gain of the last still view). With "
+        "color_normalize 'none' or 'still'. 0: never. Consecutive frames of the tune sequences read at most 0.13, "
+        "a cast of B and R times 1 -/+ 0.2 0.37-0.42 (scripts/jump_readings.py)."))
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
         "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
         "on."))
@@ -477,3 +485,6 @@ class ColorModelParams(Params):
             raise ParameterError(f"parameter 'denoise_kernel' must be odd, got {self.denoise_kernel}")
         if self.histogram_parts > 1 and self.grey_relit_shift > 0:
             raise ParameterError("grey_relit_shift shifts the bins of one-part histograms: use histogram_parts=1")
+        if self.cast_jump > 0 and self.color_normalize not in ("none", "still"):
+            raise ParameterError(f"cast_jump works with color_normalize 'none' or 'still', not "
+                                 f"{self.color_normalize!r}")

@@ -1,0 +1,66 @@
+"""Frame-to-frame colour jumps: what ``pftrack.cues.still_gain.frame_jump`` reads on sequences.
+
+For every sequence (an OTB-layout folder, a video, or a synthetic scene's folder) and every frame after the first,
+the per-channel median log-ratio of the frame's levels against the previous frame's on a lattice of pixels, and the
+chromatic part of that jump (the largest difference between two channels' medians). A white balance that switches
+shows as a chromatic jump on one frame; camera motion, walkers and a gradual drift show as small ones.
+
+    python scripts/jump_readings.py reports/split/tune_real reports/split/tune_pets
+
+Prints one line per sequence: its largest chromatic jump, the frame where it is, the channels' medians there, and
+the number of frames whose chromatic jump exceeds 0.05 / 0.1 / 0.15.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from pftrack.cues.intensity import is_gray
+from pftrack.cues.still_gain import frame_jump, reference_lattice
+from pftrack.io import discover_sequences
+from pftrack.io.sources import read_image
+
+
+def readings(seq) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame (from the second): the channels' median log-ratios ``(n - 1, 3)`` and their MADs."""
+    prev, meds, mads = None, [], []
+    for f in seq.frames:
+        frame = read_image(f)
+        if frame is None or frame.ndim != 3 or is_gray(frame):
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        lat = reference_lattice(frame)
+        if prev is not None:
+            m, d = frame_jump(prev, lat)
+            meds.append(m)
+            mads.append(d)
+        prev = lat
+    return np.array(meds).reshape(-1, 3), np.array(mads).reshape(-1, 3)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("folders", nargs="+", type=Path)
+    args = ap.parse_args(argv)
+    allc = []
+    for p in (s for folder in args.folders for s in discover_sequences(folder)):
+        meds, mads = readings(p)
+        if not len(meds):
+            print(f"{p.name}: grey or too short")
+            continue
+        chroma = meds.max(1) - meds.min(1)
+        allc.append(chroma)
+        k = int(np.argmax(chroma))
+        counts = [int(np.sum(chroma > t)) for t in (0.05, 0.1, 0.15)]
+        print(f"{p.name}: max chroma {chroma[k]:.3f} at frame {k + 1} (medians {np.round(meds[k], 3).tolist()}, "
+              f"MAD {np.round(mads[k], 3).tolist()}); frames > 0.05/0.1/0.15: {counts} of {len(chroma)}")
+    if allc:
+        c = np.concatenate(allc)
+        print(f"all: {len(c)} frames, chroma 99th pct {np.percentile(c, 99):.3f}, max {c.max():.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
