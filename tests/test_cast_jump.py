@@ -158,3 +158,22 @@ def test_no_jump_read_on_a_scene_without_one():
         if cj:
             np.testing.assert_array_equal(t.cue._cast_gain, 1.0)
     np.testing.assert_array_equal(boxes[0.0], boxes[0.2])
+
+
+def test_a_channel_clipped_almost_everywhere_reads_no_jump():
+    """A saturated view (blue above the counted levels but for a few pixels, as on tld_pedestrian2's sky) must not
+    read a jump from those few pixels."""
+    f, _ = _colour_frame()
+    f = f.copy()
+    f[..., 0] = 250  # blue clipped everywhere
+    g = f.copy()
+    f[:48:16, :48:16, 0] = 100  # nine lattice pixels counted, whose blue then drops by a quarter
+    g[:48:16, :48:16, 0] = 75
+    med, mad = frame_jump(reference_lattice(f), reference_lattice(g))
+    assert med[0] == 0.0 and np.isinf(mad[0]), (med, mad)
+    cue = ColorCue("rgb", cast_jump=0.2)
+    cue.adapt_to(f)
+    cue.new_frame(f)
+    cue.new_frame(g)
+    np.testing.assert_array_equal(cue._cast_gain, 1.0)
+    assert cue.lut is cue._base_lut

@@ -26,7 +26,7 @@ from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histog
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
 from .quantize import level_gain, level_range, make_lut, quantize, quantize_region, shift_form, stretched_lut
-from .still_gain import JUMP_MAX_MAD, frame_jump, reference_lattice, still_gain
+from .still_gain import JUMP_MAX_MAD, JumpReader, reference_lattice, still_gain
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Gains within this of 1 leave the raw colours ("adaptive" and "still"): no jitter from the gain's estimate.
@@ -165,7 +165,7 @@ class ColorCue:
         if cast_jump > 0 and normalize not in ("none", "still"):
             raise ValueError(f"cast_jump works with normalize 'none' or 'still', not {normalize!r}")
         self.cast_jump = float(cast_jump)
-        self._cast_prev: np.ndarray | None = None  # cast_jump: the previous frame's lattice
+        self._jumps = JumpReader(min_chroma=self.cast_jump, max_mad=JUMP_MAX_MAD) if self.cast_jump > 0 else None
         self._cast_gain = np.ones(3)  # cast_jump: the product of the jumps since the start (or the last still view)
         self.level_gain = 1.0
         self.level_offset = 0.0
@@ -210,7 +210,7 @@ class ColorCue:
             self._still_gain = np.ones(3)
             self.lut = self._base_lut
         if self.cast_jump > 0:
-            self._cast_prev = reference_lattice(frame) if ok else None
+            self._jumps.reset(frame if ok else None)
             self._cast_gain = np.ones(3)
             if self.normalize == "none" and self.color_space == "rgb":
                 self.lut = self._base_lut
@@ -255,13 +255,10 @@ class ColorCue:
 
     def _follow_cast(self, frame: np.ndarray) -> bool:
         """``cast_jump``: compare the frame with the previous one; True when a jump changed the cast gain."""
-        if frame.dtype != np.uint8:
+        r = self._jumps.read(frame)
+        if r is None:
             return False
-        lat = reference_lattice(frame)
-        prev, self._cast_prev = self._cast_prev, lat
-        if prev is None or prev.shape != lat.shape:
-            return False
-        med, mad = frame_jump(prev, lat, max_mad=JUMP_MAX_MAD)
+        med, mad = r
         if med.max() - med.min() < self.cast_jump or mad.max() > JUMP_MAX_MAD:
             return False
         self._cast_gain = self._cast_gain * np.exp(med)

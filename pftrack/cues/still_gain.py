@@ -28,6 +28,10 @@ HIST_BINS = 601  # odd: a log-ratio of 0 (no change) falls at a bin centre
 #: :func:`frame_jump` read as a jump of the light (``cast_jump``) only when every channel's MAD is at most this: a
 #: hand-held camera's consecutive frames read 0.02-0.29, a fast swing 0.5 (docs/rules/cast_jump_rule.txt)
 JUMP_MAX_MAD = 0.4
+#: ... and every channel has at least this many lattice pixels within (LOW, HIGH): a view whose blue is clipped almost
+#: everywhere (a saturated sky) reads a "jump" from a handful of pixels (one on tld_pedestrian2); 253 or more on
+#: every frame of the tune sequences
+JUMP_MIN_PIXELS = 100
 
 _LOG = np.log(np.maximum(np.arange(256, dtype=np.float64), 1.0))
 
@@ -110,18 +114,80 @@ def still_gain(ref: np.ndarray, frame: np.ndarray, *, stride: int = 16, max_mad:
     return gains
 
 
-def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+@njit
+def _jump(prev, frame, stride, lo, hi, span, log_table, hist, cur, min_chroma, max_mad, min_pixels, out):
+    """:func:`frame_jump` in one pass: the log-ratios of ``frame``'s lattice (every ``stride``-th pixel, copied into
+    ``cur``) against ``prev`` counted in ``hist``; ``out[0]`` the channels' medians (0 for a channel with fewer than
+    ``min_pixels`` counted), ``out[1]`` their MADs, walked only when the chromatic jump reaches ``min_chroma`` (else,
+    and for such a channel, inf); ``out[2]`` the pixels counted."""
+    hist[:] = 0
+    nb = hist.shape[1]
+    scale = nb / (2.0 * span)
+    for j in range(prev.shape[0]):
+        for i in range(prev.shape[1]):
+            for c in range(3):
+                a = prev[j, i, c]
+                b = frame[j * stride, i * stride, c]
+                cur[j, i, c] = b
+                if a > lo and a < hi and b > lo and b < hi:
+                    k = int((log_table[b] - log_table[a] + span) * scale)
+                    if 0 <= k < nb:
+                        hist[c, k] += 1
+    stats = np.empty(3)
+    for c in range(3):
+        _median_and_mad(hist[c], span, 0.0, stats)
+        out[0, c] = stats[0] if stats[2] >= min_pixels and stats[2] > 0 else 0.0
+        out[1, c] = math.inf
+        out[2, c] = stats[2]
+    if out[0].max() - out[0].min() >= min_chroma:
+        for c in range(3):
+            if out[2, c] >= min_pixels and out[2, c] > 0:
+                _median_and_mad(hist[c], span, max_mad, stats)
+                out[1, c] = stats[1]
+    return out
+
+
+class JumpReader:
+    """:func:`frame_jump` frame after frame, with its buffers kept: :meth:`read` compares a frame with the one
+    before and returns its medians and MADs ``(2, 3)`` (MADs inf unless the chromatic jump reaches ``min_chroma``,
+    and for a channel with fewer than ``min_pixels`` counted; None for the first frame or a frame of another size)."""
+
+    def __init__(self, stride: int = 16, min_chroma: float = 0.0, max_mad: float = 1.0,
+                 min_pixels: int = JUMP_MIN_PIXELS):
+        self.stride, self.min_chroma, self.max_mad = int(stride), float(min_chroma), float(max_mad)
+        self.min_pixels = int(min_pixels)
+        self._hist = np.zeros((3, HIST_BINS), np.int64)
+        self._prev: np.ndarray | None = None
+        self._cur: np.ndarray | None = None
+        self._out = np.zeros((3, 3))
+
+    def reset(self, frame: np.ndarray | None) -> None:
+        """Start again from ``frame`` (None: no previous frame)."""
+        self._prev = None if frame is None else reference_lattice(frame, self.stride)
+        self._cur = None if frame is None else np.empty_like(self._prev)
+
+    def read(self, frame: np.ndarray) -> np.ndarray | None:
+        s = self.stride
+        shape = ((frame.shape[0] + s - 1) // s, (frame.shape[1] + s - 1) // s)
+        if self._prev is None or self._prev.shape[:2] != shape or frame.ndim != 3 or frame.dtype != np.uint8:
+            self.reset(frame if frame.ndim == 3 and frame.dtype == np.uint8 else None)
+            return None
+        _jump(self._prev, frame, s, LOW, HIGH, SPAN, _LOG, self._hist, self._cur, self.min_chroma, self.max_mad,
+              self.min_pixels, self._out)
+        self._prev, self._cur = self._cur, self._prev
+        return self._out[:2]
+
+
+def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0,
+               min_pixels: int = JUMP_MIN_PIXELS) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel median log-ratio ``(3,)`` of a frame's lattice against the previous frame's (both
     :func:`reference_lattice` of BGR uint8 frames, same stride), and the MADs ``(3,)`` (the walk stops just above
-    ``max_mad``). Channels with no pixel counted read 0 and MAD inf.
+    ``max_mad``). A channel with fewer than ``min_pixels`` counted (levels clipped or dark in most of the view) reads
+    0 and MAD inf.
 
     A white balance that switches between the two frames scales each channel by its own factor: the medians are
     their logs and differ between channels (a chromatic jump); camera motion and walkers spread the log-ratios
     about 0 without moving the channels' medians apart."""
-    hist = _log_ratio_hist(prev, lattice, 1, LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64))
-    med, mad, stats = np.zeros(3), np.full(3, np.inf), np.empty(3)
-    for c in range(3):
-        _median_and_mad(hist[c], SPAN, float(max_mad), stats)
-        if stats[2] > 0:
-            med[c], mad[c] = stats[0], stats[1]
-    return med, mad
+    out = _jump(prev, lattice, 1, LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64), np.empty_like(prev),
+                -math.inf, float(max_mad), int(min_pixels), np.zeros((3, 3)))
+    return out[0].copy(), out[1].copy()
