@@ -9,7 +9,9 @@
 ``seqinfo.ini``: each half is tracked from a fresh start, as a recording that begins there. scripts/grey_foreground.py
 writes grey copies the same way (:func:`write_halves` with a conversion). With ``--dim G`` the halves are written as
 from a dark, noisy camera under the prefix ``dark`` (every frame times G plus Gaussian noise of ``--noise SD``
-levels, seeded; as scripts/make_variants.py --dim).
+levels, seeded; as scripts/make_variants.py --dim). With ``--cast S`` they are written under the prefix ``cast`` with
+a white balance that jumps at each half's frame 67 of 200 (blue times 1 - S and red times 1 + S from there on, a warm
+cast; as scripts/make_variants.py --cast).
 """
 
 from __future__ import annotations
@@ -25,9 +27,11 @@ from pftrack.io.datasets import write_mot_groundtruth, write_seqinfo
 HALVES = {"tune": (1, 200), "report": (201, 400)}
 
 
-def write_halves(pets: Path, out: Path, *, prefix: str = "pets", convert=None) -> dict[str, Path]:
+def write_halves(pets: Path, out: Path, *, prefix: str = "pets", convert=None,
+                 indexed: bool = False) -> dict[str, Path]:
     """The two halves under ``OUT/PREFIX_HALF/PREFIX_HALF``: frames linked (``convert`` None), or written as PNG
-    after ``convert(frame)`` (e.g. a grey conversion); their folder per half."""
+    after ``convert(frame)`` (e.g. a grey conversion; ``convert(frame, i)`` with ``indexed``, ``i`` counted from 0
+    within the half); their folder per half."""
     import cv2
 
     gt = np.loadtxt(pets / "gt" / "gt.txt", delimiter=",", ndmin=2)
@@ -40,7 +44,8 @@ def write_halves(pets: Path, out: Path, *, prefix: str = "pets", convert=None) -
         for n in range(lo, hi + 1):
             src, dst = pets / "img1" / f"{n:06d}.jpg", d / "img1" / f"{n - lo + 1:06d}{ext}"
             if convert is not None:
-                cv2.imwrite(str(dst), convert(cv2.imread(str(src))))
+                img = cv2.imread(str(src))
+                cv2.imwrite(str(dst), convert(img, n - lo) if indexed else convert(img))
             elif not dst.exists():
                 os.symlink(os.path.relpath(src.resolve(), dst.parent.resolve()), dst)
         rows = gt[(gt[:, 0] >= lo) & (gt[:, 0] <= hi)].copy()
@@ -57,8 +62,24 @@ def main() -> None:
     ap.add_argument("--out", default="reports/mot_halves")
     ap.add_argument("--dim", type=float, metavar="G", help="dark, noisy copies (prefix 'dark'): frames times G")
     ap.add_argument("--noise", type=float, default=3.0, metavar="SD", help="--dim's noise in grey levels (3)")
+    ap.add_argument("--cast", type=float, metavar="S", help="copies whose white balance jumps (prefix 'cast'): blue "
+                    "and red times 1 -/+ S from each half's frame 67 on")
     args = ap.parse_args()
-    convert, prefix = None, "pets"
+    convert, prefix, indexed = None, "pets", False
+    if args.dim is not None and args.cast is not None:
+        ap.error("--dim and --cast write different copies: give one")
+    if args.cast is not None:
+        if not 0 < args.cast < 1:
+            ap.error(f"--cast must be in (0, 1), got {args.cast}")
+        gains = np.array([1.0 - args.cast, 1.0, 1.0 + args.cast], np.float32)
+        start = 200 // 3
+
+        def convert(frame, i):
+            if i < start:
+                return frame
+            return np.clip(np.rint(frame.astype(np.float32) * gains), 0, 255).astype(np.uint8)
+
+        prefix, indexed = "cast", True
     if args.dim is not None:
         if not 0 < args.dim <= 1 or args.noise < 0:
             ap.error(f"--dim must be in (0, 1] and --noise at least 0, got {args.dim} and {args.noise}")
@@ -70,7 +91,7 @@ def main() -> None:
 
         prefix = "dark"
     for half, folder in write_halves(Path(args.data) / "pets09_s2l1_dev", Path(args.out), prefix=prefix,
-                                     convert=convert).items():
+                                     convert=convert, indexed=indexed).items():
         print(f"{half}: {folder}")
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 
 from .._numba import njit
@@ -191,3 +192,36 @@ def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0,
     out = _jump(prev, lattice, 1, LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64), np.empty_like(prev),
                 -math.inf, float(max_mad), int(min_pixels), np.zeros((3, 3)))
     return out[0].copy(), out[1].copy()
+
+
+class CastUndo:
+    """A frame with the white balance jumps read so far undone (``cast_jump`` of a whole-frame pipeline: ``pftrack
+    mot``'s background subtraction and colour models). Call it on every frame in order: a frame whose chromatic jump
+    against the previous one (:class:`JumpReader`) is at least ``threshold``, every channel's MAD at most
+    ``JUMP_MAX_MAD``, multiplies a per-channel gain by the jump's; each frame is returned divided by that gain (a
+    per-channel table, cv2.LUT), or as it is while the gain is within ``dead_zone`` of 1."""
+
+    def __init__(self, threshold: float, *, dead_zone: float = 0.05):
+        if not threshold > 0:
+            raise ValueError(f"threshold must be > 0, got {threshold!r}")
+        self.threshold, self.dead_zone = float(threshold), float(dead_zone)
+        self.reader = JumpReader(min_chroma=self.threshold, max_mad=JUMP_MAX_MAD)
+        self.gain = np.ones(3)
+        self._lut: np.ndarray | None = None
+
+    def __call__(self, frame: np.ndarray) -> np.ndarray:
+        r = self.reader.read(frame)
+        if r is not None:
+            med, mad = r
+            if med.max() - med.min() >= self.threshold and mad.max() <= JUMP_MAX_MAD:
+                self.gain = self.gain * np.exp(med)
+                self._lut = None if np.all(np.abs(self.gain - 1.0) < self.dead_zone) else undo_lut(self.gain)
+        if self._lut is None or frame.ndim != 3:
+            return frame
+        return cv2.LUT(frame, self._lut)
+
+
+def undo_lut(gain: np.ndarray) -> np.ndarray:
+    """The ``(1, 256, 3)`` uint8 table (cv2.LUT) that divides each channel's levels by ``gain`` (rounded, clipped)."""
+    v = np.arange(256, dtype=np.float64)[:, None] / np.asarray(gain, np.float64)[None, :]
+    return np.clip(np.rint(v), 0, 255).astype(np.uint8)[None, :, :]

@@ -59,6 +59,7 @@ from ..cues.contrast import (
     probability_integral,
 )
 from ..cues.histogram_cue import ColorCue, ColorFeatures
+from ..cues.still_gain import CastUndo
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
 from ..geometry import in_frame_fraction as _inside_fraction
@@ -118,6 +119,7 @@ class MultiPF:
         self.identities = IdentityMemory(threshold=self.params.identify_threshold, memory=self.params.identify_memory)
         self.frame_index = 0
         self._shape: tuple[int, int] | None = None
+        self._cast = CastUndo(p.cast_jump) if p.cast_jump > 0 else None  # frames with their light jumps undone
 
     # ------------------------------------------------------------------ helpers
     def _histogram(self, frame: np.ndarray, box, stored: ColorFeatures | None = None) -> np.ndarray:
@@ -198,6 +200,9 @@ class MultiPF:
         """Before the first update: start the detector's background from the first frames of the stream (read ahead
         by the caller, ``bootstrap_frames`` of them); a detector without a background ignores it."""
         if hasattr(self.detector, "prime") and len(frames):
+            if self.params.cast_jump > 0:  # the frames read ahead, with their own jumps undone (update reads them again)
+                undo = CastUndo(self.params.cast_jump)
+                frames = [undo(as_bgr_uint8(f)) for f in frames]
             self.detector.prime(frames)
 
     def read_ahead(self, items: Iterator, frame_of: Callable = lambda item: item) -> tuple[Iterator, float]:
@@ -232,6 +237,8 @@ class MultiPF:
                              f"{self._shape[1]}x{self._shape[0]}", index=self.frame_index + 1)
         self.frame_index += 1
         p = self.params
+        if self._cast is not None:
+            frame = self._cast(frame)
         dets = self.detector(frame)
         dets = dets[(dets[:, 2] >= p.min_size) & (dets[:, 3] >= p.min_size)] if len(dets) else dets
         fg = getattr(self.detector, "foreground", None) if p.foreground_gain > 0 else None
