@@ -9,9 +9,9 @@
 ``seqinfo.ini``: each half is tracked from a fresh start, as a recording that begins there. scripts/grey_foreground.py
 writes grey copies the same way (:func:`write_halves` with a conversion). With ``--dim G`` the halves are written as
 from a dark, noisy camera under the prefix ``dark`` (every frame times G plus Gaussian noise of ``--noise SD``
-levels, seeded; as scripts/make_variants.py --dim). With ``--cast S`` they are written under the prefix ``cast`` with
-a white balance that jumps at each half's frame 67 of 200 (blue times 1 - S and red times 1 + S from there on, a warm
-cast; as scripts/make_variants.py --cast).
+levels, seeded; as scripts/make_variants.py --dim). With ``--cast S`` they are written under the prefix ``castS``
+(``cast0.2``) with a white balance that jumps at each half's frame 67 of 200: blue times 1 - S and red times 1 + S
+from there on, a warm cast, as scripts/make_variants.py --cast.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ def main() -> None:
     ap.add_argument("--out", default="reports/mot_halves")
     ap.add_argument("--dim", type=float, metavar="G", help="dark, noisy copies (prefix 'dark'): frames times G")
     ap.add_argument("--noise", type=float, default=3.0, metavar="SD", help="--dim's noise in grey levels (3)")
-    ap.add_argument("--cast", type=float, metavar="S", help="copies whose white balance jumps (prefix 'cast'): blue "
+    ap.add_argument("--cast", type=float, metavar="S", help="copies whose white balance jumps (prefix castS): blue "
                     "and red times 1 -/+ S from each half's frame 67 on")
     args = ap.parse_args()
     convert, prefix, indexed = None, "pets", False
@@ -79,7 +79,7 @@ def main() -> None:
                 return frame
             return np.clip(np.rint(frame.astype(np.float32) * gains), 0, 255).astype(np.uint8)
 
-        prefix, indexed = "cast", True
+        prefix, indexed = f"cast{args.cast:g}", True
     if args.dim is not None:
         if not 0 < args.dim <= 1 or args.noise < 0:
             ap.error(f"--dim must be in (0, 1] and --noise at least 0, got {args.dim} and {args.noise}")
