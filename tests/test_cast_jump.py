@@ -180,3 +180,47 @@ def test_a_channel_clipped_almost_everywhere_reads_no_jump():
     cue.new_frame(g)
     np.testing.assert_array_equal(cue._cast_gain, 1.0)
     assert cue.lut is cue._base_lut
+
+
+def test_cast_undo_returns_the_frame_before_the_jump():
+    from pftrack.cues.still_gain import CastUndo
+
+    f, _ = _colour_frame()
+    undo = CastUndo(0.2)
+    assert undo(f) is f  # the first frame: nothing to compare with
+    g = undo(_cast(f))
+    np.testing.assert_allclose(undo.gain, WARM, atol=0.03)
+    ok = (f > 20) & (f < 200)  # away from the clipped and the darkest levels
+    assert np.abs(g.astype(int) - f)[ok].max() <= 3
+    h = _shift(_cast(f), 4, 2)  # later frames stay undone
+    assert undo(h).mean() == pytest.approx(_shift(f, 4, 2).mean(), abs=1.0)
+    with pytest.raises(ValueError):
+        CastUndo(0.0)
+
+
+def test_pftrack_mot_keeps_its_people_through_a_jump_of_the_light():
+    """multi-pf (MOG2 and colour models) on two walkers whose white balance jumps halfway: with the jump undone MOG2
+    does not take the view for foreground. Measured over seeds 0-3: MOTA 0.70-0.76 -> 0.875-0.883, false positives
+    3-9 -> 0."""
+    from pftrack.eval.mot import mot_scores
+    from pftrack.multi import create_multi_tracker
+
+    from .test_mot import movers
+
+    scores = {}
+    for cj in (0.0, 0.2):
+        runs = []
+        for seed in range(4):
+            _, frames, truths = render_scene(movers(seed, n=60))
+            tr = create_multi_tracker(seed=seed, cast_jump=cj)
+            gt, hyp = [], []
+            for t, f in enumerate(frames):
+                f = _cast(f) if t >= 30 else f
+                gt.extend([t + 1, k + 1, *truths[t].boxes[k], 1] for k in range(2) if truths[t].present[k])
+                hyp.extend([t + 1, o.track_id, *o.box, o.score] for o in tr.update(f))
+            runs.append(mot_scores(np.array(gt), np.array(hyp).reshape(-1, 7)))
+        scores[cj] = runs
+    mota = {cj: np.mean([s.mota for s in r]) for cj, r in scores.items()}
+    assert mota[0.2] > mota[0.0] + 0.08, mota
+    assert sum(s.num_false_positives for s in scores[0.2]) < sum(s.num_false_positives for s in scores[0.0])
+    assert create_multi_tracker().params.cast_jump == 0.2
