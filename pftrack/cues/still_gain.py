@@ -209,16 +209,24 @@ class CastUndo:
         self.gain = np.ones(3)
         self._lut: np.ndarray | None = None
 
-    def __call__(self, frame: np.ndarray) -> np.ndarray:
+    def read(self, frame: np.ndarray) -> None:
+        """Compare ``frame`` with the previous one and take in its jump, if any."""
         r = self.reader.read(frame)
         if r is not None:
             med, mad = r
             if med.max() - med.min() >= self.threshold and mad.max() <= JUMP_MAX_MAD:
                 self.gain = self.gain * np.exp(med)
                 self._lut = None if np.all(np.abs(self.gain - 1.0) < self.dead_zone) else undo_lut(self.gain)
-        if self._lut is None or frame.ndim != 3:
-            return frame
-        return cv2.LUT(frame, self._lut)
+
+    def undo(self, image: np.ndarray) -> np.ndarray:
+        """``image`` (the frame, or a part of it) divided by the gain read so far; itself while there is none."""
+        if self._lut is None or image.ndim != 3:
+            return image
+        return cv2.LUT(image, self._lut)
+
+    def __call__(self, frame: np.ndarray) -> np.ndarray:
+        self.read(frame)
+        return self.undo(frame)
 
 
 def undo_lut(gain: np.ndarray) -> np.ndarray:

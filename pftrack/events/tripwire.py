@@ -36,6 +36,7 @@ import numpy as np
 
 from ..cues import foreground as _fg
 from ..cues.foreground import Foreground, apply_levels
+from ..cues.still_gain import CastUndo
 from .blobs import FootCrossings, estimate_radius
 from .geometry import PatchLayout, build_patches
 from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
@@ -135,6 +136,7 @@ class TrackerlessTripwire:
         if p.bgs == "mog2":
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
+        self._cast = CastUndo(p.cast_jump) if p.cast_jump > 0 and not p.faithful else None
         self._denoise = False
         self._prev_gray: np.ndarray | None = None
         self._prev2_gray: np.ndarray | None = None
@@ -173,6 +175,9 @@ class TrackerlessTripwire:
         if self._gain is None:  # the first frame decides (dark_stretch, dark_denoise)
             self._gain, self._denoise = dark_levels(frame, self.params)
         roi = frame[self.y0:self.y1, self.x0:self.x1]
+        if self._cast is not None and frame.ndim == 3:  # cast_jump: read on the whole frame, undone on the wire's part
+            self._cast.read(frame)
+            roi = self._cast.undo(roi)
         if roi.ndim == 2:
             roi = cv2.cvtColor(roi, cv2.COLOR_GRAY2BGR)
         roi = apply_levels(roi, self._gain, self._denoise)
