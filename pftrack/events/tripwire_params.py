@@ -44,11 +44,13 @@ class TripwireParams(Params):
         "under dark_stretch: when the first frame's noise (pftrack.cues.foreground.noise_sigma) times the gain "
         "exceeds this many grey levels, the neighbourhood is smoothed by a 3 x 3 Gaussian before the stretch; 0: "
         "never. 8.66 = sqrt(75), the spread of MOG2's variance ceiling, as pftrack mot's default"))
-    cast_jump: float = param(0.0, ge=0, le=3, doc=(
+    cast_jump: float = param(0.2, ge=0, le=3, doc=(
         "a white balance that jumps: a frame whose chromatic jump against the previous processed frame (the largest "
         "minus the smallest of the channels' median log-ratios over the whole frame, pftrack.cues.still_gain."
         "CastUndo) is at least this multiplies a per-channel gain by the jump's, and the wire's neighbourhood is "
-        "divided by that gain before the background subtraction and the patches' histograms; 0: never"))
+        "divided by that gain before the background subtraction and the patches' histograms; 0: never. 0.2, as "
+        "pftrack mot's, chosen under docs/rules/tripwire_cast_jump_rule.txt (docs/tripwire.md): the PETS tune half "
+        "with casts of 0.15 and 0.25, F1 0.831 against 0.601 over strides 1-3; the six tune families identical"))
     diff_threshold: int = param(25, ge=1, le=255, doc="grey-level threshold of the frame difference")
     fg_ratio: float = param(0.3, gt=0, le=1, doc="foreground fraction of a disc that makes the patch foreground")
     contact: Literal["any", "bottom"] = param("any", doc=(
