@@ -357,3 +357,28 @@ def test_radius_auto_reads_the_frames_as_the_tripwire_sees_them():
     r = estimate_radius(dark, wire, min_area=30, gain=g, smooth=True)
     assert r == estimate_radius(seen, wire, min_area=30)
     assert 10 <= r <= 16  # half the short side of a disc of radius 14
+
+
+def test_trackerless_tripwire_counts_through_a_jump_of_the_white_balance():
+    """The two movers with a warm cast (blue times 0.75, red times 1.25) from frame 15, 25 or 40: with the jump undone
+    (cast_jump, the default) the two crossings are found once each at their frames; without, the jump's frame gives a
+    false event or puts a crossing off its frame (measured: all three)."""
+    wire, frames = _two_movers()
+    warm = np.array([0.75, 1.0, 1.25])
+
+    def crossings(at, **kw):
+        cast = [np.clip(np.rint(f * warm), 0, 255).astype(np.uint8) if k >= at else f for k, f in enumerate(frames)]
+        tw = TrackerlessTripwire(wire, cast[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50, **kw))
+        ev = []
+        for n, f in enumerate(cast, 1):
+            ev += tw.process(f, n)
+        return sorted((e.direction, e.frame) for e in ev)
+
+    assert TripwireParams().cast_jump == 0.2
+    wrong = 0
+    for at in (15, 25, 40):
+        found = crossings(at)
+        assert [d for d, _ in found] == [-1, 1], (at, found)
+        assert 27 <= dict(found)[1] <= 31 and 41 <= dict(found)[-1] <= 45, (at, found)
+        wrong += crossings(at, cast_jump=0.0) != found
+    assert wrong >= 2
