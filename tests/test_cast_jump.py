@@ -224,3 +224,24 @@ def test_pftrack_mot_keeps_its_people_through_a_jump_of_the_light():
     assert mota[0.2] > mota[0.0] + 0.08, mota
     assert sum(s.num_false_positives for s in scores[0.2]) < sum(s.num_false_positives for s in scores[0.0])
     assert create_multi_tracker().params.cast_jump == 0.2
+
+
+def test_a_switch_to_grey_and_back_reads_no_jump():
+    """A camera switching to its grey night mode and back changes every channel differently between two frames, but
+    it is no white balance: nothing is read, and the frames pass unchanged."""
+    import cv2
+
+    from pftrack.cues.still_gain import CastUndo
+
+    f, _ = _colour_frame(4)
+    grey = cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
+    med, mad = frame_jump(reference_lattice(f), reference_lattice(grey))
+    assert np.isinf(mad).all(), (med, mad)
+    undo = CastUndo(0.2)
+    for frame in (f, grey, grey, f, _cast(f)):
+        undo(frame)
+    np.testing.assert_allclose(undo.gain, WARM, atol=0.03)  # the real cast at the end is still read
+    undo = CastUndo(0.2)
+    for frame in (f, grey, f):
+        assert undo(frame) is frame
+    np.testing.assert_array_equal(undo.gain, 1.0)

@@ -173,10 +173,20 @@ class JumpReader:
         if self._prev is None or self._prev.shape[:2] != shape or frame.ndim != 3 or frame.dtype != np.uint8:
             self.reset(frame if frame.ndim == 3 and frame.dtype == np.uint8 else None)
             return None
-        _jump(self._prev, frame, s, LOW, HIGH, SPAN, _LOG, self._hist, self._cur, self.min_chroma, self.max_mad,
-              self.min_pixels, self._out)
+        out = _jump(self._prev, frame, s, LOW, HIGH, SPAN, _LOG, self._hist, self._cur, self.min_chroma,
+                    self.max_mad, self.min_pixels, self._out)
+        if out[0].max() - out[0].min() >= self.min_chroma and (_grey_lattice(self._prev) or _grey_lattice(self._cur)):
+            out[1] = math.inf  # a camera switching between colour and grey (night mode) is not a white balance
         self._prev, self._cur = self._cur, self._prev
-        return self._out[:2]
+        return out[:2]
+
+
+def _grey_lattice(lat: np.ndarray, tolerance: int = 2) -> bool:
+    """A lattice of a grey frame: at most 1 % of its pixels with a channel more than ``tolerance`` levels from
+    another (as :func:`pftrack.cues.intensity.is_gray`)."""
+    a = lat.astype(np.int16)
+    spread = np.maximum(np.abs(a[..., 0] - a[..., 1]), np.abs(a[..., 1] - a[..., 2]))
+    return int(np.count_nonzero(spread > tolerance)) <= spread.size // 100
 
 
 def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0,
@@ -184,13 +194,15 @@ def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0,
     """Per-channel median log-ratio ``(3,)`` of a frame's lattice against the previous frame's (both
     :func:`reference_lattice` of BGR uint8 frames, same stride), and the MADs ``(3,)`` (the walk stops just above
     ``max_mad``). A channel with fewer than ``min_pixels`` counted (levels clipped or dark in most of the view) reads
-    0 and MAD inf.
+    0 and MAD inf; every MAD is inf when either frame is grey (a camera switching to or from a night mode).
 
     A white balance that switches between the two frames scales each channel by its own factor: the medians are
     their logs and differ between channels (a chromatic jump); camera motion and walkers spread the log-ratios
     about 0 without moving the channels' medians apart."""
     out = _jump(prev, lattice, 1, LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64), np.empty_like(prev),
                 -math.inf, float(max_mad), int(min_pixels), np.zeros((3, 3)))
+    if _grey_lattice(prev) or _grey_lattice(lattice):
+        out[1] = math.inf  # a switch between colour and grey, or grey frames: no white balance to read
     return out[0].copy(), out[1].copy()
 
 
