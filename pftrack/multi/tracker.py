@@ -40,11 +40,7 @@ Every threshold is a documented parameter (``MultiPFParams``).
 
 from __future__ import annotations
 
-import itertools
 import math
-import time
-from collections import deque
-from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Callable
 
@@ -67,6 +63,7 @@ from ..geometry import iou_matrix
 from .detectors import as_detector, create_detector
 from .identify import IdentityMemory, person_features
 from .multi_params import MultiPFParams
+from .read_ahead import ReadAhead
 from .track_state import Candidate as _Candidate
 from .track_state import Track as _Track
 from .track_state import box_to_state as _box_to_state
@@ -89,7 +86,7 @@ class TrackOutput:
     occluded: bool
 
 
-class MultiPF:
+class MultiPF(ReadAhead):
     """Multi-target colour particle filter (see the module docstring)."""
 
     name = "multi-pf"
@@ -196,34 +193,6 @@ class MultiPF:
         return self.rng.standard_normal((n, 8)) * std
 
     # ------------------------------------------------------------------ the frame
-    def prime(self, frames) -> None:
-        """Before the first update: start the detector's background from the first frames of the stream (read ahead
-        by the caller, ``bootstrap_frames`` of them); a detector without a background ignores it."""
-        if hasattr(self.detector, "prime") and len(frames):
-            if self.params.cast_jump > 0:  # the frames read ahead, with their own jumps undone (update reads them again)
-                undo = CastUndo(self.params.cast_jump)
-                frames = [undo(as_bgr_uint8(f)) for f in frames]
-            self.detector.prime(frames)
-
-    def read_ahead(self, items: Iterator, frame_of: Callable = lambda item: item) -> tuple[Iterator, float]:
-        """``bootstrap_frames``: read that many of ``items`` ahead and :meth:`prime` the detector from their frames
-        (``frame_of(item)``). Returns the items again, those read ahead first (each released once handed on), and
-        the seconds the priming took (counted as update time by the callers)."""
-        if not self.bootstrap_frames:
-            return items, 0.0
-        items = iter(items)
-        ahead = deque(itertools.islice(items, self.bootstrap_frames))
-        t0 = time.perf_counter()
-        self.prime([frame_of(item) for item in ahead])
-        seconds = time.perf_counter() - t0
-
-        def replay():
-            while ahead:
-                yield ahead.popleft()
-            yield from items
-
-        return replay(), seconds
-
     def update(self, frame: np.ndarray) -> list[TrackOutput]:
         """Process one frame; returns the reported targets."""
         frame = as_bgr_uint8(frame, where=f"frame {self.frame_index + 1}")
