@@ -117,23 +117,16 @@ def still_gain(ref: np.ndarray, frame: np.ndarray, *, stride: int = 16, max_mad:
 
 @njit
 def _jump(prev, frame, stride, lo, hi, span, log_table, hist, cur, min_chroma, max_mad, min_pixels, out):
-    """:func:`frame_jump` in one pass: the log-ratios of ``frame``'s lattice (every ``stride``-th pixel, copied into
+    """:func:`frame_jump` in one call: the log-ratios of ``frame``'s lattice (every ``stride``-th pixel, copied into
     ``cur``) against ``prev`` counted in ``hist``; ``out[0]`` the channels' medians (0 for a channel with fewer than
     ``min_pixels`` counted), ``out[1]`` their MADs, walked only when the chromatic jump reaches ``min_chroma`` (else,
     and for such a channel, inf); ``out[2]`` the pixels counted."""
     hist[:] = 0
-    nb = hist.shape[1]
-    scale = nb / (2.0 * span)
+    _log_ratio_hist(prev, frame, stride, lo, hi, span, log_table, hist)
     for j in range(prev.shape[0]):
         for i in range(prev.shape[1]):
             for c in range(3):
-                a = prev[j, i, c]
-                b = frame[j * stride, i * stride, c]
-                cur[j, i, c] = b
-                if a > lo and a < hi and b > lo and b < hi:
-                    k = int((log_table[b] - log_table[a] + span) * scale)
-                    if 0 <= k < nb:
-                        hist[c, k] += 1
+                cur[j, i, c] = frame[j * stride, i * stride, c]
     stats = np.empty(3)
     for c in range(3):
         _median_and_mad(hist[c], span, 0.0, stats)
