@@ -26,7 +26,7 @@ from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histog
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
 from .quantize import level_gain, level_range, make_lut, quantize, quantize_region, shift_form, stretched_lut
-from .still_gain import JUMP_MAX_MAD, JumpReader, reference_lattice, still_gain
+from .still_gain import CastUndo, reference_lattice, still_gain
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Gains within this of 1 leave the raw colours ("adaptive" and "still"): no jitter from the gain's estimate.
@@ -165,8 +165,8 @@ class ColorCue:
         if cast_jump > 0 and normalize not in ("none", "still"):
             raise ValueError(f"cast_jump works with normalize 'none' or 'still', not {normalize!r}")
         self.cast_jump = float(cast_jump)
-        self._jumps = JumpReader(min_chroma=self.cast_jump, max_mad=JUMP_MAX_MAD) if self.cast_jump > 0 else None
-        self._cast_gain = np.ones(3)  # cast_jump: the product of the jumps since the start (or the last still view)
+        # cast_jump: the jumps read since the start (or the last still view), their product in _cast_gain
+        self._jumps = CastUndo(self.cast_jump) if self.cast_jump > 0 else None
         self.level_gain = 1.0
         self.level_offset = 0.0
         self._ref_levels: np.ndarray | None = None
@@ -211,7 +211,6 @@ class ColorCue:
             self.lut = self._base_lut
         if self.cast_jump > 0:
             self._jumps.reset(frame if ok else None)
-            self._cast_gain = np.ones(3)
             if self.normalize == "none" and self.color_space == "rgb":
                 self.lut = self._base_lut
         return self.color_space
@@ -222,7 +221,7 @@ class ColorCue:
         if self.color_space == "gray":
             self._eq_lut = equalization_lut(frame, gray=gray)
         elif self.color_space == "rgb" and frame.ndim == 3 and (self.normalize != "none" or self.cast_jump > 0):
-            jumped = self.cast_jump > 0 and self._follow_cast(frame)
+            jumped = self.cast_jump > 0 and frame.dtype == np.uint8 and self._jumps.read(frame)
             if self.normalize == "none":
                 if jumped:
                     self._gain_lut(self._cast_gain)
@@ -231,7 +230,9 @@ class ColorCue:
                 g = still_gain(self._still_ref, frame) if self._still_ref is not None else None
                 if g is not None:  # a still view: its gain against the first frame holds every jump before it
                     if not np.array_equal(g, self._still_gain) or not np.all(self._cast_gain == 1.0):
-                        self._still_gain, self._cast_gain = g, np.ones(3)
+                        self._still_gain = g
+                        if self._jumps is not None:  # the still gain holds every jump before this frame
+                            self._jumps.reset(frame)
                         self._gain_lut(g)  # else the table in use stays
                 elif jumped:
                     self._gain_lut(self._still_gain * self._cast_gain)
@@ -253,16 +254,10 @@ class ColorCue:
         self.lut = (self._base_lut if np.all(np.abs(g - 1.0) < GAIN_DEAD_ZONE)
                     else self.mapped_lut(gain_maps(np.ones(3), g)))
 
-    def _follow_cast(self, frame: np.ndarray) -> bool:
-        """``cast_jump``: compare the frame with the previous one; True when a jump changed the cast gain."""
-        r = self._jumps.read(frame)
-        if r is None:
-            return False
-        med, mad = r
-        if med.max() - med.min() < self.cast_jump or mad.max() > JUMP_MAX_MAD:
-            return False
-        self._cast_gain = self._cast_gain * np.exp(med)
-        return True
+    @property
+    def _cast_gain(self) -> np.ndarray:
+        """``cast_jump``: the product of the jumps read since the start or the last still view (1 without)."""
+        return np.ones(3) if self._jumps is None else self._jumps.gain
 
     def _fit_levels(self, frame: np.ndarray | None) -> None:
         """``dark_stretch`` and ``haze_stretch``: the RGB bins over the levels ``frame`` uses when it is dark or hazy

@@ -214,14 +214,23 @@ class CastUndo:
         self.gain = np.ones(3)
         self._lut: np.ndarray | None = None
 
-    def read(self, frame: np.ndarray) -> None:
-        """Compare ``frame`` with the previous one and take in its jump, if any."""
+    def reset(self, frame: np.ndarray | None = None, gain=None) -> None:
+        """Start again: the next frame is compared with ``frame`` (None: read none), the gain is ``gain`` (1)."""
+        self.reader.reset(frame)
+        self.gain = np.ones(3) if gain is None else np.asarray(gain, np.float64)
+        self._lut = None
+
+    def read(self, frame: np.ndarray) -> bool:
+        """Compare ``frame`` with the previous one and take in its jump, if any (then True)."""
         r = self.reader.read(frame)
-        if r is not None:
-            med, mad = r
-            if med.max() - med.min() >= self.threshold and mad.max() <= JUMP_MAX_MAD:
-                self.gain = self.gain * np.exp(med)
-                self._lut = None if np.all(np.abs(self.gain - 1.0) < self.dead_zone) else undo_lut(self.gain)
+        if r is None:
+            return False
+        med, mad = r
+        if med.max() - med.min() < self.threshold or mad.max() > JUMP_MAX_MAD:
+            return False
+        self.gain = self.gain * np.exp(med)
+        self._lut = None if np.all(np.abs(self.gain - 1.0) < self.dead_zone) else undo_lut(self.gain)
+        return True
 
     def undo(self, image: np.ndarray) -> np.ndarray:
         """``image`` (the frame, or a part of it) divided by the gain read so far; itself while there is none."""
