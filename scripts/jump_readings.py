@@ -8,7 +8,8 @@ shows as a chromatic jump on one frame; camera motion, walkers and a gradual dri
     python scripts/jump_readings.py reports/split/tune_real reports/split/tune_pets
 
 Prints one line per sequence: its largest chromatic jump, the frame where it is, the channels' medians there, and
-the number of frames whose chromatic jump exceeds 0.05 / 0.1 / 0.15.
+the number of frames whose chromatic jump exceeds 0.05 / 0.1 / 0.15, and the largest common jump of the light (the
+absolute mean of the three medians, on frames whose MADs are at most 0.4).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from pftrack.cues.intensity import is_gray
-from pftrack.cues.still_gain import frame_jump, reference_lattice
+from pftrack.cues.still_gain import JUMP_MAX_MAD, frame_jump, reference_lattice
 from pftrack.io import discover_sequences
 from pftrack.io.sources import read_image
 
@@ -44,21 +45,25 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("folders", nargs="+", type=Path)
     args = ap.parse_args(argv)
-    allc = []
+    allc, alll = [], []
     for p in (s for folder in args.folders for s in discover_sequences(folder)):
         meds, mads = readings(p)
         if not len(meds):
             print(f"{p.name}: grey or too short")
             continue
         chroma = meds.max(1) - meds.min(1)
+        light = np.where(mads.max(1) <= JUMP_MAX_MAD, np.abs(meds.mean(1)), 0.0)  # the common part, where still
         allc.append(chroma)
-        k = int(np.argmax(chroma))
+        alll.append(light)
+        k, j = int(np.argmax(chroma)), int(np.argmax(light))
         counts = [int(np.sum(chroma > t)) for t in (0.05, 0.1, 0.15)]
         print(f"{p.name}: max chroma {chroma[k]:.3f} at frame {k + 1} (medians {np.round(meds[k], 3).tolist()}, "
-              f"MAD {np.round(mads[k], 3).tolist()}); frames > 0.05/0.1/0.15: {counts} of {len(chroma)}")
+              f"MAD {np.round(mads[k], 3).tolist()}); frames > 0.05/0.1/0.15: {counts} of {len(chroma)}; "
+              f"max light {light[j]:.3f} at frame {j + 1}")
     if allc:
-        c = np.concatenate(allc)
-        print(f"all: {len(c)} frames, chroma 99th pct {np.percentile(c, 99):.3f}, max {c.max():.3f}")
+        c, li = np.concatenate(allc), np.concatenate(alll)
+        print(f"all: {len(c)} frames, chroma 99th pct {np.percentile(c, 99):.3f}, max {c.max():.3f}; light (the "
+              f"channels' mean median, MADs <= {JUMP_MAX_MAD}) 99th pct {np.percentile(li, 99):.3f}, max {li.max():.3f}")
     return 0
 
 

@@ -11,7 +11,8 @@ writes grey copies the same way (:func:`write_halves` with a conversion). With `
 from a dark, noisy camera under the prefix ``dark`` (every frame times G plus Gaussian noise of ``--noise SD``
 levels, seeded; as scripts/make_variants.py --dim). With ``--cast S`` they are written under the prefix ``castS``
 (``cast0.2``) with a white balance that jumps at each half's frame 67 of 200: blue times 1 - S and red times 1 + S
-from there on, a warm cast, as scripts/make_variants.py --cast.
+from there on, a warm cast, as scripts/make_variants.py --cast. With ``--light G`` (prefix ``lightG``) every channel
+is multiplied by G from that frame on: lamps switched on (G > 1) or off (G < 1).
 """
 
 from __future__ import annotations
@@ -64,14 +65,19 @@ def main() -> None:
     ap.add_argument("--noise", type=float, default=3.0, metavar="SD", help="--dim's noise in grey levels (3)")
     ap.add_argument("--cast", type=float, metavar="S", help="copies whose white balance jumps (prefix castS): blue "
                     "and red times 1 -/+ S from each half's frame 67 on")
+    ap.add_argument("--light", type=float, metavar="G", help="copies whose light jumps (prefix lightG): every "
+                    "channel times G from each half's frame 67 on")
     args = ap.parse_args()
     convert, prefix, indexed = None, "pets", False
-    if args.dim is not None and args.cast is not None:
-        ap.error("--dim and --cast write different copies: give one")
-    if args.cast is not None:
-        if not 0 < args.cast < 1:
+    if sum(a is not None for a in (args.dim, args.cast, args.light)) > 1:
+        ap.error("--dim, --cast and --light write different copies: give one")
+    if args.cast is not None or args.light is not None:
+        if args.cast is not None and not 0 < args.cast < 1:
             ap.error(f"--cast must be in (0, 1), got {args.cast}")
-        gains = np.array([1.0 - args.cast, 1.0, 1.0 + args.cast], np.float32)
+        if args.light is not None and not 0 < args.light <= 4:
+            ap.error(f"--light must be in (0, 4], got {args.light}")
+        gains = (np.array([1.0 - args.cast, 1.0, 1.0 + args.cast], np.float32) if args.cast is not None
+                 else np.full(3, args.light, np.float32))
         start = 200 // 3
 
         def convert(frame, i):
@@ -79,7 +85,8 @@ def main() -> None:
                 return frame
             return np.clip(np.rint(frame.astype(np.float32) * gains), 0, 255).astype(np.uint8)
 
-        prefix, indexed = f"cast{args.cast:g}", True
+        prefix = f"cast{args.cast:g}" if args.cast is not None else f"light{args.light:g}"
+        indexed = True
     if args.dim is not None:
         if not 0 < args.dim <= 1 or args.noise < 0:
             ap.error(f"--dim must be in (0, 1] and --noise at least 0, got {args.dim} and {args.noise}")

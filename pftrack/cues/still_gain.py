@@ -143,13 +143,14 @@ def _jump(prev, frame, stride, lo, hi, span, log_table, hist, cur, min_chroma, m
 
 class JumpReader:
     """:func:`frame_jump` frame after frame, with its buffers kept: :meth:`read` compares a frame with the one
-    before and returns its medians and MADs ``(2, 3)`` (MADs inf unless the chromatic jump reaches ``min_chroma``,
-    and for a channel with fewer than ``min_pixels`` counted; None for the first frame or a frame of another size)."""
+    before and returns its medians and MADs ``(2, 3)`` (MADs inf unless the chromatic jump reaches ``min_chroma`` or
+    the channels' mean median reaches ``min_light`` in size, for a channel with fewer than ``min_pixels`` counted, and
+    when either frame is grey; None for the first frame or a frame of another size)."""
 
     def __init__(self, stride: int = 16, min_chroma: float = 0.0, max_mad: float = 1.0,
-                 min_pixels: int = JUMP_MIN_PIXELS):
+                 min_pixels: int = JUMP_MIN_PIXELS, min_light: float = math.inf):
         self.stride, self.min_chroma, self.max_mad = int(stride), float(min_chroma), float(max_mad)
-        self.min_pixels = int(min_pixels)
+        self.min_pixels, self.min_light = int(min_pixels), float(min_light)
         self._hist = np.zeros((3, HIST_BINS), np.int64)
         self._prev: np.ndarray | None = None
         self._cur: np.ndarray | None = None
@@ -166,9 +167,11 @@ class JumpReader:
         if self._prev is None or self._prev.shape[:2] != shape or frame.ndim != 3 or frame.dtype != np.uint8:
             self.reset(frame if frame.ndim == 3 and frame.dtype == np.uint8 else None)
             return None
-        out = _jump(self._prev, frame, s, LOW, HIGH, SPAN, _LOG, self._hist, self._cur, self.min_chroma,
-                    self.max_mad, self.min_pixels, self._out)
-        if out[0].max() - out[0].min() >= self.min_chroma and (_grey_lattice(self._prev) or _grey_lattice(self._cur)):
+        light = math.isfinite(self.min_light)  # a common jump of the light is read too: every MAD walked
+        out = _jump(self._prev, frame, s, LOW, HIGH, SPAN, _LOG, self._hist, self._cur,
+                    -math.inf if light else self.min_chroma, self.max_mad, self.min_pixels, self._out)
+        candidate = out[0].max() - out[0].min() >= self.min_chroma or abs(out[0].mean()) >= self.min_light
+        if candidate and (_grey_lattice(self._prev) or _grey_lattice(self._cur)):
             out[1] = math.inf  # a camera switching between colour and grey (night mode) is not a white balance
         self._prev, self._cur = self._cur, self._prev
         return out[:2]
@@ -202,22 +205,26 @@ def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0,
 class CastUndo:
     """A frame with the white balance jumps read so far undone (``cast_jump`` of a whole-frame pipeline: ``pftrack
     mot``'s background subtraction and colour models). Call it on every frame in order: a frame whose chromatic jump
-    against the previous one (:class:`JumpReader`) is at least ``threshold``, every channel's MAD at most
-    ``JUMP_MAX_MAD``, multiplies a per-channel gain by the jump's; each frame is returned divided by that gain (a
-    per-channel table, cv2.LUT), or as it is while the gain is within ``dead_zone`` of 1."""
+    against the previous one (:class:`JumpReader`) is at least ``threshold``, or with ``light`` > 0 whose channels'
+    mean median log-ratio is at least ``light`` in size (lamps switched on or off: every channel at once), every
+    channel's MAD at most ``JUMP_MAX_MAD``, multiplies a per-channel gain by the jump's; each frame is returned
+    divided by that gain (a per-channel table, cv2.LUT), or as it is while the gain is within ``dead_zone`` of 1.
+    ``threshold`` 0 reads no chromatic jump."""
 
-    def __init__(self, threshold: float, *, dead_zone: float = 0.05):
-        if not threshold > 0:
-            raise ValueError(f"threshold must be > 0, got {threshold!r}")
-        self.threshold, self.dead_zone = float(threshold), float(dead_zone)
-        self.reader = JumpReader(min_chroma=self.threshold, max_mad=JUMP_MAX_MAD)
+    def __init__(self, threshold: float, *, light: float = 0.0, dead_zone: float = 0.05):
+        if not (threshold >= 0 and light >= 0 and threshold + light > 0):
+            raise ValueError(f"threshold and light must be >= 0, one of them > 0, got {threshold!r}, {light!r}")
+        self.threshold = float(threshold) if threshold > 0 else math.inf
+        self.light = float(light) if light > 0 else math.inf
+        self.dead_zone = float(dead_zone)
+        self.reader = JumpReader(min_chroma=self.threshold, max_mad=JUMP_MAX_MAD, min_light=self.light)
         self.gain = np.ones(3)
         self._lut: np.ndarray | None = None
 
-    def reset(self, frame: np.ndarray | None = None, gain=None) -> None:
-        """Start again: the next frame is compared with ``frame`` (None: read none), the gain is ``gain`` (1)."""
+    def reset(self, frame: np.ndarray | None = None) -> None:
+        """Start again: the next frame is compared with ``frame`` (None: read none), the gain is 1."""
         self.reader.reset(frame)
-        self.gain = np.ones(3) if gain is None else np.asarray(gain, np.float64)
+        self.gain = np.ones(3)
         self._lut = None
 
     def read(self, frame: np.ndarray) -> bool:
@@ -226,7 +233,7 @@ class CastUndo:
         if r is None:
             return False
         med, mad = r
-        if med.max() - med.min() < self.threshold or mad.max() > JUMP_MAX_MAD:
+        if (med.max() - med.min() < self.threshold and abs(med.mean()) < self.light) or mad.max() > JUMP_MAX_MAD:
             return False
         self.gain = self.gain * np.exp(med)
         self._lut = None if np.all(np.abs(self.gain - 1.0) < self.dead_zone) else undo_lut(self.gain)

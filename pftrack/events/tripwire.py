@@ -136,7 +136,8 @@ class TrackerlessTripwire:
         if p.bgs == "mog2":
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
-        self._cast = CastUndo(p.cast_jump) if p.cast_jump > 0 and not p.faithful else None
+        self._cast = (CastUndo(p.cast_jump, light=p.light_jump)
+                      if (p.cast_jump > 0 or p.light_jump > 0) and not p.faithful else None)
         self._denoise = False
         self._prev_gray: np.ndarray | None = None
         self._prev2_gray: np.ndarray | None = None

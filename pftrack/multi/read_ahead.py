@@ -20,8 +20,9 @@ class ReadAhead:
         """Before the first update: start the detector's background from the first frames of the stream (read ahead
         by the caller, ``bootstrap_frames`` of them); a detector without a background ignores it."""
         if hasattr(self.detector, "prime") and len(frames):
-            if self.params.cast_jump > 0:  # with their own jumps undone (update reads them again)
-                undo = CastUndo(self.params.cast_jump)
+            p = self.params
+            if p.cast_jump > 0 or p.light_jump > 0:  # with their own jumps undone (update reads them again)
+                undo = CastUndo(p.cast_jump, light=p.light_jump)
                 frames = [undo(as_bgr_uint8(f)) for f in frames]
             self.detector.prime(frames)
 

@@ -116,7 +116,8 @@ class MultiPF(ReadAhead):
         self.identities = IdentityMemory(threshold=self.params.identify_threshold, memory=self.params.identify_memory)
         self.frame_index = 0
         self._shape: tuple[int, int] | None = None
-        self._cast = CastUndo(p.cast_jump) if p.cast_jump > 0 else None  # frames with their light jumps undone
+        # frames with their jumps of the light undone (cast_jump, light_jump)
+        self._cast = CastUndo(p.cast_jump, light=p.light_jump) if p.cast_jump > 0 or p.light_jump > 0 else None
 
     # ------------------------------------------------------------------ helpers
     def _histogram(self, frame: np.ndarray, box, stored: ColorFeatures | None = None) -> np.ndarray:
