@@ -53,6 +53,11 @@ class LocalMotionPFParams(ColorModelParams):
         "before its runs (docs/rules/lm_dark_stretch_rule.txt, docs/robustness.md): 31 dark tune copies, mean AUC "
         "0.300 against 0.195, pooled false-lost 0.005 against 0.017; the tune split, views and windows identical "
         "run for run."))
+    cast_jump: float = param(0.2, ge=0, le=3, doc=(
+        "See ColorModelParams.cast_jump (off there). 0.2, as color-pf and fusion-pf, chosen under a rule stated before "
+        "its runs (docs/rules/lm_cast_jump_rule.txt, docs/robustness.md): 26 tune copies whose white balance jumps, "
+        "mean AUC 0.305 against 0.240, pooled false-lost 0.005 against 0.175; the tune sequences as recorded "
+        "identical run for run."))
     motion: bool = param(True, doc=(
         "Multiply the local-motion likelihood into the colour likelihood (Eq. 11). False gives the paper's "
         "reference colour tracker T_ref (same dynamics, colour likelihood only; with search=false, as in the paper)."))
