@@ -44,9 +44,10 @@ class ColorPFParams(ColorModelParams):
         "tune synthetic and photo scenes 0.669 against 0.659 (camouflage 0.266 against 0.122), re-acquired 172 of "
         "234 both; the tune real sequences, PETS people, views and windows read below 1.8 (identical)."))
     cast_jump: float = param(0.2, ge=0, le=3, doc=(
-        "See ColorModelParams.cast_jump (off there and for local-motion-pf). 0.2 for color-pf and fusion-pf, "
-        "chosen under a rule stated before its runs (docs/rules/cast_jump_rule.txt, docs/robustness.md): 26 tune "
-        "copies never run whose white balance jumps (real sequences and PETS people, casts of 0.15 and 0.3) mean "
+        "See ColorModelParams.cast_jump (off there; 0.2 for local-motion-pf under its own rule). 0.2 for color-pf "
+        "and fusion-pf, chosen under a rule stated before its runs (docs/rules/cast_jump_rule.txt, "
+        "docs/robustness.md): 26 tune copies never run whose white balance jumps (real sequences and PETS people, "
+        "casts of 0.15 and 0.3) mean "
         "AUC 0.384 against 0.351 (color-pf, pooled false-lost 0.000 against 0.058) and 0.472 against 0.449 "
         "(fusion-pf, 0.005 against 0.013); the tune sequences as recorded read no jump of 0.2 (identical runs)."))
     lost_frames: int = param(2, ge=1, le=1000, doc=(
