@@ -63,7 +63,8 @@ def main(argv=None) -> int:
     if allc:
         c, li = np.concatenate(allc), np.concatenate(alll)
         print(f"all: {len(c)} frames, chroma 99th pct {np.percentile(c, 99):.3f}, max {c.max():.3f}; light (the "
-              f"channels' mean median, MADs <= {JUMP_MAX_MAD}) 99th pct {np.percentile(li, 99):.3f}, max {li.max():.3f}")
+              f"channels' mean median, MADs <= {JUMP_MAX_MAD}) 99th pct {np.percentile(li, 99):.3f}, "
+              f"max {li.max():.3f}")
     return 0
 
 

@@ -26,7 +26,7 @@ from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histog
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
 from .quantize import level_gain, level_range, make_lut, quantize, quantize_region, shift_form, stretched_lut
-from .still_gain import CastUndo, reference_lattice, still_gain
+from .still_gain import cast_undo, reference_lattice, still_gain
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
 #: Gains within this of 1 leave the raw colours ("adaptive" and "still"): no jitter from the gain's estimate.
@@ -166,7 +166,7 @@ class ColorCue:
             raise ValueError(f"cast_jump works with normalize 'none' or 'still', not {normalize!r}")
         self.cast_jump = float(cast_jump)
         # cast_jump: the jumps read since the start (or the last still view), their product in _cast_gain
-        self._jumps = CastUndo(self.cast_jump) if self.cast_jump > 0 else None
+        self._jumps = cast_undo(self.cast_jump)
         self.level_gain = 1.0
         self.level_offset = 0.0
         self._ref_levels: np.ndarray | None = None
@@ -231,8 +231,8 @@ class ColorCue:
                 if g is not None:  # a still view: its gain against the first frame holds every jump before it
                     if not np.array_equal(g, self._still_gain) or not np.all(self._cast_gain == 1.0):
                         self._still_gain = g
-                        if self._jumps is not None:  # the still gain holds every jump before this frame
-                            self._jumps.reset(frame)
+                        if self._jumps is not None and not np.all(self._jumps.gain == 1.0):
+                            self._jumps.reset(frame)  # the still gain holds every jump before this frame
                         self._gain_lut(g)  # else the table in use stays
                 elif jumped:
                     self._gain_lut(self._still_gain * self._cast_gain)

@@ -10,6 +10,11 @@ reference, not multiplied up from frame to frame, it accumulates no bias.
 
 Both statistics come from a histogram of the log-ratios (``HIST_BINS`` bins over ``[-SPAN, SPAN]``), so the cost is one
 pass over the lattice whatever its size (about 1 600 pixels a channel on an 854 x 480 frame with a stride of 16).
+
+The same log-ratios between consecutive frames read a jump of the light (``cast_jump``, ``light_jump``;
+:func:`frame_jump`, :class:`JumpReader`, :class:`CastUndo`): a white balance that switches moves the channels' medians
+apart, lamps switched on or off move them together, and camera motion spreads the log-ratios without moving the
+medians. The jumps read are multiplied into a gain that the colour bins or the frames undo.
 """
 
 from __future__ import annotations
@@ -248,6 +253,11 @@ class CastUndo:
     def __call__(self, frame: np.ndarray) -> np.ndarray:
         self.read(frame)
         return self.undo(frame)
+
+
+def cast_undo(cast_jump: float, light_jump: float = 0.0) -> CastUndo | None:
+    """The :class:`CastUndo` of a pipeline's ``cast_jump`` and ``light_jump`` parameters, or None when both are 0."""
+    return CastUndo(cast_jump, light=light_jump) if cast_jump > 0 or light_jump > 0 else None
 
 
 def undo_lut(gain: np.ndarray) -> np.ndarray:

@@ -8,7 +8,7 @@ from collections import deque
 from collections.abc import Iterator
 from typing import Callable
 
-from ..cues.still_gain import CastUndo
+from ..cues.still_gain import cast_undo
 from ..frames import as_bgr_uint8
 
 
@@ -20,9 +20,8 @@ class ReadAhead:
         """Before the first update: start the detector's background from the first frames of the stream (read ahead
         by the caller, ``bootstrap_frames`` of them); a detector without a background ignores it."""
         if hasattr(self.detector, "prime") and len(frames):
-            p = self.params
-            if p.cast_jump > 0 or p.light_jump > 0:  # with their own jumps undone (update reads them again)
-                undo = CastUndo(p.cast_jump, light=p.light_jump)
+            undo = cast_undo(self.params.cast_jump, self.params.light_jump)
+            if undo is not None:  # with their own jumps undone (update reads them again)
                 frames = [undo(as_bgr_uint8(f)) for f in frames]
             self.detector.prime(frames)
 

@@ -55,7 +55,7 @@ from ..cues.contrast import (
     probability_integral,
 )
 from ..cues.histogram_cue import ColorCue, ColorFeatures
-from ..cues.still_gain import CastUndo
+from ..cues.still_gain import cast_undo
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
 from ..geometry import in_frame_fraction as _inside_fraction
@@ -117,7 +117,7 @@ class MultiPF(ReadAhead):
         self.frame_index = 0
         self._shape: tuple[int, int] | None = None
         # frames with their jumps of the light undone (cast_jump, light_jump)
-        self._cast = CastUndo(p.cast_jump, light=p.light_jump) if p.cast_jump > 0 or p.light_jump > 0 else None
+        self._cast = cast_undo(p.cast_jump, p.light_jump)
 
     # ------------------------------------------------------------------ helpers
     def _histogram(self, frame: np.ndarray, box, stored: ColorFeatures | None = None) -> np.ndarray:
