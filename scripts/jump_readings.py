@@ -9,7 +9,8 @@ shows as a chromatic jump on one frame; camera motion, walkers and a gradual dri
 
 Prints one line per sequence: its largest chromatic jump, the frame where it is, the channels' medians there, and
 the number of frames whose chromatic jump exceeds 0.05 / 0.1 / 0.15, and the largest common jump of the light (the
-absolute mean of the three medians, on frames whose MADs are at most 0.4).
+absolute mean of the three medians, on frames whose MADs are at most 0.4). Grey sequences are read too (their
+chromatic jumps are 0); a frame where the camera switches between colour and grey reads no jump.
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pftrack.cues.intensity import is_gray
 from pftrack.cues.still_gain import JUMP_MAX_MAD, frame_jump, reference_lattice
+from pftrack.frames import as_bgr_uint8
 from pftrack.io import discover_sequences
 from pftrack.io.sources import read_image
 
@@ -30,8 +31,9 @@ def readings(seq) -> tuple[np.ndarray, np.ndarray]:
     prev, meds, mads = None, [], []
     for f in seq.frames:
         frame = read_image(f)
-        if frame is None or frame.ndim != 3 or is_gray(frame):
+        if frame is None:
             return np.zeros((0, 3)), np.zeros((0, 3))
+        frame = as_bgr_uint8(frame)  # a grey image file: three equal channels, as the trackers see it
         lat = reference_lattice(frame)
         if prev is not None:
             m, d = frame_jump(prev, lat)
@@ -49,7 +51,7 @@ def main(argv=None) -> int:
     for p in (s for folder in args.folders for s in discover_sequences(folder)):
         meds, mads = readings(p)
         if not len(meds):
-            print(f"{p.name}: grey or too short")
+            print(f"{p.name}: unreadable or too short")
             continue
         chroma = meds.max(1) - meds.min(1)
         light = np.where(mads.max(1) <= JUMP_MAX_MAD, np.abs(meds.mean(1)), 0.0)  # the common part, where still

@@ -12,7 +12,9 @@ from a dark, noisy camera under the prefix ``dark`` (every frame times G plus Ga
 levels, seeded; as scripts/make_variants.py --dim). With ``--cast S`` they are written under the prefix ``castS``
 (``cast0.2``) with a white balance that jumps at each half's frame 67 of 200: blue times 1 - S and red times 1 + S
 from there on, a warm cast, as scripts/make_variants.py --cast. With ``--light G`` (prefix ``lightG``) every channel
-is multiplied by G from that frame on: lamps switched on (G > 1) or off (G < 1).
+is multiplied by G from that frame on: lamps switched on (G > 1) or off (G < 1). ``--grey`` converts the frames to
+grey first (one channel, as scripts/grey_foreground.py; prefix ``grey``, ``greylightG`` with ``--light``): a grey
+camera whose lamps switch.
 """
 
 from __future__ import annotations
@@ -67,10 +69,14 @@ def main() -> None:
                     "and red times 1 -/+ S from each half's frame 67 on")
     ap.add_argument("--light", type=float, metavar="G", help="copies whose light jumps (prefix lightG): every "
                     "channel times G from each half's frame 67 on")
+    ap.add_argument("--grey", action="store_true", help="grey copies (prefix grey): the frames converted to grey "
+                    "first, with --light or --dim applied after")
     args = ap.parse_args()
     convert, prefix, indexed = None, "pets", False
     if sum(a is not None for a in (args.dim, args.cast, args.light)) > 1:
         ap.error("--dim, --cast and --light write different copies: give one")
+    if args.grey and args.cast is not None:
+        ap.error("--cast is a white balance: a grey copy has none")
     if args.cast is not None or args.light is not None:
         if args.cast is not None and not 0 < args.cast < 1:
             ap.error(f"--cast must be in (0, 1), got {args.cast}")
@@ -83,7 +89,8 @@ def main() -> None:
         def convert(frame, i):
             if i < start:
                 return frame
-            return np.clip(np.rint(frame.astype(np.float32) * gains), 0, 255).astype(np.uint8)
+            g = gains if frame.ndim == 3 else gains[1]  # a grey frame: --light's common gain
+            return np.clip(np.rint(frame.astype(np.float32) * g), 0, 255).astype(np.uint8)
 
         prefix = f"cast{args.cast:g}" if args.cast is not None else f"light{args.light:g}"
         indexed = True
@@ -97,6 +104,16 @@ def main() -> None:
             return np.clip(np.rint(x), 0, 255).astype(np.uint8)
 
         prefix = "dark"
+    if args.grey:
+        import cv2
+
+        inner = convert
+
+        def convert(frame, *i):
+            g = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+            return g if inner is None else inner(g, *i)
+
+        prefix = "grey" if prefix == "pets" else "grey" + prefix
     for half, folder in write_halves(Path(args.data) / "pets09_s2l1_dev", Path(args.out), prefix=prefix,
                                      convert=convert, indexed=indexed).items():
         print(f"{half}: {folder}")

@@ -14,7 +14,9 @@ pass over the lattice whatever its size (about 1 600 pixels a channel on an 854 
 The same log-ratios between consecutive frames read a jump of the light (``cast_jump``, ``light_jump``;
 :func:`frame_jump`, :class:`JumpReader`, :class:`CastUndo`): a white balance that switches moves the channels' medians
 apart, lamps switched on or off move them together, and camera motion spreads the log-ratios without moving the
-medians. The jumps read are multiplied into a gain that the colour bins or the frames undo.
+medians. The jumps read are multiplied into a gain that the colour bins or the frames undo. A switch between colour
+and grey (a night mode) reads as no jump; between grey frames a grey camera's lamps read as a common jump only where
+asked (``grey=True``: the tripwire's ``light_jump_grey``).
 """
 
 from __future__ import annotations
@@ -150,12 +152,13 @@ class JumpReader:
     """:func:`frame_jump` frame after frame, with its buffers kept: :meth:`read` compares a frame with the one
     before and returns its medians and MADs ``(2, 3)`` (MADs inf unless the chromatic jump reaches ``min_chroma`` or
     the channels' mean median reaches ``min_light`` in size, for a channel with fewer than ``min_pixels`` counted, and
-    when either frame is grey; None for the first frame or a frame of another size)."""
+    when either frame is grey; with ``grey`` only when one frame is grey and the other not, so that lamps switched
+    on a grey camera read as a common jump; None for the first frame or a frame of another size)."""
 
     def __init__(self, stride: int = 16, min_chroma: float = 0.0, max_mad: float = 1.0,
-                 min_pixels: int = JUMP_MIN_PIXELS, min_light: float = math.inf):
+                 min_pixels: int = JUMP_MIN_PIXELS, min_light: float = math.inf, grey: bool = False):
         self.stride, self.min_chroma, self.max_mad = int(stride), float(min_chroma), float(max_mad)
-        self.min_pixels, self.min_light = int(min_pixels), float(min_light)
+        self.min_pixels, self.min_light, self.grey = int(min_pixels), float(min_light), bool(grey)
         self._hist = np.zeros((3, HIST_BINS), np.int64)
         self._prev: np.ndarray | None = None
         self._cur: np.ndarray | None = None
@@ -176,10 +179,18 @@ class JumpReader:
         out = _jump(self._prev, frame, s, LOW, HIGH, SPAN, _LOG, self._hist, self._cur,
                     -math.inf if light else self.min_chroma, self.max_mad, self.min_pixels, self._out)
         candidate = out[0].max() - out[0].min() >= self.min_chroma or abs(out[0].mean()) >= self.min_light
-        if candidate and (_grey_lattice(self._prev) or _grey_lattice(self._cur)):
-            out[1] = math.inf  # a camera switching between colour and grey (night mode) is not a white balance
         self._prev, self._cur = self._cur, self._prev
+        if candidate:
+            a, b = _grey_lattice(self._prev), _grey_lattice(self._cur)
+            if a != b or (a and not self.grey):
+                out[1] = math.inf  # a camera switching between colour and grey (night mode) is not a jump of the light
         return out[:2]
+
+    def switched(self) -> bool:
+        """Whether the camera switched between colour and grey (a night mode) between the last two frames read."""
+        if self._prev is None or self._cur is None:
+            return False
+        return _grey_lattice(self._prev) != _grey_lattice(self._cur)
 
 
 def _grey_lattice(lat: np.ndarray, tolerance: int = 2) -> bool:
@@ -190,20 +201,23 @@ def _grey_lattice(lat: np.ndarray, tolerance: int = 2) -> bool:
     return int(np.count_nonzero(spread > tolerance)) <= spread.size // 100
 
 
-def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0,
-               min_pixels: int = JUMP_MIN_PIXELS) -> tuple[np.ndarray, np.ndarray]:
+def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0, min_pixels: int = JUMP_MIN_PIXELS,
+               grey: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel median log-ratio ``(3,)`` of a frame's lattice against the previous frame's (both
     :func:`reference_lattice` of BGR uint8 frames, same stride), and the MADs ``(3,)`` (the walk stops just above
     ``max_mad``). A channel with fewer than ``min_pixels`` counted (levels clipped or dark in most of the view) reads
-    0 and MAD inf; every MAD is inf when either frame is grey (a camera switching to or from a night mode).
+    0 and MAD inf; every MAD is inf when either frame is grey (with ``grey``: only when one frame is grey and the
+    other is not, a camera switching to or from a night mode; between two grey frames the channels' medians are
+    equal, so lamps switched on or off read as a common jump and nothing as a chromatic one).
 
     A white balance that switches between the two frames scales each channel by its own factor: the medians are
     their logs and differ between channels (a chromatic jump); camera motion and walkers spread the log-ratios
     about 0 without moving the channels' medians apart."""
     out = _jump(prev, lattice, 1, LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64), np.empty_like(prev),
                 -math.inf, float(max_mad), int(min_pixels), np.zeros((3, 3)))
-    if _grey_lattice(prev) or _grey_lattice(lattice):
-        out[1] = math.inf  # a switch between colour and grey, or grey frames: no white balance to read
+    a, b = _grey_lattice(prev), _grey_lattice(lattice)
+    if a != b or (a and not grey):
+        out[1] = math.inf  # a switch between colour and grey (or, unless asked, grey frames): no jump to read
     return out[0].copy(), out[1].copy()
 
 
@@ -214,15 +228,17 @@ class CastUndo:
     mean median log-ratio is at least ``light`` in size (lamps switched on or off: every channel at once), every
     channel's MAD at most ``JUMP_MAX_MAD``, multiplies a per-channel gain by the jump's; each frame is returned
     divided by that gain (a per-channel table, cv2.LUT), or as it is while the gain is within ``dead_zone`` of 1.
-    ``threshold`` 0 reads no chromatic jump."""
+    ``threshold`` 0 reads no chromatic jump. Between grey frames nothing is read, or with ``grey`` the common jump;
+    when the camera switches between colour and grey (a night mode) the cast read so far is dropped and the light's
+    part kept (a grey frame undone channel by channel would no longer be grey)."""
 
-    def __init__(self, threshold: float, *, light: float = 0.0, dead_zone: float = 0.05):
+    def __init__(self, threshold: float, *, light: float = 0.0, dead_zone: float = 0.05, grey: bool = False):
         if not (threshold >= 0 and light >= 0 and threshold + light > 0):
             raise ValueError(f"threshold and light must be >= 0, one of them > 0, got {threshold!r}, {light!r}")
         self.threshold = float(threshold) if threshold > 0 else math.inf
         self.light = float(light) if light > 0 else math.inf
         self.dead_zone = float(dead_zone)
-        self.reader = JumpReader(min_chroma=self.threshold, max_mad=JUMP_MAX_MAD, min_light=self.light)
+        self.reader = JumpReader(min_chroma=self.threshold, max_mad=JUMP_MAX_MAD, min_light=self.light, grey=grey)
         self.gain = np.ones(3)
         self._lut: np.ndarray | None = None
 
@@ -238,6 +254,10 @@ class CastUndo:
         if r is None:
             return False
         med, mad = r
+        if not np.all(self.gain == self.gain[0]) and self.reader.switched():
+            # a grey night mode has no white balance: the cast read so far goes, the light's common part stays
+            self.gain = np.full(3, math.exp(float(np.log(self.gain).mean())))
+            self._lut = None if abs(self.gain[0] - 1.0) < self.dead_zone else undo_lut(self.gain)
         if (med.max() - med.min() < self.threshold and abs(med.mean()) < self.light) or mad.max() > JUMP_MAX_MAD:
             return False
         self.gain = self.gain * np.exp(med)
@@ -255,9 +275,12 @@ class CastUndo:
         return self.undo(frame)
 
 
-def cast_undo(cast_jump: float, light_jump: float = 0.0) -> CastUndo | None:
-    """The :class:`CastUndo` of a pipeline's ``cast_jump`` and ``light_jump`` parameters, or None when both are 0."""
-    return CastUndo(cast_jump, light=light_jump) if cast_jump > 0 or light_jump > 0 else None
+def cast_undo(cast_jump: float, light_jump: float = 0.0, light_jump_grey: bool = False) -> CastUndo | None:
+    """The :class:`CastUndo` of a pipeline's ``cast_jump``, ``light_jump`` and ``light_jump_grey`` parameters, or
+    None when both jumps are 0."""
+    if cast_jump <= 0 and light_jump <= 0:
+        return None
+    return CastUndo(cast_jump, light=light_jump, grey=light_jump_grey)
 
 
 def undo_lut(gain: np.ndarray) -> np.ndarray:
