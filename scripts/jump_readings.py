@@ -36,7 +36,7 @@ def readings(seq) -> tuple[np.ndarray, np.ndarray]:
         frame = as_bgr_uint8(frame)  # a grey image file: three equal channels, as the trackers see it
         lat = reference_lattice(frame)
         if prev is not None:
-            m, d = frame_jump(prev, lat)
+            m, d = frame_jump(prev, lat, grey=True)  # a grey camera's lamps read too (light_jump_grey)
             meds.append(m)
             mads.append(d)
         prev = lat

@@ -256,3 +256,48 @@ def test_a_switch_to_grey_and_back_reads_no_jump():
     for frame in (f, grey, f):
         assert undo(frame) is frame
     np.testing.assert_array_equal(undo.gain, 1.0)
+
+
+def test_a_grey_camera_s_lamps_are_read_only_when_asked():
+    """Between two grey frames the channels' medians are equal: no chromatic jump, but lamps switched on move them
+    together. ``grey=True`` (the tripwire's ``light_jump_grey``) reads that common jump and undoes it; by default grey
+    frames read nothing (docs/rules/grey_light_rule.txt)."""
+    from pftrack.cues.still_gain import CastUndo
+
+    f, _ = _colour_frame(5)
+    grey = cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
+    lit = _cast(grey, np.full(3, 1.3, np.float32))
+    med, mad = frame_jump(reference_lattice(grey), reference_lattice(lit), grey=True)
+    np.testing.assert_allclose(med, np.log(1.3), atol=0.03)
+    assert med[0] == med[1] == med[2] and np.all(mad < 0.1), (med, mad)
+    assert np.isinf(frame_jump(reference_lattice(grey), reference_lattice(lit))[1]).all()
+    on, off = CastUndo(0.2, light=0.18, grey=True), CastUndo(0.2, light=0.18)
+    for frame in (grey, grey, lit):
+        back, kept = on(frame), off(frame)
+    np.testing.assert_allclose(on.gain, 1.3, atol=0.04)
+    assert np.abs(back.astype(int) - grey).mean() < 1.5  # the frame before the lamps, up to rounding and clipping
+    assert np.all(back[..., 0] == back[..., 2])  # still grey
+    assert kept is lit and np.all(off.gain == 1.0)
+    # a switch from colour to grey is no jump, with or without grey=True
+    undo = CastUndo(0.2, light=0.18, grey=True)
+    for frame in (f, grey):
+        assert undo(frame) is frame
+    np.testing.assert_array_equal(undo.gain, 1.0)
+
+
+def test_a_switch_to_grey_drops_the_cast_read_before_and_keeps_the_light():
+    """A warm cast read on colour frames, then lamps: at a switch to a grey night mode the per-channel part of the
+    gain goes (an undo channel by channel would colour the grey frames), the common part stays."""
+    from pftrack.cues.still_gain import CastUndo
+
+    f, _ = _colour_frame(6)
+    undo = CastUndo(0.2, light=0.18)
+    for frame in (f, _cast(f), _cast(f, WARM * 1.3)):
+        undo(frame)
+    np.testing.assert_allclose(undo.gain, WARM * 1.3, atol=0.05)
+    grey = cv2.cvtColor(cv2.cvtColor(_cast(f, WARM * 1.3), cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
+    out = undo(grey)
+    g = undo.gain
+    assert g[0] == g[1] == g[2], g
+    np.testing.assert_allclose(g[0], np.exp(np.log(WARM * 1.3).mean()), atol=0.05)
+    assert np.all(out[..., 0] == out[..., 1]) and np.all(out[..., 1] == out[..., 2])  # the grey frame stays grey
