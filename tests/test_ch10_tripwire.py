@@ -359,13 +359,19 @@ def test_radius_auto_reads_the_frames_as_the_tripwire_sees_them():
     assert 10 <= r <= 16  # half the short side of a disc of radius 14
 
 
-@pytest.mark.parametrize("warm, option", [(np.array([0.75, 1.0, 1.25]), "cast_jump"), (np.full(3, 1.3), "light_jump")])
-def test_trackerless_tripwire_counts_through_a_jump_of_the_white_balance(warm, option):
+@pytest.mark.parametrize("warm, option, grey", [(np.array([0.75, 1.0, 1.25]), "cast_jump", False),
+                                               (np.full(3, 1.3), "light_jump", False),
+                                               (np.full(3, 1.3), "light_jump_grey", True)])
+def test_trackerless_tripwire_counts_through_a_jump_of_the_white_balance(warm, option, grey):
     """The two movers with a warm cast (blue times 0.75, red times 1.25), or with the lamps switched on (every channel
-    times 1.3), from frame 15, 25 or 40: with the jump undone (cast_jump, light_jump, the defaults) the two crossings
-    are found once each at their frames; without, the jump's frame gives a false event or puts a crossing off its
-    frame (measured: all three, both)."""
+    times 1.3; also seen by a grey camera), from frame 15, 25 or 40: with the jump undone (cast_jump, light_jump,
+    light_jump_grey, the defaults) the two crossings are found once each at their frames; without, the jump's frame
+    gives a false event or puts a crossing off its frame (measured: all three, each)."""
+    import cv2
+
     wire, frames = _two_movers()
+    if grey:
+        frames = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
 
     def crossings(at, **kw):
         cast = [np.clip(np.rint(f * warm), 0, 255).astype(np.uint8) if k >= at else f for k, f in enumerate(frames)]
@@ -375,11 +381,16 @@ def test_trackerless_tripwire_counts_through_a_jump_of_the_white_balance(warm, o
             ev += tw.process(f, n)
         return sorted((e.direction, e.frame) for e in ev)
 
-    assert TripwireParams().cast_jump == 0.2 and TripwireParams().light_jump == 0.18
+    p = TripwireParams()
+    assert p.cast_jump == 0.2 and p.light_jump == 0.18 and p.light_jump_grey
     wrong = 0
+    still = crossings(len(frames))  # no jump
     for at in (15, 25, 40):
         found = crossings(at)
-        assert [d for d, _ in found] == [-1, 1], (at, found)
-        assert 27 <= dict(found)[1] <= 31 and 41 <= dict(found)[-1] <= 45, (at, found)
-        wrong += crossings(at, **{option: 0.0}) != found
+        if grey:  # in grey the mover going down has about the ground's level (94 against 100): not found, jump or not
+            assert found == still == [(-1, 43)], (at, found)
+        else:
+            assert [d for d, _ in found] == [-1, 1], (at, found)
+            assert 27 <= dict(found)[1] <= 31 and 41 <= dict(found)[-1] <= 45, (at, found)
+        wrong += crossings(at, **{option: False if grey else 0.0}) != found
     assert wrong >= 2
