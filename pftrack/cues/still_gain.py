@@ -230,9 +230,15 @@ class CastUndo:
     divided by that gain (a per-channel table, cv2.LUT), or as it is while the gain is within ``dead_zone`` of 1.
     ``threshold`` 0 reads no chromatic jump. Between grey frames nothing is read, or with ``grey`` the common jump;
     when the camera switches between colour and grey (a night mode) the cast read so far is dropped and the light's
-    part kept (a grey frame undone channel by channel would no longer be grey)."""
+    part kept (a grey frame undone channel by channel would no longer be grey).
 
-    def __init__(self, threshold: float, *, light: float = 0.0, dead_zone: float = 0.05, grey: bool = False):
+    ``clip_fill``: a level clipped at 255 in a channel the jumps brightened (gain above 1) is only known to be at least
+    255 / gain once undone; it takes the level seen at that pixel just before the last jump when that is higher (the
+    image passed to :meth:`undo` before it; the same part of the frame on every call). Without it a bright background
+    clipped by lamps switched on stays flat at 255 / gain, and a background model takes it for foreground."""
+
+    def __init__(self, threshold: float, *, light: float = 0.0, dead_zone: float = 0.05, grey: bool = False,
+                 clip_fill: bool = False):
         if not (threshold >= 0 and light >= 0 and threshold + light > 0):
             raise ValueError(f"threshold and light must be >= 0, one of them > 0, got {threshold!r}, {light!r}")
         self.threshold = float(threshold) if threshold > 0 else math.inf
@@ -241,12 +247,16 @@ class CastUndo:
         self.reader = JumpReader(min_chroma=self.threshold, max_mad=JUMP_MAX_MAD, min_light=self.light, grey=grey)
         self.gain = np.ones(3)
         self._lut: np.ndarray | None = None
+        self.clip_fill = bool(clip_fill)
+        self._last: np.ndarray | None = None  # clip_fill: the last image undone, and the one before the last jump
+        self._ref: np.ndarray | None = None
 
     def reset(self, frame: np.ndarray | None = None) -> None:
         """Start again: the next frame is compared with ``frame`` (None: read none), the gain is 1."""
         self.reader.reset(frame)
         self.gain = np.ones(3)
         self._lut = None
+        self._last = self._ref = None
 
     def read(self, frame: np.ndarray) -> bool:
         """Compare ``frame`` with the previous one and take in its jump, if any (then True)."""
@@ -258,8 +268,10 @@ class CastUndo:
             # a grey night mode has no white balance: the cast read so far goes, the light's common part stays
             self.gain = np.full(3, math.exp(float(np.log(self.gain).mean())))
             self._lut = None if abs(self.gain[0] - 1.0) < self.dead_zone else undo_lut(self.gain)
+            self._ref = None
         if (med.max() - med.min() < self.threshold and abs(med.mean()) < self.light) or mad.max() > JUMP_MAX_MAD:
             return False
+        self._ref = self._last
         self.gain = self.gain * np.exp(med)
         self._lut = None if np.all(np.abs(self.gain - 1.0) < self.dead_zone) else undo_lut(self.gain)
         return True
@@ -267,20 +279,35 @@ class CastUndo:
     def undo(self, image: np.ndarray) -> np.ndarray:
         """``image`` (the frame, or a part of it) divided by the gain read so far; itself while there is none."""
         if self._lut is None or image.ndim != 3:
-            return image
-        return cv2.LUT(image, self._lut)
+            out = image
+        else:
+            out = cv2.LUT(image, self._lut)
+            if self.clip_fill and self._ref is not None and self._ref.shape == image.shape:
+                _fill_clipped(image, out, self._ref, self.gain > 1.0 + self.dead_zone)
+        if self.clip_fill:
+            self._last = out.copy() if out is image else out  # the caller may draw on its frame
+        return out
 
     def __call__(self, frame: np.ndarray) -> np.ndarray:
         self.read(frame)
         return self.undo(frame)
 
 
-def cast_undo(cast_jump: float, light_jump: float = 0.0, light_jump_grey: bool = False) -> CastUndo | None:
-    """The :class:`CastUndo` of a pipeline's ``cast_jump``, ``light_jump`` and ``light_jump_grey`` parameters, or
-    None when both jumps are 0."""
+def _fill_clipped(raw: np.ndarray, out: np.ndarray, ref: np.ndarray, channels: np.ndarray) -> None:
+    """In ``out`` (``raw`` undone), each brightened channel's levels clipped at 255 in ``raw`` raised to ``ref``'s
+    where that is higher (in place)."""
+    for c in np.flatnonzero(channels):
+        o = out[..., c]
+        np.maximum(o, ref[..., c], out=o, where=raw[..., c] >= 255)
+
+
+def cast_undo(cast_jump: float, light_jump: float = 0.0, light_jump_grey: bool = False,
+              clip_fill: bool = False) -> CastUndo | None:
+    """The :class:`CastUndo` of a pipeline's ``cast_jump``, ``light_jump``, ``light_jump_grey`` and ``clip_fill``
+    parameters, or None when both jumps are 0."""
     if cast_jump <= 0 and light_jump <= 0:
         return None
-    return CastUndo(cast_jump, light=light_jump, grey=light_jump_grey)
+    return CastUndo(cast_jump, light=light_jump, grey=light_jump_grey, clip_fill=clip_fill)
 
 
 def undo_lut(gain: np.ndarray) -> np.ndarray:

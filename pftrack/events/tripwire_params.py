@@ -61,6 +61,9 @@ class TripwireParams(Params):
         "reads no jump either way. Chosen under docs/rules/grey_light_tripwire_rule.txt (docs/tripwire.md): the grey "
         "PETS tune half with its light times 1.2, 1.4 and 0.6, F1 0.668 against 0.603 over strides 1-3; the grey "
         "and colour tune halves as recorded identical"))
+    clip_fill: bool = param(False, doc=(
+        "once a jump is undone, a level clipped at 255 in a brightened channel takes the level seen there just before "
+        "the jump when that is higher (pftrack.cues.still_gain.CastUndo; docs/rules/clip_fill_rule.txt)"))
     diff_threshold: int = param(25, ge=1, le=255, doc="grey-level threshold of the frame difference")
     fg_ratio: float = param(0.3, gt=0, le=1, doc="foreground fraction of a disc that makes the patch foreground")
     contact: Literal["any", "bottom"] = param("any", doc=(

@@ -117,7 +117,7 @@ class MultiPF(ReadAhead):
         self.frame_index = 0
         self._shape: tuple[int, int] | None = None
         # frames with their jumps of the light undone (cast_jump, light_jump)
-        self._cast = cast_undo(p.cast_jump, p.light_jump)
+        self._cast = cast_undo(p.cast_jump, p.light_jump, p.light_jump_grey, p.clip_fill)
 
     # ------------------------------------------------------------------ helpers
     def _histogram(self, frame: np.ndarray, box, stored: ColorFeatures | None = None) -> np.ndarray:
