@@ -208,29 +208,32 @@ def test_cast_undo_returns_the_frame_before_the_jump():
     assert np.abs(g.astype(int) - f)[ok].max() <= 3
 
 
-@pytest.mark.parametrize("gains, option", [(WARM, "cast_jump"), (np.full(3, 1.3, np.float32), "light_jump")])
-def test_pftrack_mot_keeps_its_people_through_a_jump_of_the_light(gains, option):
-    """multi-pf (MOG2 and colour models) on two walkers whose white balance jumps halfway (a warm cast), or whose
-    lamps are switched on (every channel times 1.3): with the jump undone MOG2 does not take the view for foreground.
-    Measured over seeds 0-3, both: MOTA 0.70-0.76 -> 0.875-0.883, false positives 3-9 -> 0."""
+def _mot_on_walkers(seed: int, change, **params):
+    """multi-pf with ``params`` on two synthetic walkers (tests/test_mot.py's movers, 60 frames), frame ``t`` seen
+    as ``change(t, frame)``: py-motmetrics' scores against the walkers' boxes."""
     from pftrack.eval.mot import mot_scores
     from pftrack.multi import create_multi_tracker
 
     from .test_mot import movers
 
-    scores = {}
-    for cj in (0.0, 0.2):
-        runs = []
-        for seed in range(4):
-            _, frames, truths = render_scene(movers(seed, n=60))
-            tr = create_multi_tracker(seed=seed, **{option: cj})
-            gt, hyp = [], []
-            for t, f in enumerate(frames):
-                f = _cast(f, gains) if t >= 30 else f
-                gt.extend([t + 1, k + 1, *truths[t].boxes[k], 1] for k in range(2) if truths[t].present[k])
-                hyp.extend([t + 1, o.track_id, *o.box, o.score] for o in tr.update(f))
-            runs.append(mot_scores(np.array(gt), np.array(hyp).reshape(-1, 7)))
-        scores[cj] = runs
+    _, frames, truths = render_scene(movers(seed, n=60))
+    tr = create_multi_tracker(seed=seed, **params)
+    gt, hyp = [], []
+    for t, f in enumerate(frames):
+        gt.extend([t + 1, k + 1, *truths[t].boxes[k], 1] for k in range(2) if truths[t].present[k])
+        hyp.extend([t + 1, o.track_id, *o.box, o.score] for o in tr.update(change(t, f)))
+    return mot_scores(np.array(gt), np.array(hyp).reshape(-1, 7))
+
+
+@pytest.mark.parametrize("gains, option", [(WARM, "cast_jump"), (np.full(3, 1.3, np.float32), "light_jump")])
+def test_pftrack_mot_keeps_its_people_through_a_jump_of_the_light(gains, option):
+    """multi-pf (MOG2 and colour models) on two walkers whose white balance jumps halfway (a warm cast), or whose
+    lamps are switched on (every channel times 1.3): with the jump undone MOG2 does not take the view for foreground.
+    Measured over seeds 0-3, both: MOTA 0.70-0.76 -> 0.875-0.883, false positives 3-9 -> 0."""
+    from pftrack.multi import create_multi_tracker
+
+    scores = {cj: [_mot_on_walkers(seed, lambda t, f: _cast(f, gains) if t >= 30 else f, **{option: cj})
+                   for seed in range(4)] for cj in (0.0, 0.2)}
     mota = {cj: np.mean([s.mota for s in r]) for cj, r in scores.items()}
     assert mota[0.2] > mota[0.0] + 0.08, mota
     assert sum(s.num_false_positives for s in scores[0.2]) < sum(s.num_false_positives for s in scores[0.0])
@@ -339,28 +342,19 @@ def test_pftrack_mot_keeps_its_people_when_lamps_clip_a_bright_view(grey):
     (``clip_fill``, ``light_jump_grey``) against each switched off, seeds 0-2. Measured: colour MOTA 0.71-0.72
     against 0.29-0.39 (false positives 11-16 against 45-66); grey -0.06 to 0.28 against -0.26 to 0.12 (these grey
     walkers are hard for MOG2 with or without lamps)."""
-    from pftrack.eval.mot import mot_scores
     from pftrack.multi import create_multi_tracker
-
-    from .test_mot import movers
 
     option = "light_jump_grey" if grey else "clip_fill"
     assert getattr(create_multi_tracker().params, option) is True
-    mota = {}
-    for on in (True, False):
-        runs = []
-        for seed in range(3):
-            _, frames, truths = render_scene(movers(seed, n=60))
-            tr = create_multi_tracker(seed=seed, **{option: on})
-            gt, hyp = [], []
-            for t, f in enumerate(frames):
-                if grey:
-                    f = cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
-                else:
-                    f = np.clip(f.astype(np.int16) + 60, 0, 255).astype(np.uint8)
-                f = _cast(f, np.full(3, 1.3 if grey else 1.4, np.float32)) if t >= 30 else f
-                gt.extend([t + 1, k + 1, *truths[t].boxes[k], 1] for k in range(2) if truths[t].present[k])
-                hyp.extend([t + 1, o.track_id, *o.box, o.score] for o in tr.update(f))
-            runs.append(mot_scores(np.array(gt), np.array(hyp).reshape(-1, 7)).mota)
-        mota[on] = float(np.mean(runs))
+    lamps = np.full(3, 1.3 if grey else 1.4, np.float32)
+
+    def change(t, f):
+        if grey:
+            f = cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
+        else:
+            f = np.clip(f.astype(np.int16) + 60, 0, 255).astype(np.uint8)
+        return _cast(f, lamps) if t >= 30 else f
+
+    mota = {on: float(np.mean([_mot_on_walkers(seed, change, **{option: on}).mota for seed in range(3)]))
+            for on in (True, False)}
     assert mota[True] > mota[False] + (0.1 if grey else 0.3), mota
