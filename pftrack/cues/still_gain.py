@@ -16,7 +16,8 @@ The same log-ratios between consecutive frames read a jump of the light (``cast_
 apart, lamps switched on or off move them together, and camera motion spreads the log-ratios without moving the
 medians. The jumps read are multiplied into a gain that the colour bins or the frames undo. A switch between colour
 and grey (a night mode) reads as no jump; between grey frames a grey camera's lamps read as a common jump only where
-asked (``grey=True``: the tripwire's ``light_jump_grey``).
+asked (``grey=True``: ``light_jump_grey`` of pftrack mot and the tripwire). ``clip_fill`` gives a level clipped by a
+brightening jump the level seen there before it (:class:`CastUndo`).
 """
 
 from __future__ import annotations
