@@ -358,3 +358,20 @@ def test_pftrack_mot_keeps_its_people_when_lamps_clip_a_bright_view(grey):
     mota = {on: float(np.mean([_mot_on_walkers(seed, change, **{option: on}).mota for seed in range(3)]))
             for on in (True, False)}
     assert mota[True] > mota[False] + (0.1 if grey else 0.3), mota
+
+
+def test_fill_clipped_raises_only_the_clipped_levels_of_the_brightened_channels():
+    from pftrack.cues.still_gain import _fill_clipped
+
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        raw = np.clip(rng.normal(200, 60, (37, 53, 3)), 0, 255).astype(np.uint8)
+        ref = rng.integers(0, 256, raw.shape, dtype=np.uint8)
+        out = rng.integers(0, 256, raw.shape, dtype=np.uint8)
+        channels = rng.random(3) < 0.6
+        expected = out.copy()
+        for c in np.flatnonzero(channels):
+            m = raw[..., c] == 255
+            expected[..., c][m] = np.maximum(out[..., c][m], ref[..., c][m])
+        _fill_clipped(raw, out, ref, channels)
+        np.testing.assert_array_equal(out, expected)
