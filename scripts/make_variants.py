@@ -60,6 +60,8 @@ levels crowd into the top part of the range with their contrast cut to ``1 - H``
 With ``--cast S`` one copy is written instead, ``NAME-castS``: from frame floor(n/3)+1 (frame numbers from 1) to the
 end, the blue and red channels times ``1 - S`` and ``1 + S`` (a warm cast) or the reverse (a cool one; drawn from the
 name), green as it is: a camera's automatic white balance that jumps, or daylight giving way to lamps. JPEG 92.
+With ``--light G`` one copy ``NAME-lightG``: from the same frame on every channel times G (lamps switched on, G > 1,
+or off, G < 1), levels clipped at 255.
 
 With ``--zoom Z`` one copy is written instead, ``NAME-zoomZ``: a camera that zooms steadily about the first frame's
 target centre, so that the target's size changes Z times over the sequence (Z > 1: zooming in, from the full view
@@ -319,6 +321,8 @@ def main() -> None:
                     "the first N frames (NAME-dimG-noiseSD-rampN; default 0: no ramp)")
     ap.add_argument("--cast", type=float, metavar="S", help="only a copy whose white balance jumps a third of the "
                     "way through (NAME-castS): blue and red times 1 -/+ S, warm or cool")
+    ap.add_argument("--light", type=float, metavar="G", help="only a copy whose light jumps a third of the way "
+                    "through (NAME-lightG): every channel times G")
     ap.add_argument("--zoom", type=float, metavar="Z", help="only a copy through a steady zoom (NAME-zoomZ) that "
                     "changes the target's size Z times over the sequence (Z > 1 in, Z < 1 out)")
     args = ap.parse_args()
@@ -332,6 +336,8 @@ def main() -> None:
         ap.error(f"--haze must be a fraction in (0, 1), got {args.haze}")
     if args.cast is not None and not 0 < args.cast <= 0.6:
         ap.error(f"--cast must be a strength in (0, 0.6], got {args.cast}")
+    if args.light is not None and not (0.25 <= args.light <= 4 and args.light != 1):
+        ap.error(f"--light must be a gain in [0.25, 4] other than 1, got {args.light}")
     if args.haze is not None and args.dim is not None:
         ap.error("--haze and --dim write different copies: give one")
     if not args.noise >= 0:
@@ -385,6 +391,10 @@ def main() -> None:
         if args.cast is not None:
             write_cast(seq, out / f"{seq.name}-cast{args.cast:g}", args.cast)
             print(f"{seq.name}: {n} frames -> {out}/{seq.name}-cast{args.cast:g}")
+            continue
+        if args.light is not None:
+            write_cast(seq, out / f"{seq.name}-light{args.light:g}", 0.0, gains=np.full(3, args.light))
+            print(f"{seq.name}: {n} frames -> {out}/{seq.name}-light{args.light:g}")
             continue
         if args.stride is not None:
             kept = write_strided(seq, out / f"{seq.name}-s{args.stride}", args.stride)

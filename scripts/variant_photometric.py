@@ -108,11 +108,12 @@ def cast_gains(name: str, strength: float) -> np.ndarray:
     return np.array([1.0 - s, 1.0, 1.0 + s], np.float32)
 
 
-def write_cast(seq, dest: Path, strength: float) -> None:
-    """``seq``'s colour frames with the :func:`cast_gains` applied from frame floor(n/3) (from 0) on, as an OTB
-    folder: a white balance that jumps a third of the way through."""
+def write_cast(seq, dest: Path, strength: float, *, gains: np.ndarray | None = None) -> None:
+    """``seq``'s colour frames with the :func:`cast_gains` (or ``gains``, B, G, R) applied from frame floor(n/3)
+    (from 0) on, as an OTB folder: a white balance that jumps a third of the way through (or lamps switched)."""
     (dest / "img").mkdir(parents=True, exist_ok=True)
-    gains, start = cast_gains(seq.name, strength), len(seq.frames) // 3
+    gains = cast_gains(seq.name, strength) if gains is None else np.asarray(gains, np.float32)
+    start = len(seq.frames) // 3
     for i, path in enumerate(seq.frames):
         img = cv2.imread(str(path), cv2.IMREAD_COLOR).astype(np.float32) * (gains if i >= start else 1.0)
         write_jpeg(dest, i, img)

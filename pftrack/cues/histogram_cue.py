@@ -138,13 +138,16 @@ class ColorCue:
         ``JUMP_MAX_MAD``, multiplies a per-channel gain by the jump's, and the bins undo that gain (with ``"still"``,
         times the gain held from the last still view, which a new still view's gain replaces); with ``normalize``
         ``"none"`` or ``"still"`` only. 0: never.
+    light_jump : the same for lamps switched on or off: a frame whose channels' mean median log-ratio is at least
+        this in size (every channel at once) takes that jump into the same gain. 0: never.
     """
 
     def __init__(self, color_space: str = "rgb", bins: tuple[int, int, int] | None = None,
                  kernel: KernelName = "nummiaro", max_pixels: int = 0, *,
                  gray_bins: tuple[int, int] = DEFAULT_GRAY_BINS, gradient_threshold: float = 40.0,
                  fallback: ColorSpace = "rgb", normalize: str = "none", parts: int = 1, dark_stretch: float = 0.0,
-                 dark_percentile: float = 99.5, haze_stretch: float = 0.0, cast_jump: float = 0.0):
+                 dark_percentile: float = 99.5, haze_stretch: float = 0.0, cast_jump: float = 0.0,
+                 light_jump: float = 0.0):
         if parts not in (1, 2):
             raise ValueError(f"parts must be 1 or 2, got {parts!r}")
         self.parts = int(parts)
@@ -160,13 +163,13 @@ class ColorCue:
         if not haze_stretch >= 0:
             raise ValueError(f"haze_stretch must be >= 0, got {haze_stretch!r}")
         self.haze_stretch = float(haze_stretch)
-        if not cast_jump >= 0:
-            raise ValueError(f"cast_jump must be >= 0, got {cast_jump!r}")
-        if cast_jump > 0 and normalize not in ("none", "still"):
-            raise ValueError(f"cast_jump works with normalize 'none' or 'still', not {normalize!r}")
-        self.cast_jump = float(cast_jump)
-        # cast_jump: the jumps read since the start (or the last still view), their product in _cast_gain
-        self._jumps = cast_undo(self.cast_jump)
+        if not (cast_jump >= 0 and light_jump >= 0):
+            raise ValueError(f"cast_jump and light_jump must be >= 0, got {cast_jump!r}, {light_jump!r}")
+        if (cast_jump > 0 or light_jump > 0) and normalize not in ("none", "still"):
+            raise ValueError(f"cast_jump and light_jump work with normalize 'none' or 'still', not {normalize!r}")
+        self.cast_jump, self.light_jump = float(cast_jump), float(light_jump)
+        # cast_jump, light_jump: the jumps read since the start (or the last still view), their product in _cast_gain
+        self._jumps = cast_undo(self.cast_jump, self.light_jump)
         self.level_gain = 1.0
         self.level_offset = 0.0
         self._ref_levels: np.ndarray | None = None
@@ -209,7 +212,7 @@ class ColorCue:
             self._still_ref = reference_lattice(frame) if ok else None
             self._still_gain = np.ones(3)
             self.lut = self._base_lut
-        if self.cast_jump > 0:
+        if self._jumps is not None:
             self._jumps.reset(frame if ok else None)
             if self.normalize == "none" and self.color_space == "rgb":
                 self.lut = self._base_lut
@@ -220,8 +223,8 @@ class ColorCue:
         features, or the lighting normalisation of the RGB bins (``gray``: the frame's grey image, if at hand)."""
         if self.color_space == "gray":
             self._eq_lut = equalization_lut(frame, gray=gray)
-        elif self.color_space == "rgb" and frame.ndim == 3 and (self.normalize != "none" or self.cast_jump > 0):
-            jumped = self.cast_jump > 0 and frame.dtype == np.uint8 and self._jumps.read(frame)
+        elif self.color_space == "rgb" and frame.ndim == 3 and (self.normalize != "none" or self._jumps is not None):
+            jumped = self._jumps is not None and frame.dtype == np.uint8 and self._jumps.read(frame)
             if self.normalize == "none":
                 if jumped:
                     self._gain_lut(self._cast_gain)

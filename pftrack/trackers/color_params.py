@@ -83,6 +83,11 @@ class ColorModelParams(Params):
         "undo from then on (with color_normalize='still' together with the gain of the last still view). With "
         "color_normalize 'none' or 'still'. 0: never. Consecutive frames of the tune sequences read at most 0.13, "
         "a cast of B and R times 1 -/+ 0.2 0.37-0.42 (scripts/jump_readings.py)."))
+    light_jump: float = param(0.0, ge=0, le=3, doc=(
+        "The same for lamps switched on or off: a frame whose channels' median log-ratios are at least this on "
+        "average, in size (every channel at once), takes that jump into cast_jump's gain. 0: never. The tune "
+        "sequences read at most 0.110 (an exposure settling), lamps times 1.3 0.26 "
+        "(docs/rules/sot_light_jump_rule.txt)."))
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
         "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
         "on."))
@@ -485,6 +490,6 @@ class ColorModelParams(Params):
             raise ParameterError(f"parameter 'denoise_kernel' must be odd, got {self.denoise_kernel}")
         if self.histogram_parts > 1 and self.grey_relit_shift > 0:
             raise ParameterError("grey_relit_shift shifts the bins of one-part histograms: use histogram_parts=1")
-        if self.cast_jump > 0 and self.color_normalize not in ("none", "still"):
-            raise ParameterError(f"cast_jump works with color_normalize 'none' or 'still', not "
+        if (self.cast_jump > 0 or self.light_jump > 0) and self.color_normalize not in ("none", "still"):
+            raise ParameterError(f"cast_jump and light_jump work with color_normalize 'none' or 'still', not "
                                  f"{self.color_normalize!r}")

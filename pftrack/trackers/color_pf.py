@@ -100,7 +100,7 @@ class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, Sea
                             gray_bins=tuple(p.gray_bins), gradient_threshold=p.gradient_threshold,
                             normalize=p.color_normalize, parts=p.histogram_parts, dark_stretch=p.dark_stretch,
                             dark_percentile=p.dark_percentile, haze_stretch=p.haze_stretch,
-                            cast_jump=p.cast_jump)
+                            cast_jump=p.cast_jump, light_jump=p.light_jump)
         self.loss = LossDetector(lost_frames=p.lost_frames, reacquire_margin=p.reacquire_margin,
                                  history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                  sd_floor_background=p.score_sd_floor, learn_z=p.history_z,
