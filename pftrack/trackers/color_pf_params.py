@@ -50,6 +50,12 @@ class ColorPFParams(ColorModelParams):
         "casts of 0.15 and 0.3) mean "
         "AUC 0.384 against 0.351 (color-pf, pooled false-lost 0.000 against 0.058) and 0.472 against 0.449 "
         "(fusion-pf, 0.005 against 0.013); the tune sequences as recorded read no jump of 0.2 (identical runs)."))
+    light_jump: float = param(0.18, ge=0, le=3, doc=(
+        "See ColorModelParams.light_jump (off there and for fusion-pf, whose still view's gain reads lamps). 0.18 "
+        "for color-pf (and local-motion-pf), chosen under a rule stated before its runs "
+        "(docs/rules/sot_light_jump_rule.txt, docs/robustness.md): 26 tune copies never run whose light jumps a "
+        "third of the way through (real sequences and PETS people, light times 1.55 and 0.75), mean AUC 0.391 "
+        "against 0.343, pooled false-lost 0.037 against 0.096; the tune sequences as recorded identical."))
     lost_frames: int = param(2, ge=1, le=1000, doc=(
         "'A couple of frames' (§6) of absence evidence before the target is declared lost. 2 for color-pf, "
         "chosen on the tune split (docs/robustness.md): against 3, lost recall 0.828 against 0.791, false-lost "

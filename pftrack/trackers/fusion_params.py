@@ -38,6 +38,10 @@ class FusionPFParams(ColorPFParams):
         "the PETS people through haze of 0.6 fell to 0.383 against 0.420. Its structural cue and box contrast "
         "already read a veiled target (on copies through haze of 0.5 and 0.7 it kept 0.55 of its 0.58 on the real "
         "sequences)."))
+    light_jump: float = param(0.0, ge=0, le=3, doc=(
+        "See ColorModelParams.light_jump. Off for fusion-pf (0.18 for color-pf), not judged: its still view's gain "
+        "(color_normalize='still') reads lamps switched on or off (synthetic vanish scenes with the light times 1.3 "
+        "or 0.7: mean IoU 0.517 and 0.521 against 0.515 as rendered; docs/rules/sot_light_jump_rule.txt)."))
     acquire_early_frames: int = param(0, ge=0, doc=(
         "See ColorModelParams.acquire_early_frames. Off for fusion-pf (10 for color-pf): on the tune data it took "
         "12 more of the windows' 60 returns, but the PETS tune views' pooled lost recall fell to 0.511 against "
