@@ -222,6 +222,22 @@ def test_cast_jumps_the_white_balance_a_third_of_the_way_through(tmp_path):
         assert res.returncode == 2 and "cast" in res.stderr
 
 
+def test_light_jumps_every_channel_a_third_of_the_way_through(tmp_path):
+    seq = _otb(tmp_path, n=6)
+    _run(str(seq), "--light", "1.3", "--out", str(tmp_path / "l"))
+    copy = read_sequence(tmp_path / "l" / "tiny-light1.3")
+    np.testing.assert_array_equal(copy.groundtruth, read_sequence(seq).groundtruth)
+    for i, (orig, new) in enumerate(zip(read_sequence(seq).frames, copy.frames)):
+        a = cv2.imread(str(orig), cv2.IMREAD_COLOR).astype(float)
+        b = cv2.imread(str(new), cv2.IMREAD_COLOR).astype(float)
+        expect = np.clip(a * 1.3, 0, 255) if i >= 2 else a
+        assert np.allclose(b.mean(axis=(0, 1)), expect.mean(axis=(0, 1)), atol=2.0), i
+    for bad in ("1", "0.1", "5"):
+        res = subprocess.run([sys.executable, str(SCRIPT), str(seq), "--light", bad, "--out", str(tmp_path / "z")],
+                             capture_output=True, text=True)
+        assert res.returncode == 2 and "light" in res.stderr
+
+
 def test_lamps_light_a_dark_copy_away_from_the_target(tmp_path):
     script = _script()
     boxes = np.tile([100.0, 60.0, 40.0, 80.0], (30, 1))
