@@ -181,10 +181,8 @@ class JumpReader:
                     -math.inf if light else self.min_chroma, self.max_mad, self.min_pixels, self._out)
         candidate = out[0].max() - out[0].min() >= self.min_chroma or abs(out[0].mean()) >= self.min_light
         self._prev, self._cur = self._cur, self._prev
-        if candidate:
-            a, b = _grey_lattice(self._prev), _grey_lattice(self._cur)
-            if a != b or (a and not self.grey):
-                out[1] = math.inf  # a camera switching between colour and grey (night mode) is not a jump of the light
+        if candidate and _refused(self._cur, self._prev, self.grey):
+            out[1] = math.inf
         return out[:2]
 
     def switched(self) -> bool:
@@ -192,6 +190,13 @@ class JumpReader:
         if self._prev is None or self._cur is None:
             return False
         return _grey_lattice(self._prev) != _grey_lattice(self._cur)
+
+
+def _refused(prev: np.ndarray, cur: np.ndarray, grey: bool) -> bool:
+    """Whether no jump can be read between two lattices: a camera switching between colour and grey (a night mode)
+    is not a jump of the light, and grey frames are read only with ``grey``."""
+    a, b = _grey_lattice(prev), _grey_lattice(cur)
+    return a != b or (a and not grey)
 
 
 def _grey_lattice(lat: np.ndarray, tolerance: int = 2) -> bool:
@@ -216,9 +221,8 @@ def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0, m
     about 0 without moving the channels' medians apart."""
     out = _jump(prev, lattice, 1, LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64), np.empty_like(prev),
                 -math.inf, float(max_mad), int(min_pixels), np.zeros((3, 3)))
-    a, b = _grey_lattice(prev), _grey_lattice(lattice)
-    if a != b or (a and not grey):
-        out[1] = math.inf  # a switch between colour and grey (or, unless asked, grey frames): no jump to read
+    if _refused(prev, lattice, grey):
+        out[1] = math.inf
     return out[0].copy(), out[1].copy()
 
 
@@ -249,7 +253,8 @@ class CastUndo:
         self.gain = np.ones(3)
         self._lut: np.ndarray | None = None
         self.clip_fill = bool(clip_fill)
-        self._last: np.ndarray | None = None  # clip_fill: the last image undone, and the one before the last jump
+        # clip_fill: copies of the last image undone and of the one before the last jump (two buffers, swapped)
+        self._last: np.ndarray | None = None
         self._ref: np.ndarray | None = None
 
     def reset(self, frame: np.ndarray | None = None) -> None:
@@ -265,14 +270,15 @@ class CastUndo:
         if r is None:
             return False
         med, mad = r
-        if not np.all(self.gain == self.gain[0]) and self.reader.switched():
+        g = self.gain
+        if (g[0] != g[1] or g[1] != g[2]) and self.reader.switched():
             # a grey night mode has no white balance: the cast read so far goes, the light's common part stays
             self.gain = np.full(3, math.exp(float(np.log(self.gain).mean())))
             self._lut = None if abs(self.gain[0] - 1.0) < self.dead_zone else undo_lut(self.gain)
             self._ref = None
         if (med.max() - med.min() < self.threshold and abs(med.mean()) < self.light) or mad.max() > JUMP_MAX_MAD:
             return False
-        self._ref = self._last
+        self._ref, self._last = self._last, self._ref  # the frame before the jump; its buffer is reused below
         self.gain = self.gain * np.exp(med)
         self._lut = None if np.all(np.abs(self.gain - 1.0) < self.dead_zone) else undo_lut(self.gain)
         return True
@@ -285,8 +291,10 @@ class CastUndo:
             out = cv2.LUT(image, self._lut)
             if self.clip_fill and self._ref is not None and self._ref.shape == image.shape:
                 _fill_clipped(image, out, self._ref, self.gain > 1.0 + self.dead_zone)
-        if self.clip_fill:
-            self._last = out.copy() if out is image else out  # the caller may draw on its frame
+        if self.clip_fill:  # a copy: the caller may draw on its frame
+            if self._last is None or self._last.shape != out.shape:
+                self._last = np.empty_like(out)
+            np.copyto(self._last, out)
         return out
 
     def __call__(self, frame: np.ndarray) -> np.ndarray:
