@@ -15,6 +15,30 @@ REPO = Path(__file__).resolve().parents[1]
 SHARED_DATA = Path(os.environ.get("PFTRACK_SHARED_DATA", REPO.parent / "shared" / "data"))
 
 
+def pytest_configure(config):
+    """With several workers on a checkout whose kernels were never compiled (a fresh clone): compile them first,
+    the shares of ``tests/_prewarm.py`` side by side, so that the workers load them from Numba's cache instead of
+    each compiling the same kernels. Best effort: a share that fails or hangs leaves its kernels to the workers."""
+    import subprocess
+    import sys
+
+    workers = getattr(config.option, "numprocesses", None)
+    if hasattr(config, "workerinput") or not isinstance(workers, int) or workers < 2:
+        return
+    from pftrack._numba import numba_enabled
+
+    if not numba_enabled() or next((REPO / "pftrack").rglob("*.nbi"), None) is not None:
+        return
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")]))}
+    procs = [subprocess.Popen([sys.executable, str(REPO / "tests" / "_prewarm.py"), str(k), str(workers)], env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for k in range(workers)]
+    for p in procs:
+        try:
+            p.wait(timeout=300)
+        except subprocess.TimeoutExpired:
+            p.kill()
+
+
 def load_script(name: str):
     """The module of ``scripts/NAME.py`` (the scripts are not a package)."""
     import importlib.util
