@@ -8,7 +8,7 @@ import pytest
 
 import pftrack
 from pftrack.cues.histogram_cue import ColorCue
-from pftrack.cues.still_gain import reference_lattice, still_gain
+from pftrack.cues.still_gain import HIGH, HIST_BINS, LOW, SPAN, CastUndo, pair_bins, reference_lattice, still_gain
 from pftrack.eval.metrics import per_frame_iou
 from pftrack.synth.scenes import Scene
 from pftrack.synth.varied import varied_scene
@@ -39,6 +39,42 @@ def test_gain_of_a_still_view_is_found_per_channel_and_a_moved_view_gives_none()
     assert still_gain(ref, _u8(np.roll(base, 9, axis=1))) is None  # a pan: the log-ratios spread
     assert still_gain(ref, _u8(base[:200])) is None  # another size
     assert still_gain(ref, _u8(base)[..., 0]) is None  # not BGR
+
+
+def test_the_pair_table_gives_every_pair_of_levels_the_bin_of_its_log_ratio():
+    """The kernels look a pair of levels up in ``pair_bins``: the bin is the one the log-ratio's formula gives, and
+    -1 for a level that is dark or clipped."""
+    table = pair_bins()
+    log = np.log(np.maximum(np.arange(256, dtype=np.float64), 1.0))
+    scale = HIST_BINS / (2.0 * SPAN)
+    for a in range(256):
+        for b in (0, LOW, LOW + 1, 100, 128, HIGH - 1, HIGH, 255, a):
+            inside = LOW < a < HIGH and LOW < b < HIGH
+            want = int((log[b] - log[a] + SPAN) * scale) if inside else -1
+            assert table[a, b] == want, (a, b)
+    assert table[100, 100] == HIST_BINS // 2  # no change: the middle bin
+
+
+def test_the_gain_read_from_the_jump_reader_s_lattice_is_the_frame_s():
+    """The colour cue reads the still gain from the lattice the jump reader copied (contiguous, stride 1): the same
+    gains as from the frame, and the same tables frame after frame."""
+    rng = np.random.default_rng(3)
+    base = _scene(3)
+    ref = reference_lattice(_u8(base))
+    jumps = CastUndo(0.2)
+    for k, g in enumerate(([1.0, 1.0, 1.0], [1.3, 1.1, 0.8], [1.3, 1.1, 0.8], [0.7, 0.7, 0.7])):
+        frame = _u8(base * np.array(g) + rng.normal(0, 2, base.shape))
+        jumps.read(frame)
+        a, b = still_gain(ref, frame), still_gain(ref, jumps.reader.lattice, stride=1)
+        assert a is not None and np.array_equal(a, b), k
+    cues = [ColorCue(color_space="rgb", normalize="still", cast_jump=c) for c in (0.2, 0.0)]
+    frames = [_u8(base * s + rng.normal(0, 2, base.shape)) for s in (1.0, 1.0, 1.4, 1.4, 0.9)]
+    for cue in cues:
+        cue.adapt_to(frames[0])
+    for f in frames[1:]:
+        for cue in cues:
+            cue.new_frame(f)
+        assert np.array_equal(cues[0].lut, cues[1].lut)
 
 
 def test_cue_quantises_a_brightened_still_frame_as_the_first_one():

@@ -230,7 +230,10 @@ class ColorCue:
                     self._gain_lut(self._cast_gain)
                 return
             if self.normalize == "still":
-                g = still_gain(self._still_ref, frame) if self._still_ref is not None else None
+                # the lattice the jump reader copied from this frame (hot, contiguous): the same levels
+                lattice = self._jumps.reader.lattice if self._jumps is not None and frame.dtype == np.uint8 else None
+                g = None if self._still_ref is None else (still_gain(self._still_ref, frame) if lattice is None
+                                                          else still_gain(self._still_ref, lattice, stride=1))
                 if g is not None:  # a still view: its gain against the first frame holds every jump before it
                     if not np.array_equal(g, self._still_gain) or not np.all(self._cast_gain == 1.0):
                         self._still_gain = g

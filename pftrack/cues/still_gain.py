@@ -45,24 +45,35 @@ JUMP_MIN_PIXELS = 100
 _LOG = np.log(np.maximum(np.arange(256, dtype=np.float64), 1.0))
 
 
+def pair_bins(lo: int = LOW, hi: int = HIGH, span: float = SPAN, bins: int = HIST_BINS) -> np.ndarray:
+    """``(256, 256)`` int16: the histogram bin of the log-ratio ``log b - log a`` of levels ``a`` (reference) and
+    ``b`` (frame), -1 where either level is at or outside ``(lo, hi)`` or the ratio outside ``[-span, span]``. The
+    kernels look each pair up instead of computing it (the same float expression, evaluated once here)."""
+    scale = bins / (2.0 * span)
+    k = ((_LOG[None, :] - _LOG[:, None] + span) * scale).astype(np.int64)
+    levels = np.arange(256)
+    ok = ((levels > lo) & (levels < hi))[:, None] & ((levels > lo) & (levels < hi))[None, :] & (k >= 0) & (k < bins)
+    return np.where(ok, k, -1).astype(np.int16)
+
+
+_PAIR_BINS = pair_bins()
+
+
 def reference_lattice(frame: np.ndarray, stride: int = 16) -> np.ndarray:
     """The reference's lattice ``frame[::stride, ::stride]`` of a BGR uint8 frame, contiguous."""
     return np.ascontiguousarray(frame[::stride, ::stride])
 
 
 @njit
-def _log_ratio_hist(ref, frame, stride, lo, hi, span, log_table, hist):
-    nb = hist.shape[1]
-    scale = nb / (2.0 * span)
+def _log_ratio_hist(ref, frame, stride, pairs, hist):
+    """Count the log-ratios of ``frame``'s lattice (every ``stride``-th pixel) against ``ref`` in ``hist`` (3 rows),
+    each pair of levels looked up in ``pairs`` (:func:`pair_bins`)."""
     for j in range(ref.shape[0]):
         for i in range(ref.shape[1]):
             for c in range(3):
-                a = ref[j, i, c]
-                b = frame[j * stride, i * stride, c]
-                if a > lo and a < hi and b > lo and b < hi:
-                    k = int((log_table[b] - log_table[a] + span) * scale)
-                    if 0 <= k < nb:
-                        hist[c, k] += 1
+                k = pairs[ref[j, i, c], frame[j * stride, i * stride, c]]
+                if k >= 0:
+                    hist[c, k] += 1
     return hist
 
 
@@ -112,7 +123,7 @@ def still_gain(ref: np.ndarray, frame: np.ndarray, *, stride: int = 16, max_mad:
     rows, cols = (frame.shape[0] + stride - 1) // stride, (frame.shape[1] + stride - 1) // stride
     if (rows, cols) != ref.shape[:2]:
         return None
-    hist = _log_ratio_hist(ref, frame, int(stride), LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64))
+    hist = _log_ratio_hist(ref, frame, int(stride), _PAIR_BINS, np.zeros((3, HIST_BINS), np.int64))
     gains = np.empty(3)
     stats = np.empty(3)
     for c in range(3):
@@ -124,13 +135,13 @@ def still_gain(ref: np.ndarray, frame: np.ndarray, *, stride: int = 16, max_mad:
 
 
 @njit
-def _jump(prev, frame, stride, lo, hi, span, log_table, hist, cur, min_chroma, max_mad, min_pixels, out):
+def _jump(prev, frame, stride, span, pairs, hist, cur, min_chroma, max_mad, min_pixels, out):
     """:func:`frame_jump` in one call: the log-ratios of ``frame``'s lattice (every ``stride``-th pixel, copied into
     ``cur``) against ``prev`` counted in ``hist``; ``out[0]`` the channels' medians (0 for a channel with fewer than
     ``min_pixels`` counted), ``out[1]`` their MADs, walked only when the chromatic jump reaches ``min_chroma`` (else,
     and for such a channel, inf); ``out[2]`` the pixels counted."""
     hist[:] = 0
-    _log_ratio_hist(prev, frame, stride, lo, hi, span, log_table, hist)
+    _log_ratio_hist(prev, frame, stride, pairs, hist)
     for j in range(prev.shape[0]):
         for i in range(prev.shape[1]):
             for c in range(3):
@@ -177,13 +188,20 @@ class JumpReader:
             self.reset(frame if frame.ndim == 3 and frame.dtype == np.uint8 else None)
             return None
         light = math.isfinite(self.min_light)  # a common jump of the light is read too: every MAD walked
-        out = _jump(self._prev, frame, s, LOW, HIGH, SPAN, _LOG, self._hist, self._cur,
+        out = _jump(self._prev, frame, s, SPAN, _PAIR_BINS, self._hist, self._cur,
                     -math.inf if light else self.min_chroma, self.max_mad, self.min_pixels, self._out)
-        candidate = out[0].max() - out[0].min() >= self.min_chroma or abs(out[0].mean()) >= self.min_light
+        m0, m1, m2 = out[0].tolist()  # three floats: Python's arithmetic is cheaper than NumPy's reductions here
+        candidate = max(m0, m1, m2) - min(m0, m1, m2) >= self.min_chroma or abs((m0 + m1 + m2) / 3) >= self.min_light
         self._prev, self._cur = self._cur, self._prev
         if candidate and _refused(self._cur, self._prev, self.grey):
             out[1] = math.inf
         return out[:2]
+
+    @property
+    def lattice(self) -> np.ndarray | None:
+        """A contiguous copy of the last frame's lattice (every ``stride``-th pixel) once a frame was read, else
+        None."""
+        return self._prev
 
     def switched(self) -> bool:
         """Whether the camera switched between colour and grey (a night mode) between the last two frames read."""
@@ -219,7 +237,7 @@ def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0, m
     A white balance that switches between the two frames scales each channel by its own factor: the medians are
     their logs and differ between channels (a chromatic jump); camera motion and walkers spread the log-ratios
     about 0 without moving the channels' medians apart."""
-    out = _jump(prev, lattice, 1, LOW, HIGH, SPAN, _LOG, np.zeros((3, HIST_BINS), np.int64), np.empty_like(prev),
+    out = _jump(prev, lattice, 1, SPAN, _PAIR_BINS, np.zeros((3, HIST_BINS), np.int64), np.empty_like(prev),
                 -math.inf, float(max_mad), int(min_pixels), np.zeros((3, 3)))
     if _refused(prev, lattice, grey):
         out[1] = math.inf
@@ -270,13 +288,15 @@ class CastUndo:
         if r is None:
             return False
         med, mad = r
+        m0, m1, m2 = med.tolist()
         g = self.gain
         if (g[0] != g[1] or g[1] != g[2]) and self.reader.switched():
             # a grey night mode has no white balance: the cast read so far goes, the light's common part stays
             self.gain = np.full(3, math.exp(float(np.log(self.gain).mean())))
             self._lut = None if abs(self.gain[0] - 1.0) < self.dead_zone else undo_lut(self.gain)
             self._ref = None
-        if (med.max() - med.min() < self.threshold and abs(med.mean()) < self.light) or mad.max() > JUMP_MAX_MAD:
+        chroma, common = max(m0, m1, m2) - min(m0, m1, m2), abs((m0 + m1 + m2) / 3)
+        if (chroma < self.threshold and common < self.light) or max(mad.tolist()) > JUMP_MAX_MAD:
             return False
         self._ref, self._last = self._last, self._ref  # the frame before the jump; its buffer is reused below
         self.gain = self.gain * np.exp(med)
