@@ -215,3 +215,37 @@ def test_segment_cli(tmp_path, capsys):
     assert main(["segment", str(d), "--out-dir", str(out)]) == 2          # neither --box nor --mask
     assert main(["segment", str(d), "--box", "400,400,10,10", "--out-dir", str(out)]) == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_segment_cli_takes_a_sequence_folder_s_own_first_mask_or_box(tmp_path, capsys):
+    """Without --box or --mask, a DAVIS-like folder (img/, masks/, groundtruth_rect.txt) gives its first frame's
+    mask, and an OTB folder without masks its first ground-truth box: the same masks as given by hand."""
+    frames, masks = _blob_video(n=5)
+    seq = tmp_path / "blob"
+    (seq / "img").mkdir(parents=True)
+    (seq / "masks").mkdir()
+    boxes = []
+    for i, (f, m) in enumerate(zip(frames, masks)):
+        cv2.imwrite(str(seq / "img" / f"{i:05d}.png"), f)
+        cv2.imwrite(str(seq / "masks" / f"{i:05d}.png"), m.astype(np.uint8) * 255)
+        ys, xs = np.nonzero(m)
+        boxes.append([xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1])
+    np.savetxt(seq / "groundtruth_rect.txt", np.array(boxes), fmt="%d", delimiter=",")
+    own, given = tmp_path / "own", tmp_path / "given"
+    assert main(["segment", str(seq), "--out-dir", str(own)]) == 0
+    assert "masks" in capsys.readouterr().err  # says where the first object came from
+    assert main(["segment", str(seq), "--mask", str(seq / "masks" / "00000.png"), "--out-dir", str(given),
+                 "--quiet"]) == 0
+    for k in range(1, 6):
+        a, b = (cv2.imread(str(d / f"{k:06d}.png"), cv2.IMREAD_GRAYSCALE) for d in (own, given))
+        assert np.array_equal(a, b), k
+    import shutil
+
+    shutil.rmtree(seq / "masks")
+    boxed, by_hand = tmp_path / "boxed", tmp_path / "by_hand"
+    assert main(["segment", str(seq), "--out-dir", str(boxed), "--quiet"]) == 0
+    assert main(["segment", str(seq), "--box", ",".join(map(str, boxes[0])), "--out-dir", str(by_hand),
+                 "--quiet"]) == 0
+    for k in range(1, 6):
+        a, b = (cv2.imread(str(d / f"{k:06d}.png"), cv2.IMREAD_GRAYSCALE) for d in (boxed, by_hand))
+        assert np.array_equal(a, b), k

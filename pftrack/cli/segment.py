@@ -20,6 +20,8 @@ def add_segment(sub) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--box", help="X,Y,W,H of the object in the first frame (GrabCut finds the first mask)")
     g.add_argument("--mask", help="first-frame mask (PNG, non-zero = object), the same size as the frames")
+    p.epilog = ("Without --box or --mask, a sequence folder gives the object itself: its first frame's mask in "
+                "masks/ (DAVIS), else its first frame's ground-truth box.")
     p.add_argument("--out-dir", default="masks", help="folder of the mask PNGs (default masks/)")
     p.add_argument("--video-out", help="video with the mask's contour overlaid")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
@@ -38,27 +40,37 @@ def cmd_segment(args) -> int:
     from ..params import parse_param_assignments
     from ..segmentation.tracker import GraphCutParams, GraphCutTracker
 
-    if not args.box and not args.mask:
-        raise ParameterError("give the first frame's object with --box X,Y,W,H or --mask FIRST.png")
     params = GraphCutParams.from_mapping(parse_param_assignments(args.param))
-    first_mask = None
-    if args.mask:
-        img = image_file(args.mask)
-        first_mask = (img if img.ndim == 2 else img.max(axis=2)) > 0
-        if not first_mask.any():
-            raise InputError(f"{args.mask}: the mask is empty")
-    out_dir = Path(args.out_dir)
-    prepare_output(out_dir / "000001.png")
-    if args.video_out:
-        prepare_video_output(args.video_out)
     source = open_source(args.source)
+    mask_path, box_spec = args.mask, args.box
+    if not mask_path and not box_spec:  # the sequence's own first mask or box, said before any output is made
+        mask_path, box_spec = _sequence_object(source)
+        if mask_path is None and box_spec is None:
+            source.close()
+            raise ParameterError("give the first frame's object with --box X,Y,W,H or --mask FIRST.png")
+        if not args.quiet:
+            print(f"first object: {mask_path or 'the ground-truth box ' + box_spec}", file=sys.stderr)
+    first_mask = None
+    try:
+        if mask_path:
+            img = image_file(mask_path)
+            first_mask = (img if img.ndim == 2 else img.max(axis=2)) > 0
+            if not first_mask.any():
+                raise InputError(f"{mask_path}: the mask is empty")
+        out_dir = Path(args.out_dir)
+        prepare_output(out_dir / "000001.png")
+        if args.video_out:
+            prepare_video_output(args.video_out)
+    except Exception:
+        source.close()
+        raise
     frames, (number, frame) = first_frame(source, args.source)
     H, W = frame.shape[:2]
     try:
         if first_mask is not None and first_mask.shape != (H, W):
-            raise InputError(f"{args.mask}: mask size {first_mask.shape[1]}x{first_mask.shape[0]} differs from the "
+            raise InputError(f"{mask_path}: mask size {first_mask.shape[1]}x{first_mask.shape[0]} differs from the "
                              f"frames' {W}x{H}")
-        box = validate_box(parse_box(args.box), W, H) if args.box else None
+        box = validate_box(parse_box(box_spec), W, H) if box_spec else None
     except (InputError, BoxError):
         source.close()
         raise
@@ -93,3 +105,22 @@ def cmd_segment(args) -> int:
         close_all(bar, sinks, source)
     print(f"{counted(done, 'mask')} ({counted(lost, 'frame')} lost) -> {out_dir}", file=sys.stderr)
     return 0
+
+
+def _sequence_object(source) -> tuple[str | None, str | None]:
+    """The first frame's object of a sequence folder: ``(mask file, None)`` when the folder has a ``masks/`` image
+    of its first frame (DAVIS), ``(None, "X,Y,W,H")`` when its ground truth starts on the first frame, else
+    ``(None, None)``."""
+    seq = source.sequence
+    if seq is None or not seq.frames:
+        return None, None
+    first = seq.frames[0]
+    if isinstance(first, Path):
+        for name in (first.stem + ".png", first.name):
+            for folder in (first.parent.parent / "masks", first.parent / "masks"):
+                if (folder / name).is_file():
+                    return str(folder / name), None
+    box = source.init_box
+    if box is not None and source.init_number == 1:
+        return None, ",".join(f"{v:g}" for v in box)
+    return None, None
