@@ -195,7 +195,9 @@ class Params:
             if key not in known:
                 close = difflib.get_close_matches(key, sorted(known), n=3)
                 hint = (f"; did you mean {', '.join(close)}?" if close else
-                        f"; valid: {', '.join(sorted(known))}" if known else " (it takes no parameters)")
+                        f"; valid: {', '.join(sorted(known))}" if 0 < len(known) <= 12 else
+                        f" (it has {len(known)}: 'pftrack list NAME' shows them)" if known else
+                        " (it takes no parameters)")
                 raise ParameterError(f"unknown parameter '{key}' for {cls.__name__}{hint}")
         return cls(**merged)
 

@@ -103,6 +103,21 @@ def test_a_negative_seed_is_refused_by_the_api():
     assert create_tracker("color-pf", seed=0) is not None
 
 
+def test_an_unknown_parameter_is_told_in_a_short_line():
+    """A misspelt parameter gets its close matches; another one names the parameters when there are few, and points
+    to ``pftrack list`` when there are many (not a line of a hundred names)."""
+    from pftrack.errors import ParameterError
+    from pftrack.trackers import create_tracker
+
+    with pytest.raises(ParameterError, match="did you mean n_particles"):
+        create_tracker("color-pf", num_particles=5)
+    with pytest.raises(ParameterError) as err:
+        create_tracker("color-pf", nosuch=1)
+    assert "pftrack list" in str(err.value) and len(str(err.value)) < 120
+    with pytest.raises(ParameterError, match="valid: enlarge, lost_frames"):
+        create_tracker("template", nosuch=1)
+
+
 def test_missing_camera_is_one_line_on_the_terminal(tmp_path, capfd):
     # OpenCV's backends write their own warnings straight to the process's stderr when a device fails to open
     assert main(["track", "97", "--box", "1,1,5,5", "--out", str(tmp_path / "o.csv"), "--quiet"]) == 2
