@@ -227,12 +227,12 @@ class FusionPFParams(ColorPFParams):
     grey_search_refine: float | None = param(None, ge=0, le=4, doc=(
         "See ColorModelParams.grey_search_refine; None: search_refine on every input (fusion-pf)."))
     visible_structure: bool = param(False, doc=(
-        "While searching, the loss test of the candidate to acquire takes its structural score over the part of "
-        "its box inside the frame, against the same part of the references, when that is higher (a box partly "
-        "outside the frame samples the frame's border there, or empty gradient cells, which the references do not "
-        "hold): a target that comes back and stays at the edge is not refused by the structure for that. Off: "
-        "neutral on the tune data (tune split unchanged, windows 34 against 33 re-acquired, none gained of 555 "
-        "synthetic reappearances; docs/robustness.md)."))
+        "The loss test of a box partly outside the frame (the search's candidate to acquire, and the estimate while "
+        "tracking) takes its structural score over the part of the box inside the frame, against the same part of "
+        "the references, when that is higher (a box partly outside the frame samples the frame's border there, or "
+        "empty gradient cells, which the references do not hold): a target that comes back and stays at the edge "
+        "is neither refused nor reported lost by the structure for that. Off: search only, neutral on the tune data "
+        "(docs/rules/visible_structure_rule.txt); with the estimate too, docs/rules/visible_tracking_rule.txt."))
     acquire_shape_step: float = param(0.15, ge=0, le=1, doc=(
         "While searching, the loss test of the candidate to acquire takes its structural score as the best over "
         "its box's shape and the shapes whose half-axes are 1/(1+step) or 1+step times its own, each axis on its "

@@ -214,8 +214,9 @@ class FusionPF(ColorPF):
         if not self.structure.ready:  # started from a histogram (init_auto): no reference patch, no evidence
             return np.column_stack([rho, np.full(len(rho), np.nan)])
         s = self.structure.scores(frame, roi, ellipses)
-        if self.mode == "searching" and len(rho) == 1 and self.params.visible_structure:
-            # a candidate partly outside the frame: its visible part against the same part of the references
+        if len(rho) == 1 and self.params.visible_structure:
+            # a box partly outside the frame (the search's candidate, or the estimate while tracking): its visible
+            # part against the same part of the references
             visible = getattr(self.structure, "visible_score", None)  # not every structural cue has one
             v = visible(frame, ellipses[0]) if visible is not None else None
             if v is not None and v > s[0]:
