@@ -260,6 +260,26 @@ def test_surface_cli(tmp_path, capsys):
     assert "error" in capsys.readouterr().err
 
 
+def test_surface_cli_takes_a_sequence_folder_s_first_box(tmp_path, capsys):
+    """Without --box, a sequence folder (OTB layout, as ``pftrack synth deform`` writes) gives its first ground-truth
+    box: the same meshes as that box given by hand; a plain frame folder without --box is refused (exit 2, no CSV)."""
+    sc = deform_scene(4, n_frames=5)
+    seq = tmp_path / "deform-4"
+    (seq / "img").mkdir(parents=True)
+    for i, f in enumerate(sc.frames):
+        cv2.imwrite(str(seq / "img" / f"{i + 1:04d}.png"), f)
+    (seq / "groundtruth_rect.txt").write_text("\n".join(",".join(f"{v:.2f}" for v in sc.box) for _ in sc.frames))
+    auto, hand = tmp_path / "auto.csv", tmp_path / "hand.csv"
+    assert main(["surface", str(seq), "--mesh", "4x4", "--out", str(auto)]) == 0
+    assert "ground truth" in capsys.readouterr().err
+    box = (seq / "groundtruth_rect.txt").read_text().splitlines()[0]
+    assert main(["surface", str(seq), "--box", box, "--mesh", "4x4", "--out", str(hand), "--quiet"]) == 0
+    assert auto.read_text() == hand.read_text() and len(auto.read_text().splitlines()) == 6
+    frames = seq / "img"
+    assert main(["surface", str(frames), "--out", str(tmp_path / "none.csv")]) == 2
+    assert not (tmp_path / "none.csv").exists()
+
+
 def test_analysis_by_synthesis_reproduces_a_translated_frame_and_retextures_inside_the_mesh():
     """``frame_rmse`` (the chapter's Fig. 5 metric) is zero when the mesh is moved exactly as the frame (an
     integer shift), and grows when it is not; the shading grid scales the synthesis; ``retexture`` paints the

@@ -18,7 +18,8 @@ def add_surface(sub) -> None:
                                    "mesh) that map it onto the frame. Writes frame,x0,y0,x1,y1,... (vertices "
                                    "row-major, top row first) from frame 1, flushed per frame.")
     p.add_argument("source", help="video file, frame folder, OTB/VOT folder or camera index")
-    p.add_argument("--box", required=True, help="X,Y,W,H of the surface in the first frame")
+    p.add_argument("--box", help="X,Y,W,H of the surface in the first frame (default: a sequence folder's "
+                                 "first ground-truth box)")
     p.add_argument("--mesh", default="7x7", help="vertices COLSxROWS spanning the box (default 7x7; at least 2x2)")
     p.add_argument("--no-photometric", action="store_true", help="no shading warp (classical optical flow)")
     p.add_argument("--lambda", dest="lam", type=float,
@@ -53,23 +54,41 @@ def cmd_surface(args) -> int:
         rows, cols = parse_mesh(args.mesh)
     except ValueError as exc:
         raise ParameterError(f"--mesh: {exc}") from None
-    box = parse_box(args.box)
-    kw = {"rows": rows, "cols": cols, "photometric": not args.no_photometric, "model": args.model}
-    if args.lam is not None:
-        kw["dense_lam" if args.model == "dense" else "lam"] = args.lam
-    params = MeshParams.from_mapping(kw)
-    texture = image_file(args.texture) if args.texture else None
-    kymo = _kymogram_options(args, box)
-    prepare_output(args.out)
-    if args.video_out:
-        prepare_video_output(args.video_out)
-    source = open_source(args.source)
+    source = None
+    if args.box:
+        box, box_text = parse_box(args.box), args.box
+    else:  # a sequence folder's first ground-truth box, said before any output is made
+        source = open_source(args.source)
+        if source.init_box is None or source.init_number != 1:
+            source.close()
+            raise ParameterError("give the surface's first-frame box with --box X,Y,W,H (the source has no ground "
+                                 "truth on its first frame)")
+        box = tuple(float(v) for v in source.init_box)
+        box_text = ",".join(f"{v:g}" for v in box)
+        if not args.quiet:
+            print(f"first box: the ground truth's {box_text}", file=sys.stderr)
+    try:
+        kw = {"rows": rows, "cols": cols, "photometric": not args.no_photometric, "model": args.model}
+        if args.lam is not None:
+            kw["dense_lam" if args.model == "dense" else "lam"] = args.lam
+        params = MeshParams.from_mapping(kw)
+        texture = image_file(args.texture) if args.texture else None
+        kymo = _kymogram_options(args, box)
+        prepare_output(args.out)
+        if args.video_out:
+            prepare_video_output(args.video_out)
+    except Exception:
+        if source is not None:
+            source.close()
+        raise
+    if source is None:
+        source = open_source(args.source)
     frames, (number, frame) = first_frame(source, args.source)
     H, W = frame.shape[:2]
     x, y, w, h = box
     if x < 0 or y < 0 or x + w > W or y + h > H or w < 8 or h < 8:
         source.close()
-        raise BoxError(f"box {args.box} is not inside the {W}x{H} image with at least 8x8 pixels")
+        raise BoxError(f"box {box_text} is not inside the {W}x{H} image with at least 8x8 pixels")
     tracker = DeformableMesh(params)
     if kymo is not None:
         (p0, p1), roi = kymo
