@@ -285,3 +285,36 @@ def test_blob_boxes(benchmark, walkway, how):
         benchmark(label_stats, labels)
     else:
         benchmark(cv2.connectedComponentsWithStats, m, connectivity=8)
+
+
+@pytest.fixture(scope="module")
+def lit_frames():
+    """Two 854 x 480 colour frames of one textured view, the second with the light times 1.3 (a lamp switched on)."""
+    import cv2
+
+    rng = np.random.default_rng(5)
+    base = cv2.resize(rng.integers(30, 200, (60, 107, 3), dtype=np.uint8), (854, 480), interpolation=cv2.INTER_LINEAR)
+    return base, np.clip(base.astype(np.float32) * 1.3, 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("reading", ["steady", "jump", "still"])
+def test_light_readings_854x480(benchmark, lit_frames, reading):
+    """The per-frame readings of the light (docs/performance.md, the nineteenth look): the jump against the previous
+    frame (``cast_jump``, ``light_jump``; a steady view, and a lamp switched on or off at every frame) and the gain
+    against the first frame (``color_normalize="still"``), each on a lattice of every 16th pixel."""
+    from pftrack.cues.still_gain import JUMP_MAX_MAD, JumpReader, reference_lattice, still_gain
+
+    first, lit = lit_frames
+    if reading in ("steady", "jump"):  # "jump": the frames in turn, each read compares one with the other
+        reader = JumpReader(min_chroma=0.2, max_mad=JUMP_MAX_MAD, min_light=0.18)
+        reader.read(first)
+        frames = {"n": 0}
+
+        def step():
+            frames["n"] += 1
+            reader.read(lit if reading == "jump" and frames["n"] % 2 else first)
+
+        benchmark(step)
+    else:
+        ref = reference_lattice(first)
+        benchmark(still_gain, ref, lit)
