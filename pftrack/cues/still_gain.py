@@ -174,12 +174,14 @@ class JumpReader:
         self._hist = np.zeros((3, HIST_BINS), np.int64)
         self._prev: np.ndarray | None = None
         self._cur: np.ndarray | None = None
+        self._greys: list[bool | None] = [None, None]  # whether _prev, _cur are grey, found once per lattice
         self._out = np.zeros((3, 3))
 
     def reset(self, frame: np.ndarray | None) -> None:
         """Start again from ``frame`` (None: no previous frame)."""
         self._prev = None if frame is None else reference_lattice(frame, self.stride)
         self._cur = None if frame is None else np.empty_like(self._prev)
+        self._greys = [None, None]
 
     def read(self, frame: np.ndarray) -> np.ndarray | None:
         s = self.stride
@@ -193,9 +195,17 @@ class JumpReader:
         m0, m1, m2 = out[0].tolist()  # three floats: Python's arithmetic is cheaper than NumPy's reductions here
         candidate = max(m0, m1, m2) - min(m0, m1, m2) >= self.min_chroma or abs((m0 + m1 + m2) / 3) >= self.min_light
         self._prev, self._cur = self._cur, self._prev
-        if candidate and _refused(self._cur, self._prev, self.grey):
+        self._greys = [None, self._greys[0]]
+        if candidate and _refused(self._is_grey(1), self._is_grey(0), self.grey):
             out[1] = math.inf
         return out[:2]
+
+    def _is_grey(self, which: int) -> bool:
+        """Whether the last frame's lattice (0) or the one before (1) is grey: found once per lattice."""
+        g = self._greys[which]
+        if g is None:
+            g = self._greys[which] = _grey_lattice(self._prev if which == 0 else self._cur)
+        return g
 
     @property
     def lattice(self) -> np.ndarray | None:
@@ -207,14 +217,13 @@ class JumpReader:
         """Whether the camera switched between colour and grey (a night mode) between the last two frames read."""
         if self._prev is None or self._cur is None:
             return False
-        return _grey_lattice(self._prev) != _grey_lattice(self._cur)
+        return self._is_grey(0) != self._is_grey(1)
 
 
-def _refused(prev: np.ndarray, cur: np.ndarray, grey: bool) -> bool:
-    """Whether no jump can be read between two lattices: a camera switching between colour and grey (a night mode)
-    is not a jump of the light, and grey frames are read only with ``grey``."""
-    a, b = _grey_lattice(prev), _grey_lattice(cur)
-    return a != b or (a and not grey)
+def _refused(prev_grey: bool, cur_grey: bool, grey: bool) -> bool:
+    """Whether no jump can be read between two frames, from whether each is grey: a camera switching between colour
+    and grey (a night mode) is not a jump of the light, and grey frames are read only with ``grey``."""
+    return prev_grey != cur_grey or (prev_grey and not grey)
 
 
 def _grey_lattice(lat: np.ndarray, tolerance: int = 2) -> bool:
@@ -239,7 +248,7 @@ def frame_jump(prev: np.ndarray, lattice: np.ndarray, *, max_mad: float = 1.0, m
     about 0 without moving the channels' medians apart."""
     out = _jump(prev, lattice, 1, SPAN, _PAIR_BINS, np.zeros((3, HIST_BINS), np.int64), np.empty_like(prev),
                 -math.inf, float(max_mad), int(min_pixels), np.zeros((3, 3)))
-    if _refused(prev, lattice, grey):
+    if _refused(_grey_lattice(prev), _grey_lattice(lattice), grey):
         out[1] = math.inf
     return out[0].copy(), out[1].copy()
 
@@ -292,16 +301,19 @@ class CastUndo:
         g = self.gain
         if (g[0] != g[1] or g[1] != g[2]) and self.reader.switched():
             # a grey night mode has no white balance: the cast read so far goes, the light's common part stays
-            self.gain = np.full(3, math.exp(float(np.log(self.gain).mean())))
-            self._lut = None if abs(self.gain[0] - 1.0) < self.dead_zone else undo_lut(self.gain)
+            self._set_gain(np.full(3, math.exp(float(np.log(self.gain).mean()))))
             self._ref = None
         chroma, common = max(m0, m1, m2) - min(m0, m1, m2), abs((m0 + m1 + m2) / 3)
         if (chroma < self.threshold and common < self.light) or max(mad.tolist()) > JUMP_MAX_MAD:
             return False
         self._ref, self._last = self._last, self._ref  # the frame before the jump; its buffer is reused below
-        self.gain = self.gain * np.exp(med)
-        self._lut = None if np.all(np.abs(self.gain - 1.0) < self.dead_zone) else undo_lut(self.gain)
+        self._set_gain(self.gain * np.exp(med))
         return True
+
+    def _set_gain(self, gain: np.ndarray) -> None:
+        """Take ``gain`` and its table (none while every channel is within the dead zone of 1)."""
+        self.gain = gain
+        self._lut = None if np.all(np.abs(gain - 1.0) < self.dead_zone) else undo_lut(gain)
 
     def undo(self, image: np.ndarray) -> np.ndarray:
         """``image`` (the frame, or a part of it) divided by the gain read so far; itself while there is none."""
@@ -340,6 +352,12 @@ def cast_undo(cast_jump: float, light_jump: float = 0.0, light_jump_grey: bool =
     if cast_jump <= 0 and light_jump <= 0:
         return None
     return CastUndo(cast_jump, light=light_jump, grey=light_jump_grey, clip_fill=clip_fill)
+
+
+def frame_undo(params) -> CastUndo | None:
+    """:func:`cast_undo` of a whole-frame pipeline's parameters (``pftrack mot``'s, the tripwire's): their
+    ``cast_jump``, ``light_jump``, ``light_jump_grey`` and ``clip_fill``."""
+    return cast_undo(params.cast_jump, params.light_jump, params.light_jump_grey, params.clip_fill)
 
 
 def undo_lut(gain: np.ndarray) -> np.ndarray:

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..cues import foreground as _fg
 from ..cues.foreground import Foreground, apply_levels
-from ..cues.still_gain import cast_undo
+from ..cues.still_gain import frame_undo
 from .blobs import FootCrossings, estimate_radius
 from .geometry import PatchLayout, build_patches
 from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
@@ -136,7 +136,7 @@ class TrackerlessTripwire:
         if p.bgs == "mog2":
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
-        self._cast = None if p.faithful else cast_undo(p.cast_jump, p.light_jump, p.light_jump_grey, p.clip_fill)
+        self._cast = None if p.faithful else frame_undo(p)
         self._denoise = False
         self._prev_gray: np.ndarray | None = None
         self._prev2_gray: np.ndarray | None = None

@@ -8,7 +8,7 @@ from collections import deque
 from collections.abc import Iterator
 from typing import Callable
 
-from ..cues.still_gain import cast_undo
+from ..cues.still_gain import frame_undo
 from ..frames import as_bgr_uint8
 
 
@@ -20,8 +20,7 @@ class ReadAhead:
         """Before the first update: start the detector's background from the first frames of the stream (read ahead
         by the caller, ``bootstrap_frames`` of them); a detector without a background ignores it."""
         if hasattr(self.detector, "prime") and len(frames):
-            undo = cast_undo(self.params.cast_jump, self.params.light_jump, self.params.light_jump_grey,
-                             self.params.clip_fill)
+            undo = frame_undo(self.params)
             if undo is not None:  # with their own jumps undone (update reads them again)
                 frames = [undo(as_bgr_uint8(f)) for f in frames]
             self.detector.prime(frames)

@@ -55,7 +55,7 @@ from ..cues.contrast import (
     probability_integral,
 )
 from ..cues.histogram_cue import ColorCue, ColorFeatures
-from ..cues.still_gain import cast_undo
+from ..cues.still_gain import frame_undo
 from ..errors import ParameterError
 from ..frames import as_bgr_uint8
 from ..geometry import in_frame_fraction as _inside_fraction
@@ -117,7 +117,7 @@ class MultiPF(ReadAhead):
         self.frame_index = 0
         self._shape: tuple[int, int] | None = None
         # frames with their jumps of the light undone (cast_jump, light_jump)
-        self._cast = cast_undo(p.cast_jump, p.light_jump, p.light_jump_grey, p.clip_fill)
+        self._cast = frame_undo(p)
 
     # ------------------------------------------------------------------ helpers
     def _histogram(self, frame: np.ndarray, box, stored: ColorFeatures | None = None) -> np.ndarray:
