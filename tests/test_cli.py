@@ -145,7 +145,8 @@ def test_corrupt_frame_keeps_earlier_rows(tmp_path, capsys):
     assert main(["track", str(d), "--box", box, "--out", str(out), "--quiet"]) == 2
     assert "frame 5" in one_line_error(capsys)
     assert read_track_csv(out)[:, 0].tolist() == [1, 2, 3, 4]
-    assert main(["track", str(d), "--box", box, "--out", str(out), "--quiet", "--skip-bad-frames"]) == 0
+    with pytest.warns(UserWarning, match=r"skipping unreadable frame 5 \(004\.png\)"):
+        assert main(["track", str(d), "--box", box, "--out", str(out), "--quiet", "--skip-bad-frames"]) == 0
     assert read_track_csv(out)[:, 0].tolist() == [1, 2, 3, 4, 6]
     assert "(1 unreadable frame skipped)" in capsys.readouterr().err
 
