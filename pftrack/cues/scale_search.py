@@ -95,26 +95,16 @@ def _fits(frame: np.ndarray, cx: float, cy: float, ax: float, ay: float) -> bool
     return cx - ax >= 0 and cy - ay >= 0 and cx + ax <= fw and cy + ay <= fh
 
 
-def best_shape(cue, frame: np.ndarray, ellipse, step: float) -> tuple[float, float, float]:
-    """``(score, fx, fy)``: the best of ``cue``'s scores (``size_scores``) of the 3 x 3 shapes around ``ellipse``
-    ``(cx, cy, hx, hy)`` (each half-axis times 1/(1+step), 1 or 1+step, on its own) and that shape's factors (of
-    equal scores the first, the smaller shapes coming first); ``(-inf, 1, 1)`` when the largest box is not inside
-    the frame (its part beyond the border has no pixels to correlate)."""
+def best_shape_score(cue, frame: np.ndarray, ellipse, step: float) -> float:
+    """The best of ``cue``'s scores (``size_scores``) of the 3 x 3 shapes around ``ellipse`` ``(cx, cy, hx, hy)``:
+    each half-axis times 1/(1+step), 1 or 1+step, on its own; -inf when the largest box is not inside the frame (its
+    part beyond the border has no pixels to correlate)."""
     cx, cy, hx, hy = (float(v) for v in ellipse)
     k = 1.0 + step
     if not _fits(frame, cx, cy, k * hx, k * hy):
-        return -math.inf, 1.0, 1.0
+        return -math.inf
     f = (1.0 / k, 1.0, k)
-    shapes = [(a, b) for a in f for b in f]
-    scores = cue.size_scores(frame, (cx, cy, hx, hy), shapes)
-    i = max(range(len(scores)), key=scores.__getitem__)
-    return scores[i], shapes[i][0], shapes[i][1]
-
-
-def best_shape_score(cue, frame: np.ndarray, ellipse, step: float) -> float:
-    """The score of :func:`best_shape`: the best of the 3 x 3 shapes around ``ellipse``; -inf when the largest box
-    is not inside the frame."""
-    return best_shape(cue, frame, ellipse, step)[0]
+    return max(cue.size_scores(frame, (cx, cy, hx, hy), [(a, b) for a in f for b in f]))
 
 
 def _vertex_factor(cue, frame: np.ndarray, ellipse, ratios, step: float, rate: float) -> float:

@@ -140,9 +140,6 @@ class ColorHooks:
             estimate[HY] *= k
             self.ps.scale_columns(HX, HY + 1, k)
 
-    def _after_acquire(self, frame: np.ndarray) -> None:
-        """Called when the search has acquired a candidate and tracking restarts on it (hook)."""
-
     def _on_frame(self, frame: np.ndarray) -> None:
         """Called at the end of every update (tracking or searching)."""
 

@@ -487,7 +487,6 @@ class SearchMixin:
             exited = self._exit_strip() is not None  # the target had left the view through an edge
             self._start_tracking(states[cluster], loglik[cluster])
             self._begin_probation(lost_at, exited=exited)
-            self._after_acquire(frame)
             est = self.estimate
             box = tuple(float(v) for v in ellipse_to_box(est[_ELL_COLS]))
             self.last_box = box

@@ -240,11 +240,6 @@ class FusionPFParams(ColorPFParams):
         "(a couple walking toward the camera) is not refused by the structure because the search looks for it at "
         "the size it had when lost. 0: off. 0.15 chosen on the tune data under docs/rules/acquire_shape_step_rule.txt "
         "(tune windows: 50 of 60 returns re-acquired against 45; docs/robustness.md)."))
-    acquire_shape_adopt: bool = param(False, doc=(
-        "At an acquisition, the box takes the shape of the acquire_shape_step ones (9 around the acquired estimate, "
-        "each half-axis times 1/(1+step), 1 or 1+step) whose structural score is best, instead of the size the "
-        "target had when lost: a target that came back smaller or larger is followed at its new size at once "
-        "rather than by the size search's small steps (docs/rules/acquire_shape_adopt_rule.txt)."))
     relit_colour: bool = param(True, doc=(
         "While searching, when the colour cue would veto the best candidate that the structural cue alone could "
         "acquire, its colour score is retaken after undoing a global per-channel gain (von Kries: the frame's "

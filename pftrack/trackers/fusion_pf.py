@@ -35,7 +35,7 @@ from ..cues.contrast import (
 from ..cues.intensity import gain_maps, is_gray, light_levels
 from ..cues.grey_patch import grey_patch
 from ..cues.motion import LocalMotionCue, local_motion
-from ..cues.scale_search import aspect_factor, best_shape, best_shape_score, size_factor
+from ..cues.scale_search import aspect_factor, best_shape_score, size_factor
 from ..cues.structure import StructureCue
 from ..cues.structure_hog import BestStructure, HogStructure
 from ..cues.structure_light import LitStructure
@@ -264,18 +264,6 @@ class FusionPF(ColorPF):
         if defined[0]:
             self.v_ref = (v_obs[0].copy() if self.v_ref is None
                           else self.motion_cue.adapt(self.v_ref, estimate[[VX, VY]], v_obs[0]))
-
-    def _after_acquire(self, frame):
-        """``acquire_shape_adopt``: the acquired estimate and its particles take the best-scoring of the 9 shapes."""
-        p = self.params
-        if not (p.acquire_shape_adopt and p.acquire_shape_step > 0 and self._fused and self.structure.ready):
-            return
-        _, fx, fy = best_shape(self.structure, frame, self.estimate[_ELL_COLS], p.acquire_shape_step)
-        if fx != 1.0 or fy != 1.0:
-            self.estimate[HX] *= fx
-            self.estimate[HY] *= fy
-            self.ps.scale_columns(HX, HX + 1, fx)
-            self.ps.scale_columns(HY, HY + 1, fy)
 
     def _search_scale(self, frame, estimate):
         """``scale_search``: move the estimate's and the particles' size (in place) toward the size whose grey
