@@ -38,7 +38,7 @@ def test_the_timers_are_removed_afterwards():
     assert color_module._ellipse_rho_numba is kernel and cv2.resize is resize
 
 
-def test_a_call_inside_another_counts_once():
+def test_each_wrapped_call_is_counted_once():
     fs = load_script("frame_split")
     split = fs.Split()
     img = np.zeros((8, 8), np.uint8)
