@@ -125,6 +125,16 @@ def first_frame(source, what: str):
         raise SourceError(f"{what}: no frames") from None
 
 
+def first_truth_box(source) -> tuple[tuple[float, float, float, float], str] | None:
+    """A sequence folder's ground-truth box when it starts on the first frame, with its text ``X,Y,W,H`` (for the
+    commands that take the folder's own object when none is given); None otherwise."""
+    box = source.init_box
+    if box is None or source.init_number != 1:
+        return None
+    box = tuple(float(v) for v in box)
+    return box, ",".join(f"{v:g}" for v in box)
+
+
 def image_file(path: str):
     """An image read from a file given on the command line, or a one-line error (missing / not an image)."""
     from ..errors import SourceError

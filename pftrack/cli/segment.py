@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, counted, first_frame, follow_frames, image_file, progress
+from .common import close_all, counted, first_frame, first_truth_box, follow_frames, image_file, progress
 
 
 def add_segment(sub) -> None:
@@ -120,7 +120,5 @@ def _sequence_object(source) -> tuple[str | None, str | None]:
             for folder in (first.parent.parent / "masks", first.parent / "masks"):
                 if (folder / name).is_file():
                     return str(folder / name), None
-    box = source.init_box
-    if box is not None and source.init_number == 1:
-        return None, ",".join(f"{v:g}" for v in box)
-    return None, None
+    truth = first_truth_box(source)
+    return None, (None if truth is None else truth[1])

@@ -7,7 +7,7 @@ import sys
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, first_frame, follow_frames, image_file, progress
+from .common import close_all, first_frame, first_truth_box, follow_frames, image_file, progress
 
 
 def add_surface(sub) -> None:
@@ -59,12 +59,12 @@ def cmd_surface(args) -> int:
         box, box_text = parse_box(args.box), args.box
     else:  # a sequence folder's first ground-truth box, said before any output is made
         source = open_source(args.source)
-        if source.init_box is None or source.init_number != 1:
+        truth = first_truth_box(source)
+        if truth is None:
             source.close()
             raise ParameterError("give the surface's first-frame box with --box X,Y,W,H (the source has no ground "
                                  "truth on its first frame)")
-        box = tuple(float(v) for v in source.init_box)
-        box_text = ",".join(f"{v:g}" for v in box)
+        box, box_text = truth
         if not args.quiet:
             print(f"first box: the ground truth's {box_text}", file=sys.stderr)
     try:
