@@ -30,7 +30,7 @@ rm -f reports/bench-ablation/runs/*
   echo "Speed in detail (synthetic sweeps, end-to-end, ratios): [performance.md](performance.md)."
   echo
   echo "Every tracker on scenes of neither split, cut from photographs (40 scenes, one run seed each, lost rates and"
-  echo "re-acquisitions): [robustness.md](robustness-cameras.md#every-tracker-on-the-photo-scenes)."
+  echo "re-acquisitions): [robustness-cameras.md](robustness-cameras.md#every-tracker-on-the-photo-scenes)."
   echo
   echo "The ratio to CSRT depends on the sequences: CSRT's cost grows with the target's size and ours hardly does, so"
   echo "the line under each table gives it sequence by sequence too (lowest, median, highest)."
