@@ -350,9 +350,11 @@ class FusedLoss:
     """
 
     def __init__(self, n_cues: int, *, cue_clip: float = 10.0, cue_floor: float | None = None,
-                 acquire_z: float = 0.0, acquire_margin: float | None = None, **kwargs):
+                 acquire_z: float = 0.0, acquire_margin: float | None = None, history_miss_z: float = 0.0,
+                 **kwargs):
         self.members = [LossDetector(**kwargs) for _ in range(int(n_cues))]
         self.acquire_z = float(acquire_z)
+        self.history_miss_z = float(history_miss_z)
         self.acquire_margin = acquire_margin
         self.cue_clip = float(cue_clip)
         self.cue_floor = float(cue_clip if cue_floor is None else cue_floor)
@@ -418,10 +420,24 @@ class FusedLoss:
         for m, v, r in zip(self.members, s, own):
             m.learn(v, confident and r is not None and (v - m.mu_t) / m.sd_t > -m.learn_z and r >= 0.0)
 
+    def unlike_history(self, s: list[float]) -> bool:
+        """With ``history_miss_z`` > 0: at least two cues are available and every available cue's score lies more
+        than ``history_miss_z`` of its own spreads below its target history. Such a box is like nothing the target
+        has shown, whatever each cue's ratio against this scene's background says (an occluder or a look-alike of
+        the target's colours whose clutter the background statistics never sampled)."""
+        k = self.history_miss_z
+        if k <= 0.0:
+            return False
+        zs = [(v - m.mu_t) / m.sd_t for m, v in zip(self.members, s) if math.isfinite(v)]
+        return len(zs) >= 2 and max(zs) <= -k
+
     def step(self, s) -> tuple[bool, float]:
-        """As :meth:`LossDetector.step`, on the fused ratio of the score vector ``s``."""
+        """As :meth:`LossDetector.step`, on the fused ratio of the score vector ``s``; a score vector
+        :meth:`unlike_history` counts as a miss, its fused ratio taken as at most -1."""
         s = self._vector(s)
         self.llr, own = self._ratios(s)
+        if self.unlike_history(s):
+            self.llr = min(self.llr, -1.0)
         self.miss = self.miss + 1 if self.llr < 0.0 else 0
         self._learn(s, own)
         self.lost = self.miss >= self.lost_frames

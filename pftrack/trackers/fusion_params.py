@@ -202,6 +202,11 @@ class FusionPFParams(ColorPFParams):
     loss_cue_floor: float = param(2.0, gt=0, le=30, doc=(
         "Lower clip of each cue's log-likelihood ratio in the fused loss test: the most odds one cue alone can "
         "give against the target (a single cue also drops for reasons other than absence)."))
+    loss_history_z: float = param(0.0, ge=0, le=50, doc=(
+        "Fused loss test while tracking: a frame on which both cues' scores lie more than loss_history_z of their "
+        "own spreads below their target histories counts as a miss (fused ratio at most -1), whatever their ratios "
+        "against the background say: the estimate has settled on something like nothing the target showed (an "
+        "occluder of the target's colours that the background statistics never sampled). 0: off."))
     acquire_z: float = param(4.0, ge=0, le=50, doc=(
         "Re-acquisition with the fused loss test: a cue also vetoes a candidate whose score is more than "
         "acquire_z spreads below that cue's target history, even when its own ratio favours the target (a "
