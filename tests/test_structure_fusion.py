@@ -398,3 +398,30 @@ def test_fused_acquisition_margin_is_separate_from_the_tracking_gate():
             m.unseen -= 1
         assert det.acquire(s) is taken
         assert 1.0 < det.llr < 2.0
+
+
+def test_a_box_unlike_the_targets_history_in_both_cues_counts_as_a_miss():
+    """loss_history_z (photo-vanish-4106): an occluder of the target's colours that the background statistics never
+    sampled scores far below the target's history in both cues yet far above the background's tail, so the fused
+    ratio calls it the target; with history_miss_z the frame is a miss and the flag rises after lost_frames.  One cue
+    far below its history (a turning face's structure) is not enough, nor one cue alone."""
+    def detector(z):
+        det = FusedLoss(2, lost_frames=3, reacquire_margin=1.0, cue_floor=2.0, history_miss_z=z)
+        det.set_background(np.column_stack([np.linspace(0.05, 0.15, 50), np.linspace(0.3, 0.45, 50)]))
+        for _ in range(40):
+            det.step([0.97, 0.96])
+        return det
+
+    occluder = [0.6, 0.6]
+    plain, strict = detector(0.0), detector(3.0)
+    assert plain.evaluate(occluder) > 1.0  # each cue's ratio favours the occluder
+    assert [plain.step(occluder)[0] for _ in range(3)] == [False, False, False]
+    flags = [strict.step(occluder) for _ in range(3)]
+    assert [f[0] for f in flags] == [False, False, True]
+    assert all(score < 0.5 for _, score in flags) and strict.llr <= -1.0  # score and flag agree
+    # one cue far below its history, the other at it: the fused ratio decides as before
+    for s in ([0.6, 0.96], [0.97, 0.6], [0.6, np.nan]):
+        a, b = detector(0.0), detector(3.0)
+        assert [a.step(s) for _ in range(3)] == [b.step(s) for _ in range(3)]
+    # the target itself is never a miss
+    assert not strict.unlike_history(strict._vector([0.95, 0.95]))
