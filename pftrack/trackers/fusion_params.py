@@ -206,7 +206,8 @@ class FusionPFParams(ColorPFParams):
         "Fused loss test while tracking: a frame on which both cues' scores lie more than loss_history_z of their "
         "own spreads below their target histories counts as a miss (fused ratio at most -1), whatever their ratios "
         "against the background say: the estimate has settled on something like nothing the target showed (an "
-        "occluder of the target's colours that the background statistics never sampled). 0: off."))
+        "occluder of the target's colours that the background statistics never sampled). 0: off; 2.5 and 3 missed "
+        "the gain their rule asked on the tune data (docs/rules/loss_history_z_rule.txt)."))
     acquire_z: float = param(4.0, ge=0, le=50, doc=(
         "Re-acquisition with the fused loss test: a cue also vetoes a candidate whose score is more than "
         "acquire_z spreads below that cue's target history, even when its own ratio favours the target (a "
