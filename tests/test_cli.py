@@ -118,6 +118,17 @@ def test_an_unknown_parameter_is_told_in_a_short_line():
         create_tracker("template", nosuch=1)
 
 
+def test_a_tracker_named_by_anything_but_a_string_is_a_parameter_error():
+    """``create_tracker`` given a spec object or a list instead of a name says so (not difflib's TypeError)."""
+    from pftrack.errors import ParameterError
+    from pftrack.trackers import create_tracker
+    from pftrack.trackers.registry import list_trackers
+
+    for bad in (list_trackers()[0], ["color-pf"], 3):
+        with pytest.raises(ParameterError, match="named by a string"):
+            create_tracker(bad)
+
+
 def test_missing_camera_is_one_line_on_the_terminal(tmp_path, capfd):
     # OpenCV's backends write their own warnings straight to the process's stderr when a device fails to open
     assert main(["track", "97", "--box", "1,1,5,5", "--out", str(tmp_path / "o.csv"), "--quiet"]) == 2
