@@ -50,8 +50,8 @@ def get_spec(name: str) -> TrackerSpec:
         return _REGISTRY[name]
     except (KeyError, TypeError):  # TypeError: an unhashable name
         if not isinstance(name, str):
-            raise ParameterError(f"a tracker is named by a string (see 'pftrack list'), not {type(name).__name__}") \
-                from None
+            kind = type(name).__name__
+            raise ParameterError(f"a tracker is named by a string (see 'pftrack list'), not {kind}") from None
         close = difflib.get_close_matches(name, sorted(_REGISTRY), n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise ParameterError(f"unknown tracker '{name}'{hint} (see 'pftrack list')") from None
