@@ -1,6 +1,7 @@
 """The command line: the happy path and every bad-input case exits with code 2 and one line."""
 
 import cv2
+import numpy as np
 import pytest
 
 from pftrack.cli import main
@@ -53,6 +54,16 @@ def test_json_lines_carry_the_trackers_scalar_info(clip, tmp_path):
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     assert len(lines) == 20 and lines[0]["frame"] == 1 and len(lines[5]["box"]) == 4
     assert lines[5]["info"]["mode"] == "tracking" and isinstance(lines[5]["info"]["llr"], float)
+
+
+def test_json_lines_keep_lists_of_words_and_drop_arrays():
+    """A search frame's refusals (``vetoes``, a list of reasons) reach the JSON Lines; arrays and other objects do
+    not, and a non-finite number is written as null."""
+    from pftrack.cli.track import scalar_info
+
+    info = {"mode": "searching", "vetoes": ["unique", "leaving"], "llr": float("nan"), "n": np.int64(3),
+            "mask": np.zeros((2, 2)), "centre": [1.0, 2.0]}
+    assert scalar_info(info) == {"mode": "searching", "vetoes": ["unique", "leaving"], "llr": None, "n": 3}
 
 
 @pytest.mark.parametrize("args, needle", [

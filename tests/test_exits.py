@@ -143,6 +143,7 @@ def test_a_look_alike_heading_out_through_the_exit_edge_is_not_acquired(seed):
         runs[k_out] = [t.update(f) for f in frames[1:]]
     assert all(s.lost for k, s in enumerate(runs[0.5], start=1) if k >= 30)
     assert any(s.info.get("vetoed") for s in runs[0.5])
+    assert any("leaving" in s.info.get("vetoes", ()) for s in runs[0.5])  # the reason is reported with the frame
     taken = [iou(s.box, twin_box[k]) > 0.5 and not s.lost for k, s in enumerate(runs[0.0], start=1) if k >= 30]
     assert any(taken)
 

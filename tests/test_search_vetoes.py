@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.trackers.color_search import SearchCandidates
-from pftrack.trackers.vetoes import VetoMixin, near_mask
+from pftrack.trackers.vetoes import SearchCandidates, VetoMixin, near_mask
 
 
 class _Loss:
@@ -91,14 +90,14 @@ def _choose(host):
 def test_the_best_candidate_is_taken_when_no_veto_refuses_it():
     host = _Host(2, refused=())
     a = _choose(host)
-    assert a.found and not a.vetoed and host.states[a.best, 0] == 50.0
+    assert a.found and not a.vetoed and not a.vetoes and host.states[a.best, 0] == 50.0
     assert a.cluster.sum() == 10 and host.loss.unseen == 1 and host.asked == [50.0]
 
 
 def test_a_refused_candidate_gives_way_to_the_next():
     host = _Host(2, refused=(50.0,))
     a = _choose(host)
-    assert a.found and a.vetoed and host.states[a.best, 0] == 150.0
+    assert a.found and a.vetoed and host.states[a.best, 0] == 150.0 and a.vetoes == ("leaving",)
     assert set(host.states[a.cluster, 0]) == {150.0}
     assert host.loss.unseen == 1 and host.loss.acquired == [0.8]  # the loss test moved one frame
 
@@ -124,7 +123,7 @@ def test_retries_are_bounded():
     assert not a.found and host.asked == [50.0, 150.0]
     host = _Host(2, refused=(50.0, 150.0), scores=(0.9, 0.8, 0.7))
     a = _choose(host)
-    assert a.found and host.states[a.best, 0] == 250.0
+    assert a.found and host.states[a.best, 0] == 250.0 and a.vetoes == ("leaving", "leaving")
 
 
 @pytest.mark.parametrize("width, found", [(255, True), (248, False)])
@@ -195,7 +194,7 @@ def test_a_candidate_with_a_passing_rival_elsewhere_is_not_taken():
     taken on this frame, the rival is not taken either, and the loss test moves one frame on the first."""
     host = _Host(2, refused=(), scores=(0.9, 0.8, 0.3), acquire_unique=True)
     a = _choose(host)
-    assert not a.found and a.vetoed and host.states[a.best, 0] == 50.0
+    assert not a.found and a.vetoed and a.vetoes == ("unique",) and host.states[a.best, 0] == 50.0
     assert host.asked == [] and host.loss.lost and host.loss.unseen == 1 and host.loss.acquired == [0.9]
 
 

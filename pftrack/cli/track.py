@@ -37,13 +37,16 @@ def add_track(sub) -> None:
 
 def scalar_info(info: dict) -> dict:
     """The entries of a state's ``info`` that are plain scalars (the tracker's mode, the loss test's ratio, the
-    Bhattacharyya coefficient, flags such as ``probation``), non-finite numbers as None, for the JSON Lines."""
+    Bhattacharyya coefficient, flags such as ``probation``) or lists of words (the search's ``vetoes``), non-finite
+    numbers as None, for the JSON Lines."""
     import math
 
     out = {}
     for k, v in info.items():
         if isinstance(v, (bool, str)) or v is None:
             out[k] = v
+        elif isinstance(v, (list, tuple)) and all(isinstance(x, str) for x in v):
+            out[k] = list(v)
         elif isinstance(v, (int, float, np.integer, np.floating)):
             f = float(v)
             out[k] = (int(v) if isinstance(v, (int, np.integer)) else f) if math.isfinite(f) else None

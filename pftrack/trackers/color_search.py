@@ -10,9 +10,8 @@ resumes.  A detector callable may propose candidates too.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
-from typing import NamedTuple
 
 import numpy as np
 
@@ -26,28 +25,9 @@ from ..filtering.resampling import weighted_choice
 from ..frames import as_bgr_uint8
 from ..geometry import Box, box_to_ellipse, ellipse_box, ellipse_to_box, exit_edge, in_frame_fraction, validate_box
 from .base import TrackState
-from .vetoes import near_mask, search_rank
+from .vetoes import SearchCandidates, near_mask, search_rank
 
 _ELL_COLS = np.array([X, Y, HX, HY])
-
-
-class SearchCandidates(NamedTuple):
-    """The samples of one search (states, ellipses, colour scores, pixel totals, log-likelihoods, the scored
-    region) and its best candidate: index, log prior, the samples near it, its loss-test scores."""
-
-    states: np.ndarray
-    ell: np.ndarray
-    rho: np.ndarray
-    tot: np.ndarray
-    loglik: np.ndarray
-    roi: tuple
-    best: int
-    lp: float
-    near: np.ndarray
-    s_best: np.ndarray
-    n_keep: int
-    rank: np.ndarray | None = None     # the samples' ranking (refused and scene candidates at -inf)
-    scores: Callable | None = None     # scores(i): sample i's loss-test scores and log prior
 
 
 class SearchMixin:
@@ -438,13 +418,13 @@ class SearchMixin:
         best, lp, near, s_best, n_keep = c.best, c.lp, c.near, c.s_best, c.n_keep
         thr = self._threshold()
         conf = None
-        vetoed = False
+        vetoes: tuple[str, ...] = ()
         if p.search_method == "appearance" and p.loss_test == "likelihood":
             # the best candidate must look like the target's score history (hysteresis); that test is stricter
             # than the count of passing samples, which then only needs a few supporters; a candidate a veto
             # refuses gives way to the next (search_retries, .vetoes)
             a = self._choose(frame, c, self._appearance_pass(rho, thr, loglik) & (tot > 0))
-            best, s_best, lp, near, cluster, found, vetoed = a
+            best, s_best, lp, near, cluster, found, _, vetoes = a
             conf = confidence(self.loss.llr)
         else:
             if p.search_method == "appearance":
@@ -459,8 +439,9 @@ class SearchMixin:
                 mean = (ww[:, None] * pos).sum(axis=0)
                 var = float(np.mean((ww[:, None] * (pos - mean) ** 2).sum(axis=0)))
                 found = n_keep > 0 and var < p.variance_threshold and rho[best] > thr
-            vetoed = found and self._vetoed_by(frame, ell[best]) is not None
-            if vetoed:
+            reason = self._vetoed_by(frame, ell[best]) if found else None
+            if reason is not None:
+                vetoes = (reason,)
                 found = False
                 self.loss.lost = True
         if not found and self.detector is not None and self.frame_index % p.detector_interval == 0:
@@ -481,7 +462,8 @@ class SearchMixin:
                                        info={"mode": "acquired", "threshold": thr})
         if not found and (restart := self._persist_step(frame, ell[best], s_best)) is not None:
             return restart  # a changed target the search keeps finding in one place (.persistence)
-        info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr, "vetoed": vetoed}
+        info = {"mode": "searching", "n_pass": int(np.count_nonzero(rho > thr)), "threshold": thr,
+                "vetoed": bool(vetoes), "vetoes": list(vetoes)}  # why candidates were refused (.vetoes.Acquisition)
         if found:
             lost_at = self._lost_at
             exited = self._exit_strip() is not None  # the target had left the view through an edge

@@ -36,6 +36,7 @@ Nothing changes on a frame whose best candidate is not refused.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -58,10 +59,30 @@ RIVAL_GRID = np.array([(dx, dy) for dx in (-1.0, -0.5, 0.0, 0.5, 1.0) for dy in 
 RIVAL_STEPS = (1.0, 0.25)
 
 
+class SearchCandidates(NamedTuple):
+    """The samples of one search (states, ellipses, colour scores, pixel totals, log-likelihoods, the scored
+    region) and its best candidate: index, log prior, the samples near it, its loss-test scores."""
+
+    states: np.ndarray
+    ell: np.ndarray
+    rho: np.ndarray
+    tot: np.ndarray
+    loglik: np.ndarray
+    roi: tuple
+    best: int
+    lp: float
+    near: np.ndarray
+    s_best: np.ndarray
+    n_keep: int
+    rank: np.ndarray | None = None     # the samples' ranking (refused and scene candidates at -inf)
+    scores: Callable | None = None     # scores(i): sample i's loss-test scores and log prior
+
+
 class Acquisition(NamedTuple):
     """The candidate a search frame settled on: its index, loss-test scores and log prior, the samples near it,
-    the supporters (``cluster``) it would start tracking from, whether it ends the loss, and whether a veto
-    refused a candidate on this frame."""
+    the supporters (``cluster``) it would start tracking from, whether it ends the loss, whether a veto
+    refused a candidate on this frame, and why (``vetoes``: for each candidate refused in turn, ``"unique"`` for a
+    rival or a hold of ``acquire_unique``, else the reason :meth:`VetoMixin._vetoed_by` gave)."""
 
     best: int
     s_best: np.ndarray
@@ -70,6 +91,7 @@ class Acquisition(NamedTuple):
     cluster: np.ndarray
     found: bool
     vetoed: bool
+    vetoes: tuple[str, ...] = ()
 
 
 def near_mask(states: np.ndarray, centre_xy, size: tuple[float, float]) -> np.ndarray:
@@ -290,7 +312,7 @@ class VetoMixin:
         first = (best, s_best, lp, near)
         rank = c.rank
         retries = int(p.search_retries)
-        vetoed = False
+        reasons: list[str] = []
         g = p.acquire_in_frame
         for attempt in range(retries + 1):
             cluster = near & supporters
@@ -307,12 +329,13 @@ class VetoMixin:
                 # next would be the rival)
                 if self.frame_index > self._ambiguous_until:
                     self._ambiguous_until = self.frame_index + int(p.acquire_unique_hold)
-                vetoed = True
+                reasons.append("unique")
                 break
-            if self._vetoed_by(frame, c.ell[best], llr) is None:
+            reason = self._vetoed_by(frame, c.ell[best], llr)
+            if reason is None:
                 self.loss.acquire(s_best, lp)
-                return Acquisition(best, s_best, lp, near, cluster, True, vetoed)
-            vetoed = True
+                return Acquisition(best, s_best, lp, near, cluster, True, bool(reasons), tuple(reasons))
+            reasons.append(reason)
             if attempt == retries or rank is None:
                 break
             rank[near] = -np.inf  # the refused candidate's samples leave the ranking
@@ -328,4 +351,4 @@ class VetoMixin:
                 self.loss.lost = True  # acquire() ended the loss; a veto refused the candidate
         else:
             self.loss.unseen_frame()  # no candidate to test: the frame still counts unseen
-        return Acquisition(best, s_best, lp, near, cluster, False, vetoed)
+        return Acquisition(best, s_best, lp, near, cluster, False, bool(reasons), tuple(reasons))
