@@ -48,7 +48,8 @@ class TrackState:
         ``state_names`` labels the columns.
     weights : ``(N,)`` normalised particle weights.
     info : small per-frame extras (mode, number of samples passing the
-        appearance condition, ...).
+        appearance condition, ...; while a colour PF searches, ``vetoes`` names why each candidate its loss
+        test would have taken was refused, :class:`~pftrack.trackers.vetoes.Acquisition`).
     """
 
     box: Box
