@@ -24,6 +24,7 @@ import cv2
 
 import pftrack
 from pftrack.cli.common import parse_seeds
+from pftrack.frames import as_bgr_uint8
 from pftrack.io import discover_sequences
 from pftrack.io.sources import read_image
 from pftrack.trackers.registry import create_tracker
@@ -133,9 +134,9 @@ def main(argv=None) -> None:
     print("sequence | tracker | us a frame | in kernels and OpenCV | the rest | wrapped calls a frame | largest")
     for path in args.data:
         for seq in discover_sequences(path):
-            frames = [read_image(f) for f in seq.frames]
-            start = seq.init_index
-            box = tuple(float(v) for v in seq.groundtruth[start])
+            # decoded and converted as `pftrack eval` does, outside the timed updates (a grey file is one channel)
+            frames = [as_bgr_uint8(read_image(f)) for f in seq.frames]
+            start, box = seq.init_index, seq.init_box
             for name in args.trackers.split(","):
                 runs = [frame_split(frames, start, box, name, s) for s in seeds]
                 n = sum(r.frames for r in runs)
