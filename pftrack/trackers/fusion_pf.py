@@ -61,8 +61,7 @@ class FusionPF(ColorPF):
         if self._fused:
             self.loss = FusedLoss(2, cue_clip=p.loss_cue_clip, cue_floor=p.loss_cue_floor,
                                   acquire_z=p.acquire_z, acquire_margin=p.acquire_margin,
-                                  history_miss_z=p.loss_history_z, acquire_background_z=p.acquire_background_z,
-                                  lost_frames=p.lost_frames,
+                                  history_miss_z=p.loss_history_z, lost_frames=p.lost_frames,
                                   reacquire_margin=p.reacquire_margin,
                                   history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                   sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
