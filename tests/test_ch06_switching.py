@@ -7,7 +7,7 @@ import pytest
 
 import pftrack
 from pftrack.cues import feature_selection as fs
-from pftrack.filtering.loss import RunningThreshold
+from pftrack.filtering.running_threshold import RunningThreshold
 from pftrack.geometry import iou
 from pftrack.synth import Scene, camouflage_scene, teleport_scene
 

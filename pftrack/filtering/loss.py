@@ -284,46 +284,6 @@ class LossDetector:
             self.unseen -= 1
 
 
-class RunningThreshold:
-    """``mu + k sigma`` of the last ``window`` accepted values (book ch. 6 §5, ch06.md §1.10 "online").
-
-    The chapter fits a Gaussian to the similarity scores of frames labelled occluded and puts
-    the switching threshold 3 sigma from its mean; labels do not exist online, so this keeps the
-    statistics of the *confident* frames instead and flags a value more than ``k`` spreads above
-    their mean (a distance: larger is worse).  ``sd_floor`` keeps the spread from collapsing on a
-    static scene; no value is flagged before ``seed`` values have been seen.
-    """
-
-    def __init__(self, *, window: int = 30, seed: int = 10, k: float = 3.0, sd_floor: float = 0.02):
-        from collections import deque
-
-        self.values: deque[float] = deque(maxlen=window)
-        self.seed, self.k, self.sd_floor = seed, k, sd_floor
-
-    @property
-    def ready(self) -> bool:
-        return len(self.values) >= self.seed
-
-    @property
-    def mean(self) -> float:
-        return float(np.mean(self.values)) if self.values else 0.0
-
-    @property
-    def sd(self) -> float:
-        return max(float(np.std(self.values)) if len(self.values) > 1 else 0.0, self.sd_floor)
-
-    @property
-    def threshold(self) -> float:
-        return self.mean + self.k * self.sd if self.ready else math.inf
-
-    def exceeds(self, value: float) -> bool:
-        return not math.isfinite(value) or value > self.threshold
-
-    def push(self, value: float) -> None:
-        if math.isfinite(value):
-            self.values.append(float(value))
-
-
 class FusedLoss:
     """The two-class test of :class:`LossDetector` on several cues' scores, fused as independent evidence.
 

@@ -23,7 +23,7 @@ import numpy as np
 from ..cues import covariance as cv
 from ..cues import covariance_search as cs
 from ..cues.intensity import is_gray
-from ..filtering.loss import RunningThreshold
+from ..filtering.running_threshold import RunningThreshold
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState

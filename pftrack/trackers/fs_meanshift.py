@@ -36,7 +36,8 @@ import numpy as np
 
 from ..cues import feature_selection as fs
 from ..cues.intensity import equalization_lut, to_gray
-from ..filtering.loss import LossDetector, RunningThreshold, confidence
+from ..filtering.loss import LossDetector, confidence
+from ..filtering.running_threshold import RunningThreshold
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState

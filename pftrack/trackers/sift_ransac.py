@@ -33,7 +33,8 @@ import numpy as np
 from ..cues import anisotropic as an
 from ..cues import keypoints as kp
 from ..cues.histogram_cue import ColorCue, check_gray_bins
-from ..filtering.loss import LossDetector, RunningThreshold
+from ..filtering.loss import LossDetector
+from ..filtering.running_threshold import RunningThreshold
 from ..geometry import Box
 from ..params import Params, param
 from .base import Tracker, TrackState

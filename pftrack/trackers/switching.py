@@ -38,7 +38,8 @@ from ..cues import covariance_search as cs
 from ..cues import feature_selection as fs
 from ..cues.intensity import is_gray
 from ..filtering.dynamics import reappearance_log_prior
-from ..filtering.loss import RunningThreshold, confidence
+from ..filtering.loss import confidence
+from ..filtering.running_threshold import RunningThreshold
 from ..geometry import Box
 from ..params import param
 from .base import TrackState
