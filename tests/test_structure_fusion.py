@@ -425,3 +425,57 @@ def test_a_box_unlike_the_targets_history_in_both_cues_counts_as_a_miss():
         assert [a.step(s) for _ in range(3)] == [b.step(s) for _ in range(3)]
     # the target itself is never a miss
     assert not strict.unlike_history(strict._vector([0.95, 0.95]))
+
+
+def test_acquire_background_z_lets_a_cue_that_says_background_veto_sooner():
+    """acquire_background_z (turn-face-4202): a wheel taken for a face in a dark frame, on the structure's ratio
+    alone, while the colour cue finds it less like the target than the background and 1.6 spreads below its history
+    (short of history_z = 2).  With the option such a candidate is refused; a cue as far below its history whose own
+    ratio favours the target vetoes nothing, and the tracking frames' test is unchanged."""
+    def detector(z, colour_bg=(0.8, 0.93)):
+        det = FusedLoss(2, lost_frames=3, reacquire_margin=1.0, cue_floor=2.0, acquire_z=4.0, acquire_margin=2.0,
+                        acquire_background_z=z)
+        det.set_background(np.column_stack([np.linspace(*colour_bg, 50), np.linspace(0.55, 0.66, 50)]))
+        rng = np.random.default_rng(0)
+        for _ in range(60):
+            det.step([0.96 + 0.04 * rng.standard_normal(), 0.86 + 0.05 * rng.standard_normal()])
+        return det
+
+    plain, strict = detector(0.0), detector(1.5)
+    m0 = plain.members[0]
+    z = {v: (v - m0.mu_t) / m0.sd_t for v in np.linspace(0.80, 0.99, 400)}
+    v0 = next(v for v in sorted(z, reverse=True) if -2.0 < z[v] < -1.6 and m0.evaluate(v) < 0.0)
+    wheel = [v0, 0.80]  # the structure far above its background
+    assert plain.would_acquire(wheel)[1] > 2.0
+    assert plain.would_acquire(wheel)[0] and plain.acquire(wheel)
+    assert not strict.would_acquire(wheel)[0] and not strict.acquire(wheel)
+    # the same colour score in a scene whose background lies far below it: its ratio favours the target
+    plain2, strict2 = detector(0.0, (0.3, 0.5)), detector(1.5, (0.3, 0.5))
+    assert strict2.members[0].evaluate(v0) > 0.0
+    assert strict2.acquire(wheel) and plain2.acquire(wheel)
+    # while tracking, the two detectors answer alike
+    a, b = detector(0.0), detector(1.5)
+    assert [a.step(wheel) for _ in range(4)] == [b.step(wheel) for _ in range(4)]
+    assert a.confident(wheel) == b.confident(wheel)
+
+
+def test_acquire_background_z_is_set_for_searches_away_from_an_exit_strip_only(monkeypatch):
+    """fusion-pf sets the stricter veto on each search frame, and lifts it where the search is confined to the exit
+    strip of a target that left the view (a target coming back through that edge shows a sliver at first)."""
+    from pftrack.trackers.color_search import SearchMixin
+    from pftrack.trackers.registry import create_tracker
+
+    frame = np.full((120, 160, 3), 90, np.uint8)
+    frame[40:80, 60:90] = (40, 60, 200)
+    seen = []
+    monkeypatch.setattr(SearchMixin, "_search", lambda self, f: seen.append(self.loss.acquire_background_z))
+    for strip, expected in ((None, 1.5), ((0, 30.0), 0.0)):
+        t = create_tracker("fusion-pf", seed=0, acquire_background_z=1.5)
+        t.init(frame, (60, 40, 30, 40))
+        monkeypatch.setattr(type(t), "_exit_strip", lambda self, s=strip: s)
+        t._search(frame)
+        assert seen[-1] == expected
+    t = create_tracker("fusion-pf", seed=0)
+    t.init(frame, (60, 40, 30, 40))
+    t._search(frame)
+    assert seen[-1] == 0.0 and t.loss.acquire_background_z == 0.0
