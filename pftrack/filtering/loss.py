@@ -311,11 +311,10 @@ class FusedLoss:
 
     def __init__(self, n_cues: int, *, cue_clip: float = 10.0, cue_floor: float | None = None,
                  acquire_z: float = 0.0, acquire_margin: float | None = None, history_miss_z: float = 0.0,
-                 acquire_background_z: float = 0.0, **kwargs):
+                 **kwargs):
         self.members = [LossDetector(**kwargs) for _ in range(int(n_cues))]
         self.acquire_z = float(acquire_z)
         self.history_miss_z = float(history_miss_z)
-        self.acquire_background_z = float(acquire_background_z)
         self.acquire_margin = acquire_margin
         self.cue_clip = float(cue_clip)
         self.cue_floor = float(cue_clip if cue_floor is None else cue_floor)
@@ -404,12 +403,11 @@ class FusedLoss:
         self.lost = self.miss >= self.lost_frames
         return self.lost, confidence(self.llr)
 
-    def confident(self, s, *, veto_z: float = 0.0, margin: float | None = None, llr: float | None = None,
-                  background_z: float = 0.0) -> bool:
+    def confident(self, s, *, veto_z: float = 0.0, margin: float | None = None, llr: float | None = None) -> bool:
         """The fused ratio (``llr``, default the last one computed) is clearly the target's, and no cue vetoes
-        it: a cue vetoes when its score is far below its own history (``learn_z`` spreads, or ``background_z``
-        when that is lower and above 0) *and* its own ratio says background, or (``veto_z`` > 0) when it is more
-        than ``veto_z`` spreads below its history, whatever its ratio."""
+        it: a cue vetoes when its score is far below its own history (``learn_z`` spreads) *and* its own ratio
+        says background, or (``veto_z`` > 0) when it is more than ``veto_z`` spreads below its history,
+        whatever its ratio."""
         s = self._vector(s)
         llr = self.llr if llr is None else llr
         if not any(math.isfinite(v) for v in s) or llr <= (self.reacquire_margin if margin is None else margin):
@@ -417,8 +415,7 @@ class FusedLoss:
         for m, v in zip(self.members, s):
             if math.isfinite(v):
                 z = (v - m.mu_t) / m.sd_t
-                k = min(m.learn_z, background_z) if background_z > 0.0 else m.learn_z
-                if (z <= -k and m.evaluate(v) < 0.0) or (veto_z > 0.0 and z <= -veto_z):
+                if (z <= -m.learn_z and m.evaluate(v) < 0.0) or (veto_z > 0.0 and z <= -veto_z):
                     return False
         return True
 
@@ -426,14 +423,11 @@ class FusedLoss:
         """While lost: does a candidate with score vector ``s`` end the loss?  (``log_prior`` as in
         :meth:`LossDetector.acquire`.)  With ``acquire_z`` > 0 every cue's score must also be within
         ``acquire_z`` spreads of its own history: a candidate the fused ratio favours because one cue is far
-        above the background, while another sees it far below the target as last seen, is not taken. With
-        ``acquire_background_z`` > 0, a cue whose own ratio says background vetoes from that many spreads below
-        its history on (instead of ``learn_z``)."""
+        above the background, while another sees it far below the target as last seen, is not taken."""
         s = self._vector(s)
         self.unseen_frame()
         self.llr = self.evaluate(s) + log_prior
-        if self.confident(s, veto_z=self.acquire_z, margin=self.acquire_margin,
-                          background_z=self.acquire_background_z):
+        if self.confident(s, veto_z=self.acquire_z, margin=self.acquire_margin):
             self.lost = False
             self.miss = 0
             return True
@@ -452,8 +446,7 @@ class FusedLoss:
             m.unseen += 1
         try:
             llr = self.evaluate(s) + log_prior
-            return self.confident(s, veto_z=self.acquire_z, margin=self.acquire_margin, llr=llr,
-                                  background_z=self.acquire_background_z), llr
+            return self.confident(s, veto_z=self.acquire_z, margin=self.acquire_margin, llr=llr), llr
         finally:
             for m in self.members:
                 m.unseen -= 1

@@ -208,14 +208,6 @@ class FusionPFParams(ColorPFParams):
         "against the background say: the estimate has settled on something like nothing the target showed (an "
         "occluder of the target's colours that the background statistics never sampled). 0: off; 2.5 and 3 missed "
         "the gain their rule asked on the tune data (docs/rules/loss_history_z_rule.txt)."))
-    acquire_background_z: float = param(0.0, ge=0, le=50, doc=(
-        "Re-acquisition with the fused loss test: a cue whose own ratio says background vetoes a candidate whose "
-        "score lies more than this many of its spreads below the cue's target history (instead of history_z): a "
-        "candidate taken on one cue's evidence alone, while the other finds it less like the target than this "
-        "scene's background and well below the target as last seen (a wheel taken for a face in a dark frame). "
-        "Applied to searches that are not confined to an exit strip (a target coming back through an edge shows "
-        "little of itself at first). 0: off (history_z). Without the exit-strip condition it failed its rule "
-        "(docs/rules/acquire_background_z_rule.txt)."))
     acquire_z: float = param(4.0, ge=0, le=50, doc=(
         "Re-acquisition with the fused loss test: a cue also vetoes a candidate whose score is more than "
         "acquire_z spreads below that cue's target history, even when its own ratio favours the target (a "

@@ -43,7 +43,6 @@ from ..filtering.dynamics import HX, HY, VX, VY
 from ..filtering.loss import FusedLoss
 from ..geometry import box_to_ellipse, ellipse_box
 from .color_hooks import fused_supporters
-from .base import TrackState
 from .color_pf import _ELL_COLS, ColorPF
 from .fusion_params import FusionPFParams
 
@@ -62,8 +61,7 @@ class FusionPF(ColorPF):
         if self._fused:
             self.loss = FusedLoss(2, cue_clip=p.loss_cue_clip, cue_floor=p.loss_cue_floor,
                                   acquire_z=p.acquire_z, acquire_margin=p.acquire_margin,
-                                  history_miss_z=p.loss_history_z, acquire_background_z=p.acquire_background_z,
-                                  lost_frames=p.lost_frames,
+                                  history_miss_z=p.loss_history_z, lost_frames=p.lost_frames,
                                   reacquire_margin=p.reacquire_margin,
                                   history_rate=p.history_rate, sd_floor_target=p.score_sd_floor,
                                   sd_floor_background=p.score_sd_floor, learn_z=p.history_z)
@@ -85,14 +83,6 @@ class FusionPF(ColorPF):
         return p.structure and p.fused_loss and p.loss_test == "likelihood"
 
     # ------------------------------------------------------------------ init
-    def _search(self, frame: np.ndarray) -> TrackState:
-        p = self.params
-        if self._fused and p.acquire_background_z > 0:
-            # away from an exit strip only: a target coming back through an edge shows little of itself at first,
-            # and its colour score can lie below the background's for a few frames
-            self.loss.acquire_background_z = p.acquire_background_z if self._exit_strip() is None else 0.0
-        return super()._search(frame)
-
     def _structure_cue(self, frame):
         """A fresh structural cue for the input ``frame`` (None: unknown): on grey input with ``grey_structure`` other
         than 'levels', the quotient and grey-level pair of pftrack.cues.structure_light."""
