@@ -256,9 +256,10 @@ class FusionPF(ColorPF):
 
     def _after_estimate(self, frame, estimate):
         p = self.params
-        if p.position_search > 0 and p.position_search_rate > 0 and p.structure and self.structure.ready:
+        if (p.position_search > 0 and p.position_search_rate > 0 and p.structure and self.structure.ready
+                and (not p.position_search_gated or (self._fused and self.loss.llr > self.loss.reacquire_margin))):
             dx, dy = position_offset(self.structure, frame, estimate[_ELL_COLS], p.position_search,
-                                     p.position_search_rate)
+                                     p.position_search_rate, edge=1.0 if p.position_search_gated else 0.0)
             if dx or dy:
                 estimate[X] += dx
                 estimate[Y] += dy
