@@ -192,37 +192,3 @@ def test_fusion_pf_scale_search_follows_a_growing_target(seed):
     true = np.sqrt(gt[-1, 2] * gt[-1, 3])
     assert abs(sizes[0.03] / true - 1.0) < 0.15, (sizes, true)
     assert sizes[0.0] == pytest.approx(np.sqrt(gt[0, 2] * gt[0, 3]), rel=0.02)
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_position_offset_moves_the_centre_toward_the_target(seed):
-    """position_search: an estimate 2 px left of and 2 px above the textured target moves right and down, by at most
-    rate x step of each half-axis; one on the target stays (almost) put; a shifted box past the frame's edge gives
-    (0, 0)."""
-    from pftrack.cues.scale_search import position_offset
-
-    rng = np.random.default_rng(seed)
-    cue = StructureCue(template_pixels=256, anchor=True)
-    cue.init(_textured_frame(rng, 1.0), (160.0, 120.0, 24.0, 36.0))
-    cue.new_frame()
-    frame = _textured_frame(rng, 1.0)
-    dx, dy = position_offset(cue, frame, (158.0, 118.0, 24.0, 36.0), 0.1, 1.0)
-    assert 0.5 < dx <= 0.1 * 24.0 and 0.5 < dy <= 0.1 * 36.0, (dx, dy)
-    cue.new_frame()
-    dx0, dy0 = position_offset(cue, frame, (160.0, 120.0, 24.0, 36.0), 0.1, 1.0)
-    assert abs(dx0) < 0.5 and abs(dy0) < 0.5, (dx0, dy0)
-    cue.new_frame()
-    half = position_offset(cue, frame, (158.0, 118.0, 24.0, 36.0), 0.1, 0.5)
-    assert half == pytest.approx((0.5 * dx, 0.5 * dy))
-    cue.new_frame()
-    assert position_offset(cue, frame, (25.0, 120.0, 24.0, 36.0), 0.1, 1.0) == (0.0, 0.0)
-
-
-def test_particle_column_and_mean_shift_together():
-    from pftrack.filtering.particles import ParticleSet
-
-    ps = ParticleSet(np.arange(12.0).reshape(3, 4), np.log(np.array([0.2, 0.3, 0.5])))
-    before = ps.mean().copy()
-    ps.shift_columns(1, 2.5)
-    np.testing.assert_allclose(ps.states[:, 1], np.arange(12.0).reshape(3, 4)[:, 1] + 2.5)
-    np.testing.assert_allclose(ps.mean(), before + np.array([0.0, 2.5, 0.0, 0.0]))

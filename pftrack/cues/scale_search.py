@@ -141,28 +141,3 @@ def aspect_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> 
     at a fixed aspect cannot follow it.  1 when the widest or the tallest box is not inside the frame."""
     k = 1.0 + step
     return _vertex_factor(cue, frame, ellipse, ((1.0 / k, k), (1.0, 1.0), (k, 1.0 / k)), step, rate)
-
-
-def position_offset(cue, frame: np.ndarray, ellipse, step: float, rate: float, *,
-                    edge: float = 0.0) -> tuple[float, float]:
-    """``(dx, dy)``: how far the centre of ``ellipse`` ``(cx, cy, hx, hy)`` moves toward the position whose patch best
-    matches ``cue``'s references (anything with ``scores(frame, roi, ellipses)``): the NCC of the box shifted by
-    ``step`` of each half-axis to either side along that axis, the vertex of the parabola through the three scores
-    of each axis (:func:`vertex_offset`), ``rate`` of the way (DSST's translation step, on the structural cue).
-
-    The estimate of a particle filter is the weighted mean of noisy samples; this corrects it toward the
-    structural cue's own peak. ``(0, 0)`` when a shifted box is not inside the frame (with ``edge`` > 0: when the
-    box grown by ``edge`` of its half-axes is not: a target leaving the view is not pulled back inside it), or a
-    score is not finite."""
-    cx, cy, hx, hy = np.asarray(ellipse, dtype=np.float64).ravel()[:4].tolist()
-    ax, ay = (1.0 + max(step, edge)) * hx, (1.0 + max(step, edge)) * hy
-    if not _fits(frame, cx, cy, ax, ay):
-        return 0.0, 0.0
-    dx, dy = step * hx, step * hy
-    ell = np.array([[cx, cy, hx, hy], [cx - dx, cy, hx, hy], [cx + dx, cy, hx, hy],
-                    [cx, cy - dy, hx, hy], [cx, cy + dy, hx, hy]])
-    s = np.asarray(cue.scores(frame, None, ell), dtype=np.float64)
-    if not np.all(np.isfinite(s)):
-        return 0.0, 0.0
-    mid, left, right, up, down = s.tolist()
-    return rate * dx * vertex_offset(left, mid, right), rate * dy * vertex_offset(up, mid, down)

@@ -105,12 +105,6 @@ class ParticleSet:
         self.states[:, start:stop] *= factor
         self._mean[start:stop] *= factor
 
-    def shift_columns(self, column: int, offset: float) -> None:
-        """Add ``offset`` to the state column ``column`` of every particle, and of the weighted mean (a position
-        correction found after the estimate; the weights are unchanged)."""
-        self.states[:, column] += offset
-        self._mean[column] += offset
-
     def resample(self, indices: np.ndarray) -> None:
         """Replace the set by the selected particles with uniform weights (in place)."""
         np.take(self.states, indices, axis=0, out=self._scratch, mode="clip")  # valid indices; "raise" buffers out

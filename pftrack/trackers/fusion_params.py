@@ -140,20 +140,6 @@ class FusionPFParams(ColorPFParams):
     scale_search_rate: float = param(0.25, ge=0, le=1, doc=(
         "Fraction (in log scale) of the scale search's vertex applied per frame: at most (1+s)^rate, 0.75 % with "
         "s = 0.03 and this default, so noise in the three scores moves the size little."))
-    position_search: float = param(0.0, ge=0, le=0.5, doc=(
-        "d > 0: after each tracked frame's estimate (before the size search), its box shifted by d of each half-axis "
-        "to either side along each axis is compared with the structural cue's references by NCC, and the estimate "
-        "and every particle move toward the vertex of the parabola through each axis's three scores by "
-        "position_search_rate of it (cues.scale_search.position_offset; DSST's translation step): the weighted mean "
-        "of noisy particles corrected toward the structure's peak. Skipped while a shifted box is not inside the "
-        "frame. 0: off."))
-    position_search_rate: float = param(0.5, ge=0, le=1, doc=(
-        "Fraction of the position search's vertex applied per frame (at most d of the half-axes times this)."))
-    position_search_gated: bool = param(False, doc=(
-        "With position_search: only after a frame the fused loss test was confident on, and only while the box "
-        "grown by one half-axis each way is inside the frame (a target leaving the view or being covered is not "
-        "pulled onto what is left of it). Ungated, position_search failed its rule on the tune data "
-        "(docs/rules/position_search_rule.txt)."))
     aspect_search: float = param(0.0, ge=0, le=0.5, doc=(
         "a > 0: after the size search, the estimate's box at the shapes (hx/(1+a), hy(1+a)), (hx, hy) and "
         "(hx(1+a), hy/(1+a)) (the same area) is compared with the structural cue's references by NCC, and the "

@@ -35,11 +35,11 @@ from ..cues.contrast import (
 from ..cues.intensity import gain_maps, is_gray, light_levels
 from ..cues.grey_patch import grey_patch
 from ..cues.motion import LocalMotionCue, local_motion
-from ..cues.scale_search import aspect_factor, best_shape_score, position_offset, size_factor
+from ..cues.scale_search import aspect_factor, best_shape_score, size_factor
 from ..cues.structure import StructureCue
 from ..cues.structure_hog import BestStructure, HogStructure
 from ..cues.structure_light import LitStructure
-from ..filtering.dynamics import HX, HY, VX, VY, X, Y
+from ..filtering.dynamics import HX, HY, VX, VY
 from ..filtering.loss import FusedLoss
 from ..geometry import box_to_ellipse, ellipse_box
 from .color_hooks import fused_supporters
@@ -256,15 +256,6 @@ class FusionPF(ColorPF):
 
     def _after_estimate(self, frame, estimate):
         p = self.params
-        if (p.position_search > 0 and p.position_search_rate > 0 and p.structure and self.structure.ready
-                and (not p.position_search_gated or (self._fused and self.loss.llr > self.loss.reacquire_margin))):
-            dx, dy = position_offset(self.structure, frame, estimate[_ELL_COLS], p.position_search,
-                                     p.position_search_rate, edge=1.0 if p.position_search_gated else 0.0)
-            if dx or dy:
-                estimate[X] += dx
-                estimate[Y] += dy
-                self.ps.shift_columns(X, dx)
-                self.ps.shift_columns(Y, dy)
         if p.scale_search > 0 and p.scale_search_rate > 0 and p.structure and self.structure.ready:
             self._search_scale(frame, estimate)
         if not p.motion or self._flow is None:
