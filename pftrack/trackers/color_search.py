@@ -424,7 +424,7 @@ class SearchMixin:
             # than the count of passing samples, which then only needs a few supporters; a candidate a veto
             # refuses gives way to the next (search_retries, .vetoes)
             a = self._choose(frame, c, self._appearance_pass(rho, thr, loglik) & (tot > 0))
-            best, s_best, lp, near, cluster, found, _, vetoes = a
+            best, s_best, lp, near, cluster, found, vetoes = a
             conf = confidence(self.loss.llr)
         else:
             if p.search_method == "appearance":

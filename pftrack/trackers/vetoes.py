@@ -90,8 +90,12 @@ class Acquisition(NamedTuple):
     near: np.ndarray
     cluster: np.ndarray
     found: bool
-    vetoed: bool
     vetoes: tuple[str, ...] = ()
+
+    @property
+    def vetoed(self) -> bool:
+        """Did a veto refuse a candidate on this frame?"""
+        return bool(self.vetoes)
 
 
 def near_mask(states: np.ndarray, centre_xy, size: tuple[float, float]) -> np.ndarray:
@@ -334,7 +338,7 @@ class VetoMixin:
             reason = self._vetoed_by(frame, c.ell[best], llr)
             if reason is None:
                 self.loss.acquire(s_best, lp)
-                return Acquisition(best, s_best, lp, near, cluster, True, bool(reasons), tuple(reasons))
+                return Acquisition(best, s_best, lp, near, cluster, True, tuple(reasons))
             reasons.append(reason)
             if attempt == retries or rank is None:
                 break
@@ -351,4 +355,4 @@ class VetoMixin:
                 self.loss.lost = True  # acquire() ended the loss; a veto refused the candidate
         else:
             self.loss.unseen_frame()  # no candidate to test: the frame still counts unseen
-        return Acquisition(best, s_best, lp, near, cluster, False, bool(reasons), tuple(reasons))
+        return Acquisition(best, s_best, lp, near, cluster, False, tuple(reasons))
