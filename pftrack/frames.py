@@ -7,11 +7,15 @@ Everything that enters a tracker passes :func:`as_bgr_uint8`:
 * ``(H, W, 4)`` BGRA → alpha dropped;
 * ``uint16`` → scaled to 8 bits (``v >> 8``), as OpenCV does when it saves 16-bit
   data to 8-bit formats;
-* any other dtype, shape or an empty image → :class:`~pftrack.errors.FrameError`.
+* floating point in ``[0, 1]`` (scikit-image's and OpenCV's convention for float images) → ``round(255 v)``;
+* other integer types (an image that went through NumPy arithmetic) with every value in ``[0, 255]`` → as 8 bits;
+* any other dtype, values out of those ranges (or not finite), shape or an empty image →
+  :class:`~pftrack.errors.FrameError`.
 """
 
 from __future__ import annotations
 
+import math
 import weakref
 
 import cv2
@@ -44,6 +48,17 @@ def grey_origin(frame: np.ndarray) -> np.ndarray | None:
     return entry[1]
 
 
+def _float_to_uint8(frame: np.ndarray, where: str) -> np.ndarray:
+    """``round(255 v)`` of a float image whose values all lie in ``[0, 1]``, or FrameError."""
+    lo, hi = float(frame.min()), float(frame.max())
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise FrameError(f"{where}: the {frame.dtype} image holds NaN or infinite values")
+    if lo < 0.0 or hi > 1.0:
+        raise FrameError(f"{where}: {frame.dtype} values {lo:g}..{hi:g} lie outside [0, 1] (scale a float image to "
+                         "[0, 1], or give uint8)")
+    return np.rint(frame * 255.0).astype(np.uint8)
+
+
 def as_bgr_uint8(frame, *, where: str = "frame") -> np.ndarray:
     """Return ``frame`` as a C-contiguous ``(H, W, 3)`` uint8 BGR array, or raise FrameError."""
     if not isinstance(frame, np.ndarray):
@@ -55,8 +70,16 @@ def as_bgr_uint8(frame, *, where: str = "frame") -> np.ndarray:
         frame = (frame >> 8).astype(np.uint8)
     elif frame.dtype == np.bool_:
         frame = frame.astype(np.uint8) * 255
+    elif frame.dtype.kind == "f":
+        frame = _float_to_uint8(frame, where)
+    elif frame.dtype.kind in "iu" and frame.dtype != np.uint8:
+        lo, hi = int(frame.min()), int(frame.max())
+        if lo < 0 or hi > 255:
+            raise FrameError(f"{where}: {frame.dtype} values {lo}..{hi} lie outside 0..255 (give uint8, uint16, "
+                             "or floats in [0, 1])")
+        frame = frame.astype(np.uint8)
     elif frame.dtype != np.uint8:
-        raise FrameError(f"{where}: unsupported pixel type {frame.dtype} (expected uint8 or uint16)")
+        raise FrameError(f"{where}: unsupported pixel type {frame.dtype} (expected uint8, uint16 or float in [0, 1])")
     if frame.ndim == 2:
         gray = np.ascontiguousarray(frame)
         return _from_grey(gray, fresh or gray is not frame)

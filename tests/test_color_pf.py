@@ -208,9 +208,12 @@ def test_bad_inputs_raise_specific_errors():
     tr.init(frame, (10, 10, 10, 10))
     with pytest.raises(FrameError):
         tr.update(np.zeros((40, 60, 3), np.uint8))
+    with pytest.raises(FrameError, match="outside"):
+        tr.update(np.full((50, 60, 3), 200.0, np.float32))
     with pytest.raises(FrameError):
-        tr.update(np.zeros((50, 60, 3), np.float32))
-    # grayscale and 16-bit frames are converted
+        tr.update(np.zeros((50, 60, 3), np.complex64))
+    # grayscale, 16-bit and float frames in [0, 1] are converted
+    tr.update(np.zeros((50, 60, 3), np.float32))
     tr.update(np.zeros((50, 60), np.uint8))
     tr.update(np.zeros((50, 60, 3), np.uint16))
     with pytest.raises(ParameterError):

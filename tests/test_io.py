@@ -404,3 +404,23 @@ def test_h264_round_trip_keeps_count_and_size_and_is_close():
     assert grey[0].shape == (21, 33, 3)
     with pytest.raises(ParameterError):
         h264_round_trip(frames, 60)
+
+
+def test_float_and_wide_integer_frames_are_converted_or_refused_with_their_range():
+    from pftrack.frames import as_bgr_uint8
+
+    rng = np.random.default_rng(5)
+    img = rng.integers(0, 256, (7, 9, 3), dtype=np.uint8)
+    for dtype in (np.float32, np.float64):
+        np.testing.assert_array_equal(as_bgr_uint8((img / 255.0).astype(dtype)), img)
+    for dtype in (np.int32, np.int64, np.int16, np.uint32):
+        np.testing.assert_array_equal(as_bgr_uint8(img.astype(dtype)), img)
+    np.testing.assert_array_equal(as_bgr_uint8(img[:, :, 0].astype(np.int64)), img[:, :, [0, 0, 0]])
+    with pytest.raises(FrameError, match=r"0\.5\.\.255 lie outside \[0, 1\]"):
+        as_bgr_uint8(np.linspace(0.5, 255, 63).reshape(7, 9))
+    with pytest.raises(FrameError, match="NaN"):
+        as_bgr_uint8(np.full((4, 4), np.nan))
+    with pytest.raises(FrameError, match="-1..255 lie outside 0..255"):
+        as_bgr_uint8(np.array([[-1, 255]], np.int32))
+    with pytest.raises(FrameError, match="unsupported pixel type"):
+        as_bgr_uint8(np.zeros((4, 4), np.complex64))
