@@ -394,3 +394,61 @@ def test_trackerless_tripwire_counts_through_a_jump_of_the_white_balance(warm, o
             assert 27 <= dict(found)[1] <= 31 and 41 <= dict(found)[-1] <= 45, (at, found)
         wrong += crossings(at, **{option: False if grey else 0.0}) != found
     assert wrong >= 2
+
+
+def test_band_rects_hold_every_pixel_within_reach_and_leave_out_an_oblique_wires_corners():
+    from pftrack.events.geometry import band_rects
+
+    wire = np.array([[30.0, 20.0], [200.0, 150.0], [260.0, 60.0]])
+    origin, shape, reach = (10, 5), (170, 270), 25.0
+    rects = band_rects(wire, origin, shape, reach, rows=8)
+    covered = np.zeros(shape, bool)
+    for y0, y1, x0, x1 in rects:
+        assert not covered[y0:y1, x0:x1].any()  # the rectangles do not overlap
+        covered[y0:y1, x0:x1] = True
+    ys, xs = np.mgrid[0:shape[0], 0:shape[1]]
+    pts = np.stack([xs.ravel() + origin[0], ys.ravel() + origin[1]], 1).astype(float)
+    dist = polyline_project(pts, wire)[0].reshape(shape)
+    assert covered[dist <= reach].all()
+    assert covered.mean() < 0.75  # an oblique wire's bounding box is mostly left out
+    # a horizontal wire's region: bands of full rows beside the wire, merged, and narrower ones at the ends
+    flat = band_rects(np.array([[20.0, 50.0], [220.0, 50.0]]), (0, 0), (100, 240), 40.0)
+    assert any(y0 <= 24 and y1 >= 80 and (x0, x1) == (0, 240) for y0, y1, x0, x1 in flat)
+    assert len(flat) <= 8 and flat[0][0] == 8 and flat[-1][1] == 96
+
+
+def test_foreground_on_rectangles_labels_their_pixels_as_the_whole_frame_does():
+    from pftrack.cues.foreground import Foreground
+
+    rng = np.random.default_rng(4)
+    rects = [(0, 10, 0, 64), (10, 30, 5, 40), (30, 48, 20, 64)]
+    whole, parts = Foreground(50, 16.0), Foreground(50, 16.0, rects=rects)
+    for t in range(40):
+        f = np.clip(rng.normal(120, 6, (48, 64, 3)), 0, 255).astype(np.uint8)
+        f[8:30, (t % 50):(t % 50) + 12] = (30, 200, 60)
+        if t >= 30:  # grey frames: the grey shadow threshold applies in every rectangle
+            f[:] = f.mean(2, keepdims=True).astype(np.uint8)
+        a, b = whole.apply(f), parts.apply(f)
+        inside = np.zeros(a.shape, bool)
+        for y0, y1, x0, x1 in rects:
+            inside[y0:y1, x0:x1] = True
+        np.testing.assert_array_equal(b[inside], a[inside])
+        assert not b[~inside].any() and set(np.unique(a)) <= {0, 1}
+    assert parts.grey and whole.grey
+
+
+def test_an_oblique_wire_gives_the_same_events_with_its_band_only():
+    from pftrack.synth.walkers import walkers_scene
+
+    sc = walkers_scene(3, wire="oblique", n_frames=120)
+    runs = {}
+    for band in (False, True):
+        tw = TrackerlessTripwire(sc.wire, sc.frames[0].shape[:2], sc.fps, TripwireParams(radius=8, bgs_band=band))
+        ev = []
+        for n, f in enumerate(sc.frames, 1):
+            ev += tw.process(f, n)
+        ev += tw.finish()
+        runs[band] = ([(e.frame, e.direction, e.x, e.y) for e in ev], tw._bgs.rects)
+    assert runs[True][0] == runs[False][0] and runs[True][0]
+    area = sum((y1 - y0) * (x1 - x0) for y0, y1, x0, x1 in runs[True][1])
+    assert runs[False][1] is None and area < 0.9 * tw._fg.size

@@ -83,30 +83,49 @@ def apply_levels(frame: np.ndarray, gain: float, smooth: bool) -> np.ndarray:
     return cv2.convertScaleAbs(cv2.GaussianBlur(frame, (3, 3), 0) if smooth else frame, alpha=gain)
 
 
+def _foreground_only(mask: np.ndarray) -> np.ndarray:
+    """1 where MOG2's ``mask`` says foreground (255), 0 for background (0) and shadow (127)."""
+    return cv2.threshold(mask, 254, 1, cv2.THRESH_BINARY)[1]
+
+
 class Foreground:
     """MOG2 with shadow detection, whose shadow threshold on grey frames is ``grey_shadow_threshold``.
 
     ``apply(frame)`` returns a uint8 mask (1 foreground, 0 background or shadow) and updates the background model,
     as ``BackgroundSubtractorMOG2.apply`` does; ``grey`` says whether the last frame was taken as grey.
+
+    ``rects``: the rectangles ``(y0, y1, x0, x1)`` of the frame where the mask is wanted (None: all of it), each with
+    a model of its own; the mask is 0 elsewhere. MOG2 models each pixel on its own, so a pixel inside a rectangle
+    gets the label it gets when the whole frame is modelled, at the cost of the rectangles' pixels only.
     """
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0, *,
-                 grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD):
+                 grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD, rects=None):
         if not 0.0 <= grey_shadow_threshold <= 1.0:
             raise ValueError(f"grey_shadow_threshold must be in [0, 1], got {grey_shadow_threshold}")
         self.grey_shadow_threshold = float(grey_shadow_threshold)
-        self.subtractor = cv2.createBackgroundSubtractorMOG2(history=int(history), varThreshold=float(var_threshold),
-                                                             detectShadows=True)
-        self.subtractor.setShadowThreshold(OPENCV_SHADOW_THRESHOLD)
+        self.rects = None if rects is None else [tuple(int(v) for v in r) for r in rects]
+        self._models = [cv2.createBackgroundSubtractorMOG2(history=int(history), varThreshold=float(var_threshold),
+                                                           detectShadows=True)
+                        for _ in (self.rects if self.rects is not None else [None])]
+        self.subtractor = self._models[0]
+        for m in self._models:
+            m.setShadowThreshold(OPENCV_SHADOW_THRESHOLD)
         self.grey = False
 
     def apply(self, frame: np.ndarray, learning_rate: float = -1.0) -> np.ndarray:
         # a lattice of every 16th pixel is enough to tell a grey frame (about 1700 pixels of a 768 x 576 frame)
         grey = self.grey_shadow_threshold != OPENCV_SHADOW_THRESHOLD and is_gray(frame, stride=16)
         if grey != self.grey:
-            self.subtractor.setShadowThreshold(self.grey_shadow_threshold if grey else OPENCV_SHADOW_THRESHOLD)
+            for m in self._models:
+                m.setShadowThreshold(self.grey_shadow_threshold if grey else OPENCV_SHADOW_THRESHOLD)
             self.grey = grey
-        return (self.subtractor.apply(frame, learningRate=learning_rate) == 255).astype(np.uint8)
+        if self.rects is None:
+            return _foreground_only(self.subtractor.apply(frame, learningRate=learning_rate))
+        out = np.zeros(frame.shape[:2], np.uint8)
+        for (y0, y1, x0, x1), m in zip(self.rects, self._models):
+            out[y0:y1, x0:x1] = _foreground_only(m.apply(frame[y0:y1, x0:x1], learningRate=learning_rate))
+        return out
 
     def prime(self, frames, diff: float = BOOTSTRAP_DIFF) -> None:
         """Start the background model from ``frames`` (a few seconds of the stream, before it is processed) with

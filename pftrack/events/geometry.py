@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Crossing", "PatchLayout", "build_patches", "crossings_of_track", "parse_polyline", "polyline_project"]
+__all__ = ["Crossing", "PatchLayout", "band_rects", "build_patches", "crossings_of_track", "parse_polyline",
+           "polyline_project"]
 
 
 def parse_polyline(text: str) -> np.ndarray:
@@ -64,6 +65,34 @@ def polyline_project(p: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, np.nda
     f = foot[idx, k]
     signed = np.einsum("nc,nc->n", p - f, n_r[k])
     return dist[idx, k], f, k, cum[k] + t[idx, k], signed
+
+
+def band_rects(pts: np.ndarray, origin: tuple[int, int], shape: tuple[int, int], reach: float,
+               rows: int = 8) -> list[tuple[int, int, int, int]]:
+    """Rectangles ``(y0, y1, x0, x1)`` of a region of ``shape`` (h, w) whose top-left pixel is ``origin`` (x, y) in
+    image coordinates, which together hold every pixel within ``reach`` of the polyline ``pts``: per band of
+    ``rows`` rows, the columns from the first to the last such pixel; bands with the same columns are merged.
+    The region of a horizontal or vertical wire is then one rectangle but for its ends; that of an oblique wire
+    leaves out the corners of its bounding box."""
+    h, w = int(shape[0]), int(shape[1])
+    ys = np.arange(h, dtype=np.float64) + origin[1]
+    xs = np.arange(w, dtype=np.float64) + origin[0]
+    near = np.zeros((h, w), dtype=bool)
+    for (ax, ay), (bx, by) in zip(pts[:-1], pts[1:]):
+        dx, dy = bx - ax, by - ay
+        t = np.clip(((xs[None, :] - ax) * dx + (ys[:, None] - ay) * dy) / (dx * dx + dy * dy), 0.0, 1.0)
+        near |= np.hypot(xs[None, :] - ax - t * dx, ys[:, None] - ay - t * dy) <= reach
+    rects: list[tuple[int, int, int, int]] = []
+    for y0 in range(0, h, rows):
+        cols = np.flatnonzero(near[y0:y0 + rows].any(axis=0))
+        if not len(cols):
+            continue
+        y1, x0, x1 = min(y0 + rows, h), int(cols[0]), int(cols[-1]) + 1
+        if rects and rects[-1][1] == y0 and rects[-1][2:] == (x0, x1):
+            rects[-1] = (rects[-1][0], y1, x0, x1)
+        else:
+            rects.append((y0, y1, x0, x1))
+    return rects
 
 
 @dataclass

@@ -38,7 +38,7 @@ from ..cues import foreground as _fg
 from ..cues.foreground import Foreground, apply_levels
 from ..cues.still_gain import frame_undo
 from .blobs import FootCrossings, estimate_radius
-from .geometry import PatchLayout, build_patches
+from .geometry import PatchLayout, band_rects, build_patches
 from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
 from .timing import CrossingTimer
 from .tripwire_params import TripwireParams
@@ -134,7 +134,9 @@ class TrackerlessTripwire:
         self._prior = 0.0 if p.faithful else p.motion_prior / self.stride ** 2
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
         if p.bgs == "mog2":
-            self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold)
+            rects = band_rects(self.polyline, (self.x0, self.y0), (rh, rw), pad + r) if p.bgs_band else None
+            self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold,
+                                   rects=rects)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
         self._cast = None if p.faithful else frame_undo(p)
         self._denoise = False
@@ -209,11 +211,11 @@ class TrackerlessTripwire:
         new_app = np.zeros(len(self.patches), dtype=bool)
         rows = np.flatnonzero(is_fg)
         if len(rows) and self._prev_gray is not None:
-            bins = colour_bins(roi, p.bits).ravel()
             nb = 1 << (3 * p.bits)
             pix = self._disc[rows]                                    # (k, D)
+            bins = colour_bins(roi[pix // roi.shape[1], pix % roi.shape[1]], p.bits)  # the discs' pixels only
             wts = fg[pix].astype(np.float64) if p.hist_pixels == "fg" else np.ones(pix.shape)
-            ids = (np.arange(len(rows))[:, None] * nb + bins[pix]).ravel()
+            ids = (np.arange(len(rows))[:, None] * nb + bins).ravel()
             hists = np.bincount(ids, weights=wts.ravel(), minlength=len(rows) * nb).reshape(len(rows), nb)
             hists /= np.maximum(hists.sum(1, keepdims=True), 1e-12)
             for k, i in enumerate(rows):

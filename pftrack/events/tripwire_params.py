@@ -27,6 +27,11 @@ class TripwireParams(Params):
         "twice as dark as the ground: a darker pixel is a shadow only above this fraction of the background's "
         "brightness (1: none; 0.5: OpenCV's, as on colour frames; 0.85 chosen on the grey tune data, "
         "docs/tripwire.md; pftrack.cues.foreground)"))
+    bgs_band: bool = param(True, doc=(
+        "MOG2 models only the rows and columns that hold pixels within the neighbourhood's reach of the wire (the "
+        "patches' radius plus the block matching's range and margins), not the whole bounding box of an oblique "
+        "wire; inside them every pixel's label is the one the whole box gives (MOG2 models each pixel on its own). "
+        "A wire across the view diagonally then costs a fraction of its box (docs/tripwire.md, Speed)"))
     bgs_bootstrap: float = param(0.0, ge=0, doc=(
         "seconds of processed frames (at least 3) held at the start; MOG2 learns them with their moving pixels "
         "replaced by the per-pixel median (pftrack.cues.foreground.still_frames), then they are processed (0: off; "
