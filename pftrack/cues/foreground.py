@@ -97,12 +97,18 @@ class Foreground:
     ``rects``: the rectangles ``(y0, y1, x0, x1)`` of the frame where the mask is wanted (None: all of it), each with
     a model of its own; the mask is 0 elsewhere. MOG2 models each pixel on its own, so a pixel inside a rectangle
     gets the label it gets when the whole frame is modelled, at the cost of the rectangles' pixels only.
+
+    ``scale``: MOG2 models the frame reduced by this factor (block means, ``(w // scale, h // scale)``; ``rects`` are
+    then in the reduced frame's pixels), and the mask is brought back to the frame's size by nearest neighbour.
     """
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0, *,
-                 grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD, rects=None):
+                 grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD, rects=None, scale: int = 1):
         if not 0.0 <= grey_shadow_threshold <= 1.0:
             raise ValueError(f"grey_shadow_threshold must be in [0, 1], got {grey_shadow_threshold}")
+        if int(scale) < 1:
+            raise ValueError(f"scale must be >= 1, got {scale}")
+        self.scale = int(scale)
         self.grey_shadow_threshold = float(grey_shadow_threshold)
         self.rects = None if rects is None else [tuple(int(v) for v in r) for r in rects]
         self._models = [cv2.createBackgroundSubtractorMOG2(history=int(history), varThreshold=float(var_threshold),
@@ -120,12 +126,17 @@ class Foreground:
             for m in self._models:
                 m.setShadowThreshold(self.grey_shadow_threshold if grey else OPENCV_SHADOW_THRESHOLD)
             self.grey = grey
+        h, w = frame.shape[:2]
+        k = self.scale
+        if k > 1:
+            frame = cv2.resize(frame, (max(w // k, 1), max(h // k, 1)), interpolation=cv2.INTER_AREA)
         if self.rects is None:
-            return _foreground_only(self.subtractor.apply(frame, learningRate=learning_rate))
-        out = np.zeros(frame.shape[:2], np.uint8)
-        for (y0, y1, x0, x1), m in zip(self.rects, self._models):
-            out[y0:y1, x0:x1] = _foreground_only(m.apply(frame[y0:y1, x0:x1], learningRate=learning_rate))
-        return out
+            out = _foreground_only(self.subtractor.apply(frame, learningRate=learning_rate))
+        else:
+            out = np.zeros(frame.shape[:2], np.uint8)
+            for (y0, y1, x0, x1), m in zip(self.rects, self._models):
+                out[y0:y1, x0:x1] = _foreground_only(m.apply(frame[y0:y1, x0:x1], learningRate=learning_rate))
+        return out if k == 1 else cv2.resize(out, (w, h), interpolation=cv2.INTER_NEAREST)
 
     def prime(self, frames, diff: float = BOOTSTRAP_DIFF) -> None:
         """Start the background model from ``frames`` (a few seconds of the stream, before it is processed) with

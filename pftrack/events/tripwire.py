@@ -134,9 +134,11 @@ class TrackerlessTripwire:
         self._prior = 0.0 if p.faithful else p.motion_prior / self.stride ** 2
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
         if p.bgs == "mog2":
-            rects = band_rects(self.polyline, (self.x0, self.y0), (rh, rw), pad + r) if p.bgs_band else None
+            k = p.bgs_scale
+            rects = band_rects(self.polyline / k, (self.x0 / k, self.y0 / k), (max(rh // k, 1), max(rw // k, 1)),
+                               (pad + r) / k + (k > 1)) if p.bgs_band else None
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold,
-                                   rects=rects)
+                                   rects=rects, scale=k)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
         self._cast = None if p.faithful else frame_undo(p)
         self._denoise = False

@@ -32,6 +32,9 @@ class TripwireParams(Params):
         "patches' radius plus the block matching's range and margins), not the whole bounding box of an oblique "
         "wire; inside them every pixel's label is the one the whole box gives (MOG2 models each pixel on its own). "
         "A wire across the view diagonally then costs a fraction of its box (docs/tripwire.md, Speed)"))
+    bgs_scale: int = param(1, ge=1, le=4, doc=(
+        "MOG2 models the neighbourhood reduced by this factor (block means), its mask brought back to full size "
+        "(pftrack mot's detector reduces by 2 for the same reason: MOG2 is most of a frame's time)"))
     bgs_bootstrap: float = param(0.0, ge=0, doc=(
         "seconds of processed frames (at least 3) held at the start; MOG2 learns them with their moving pixels "
         "replaced by the per-pixel median (pftrack.cues.foreground.still_frames), then they are processed (0: off; "
