@@ -452,3 +452,24 @@ def test_an_oblique_wire_gives_the_same_events_with_its_band_only():
     assert runs[True][0] == runs[False][0] and runs[True][0]
     area = sum((y1 - y0) * (x1 - x0) for y0, y1, x0, x1 in runs[True][1])
     assert runs[False][1] is None and area < 0.9 * tw._fg.size
+
+
+def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire_still_counts():
+    from pftrack.cues.foreground import Foreground
+
+    rng = np.random.default_rng(6)
+    fg = Foreground(30, 16.0, scale=2)
+    for t in range(20):
+        f = np.clip(rng.normal(120, 4, (49, 65, 3)), 0, 255).astype(np.uint8)
+        if t == 19:
+            f[10:30, 20:40] = (20, 220, 40)
+        m = fg.apply(f)
+    assert m.shape == (49, 65) and m[12:28, 22:38].all() and m[:, :16].sum() == 0
+    with pytest.raises(ValueError):
+        Foreground(scale=0)
+    wire, frames = _two_movers()
+    tw = TrackerlessTripwire(wire, frames[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50, bgs_scale=2))
+    ev = []
+    for n, f in enumerate(frames, 1):
+        ev += tw.process(f, n)
+    assert sorted(e.direction for e in ev) == [-1, 1]
