@@ -3,6 +3,7 @@
     python scripts/ch10_tune.py bgs_bootstrap 2,4,8                      # the six families
     python scripts/ch10_tune.py group_blob 0.2,0.5 --families pets,walkers
     python scripts/ch10_tune.py foot_hold 1,2 --with bgs_bootstrap=4   # every row with another setting too
+    python scripts/ch10_tune.py v_max auto,300                          # auto: read from each scene's first 10 s
 
 For each value (and the current default beside them), F1 (events one-to-one, right direction, within +-10 frames)
 of each family, and the mean over the families:
@@ -33,6 +34,7 @@ from ch10_experiments import PETS_LINES, add, ntt, score, summarise  # noqa: E40
 from pftrack.cli.common import parse_seeds  # noqa: E402
 from pftrack.events.eval import track_crossings  # noqa: E402
 from pftrack.events.geometry import parse_polyline  # noqa: E402
+from pftrack.events.blobs import estimate_speed  # noqa: E402
 from pftrack.events.tripwire import TripwireParams, dark_levels, estimate_radius  # noqa: E402
 from pftrack.io.datasets import read_sequence  # noqa: E402
 
@@ -41,6 +43,15 @@ def _radius(frames, line, kw: dict) -> float:
     """``--radius auto`` on the frames as the tripwire of the setting ``kw`` sees them (``dark_stretch``)."""
     gain, smooth = dark_levels(frames[0], TripwireParams(**kw))
     return estimate_radius(frames, line, gain=gain, smooth=smooth)
+
+
+def _setting(frames, line, fps: float, key: str, value, fixed: dict) -> dict:
+    """``{key: value}``, or for ``v_max`` = ``"auto"`` the speed limit read from ``frames`` (the first 10 s, ``fps``
+    processed frames a second) as ``pftrack tripwire --v-max auto`` reads it."""
+    if key != "v_max" or value != "auto":
+        return {key: value}
+    gain, smooth = dark_levels(frames[0], TripwireParams(**fixed))
+    return {"v_max": estimate_speed(frames, line, fps, gain=gain, smooth=smooth)}
 
 
 def _pets(args) -> dict:
@@ -54,8 +65,10 @@ def _pets(args) -> dict:
         line = parse_polyline(text)
         truth = track_crossings(seq.mot_gt, line, hysteresis=5)
         for v in values:
-            r = _radius(sub[:max(1, 70 // stride)], line, {**fixed, key: v})
-            ev, _ = ntt(sub, numbers, line, 7.0, stride, radius=r, **fixed, **{key: v})
+            calib = sub[:max(1, 70 // stride)]
+            kv = _setting(calib, line, 7.0 / stride, key, v, fixed)
+            r = _radius(calib, line, {**fixed, **kv})
+            ev, _ = ntt(sub, numbers, line, 7.0, stride, radius=r, **fixed, **kv)
             add(acc, f"pets stride {stride} | {v}", score([(e.frame, e.direction) for e in ev], truth, 1, 200))
     return acc
 
@@ -69,8 +82,9 @@ def _walkers(args) -> dict:
     numbers = list(range(1, len(sc.frames) + 1))
     acc: dict = {}
     for v in values:
-        r = _radius(sc.frames[:int(10 * sc.fps)], sc.wire, {**fixed, key: v})
-        ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, radius=r, **fixed, **{key: v})
+        kv = _setting(sc.frames[:int(10 * sc.fps)], sc.wire, sc.fps, key, v, fixed)
+        r = _radius(sc.frames[:int(10 * sc.fps)], sc.wire, {**fixed, **kv})
+        ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, radius=r, **fixed, **kv)
         add(acc, f"walkers | {v}", score([(e.frame, e.direction) for e in ev], truth, 0, 1e9))
     return acc
 
@@ -84,7 +98,8 @@ def _traffic(args) -> dict:
     numbers = list(range(1, len(sc.frames) + 1))
     acc: dict = {}
     for v in values:
-        kw = {"timing": "match", **({"bgs_history": 100} if kind == "dense" else {}), **fixed, key: v}
+        kw = {"timing": "match", **({"bgs_history": 100} if kind == "dense" else {}), **fixed,
+              **_setting(sc.frames[:int(10 * sc.fps)], sc.wire, sc.fps, key, v, fixed)}
         ev, _ = ntt(sc.frames, numbers, sc.wire, sc.fps, 1, **kw)
         add(acc, f"traffic {kind} | {v}", score([(e.frame, e.direction) for e in ev], truth, 0, 1e9))
     return acc
@@ -107,7 +122,8 @@ def main() -> None:
         raise SystemExit(f"unknown tripwire parameter {args.param!r}")
     default = getattr(TripwireParams(), args.param)
     kind = type(default)
-    values = [default] + [kind(v) if kind is not bool else v.lower() in ("1", "true") for v in args.values.split(",")]
+    values = [default] + [v if (args.param, v) == ("v_max", "auto") else kind(v) if kind is not bool
+                          else v.lower() in ("1", "true") for v in args.values.split(",")]
     fams = set(args.families.split(","))
     jobs = []
     with ProcessPoolExecutor(2) as ex:

@@ -18,7 +18,8 @@ patches (or from its foot point) within ``window`` frames is not counted again, 
 blob counted by its foot point is dropped.
 
 :func:`estimate_radius` reads the patch radius from the foreground blobs near the wire (``--radius
-auto``), and :func:`label_stats` the blobs' boxes from a label image.
+auto``), :func:`estimate_speed` the block matching's speed limit from their motion (``--v-max auto``), and
+:func:`label_stats` the blobs' boxes from a label image.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ import numpy as np
 from ..cues.foreground import GREY_SHADOW_THRESHOLD, Foreground, apply_levels
 from .geometry import _segments, polyline_project
 
-__all__ = ["FootCrossings", "FootEvent", "estimate_radius", "label_stats"]
+__all__ = ["FootCrossings", "FootEvent", "estimate_radius", "estimate_speed", "label_stats"]
 
 
 @dataclass(frozen=True)
@@ -298,3 +299,40 @@ def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_are
         st = stats[1:][ok][d <= near]
         sides += np.minimum(st[:, cv2.CC_STAT_WIDTH], st[:, cv2.CC_STAT_HEIGHT]).tolist()
     return float(0.5 * np.median(sides)) if len(sides) >= 5 else float(default)
+
+
+def estimate_speed(frames, polyline: np.ndarray, fps: float, *, near: float = 150.0, min_area: int = 60,
+                   quantile: float = 0.95, factor: float = 2.0, min_samples: int = 10, default: float = 600.0,
+                   grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD, gain: float = 1.0,
+                   smooth: bool = False) -> float:
+    """``--v-max auto``: the block matching's speed limit ``v_max`` (px/s) read from the given frames (e.g. the
+    first 10 s, ``fps`` frames a second as given): ``factor`` times the ``quantile`` of the speeds of the foreground
+    blobs whose centroids lie within ``near`` px of the wire. A blob's speed is its centroid's displacement from the
+    blob of the frame before that it overlaps most, when their areas are within a factor 1.5 of each other (merges
+    and splits are left out). ``default`` when fewer than ``min_samples`` speeds were read. The foreground is the
+    tripwire's, as in :func:`estimate_radius`."""
+    pts = np.asarray(polyline, dtype=np.float64)
+    bgs = Foreground(500, 16.0, grey_shadow_threshold=grey_shadow_threshold)
+    kernel = np.ones((3, 3), np.uint8)
+    speeds: list[float] = []
+    prev = None  # (labels, areas, centroids) of the frame before
+    for frame in frames:
+        fg = cv2.morphologyEx(bgs.apply(apply_levels(frame, gain, smooth)), cv2.MORPH_OPEN, kernel)
+        n, labels, stats, cent = cv2.connectedComponentsWithStats(fg)
+        areas = stats[:, cv2.CC_STAT_AREA]
+        if prev is not None and n > 1:
+            p_labels, p_areas, p_cent = prev
+            ok = np.flatnonzero(areas[1:] >= min_area) + 1
+            if len(ok):
+                ok = ok[polyline_project(cent[ok], pts)[0] <= near]
+            for i in ok:
+                under = np.bincount(p_labels[labels == i], minlength=len(p_areas))
+                under[0] = 0
+                j = int(np.argmax(under))
+                if under[j] == 0 or not 1 / 1.5 <= areas[i] / p_areas[j] <= 1.5:
+                    continue
+                speeds.append(float(np.hypot(*(cent[i] - p_cent[j]))) * fps)
+        prev = (labels, areas, cent)
+    if len(speeds) < min_samples:
+        return float(default)
+    return float(factor * np.quantile(speeds, quantile))
