@@ -289,7 +289,7 @@ def test_tripwire_cli_radius_auto_and_overlay_video(tmp_path, capsys):
     line = parse_polyline(wire)
     frames = [f for _, f in open_source(tmp_path / "road").numbered()]  # the JPEG frames the command read
     r = estimate_radius(frames[:int(10 * sc.fps)][::2], line)
-    assert f"(r = {r:.1f} px)" in capsys.readouterr().err
+    assert f"(r = {r:.1f} px, v_max = 600 px/s)" in capsys.readouterr().err
     tw = TrackerlessTripwire(line, frames[0].shape[:2], sc.fps, TripwireParams(radius=r), stride=2)
     ev = []
     for n, f in enumerate(frames, 1):
@@ -473,3 +473,29 @@ def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire
     for n, f in enumerate(frames, 1):
         ev += tw.process(f, n)
     assert sorted(e.direction for e in ev) == [-1, 1]
+
+
+def test_estimate_speed_reads_the_movers_speed_and_v_max_auto_counts_as_the_api_with_it(tmp_path, capsys):
+    from pftrack.events.blobs import estimate_speed
+    from pftrack.events.geometry import parse_polyline
+    from pftrack.io import open_source
+
+    wire, frames = _two_movers()  # discs moving 2 px a frame at 30 fps: 60 px/s
+    v = estimate_speed(frames[:60], wire, 30.0)
+    assert 100.0 <= v <= 140.0  # twice the 95th percentile of about 60 px/s
+    assert estimate_speed(frames[:3], wire, 30.0) == 600.0  # too few speeds read: the default
+    sc = traffic_scene(8, kind="sparse", n_vehicles=4)
+    export_traffic(sc, tmp_path / "road")
+    text = (tmp_path / "road" / "wire.txt").read_text().strip()
+    out = tmp_path / "ev.csv"
+    assert main(["tripwire", str(tmp_path / "road"), "--line", text, "--radius", "10", "--v-max", "auto",
+                 "--out", str(out), "--quiet"]) == 0
+    line = parse_polyline(text)
+    read = [f for _, f in open_source(tmp_path / "road").numbered()]
+    v = estimate_speed(read[:int(10 * sc.fps)], line, sc.fps)
+    assert f"v_max = {v:.0f} px/s" in capsys.readouterr().err and v < 600.0
+    tw = TrackerlessTripwire(line, read[0].shape[:2], sc.fps, TripwireParams(radius=10, v_max=v))
+    ev = [e for n, f in enumerate(read, 1) for e in tw.process(f, n)] + tw.finish()
+    assert [int(x.split(",")[0]) for x in out.read_text().splitlines()[1:]] == [e.frame for e in ev]
+    assert main(["tripwire", str(tmp_path / "road"), "--line", text, "--v-max", "fast", "--out", str(out)]) == 2
+    assert "--v-max must be a number or 'auto'" in capsys.readouterr().err

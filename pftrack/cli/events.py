@@ -38,6 +38,10 @@ def add_tripwire(sub) -> None:
                    help="with --from-tracks: tracks seen on fewer frames are unconfirmed and ignored (default 3)")
     p.add_argument("--radius", default="auto", help="patch radius in pixels, or 'auto' (from the foreground blobs "
                                                      "near the line in the first 10 s)")
+    p.add_argument("--v-max", default=None, metavar="PX_PER_S|auto",
+                   help="fastest object speed in px/s, the block matching's range (default 600, for vehicles), or "
+                        "'auto' (twice the 95th percentile of the blobs' speeds near the line in the first 10 s: "
+                        "about twice as fast on walkers at 7 fps, at some cost in crossings found; docs/tripwire.md)")
     p.add_argument("--stride", type=int, default=1, help="process every K-th frame (a K times lower frame rate)")
     p.add_argument("--fps", type=float, help="frame rate when the source does not state it (default 25)")
     p.add_argument("--video-out", help="overlay video: patches by state, events")
@@ -84,6 +88,7 @@ def cmd_tripwire(args) -> int:
     import cv2
 
     from ..errors import ParameterError, SourceError
+    from ..events.blobs import estimate_speed
     from ..events.tripwire import TrackerlessTripwire, TripwireParams, dark_levels, estimate_radius
     from ..io.sinks import VideoSink, _TextSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
@@ -105,17 +110,24 @@ def cmd_tripwire(args) -> int:
             extra["radius"] = float(args.radius)
         except ValueError:
             raise ParameterError(f"--radius must be a number or 'auto', got {args.radius!r}") from None
+    v_auto = args.v_max == "auto"
+    if args.v_max is not None and not v_auto:
+        try:
+            extra["v_max"] = float(args.v_max)
+        except ValueError:
+            raise ParameterError(f"--v-max must be a number or 'auto', got {args.v_max!r}") from None
     prepare_output(args.out)
     if args.video_out:
         prepare_video_output(args.video_out)
     source = open_source(args.source)
     fps = float(args.fps or source.fps or 25.0)
-    if args.radius == "auto":
+    if args.radius == "auto" or v_auto:
         from ..io.sources import VideoSource
 
         if isinstance(source, VideoSource) and str(args.source).strip().isdigit():
             source.close()
-            raise ParameterError("--radius auto needs a file or folder (it reads the first 10 s twice); give --radius")
+            raise ParameterError("--radius auto and --v-max auto need a file or folder (they read the first 10 s "
+                                 "twice); give --radius")
         calib = []
         for number, frame in source.numbered():
             if (number - 1) % args.stride == 0:
@@ -125,8 +137,12 @@ def cmd_tripwire(args) -> int:
         source.close()
         early = TripwireParams.from_mapping({k: v for k, v in extra.items() if k != "radius"})
         gain, smooth = dark_levels(calib[0], early) if calib else (1.0, False)
-        extra["radius"] = estimate_radius(calib, line, grey_shadow_threshold=early.bgs_grey_shadow_threshold,
-                                          gain=gain, smooth=smooth)
+        if args.radius == "auto":
+            extra["radius"] = estimate_radius(calib, line, grey_shadow_threshold=early.bgs_grey_shadow_threshold,
+                                              gain=gain, smooth=smooth)
+        if v_auto:
+            extra["v_max"] = estimate_speed(calib, line, fps / args.stride, gain=gain, smooth=smooth,
+                                            grey_shadow_threshold=early.bgs_grey_shadow_threshold)
         del calib
         source = open_source(args.source)
     params = TripwireParams.from_mapping(extra)
@@ -189,6 +205,6 @@ def cmd_tripwire(args) -> int:
     finally:
         close_all(bar, sinks, source)
     noun = "crossing" if count[1] + count[-1] == 1 else "crossings"
-    print(f"{count[1]} positive and {count[-1]} negative {noun} (r = {params.radius:.1f} px) -> {args.out}",
-          file=sys.stderr)
+    print(f"{count[1]} positive and {count[-1]} negative {noun} (r = {params.radius:.1f} px, "
+          f"v_max = {params.v_max:.0f} px/s) -> {args.out}", file=sys.stderr)
     return 0

@@ -101,7 +101,11 @@ class TripwireParams(Params):
     t_max: float = param(4.0, gt=0, doc="T_max in seconds: history entries last seen longer ago are ignored (4 "
                                        "chosen with bits; 3 before)")
     max_entries: int = param(32, ge=1, doc="history entries kept per patch")
-    v_max: float = param(600.0, gt=0, doc="largest speed in px/s, for the SSD search range")
+    v_max: float = param(600.0, gt=0, doc=(
+        "largest speed in px/s, for the SSD search range and the depth of the wire's neighbourhood (set for "
+        "vehicles; pftrack tripwire --v-max auto reads it from the first 10 s, pftrack.events.blobs.estimate_speed: "
+        "2.1x as fast on PETS at 7 fps but 6 fewer of the tune families' crossings, so not the default; "
+        "docs/rules/tripwire_vmax_auto_rule.txt)"))
     motion_prior: float = param(1.0, ge=0, doc=(
         "lambda of the SSD block matching's prior for small motions: a displacement of d px per frame of the "
         "source costs lambda |d|^2 more per matched pixel (grey levels^2 per px^2; with --stride K, the K-frame "
