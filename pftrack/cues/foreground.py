@@ -111,6 +111,8 @@ class Foreground:
         self.scale = int(scale)
         self.grey_shadow_threshold = float(grey_shadow_threshold)
         self.rects = None if rects is None else [tuple(int(v) for v in r) for r in rects]
+        if self.rects is not None and not self.rects:
+            raise ValueError("rects is empty: give None for the whole frame")
         self._models = [cv2.createBackgroundSubtractorMOG2(history=int(history), varThreshold=float(var_threshold),
                                                            detectShadows=True)
                         for _ in (self.rects if self.rects is not None else [None])]

@@ -137,6 +137,7 @@ class TrackerlessTripwire:
             k = p.bgs_scale
             rects = band_rects(self.polyline / k, (self.x0 / k, self.y0 / k), (max(rh // k, 1), max(rw // k, 1)),
                                (pad + r) / k + (k > 1)) if p.bgs_band else None
+            rects = rects or None  # no pixel within reach (a wire outside the view): the whole box
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold,
                                    rects=rects, scale=k)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
