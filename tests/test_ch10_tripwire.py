@@ -500,3 +500,27 @@ def test_estimate_speed_reads_the_movers_speed_and_v_max_auto_counts_as_the_api_
     assert [int(x.split(",")[0]) for x in out.read_text().splitlines()[1:]] == [e.frame for e in ev]
     assert main(["tripwire", str(tmp_path / "road"), "--line", text, "--v-max", "fast", "--out", str(out)]) == 2
     assert "--v-max must be a number or 'auto'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("shift", [(3, -2), (14, 5), (27, -19), (-40, 33)])
+def test_ssd_motion_searching_near_first_gives_the_whole_windows_answer(monkeypatch, shift):
+    """With the prior, the search over +-NEAR_SEARCH px first, widened only as far as the prior lets a better match
+    lie, returns what the whole window returns: small motions, motions past the first window, near the edge."""
+    import cv2
+
+    import pftrack.events.scoring as scoring
+
+    rng = np.random.default_rng(7)
+    img = np.clip(cv2.GaussianBlur(rng.normal(128, 40, (160, 200)), (0, 0), 2.0), 0, 255).astype(np.uint8)
+    moved = np.roll(np.roll(img, shift[0], axis=1), shift[1], axis=0)
+    noisy = np.clip(moved + rng.normal(0, 6, moved.shape), 0, 255).astype(np.uint8)
+    mask = (rng.random(img.shape) < 0.7).astype(np.uint8)
+    for centre, pen, m in (((100, 80), 1.0, None), ((100, 80), 0.2, mask), ((20, 150), 0.5, mask),
+                           ((100, 80), 0.05, None)):
+        got = ssd_motion(img, noisy, centre, 8, 60, mask=m, penalty=pen)
+        monkeypatch.setattr(scoring, "NEAR_SEARCH", 10 ** 6)
+        whole = ssd_motion(img, noisy, centre, 8, 60, mask=m, penalty=pen)
+        monkeypatch.setattr(scoring, "NEAR_SEARCH", 16)
+        # the same displacement; OpenCV's correlation rounds differently over a smaller window (sub-pixel step)
+        np.testing.assert_allclose(got[0], whole[0], atol=0.01)
+        assert got[1] == pytest.approx(whole[1], rel=1e-3, abs=1e-2)
