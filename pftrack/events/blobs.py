@@ -326,7 +326,9 @@ def estimate_speed(frames, polyline: np.ndarray, fps: float, *, near: float = 15
             if len(ok):
                 ok = ok[polyline_project(cent[ok], pts)[0] <= near]
             for i in ok:
-                under = np.bincount(p_labels[labels == i], minlength=len(p_areas))
+                x, y, bw, bh = stats[i, :4]
+                box = (slice(y, y + bh), slice(x, x + bw))  # the blob's box: its pixels and what lay under them
+                under = np.bincount(p_labels[box][labels[box] == i], minlength=len(p_areas))
                 under[0] = 0
                 j = int(np.argmax(under))
                 if under[j] == 0 or not 1 / 1.5 <= areas[i] / p_areas[j] <= 1.5:
