@@ -32,9 +32,9 @@ sys.path.insert(0, str(Path(__file__).parent))
 from ch10_experiments import PETS_LINES, add, ntt, score, summarise  # noqa: E402
 
 from pftrack.cli.common import parse_seeds  # noqa: E402
+from pftrack.events.blobs import estimate_speed  # noqa: E402
 from pftrack.events.eval import track_crossings  # noqa: E402
 from pftrack.events.geometry import parse_polyline  # noqa: E402
-from pftrack.events.blobs import estimate_speed  # noqa: E402
 from pftrack.events.tripwire import TripwireParams, dark_levels, estimate_radius  # noqa: E402
 from pftrack.io.datasets import read_sequence  # noqa: E402
 
