@@ -116,7 +116,6 @@ class Foreground:
         self._models = [cv2.createBackgroundSubtractorMOG2(history=int(history), varThreshold=float(var_threshold),
                                                            detectShadows=True)
                         for _ in (self.rects if self.rects is not None else [None])]
-        self.subtractor = self._models[0]
         for m in self._models:
             m.setShadowThreshold(OPENCV_SHADOW_THRESHOLD)
         self.grey = False
@@ -133,7 +132,7 @@ class Foreground:
         if k > 1:
             frame = cv2.resize(frame, (max(w // k, 1), max(h // k, 1)), interpolation=cv2.INTER_AREA)
         if self.rects is None:
-            out = _foreground_only(self.subtractor.apply(frame, learningRate=learning_rate))
+            out = _foreground_only(self._models[0].apply(frame, learningRate=learning_rate))
         else:
             out = np.zeros(frame.shape[:2], np.uint8)
             for (y0, y1, x0, x1), m in zip(self.rects, self._models):

@@ -274,29 +274,33 @@ def label_stats(labels: np.ndarray) -> np.ndarray:
     return out
 
 
+def _near_blobs(frames, pts: np.ndarray, near: float, min_area: int, grey_shadow_threshold: float, gain: float,
+                smooth: bool):
+    """Per frame, the tripwire's foreground blobs (MOG2, ``grey_shadow_threshold``; the frames smoothed and multiplied
+    by ``gain`` as ``dark_denoise`` and ``dark_stretch`` decide, :func:`~pftrack.events.tripwire.dark_levels`; a 3 x 3
+    opening): ``(labels, stats, centroids, idx)``, ``idx`` the labels of the blobs of at least ``min_area`` pixels
+    whose centroids lie within ``near`` px of the wire ``pts``."""
+    bgs = Foreground(500, 16.0, grey_shadow_threshold=grey_shadow_threshold)
+    kernel = np.ones((3, 3), np.uint8)
+    for frame in frames:
+        fg = cv2.morphologyEx(bgs.apply(apply_levels(frame, gain, smooth)), cv2.MORPH_OPEN, kernel)
+        _, labels, stats, cent = cv2.connectedComponentsWithStats(fg)
+        idx = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= min_area) + 1
+        if len(idx):
+            idx = idx[polyline_project(cent[idx], pts)[0] <= near]
+        yield labels, stats, cent, idx
+
+
 def estimate_radius(frames, polyline: np.ndarray, *, near: float = 50.0, min_area: int = 60,
                     default: float = 12.0, grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD,
                     gain: float = 1.0, smooth: bool = False) -> float:
     """``--radius auto`` (ch10.md §1.2, proposed): half the median short side of the foreground blobs whose
     centroids lie within ``near`` px of the wire, over the given frames (e.g. the first 10 s); the foreground is
-    the tripwire's (MOG2, ``grey_shadow_threshold`` as its ``bgs_grey_shadow_threshold``; the frames smoothed and
-    multiplied by ``gain`` as its ``dark_denoise`` and ``dark_stretch`` decide, :func:`~pftrack.events.tripwire.
-    dark_levels`)."""
-    pts = np.asarray(polyline, dtype=np.float64)
-    bgs = Foreground(500, 16.0, grey_shadow_threshold=grey_shadow_threshold)
-    kernel = np.ones((3, 3), np.uint8)
+    the tripwire's (:func:`_near_blobs`)."""
     sides = []
-    for frame in frames:
-        fg = cv2.morphologyEx(bgs.apply(apply_levels(frame, gain, smooth)), cv2.MORPH_OPEN, kernel)
-        n, _, stats, cent = cv2.connectedComponentsWithStats(fg)
-        if n <= 1:
-            continue
-        ok = stats[1:, cv2.CC_STAT_AREA] >= min_area
-        if not ok.any():
-            continue
-        c = cent[1:][ok]
-        d = polyline_project(c, pts)[0]
-        st = stats[1:][ok][d <= near]
+    for _, stats, _, idx in _near_blobs(frames, np.asarray(polyline, dtype=np.float64), near, min_area,
+                                        grey_shadow_threshold, gain, smooth):
+        st = stats[idx]
         sides += np.minimum(st[:, cv2.CC_STAT_WIDTH], st[:, cv2.CC_STAT_HEIGHT]).tolist()
     return float(0.5 * np.median(sides)) if len(sides) >= 5 else float(default)
 
@@ -310,22 +314,15 @@ def estimate_speed(frames, polyline: np.ndarray, fps: float, *, near: float = 15
     blobs whose centroids lie within ``near`` px of the wire. A blob's speed is its centroid's displacement from the
     blob of the frame before that it overlaps most, when their areas are within a factor 1.5 of each other (merges
     and splits are left out). ``default`` when fewer than ``min_samples`` speeds were read. The foreground is the
-    tripwire's, as in :func:`estimate_radius`."""
-    pts = np.asarray(polyline, dtype=np.float64)
-    bgs = Foreground(500, 16.0, grey_shadow_threshold=grey_shadow_threshold)
-    kernel = np.ones((3, 3), np.uint8)
+    tripwire's (:func:`_near_blobs`)."""
     speeds: list[float] = []
     prev = None  # (labels, areas, centroids) of the frame before
-    for frame in frames:
-        fg = cv2.morphologyEx(bgs.apply(apply_levels(frame, gain, smooth)), cv2.MORPH_OPEN, kernel)
-        n, labels, stats, cent = cv2.connectedComponentsWithStats(fg)
+    for labels, stats, cent, idx in _near_blobs(frames, np.asarray(polyline, dtype=np.float64), near, min_area,
+                                                grey_shadow_threshold, gain, smooth):
         areas = stats[:, cv2.CC_STAT_AREA]
-        if prev is not None and n > 1:
+        if prev is not None:
             p_labels, p_areas, p_cent = prev
-            ok = np.flatnonzero(areas[1:] >= min_area) + 1
-            if len(ok):
-                ok = ok[polyline_project(cent[ok], pts)[0] <= near]
-            for i in ok:
+            for i in idx:
                 x, y, bw, bh = stats[i, :4]
                 box = (slice(y, y + bh), slice(x, x + bw))  # the blob's box: its pixels and what lay under them
                 under = np.bincount(p_labels[box][labels[box] == i], minlength=len(p_areas))

@@ -88,18 +88,20 @@ def ssd_motion(prev: np.ndarray, cur: np.ndarray, centre, half: int, search: int
     The best displacement and its neighbours (for the sub-pixel step) are those of the whole window; OpenCV's
     correlation rounds differently over the smaller window, which moves the sub-pixel step by up to about 0.002 px.
     """
+    full = search  # the prior's table is the full range's, sliced for any window (one cached table per range)
     if penalty > 0 and search > NEAR_SEARCH:
-        v, ssd, cost, n_pix = _ssd_search(prev, cur, centre, half, NEAR_SEARCH, mask, penalty)
+        v, ssd, cost, n_pix = _ssd_search(prev, cur, centre, half, NEAR_SEARCH, mask, penalty, full)
         reach = math.sqrt(cost / (penalty * n_pix)) if math.isfinite(cost) else math.inf
         if reach < NEAR_SEARCH - 1 or not math.isfinite(ssd):
             return v, ssd
         search = min(search, int(math.ceil(reach)) + 2)
-    v, ssd, _, _ = _ssd_search(prev, cur, centre, half, search, mask, penalty)
+    v, ssd, _, _ = _ssd_search(prev, cur, centre, half, search, mask, penalty, full)
     return v, ssd
 
 
-def _ssd_search(prev, cur, centre, half, search, mask, penalty):
-    """:func:`ssd_motion` over ±``search`` px: ``(v, ssd per pixel, best cost with the prior, matched pixels)``."""
+def _ssd_search(prev, cur, centre, half, search, mask, penalty, table):
+    """:func:`ssd_motion` over ±``search`` px (``table`` >= ``search``: the range of the prior's offsets table):
+    ``(v, ssd per pixel, best cost with the prior, matched pixels)``."""
     h, w = prev.shape[:2]
     cx, cy = (int(round(float(c))) for c in centre)
     x0, y0, x1, y1 = cx - half, cy - half, cx + half + 1, cy + half + 1
@@ -123,7 +125,7 @@ def _ssd_search(prev, cur, centre, half, search, mask, penalty):
     ssd = cost
     if penalty > 0:  # the prior for small motions: lambda |d|^2 per matched pixel
         oy, ox = y0 - sy0, x0 - sx0  # where the zero motion lies in the cost map
-        sq = _squared_offsets(search)[search - oy:search - oy + cost.shape[0], search - ox:search - ox + cost.shape[1]]
+        sq = _squared_offsets(table)[table - oy:table - oy + cost.shape[0], table - ox:table - ox + cost.shape[1]]
         cost = cost + np.float32(penalty * n_pix) * sq
     _, _, (bx, by), _ = cv2.minMaxLoc(cost)
     exact = ssd[by, bx] <= 1e-6 * n_pix

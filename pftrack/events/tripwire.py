@@ -127,6 +127,7 @@ class TrackerlessTripwire:
         xs = np.clip(c[:, 0:1] + dx[None], 0, rw - 1)
         ys = np.clip(c[:, 1:2] + dy[None], 0, rh - 1)
         self._disc = ys * rw + xs                      # (m, D) flat ROI indices of each disc
+        self._disc_yx = (ys, xs)                       # the same as rows and columns
         below = np.clip(c[:, 1:2] + dy[None] + int(round(1.5 * r)), 0, rh - 1)
         self._below = below * rw + xs                  # the same discs 1.5 r lower
         self.half = half
@@ -216,7 +217,7 @@ class TrackerlessTripwire:
         if len(rows) and self._prev_gray is not None:
             nb = 1 << (3 * p.bits)
             pix = self._disc[rows]                                    # (k, D)
-            bins = colour_bins(roi[pix // roi.shape[1], pix % roi.shape[1]], p.bits)  # the discs' pixels only
+            bins = colour_bins(roi[self._disc_yx[0][rows], self._disc_yx[1][rows]], p.bits)  # the discs' pixels
             wts = fg[pix].astype(np.float64) if p.hist_pixels == "fg" else np.ones(pix.shape)
             ids = (np.arange(len(rows))[:, None] * nb + bins).ravel()
             hists = np.bincount(ids, weights=wts.ravel(), minlength=len(rows) * nb).reshape(len(rows), nb)
