@@ -4,6 +4,7 @@
     python scripts/ch10_tune.py group_blob 0.2,0.5 --families pets,walkers
     python scripts/ch10_tune.py foot_hold 1,2 --with bgs_bootstrap=4   # every row with another setting too
     python scripts/ch10_tune.py v_max auto,300                          # auto: read from each scene's first 10 s
+    python scripts/ch10_tune.py bgs_reach 6,8 --speed                   # frames/s on the PETS tune frames
 
 For each value (and the current default beside them), F1 (events one-to-one, right direction, within +-10 frames)
 of each family, and the mean over the families:
@@ -105,6 +106,43 @@ def _traffic(args) -> dict:
     return acc
 
 
+SPEED_LINES = PETS_LINES + ["0,300;768,300", "100,500;700,80"]
+
+
+def speed(data: str, key: str, values: list, fixed: dict, rounds: int = 2, runs: int = 2) -> None:
+    """``--speed``: the trackerless tripwire's frames per second on the PETS tune frames 1-200 (stride 1, decode
+    excluded, this process, OpenCV on one thread, ``--radius auto``) on the four lines and two more, per line the best
+    of ``runs`` runs, ``rounds`` rounds alternating the settings; each setting's median over the lines of its rate
+    over the default's."""
+    import time
+
+    from pftrack.events.tripwire import TrackerlessTripwire
+
+    seq = read_sequence(Path(data) / "pets09_s2l1_dev")
+    frames = [cv2.imread(str(p)) for p in seq.frames[:200]]
+    best: dict = {}
+    for _ in range(rounds):
+        for text in SPEED_LINES:
+            line = parse_polyline(text)
+            for v in values:
+                kv = {**fixed, **_setting(frames[:70], line, 7.0, key, v, fixed)}
+                params = TripwireParams(**{**kv, "radius": _radius(frames[:70], line, kv)})
+                for _ in range(runs):
+                    tw = TrackerlessTripwire(line, frames[0].shape[:2], 7.0, params)
+                    t0 = time.perf_counter()
+                    for n, f in enumerate(frames, 1):
+                        tw.process(f, n)
+                    fps = len(frames) / (time.perf_counter() - t0)
+                    best[(text, v)] = max(best.get((text, v), 0.0), fps)
+    print(f"{key}: frames/s on the PETS tune frames (best of {runs} runs x {rounds} rounds), per line; the first "
+          f"value is the default")
+    for v in values:
+        rates = [best[(t, v)] for t in SPEED_LINES]
+        ratio = np.median([best[(t, v)] / best[(t, values[0])] for t in SPEED_LINES])
+        print(f"{v}: median ratio {ratio:.3f} | " + " | ".join(f"{t} {r:.0f}" for t, r in zip(SPEED_LINES, rates)),
+              flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("param", help="a TripwireParams field")
@@ -114,6 +152,8 @@ def main() -> None:
     ap.add_argument("--walker-seeds", default="0-9", metavar="A-B", help="the walkers family's seeds (default 0-9)")
     ap.add_argument("--with", dest="fixed", action="append", default=[], metavar="KEY=VALUE",
                     help="another setting for every row (repeatable)")
+    ap.add_argument("--speed", action="store_true",
+                    help="time the settings on the PETS tune frames instead (six lines, one thread)")
     args = ap.parse_args()
     fixed = dict(TripwireParams.from_mapping(dict(kv.split("=", 1) for kv in args.fixed)).as_dict().items())
     fixed = {k: v for k, v in fixed.items() if k in {kv.split("=", 1)[0] for kv in args.fixed}}
@@ -124,6 +164,9 @@ def main() -> None:
     kind = type(default)
     values = [default] + [v if (args.param, v) == ("v_max", "auto") else kind(v) if kind is not bool
                           else v.lower() in ("1", "true") for v in args.values.split(",")]
+    if args.speed:
+        speed(args.data, args.param, values, fixed)
+        return
     fams = set(args.families.split(","))
     jobs = []
     with ProcessPoolExecutor(2) as ex:

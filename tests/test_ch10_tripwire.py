@@ -455,6 +455,33 @@ def test_an_oblique_wire_gives_the_same_events_with_its_band_only():
     assert runs[False][1] is None and area < 0.9 * tw._fg.size
 
 
+def test_bgs_reach_narrows_the_band_to_its_radii_but_never_widens_it_and_keeps_the_patches_inside():
+    wire = np.array([[100.0, 500.0], [700.0, 80.0]])
+    shape = (576, 768)
+
+    def band(**kw):
+        tw = TrackerlessTripwire(wire, shape, 7.0, TripwireParams(radius=12, **kw))
+        inside = np.zeros((tw.y1 - tw.y0, tw.x1 - tw.x0), bool)
+        for y0, y1, x0, x1 in tw._bgs.rects:
+            inside[y0:y1, x0:x1] = True
+        return tw, inside
+
+    tw, full = band()
+    _, wide = band(bgs_reach=100.0)           # wider than the full reach: the full reach
+    np.testing.assert_array_equal(wide, full)
+    for k in (4.0, 6.0):
+        _, narrow = band(bgs_reach=k)
+        assert not (narrow & ~full).any() and narrow.sum() < 0.8 * full.sum()
+        assert narrow.ravel()[tw._disc].all()  # every patch's disc is modelled
+        # a pixel left out lies beyond k r of the wire; one modelled within k r and the 8-row bands' slack
+        ys, xs = np.nonzero(~narrow & full)
+        pts = np.stack([xs + tw.x0, ys + tw.y0], 1).astype(float)
+        assert polyline_project(pts, wire)[0].min() > k * 12 - 1e-6
+        ys, xs = np.nonzero(narrow)
+        pts = np.stack([xs + tw.x0, ys + tw.y0], 1).astype(float)
+        assert polyline_project(pts, wire)[0].max() < k * 12 + 10
+
+
 def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire_still_counts():
     from pftrack.cues.foreground import Foreground
 

@@ -136,8 +136,9 @@ class TrackerlessTripwire:
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
         if p.bgs == "mog2":
             k = p.bgs_scale
+            reach = min(pad + r, p.bgs_reach * r) if p.bgs_reach > 0 else pad + r
             rects = band_rects(self.polyline / k, (self.x0 / k, self.y0 / k), (max(rh // k, 1), max(rw // k, 1)),
-                               (pad + r) / k + (k > 1)) if p.bgs_band else None
+                               reach / k + (k > 1)) if p.bgs_band else None
             rects = rects or None  # no pixel within reach (a wire outside the view): the whole box
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold,
                                    rects=rects, scale=k)
