@@ -1,0 +1,169 @@
+"""Book ch. 10: the trackerless tripwire's speed paths (the band MOG2 models, its reach and scale, the speed limit
+read from the video, the block matching's near-first search) give the numbers of the slower paths."""
+
+import numpy as np
+import pytest
+
+from pftrack.cli import main
+from pftrack.events.geometry import polyline_project
+from pftrack.events.scoring import ssd_motion
+from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams
+from pftrack.synth.traffic import export_traffic, traffic_scene
+
+from .test_ch10_tripwire import _two_movers
+
+
+def test_band_rects_hold_every_pixel_within_reach_and_leave_out_an_oblique_wires_corners():
+    from pftrack.events.geometry import band_rects
+
+    wire = np.array([[30.0, 20.0], [200.0, 150.0], [260.0, 60.0]])
+    origin, shape, reach = (10, 5), (170, 270), 25.0
+    rects = band_rects(wire, origin, shape, reach, rows=8)
+    covered = np.zeros(shape, bool)
+    for y0, y1, x0, x1 in rects:
+        assert not covered[y0:y1, x0:x1].any()  # the rectangles do not overlap
+        covered[y0:y1, x0:x1] = True
+    ys, xs = np.mgrid[0:shape[0], 0:shape[1]]
+    pts = np.stack([xs.ravel() + origin[0], ys.ravel() + origin[1]], 1).astype(float)
+    dist = polyline_project(pts, wire)[0].reshape(shape)
+    assert covered[dist <= reach].all()
+    assert covered.mean() < 0.75  # an oblique wire's bounding box is mostly left out
+    # a horizontal wire's region: bands of full rows beside the wire, merged, and narrower ones at the ends
+    flat = band_rects(np.array([[20.0, 50.0], [220.0, 50.0]]), (0, 0), (100, 240), 40.0)
+    assert any(y0 <= 24 and y1 >= 80 and (x0, x1) == (0, 240) for y0, y1, x0, x1 in flat)
+    assert len(flat) <= 8 and flat[0][0] == 8 and flat[-1][1] == 96
+
+
+def test_foreground_on_rectangles_labels_their_pixels_as_the_whole_frame_does():
+    from pftrack.cues.foreground import Foreground
+
+    rng = np.random.default_rng(4)
+    rects = [(0, 10, 0, 64), (10, 30, 5, 40), (30, 48, 20, 64)]
+    whole, parts = Foreground(50, 16.0), Foreground(50, 16.0, rects=rects)
+    for t in range(40):
+        f = np.clip(rng.normal(120, 6, (48, 64, 3)), 0, 255).astype(np.uint8)
+        f[8:30, (t % 50):(t % 50) + 12] = (30, 200, 60)
+        if t >= 30:  # grey frames: the grey shadow threshold applies in every rectangle
+            f[:] = f.mean(2, keepdims=True).astype(np.uint8)
+        a, b = whole.apply(f), parts.apply(f)
+        inside = np.zeros(a.shape, bool)
+        for y0, y1, x0, x1 in rects:
+            inside[y0:y1, x0:x1] = True
+        np.testing.assert_array_equal(b[inside], a[inside])
+        assert not b[~inside].any() and set(np.unique(a)) <= {0, 1}
+    assert parts.grey and whole.grey
+
+
+def test_an_oblique_wire_gives_the_same_events_with_its_band_only():
+    from pftrack.synth.walkers import walkers_scene
+
+    sc = walkers_scene(3, wire="oblique", n_frames=120)
+    runs = {}
+    for band in (False, True):
+        tw = TrackerlessTripwire(sc.wire, sc.frames[0].shape[:2], sc.fps, TripwireParams(radius=8, bgs_band=band))
+        ev = []
+        for n, f in enumerate(sc.frames, 1):
+            ev += tw.process(f, n)
+        ev += tw.finish()
+        runs[band] = ([(e.frame, e.direction, e.x, e.y) for e in ev], tw._bgs.rects)
+    assert runs[True][0] == runs[False][0] and runs[True][0]
+    area = sum((y1 - y0) * (x1 - x0) for y0, y1, x0, x1 in runs[True][1])
+    assert runs[False][1] is None and area < 0.9 * tw._fg.size
+
+
+def test_bgs_reach_narrows_the_band_to_its_radii_but_never_widens_it_and_keeps_the_patches_inside():
+    wire = np.array([[100.0, 500.0], [700.0, 80.0]])
+    shape = (576, 768)
+
+    def band(**kw):
+        tw = TrackerlessTripwire(wire, shape, 7.0, TripwireParams(radius=12, **kw))
+        inside = np.zeros((tw.y1 - tw.y0, tw.x1 - tw.x0), bool)
+        for y0, y1, x0, x1 in tw._bgs.rects:
+            inside[y0:y1, x0:x1] = True
+        return tw, inside
+
+    tw, full = band()
+    _, wide = band(bgs_reach=100.0)           # wider than the full reach: the full reach
+    np.testing.assert_array_equal(wide, full)
+    for k in (4.0, 6.0):
+        _, narrow = band(bgs_reach=k)
+        assert not (narrow & ~full).any() and narrow.sum() < 0.8 * full.sum()
+        assert narrow.ravel()[tw._disc].all()  # every patch's disc is modelled
+        # a pixel left out lies beyond k r of the wire; one modelled within k r and the 8-row bands' slack
+        ys, xs = np.nonzero(~narrow & full)
+        pts = np.stack([xs + tw.x0, ys + tw.y0], 1).astype(float)
+        assert polyline_project(pts, wire)[0].min() > k * 12 - 1e-6
+        ys, xs = np.nonzero(narrow)
+        pts = np.stack([xs + tw.x0, ys + tw.y0], 1).astype(float)
+        assert polyline_project(pts, wire)[0].max() < k * 12 + 10
+
+
+def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire_still_counts():
+    from pftrack.cues.foreground import Foreground
+
+    rng = np.random.default_rng(6)
+    fg = Foreground(30, 16.0, scale=2)
+    for t in range(20):
+        f = np.clip(rng.normal(120, 4, (49, 65, 3)), 0, 255).astype(np.uint8)
+        if t == 19:
+            f[10:30, 20:40] = (20, 220, 40)
+        m = fg.apply(f)
+    assert m.shape == (49, 65) and m[12:28, 22:38].all() and m[:, :16].sum() == 0
+    with pytest.raises(ValueError):
+        Foreground(scale=0)
+    wire, frames = _two_movers()
+    tw = TrackerlessTripwire(wire, frames[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50, bgs_scale=2))
+    ev = []
+    for n, f in enumerate(frames, 1):
+        ev += tw.process(f, n)
+    assert sorted(e.direction for e in ev) == [-1, 1]
+
+
+def test_estimate_speed_reads_the_movers_speed_and_v_max_auto_counts_as_the_api_with_it(tmp_path, capsys):
+    from pftrack.events.blobs import estimate_speed
+    from pftrack.events.geometry import parse_polyline
+    from pftrack.io import open_source
+
+    wire, frames = _two_movers()  # discs moving 2 px a frame at 30 fps: 60 px/s
+    v = estimate_speed(frames[:60], wire, 30.0)
+    assert 100.0 <= v <= 140.0  # twice the 95th percentile of about 60 px/s
+    assert estimate_speed(frames[:3], wire, 30.0) == 600.0  # too few speeds read: the default
+    sc = traffic_scene(8, kind="sparse", n_vehicles=4)
+    export_traffic(sc, tmp_path / "road")
+    text = (tmp_path / "road" / "wire.txt").read_text().strip()
+    out = tmp_path / "ev.csv"
+    assert main(["tripwire", str(tmp_path / "road"), "--line", text, "--radius", "10", "--v-max", "auto",
+                 "--out", str(out), "--quiet"]) == 0
+    line = parse_polyline(text)
+    read = [f for _, f in open_source(tmp_path / "road").numbered()]
+    v = estimate_speed(read[:int(10 * sc.fps)], line, sc.fps)
+    assert f"v_max = {v:.0f} px/s" in capsys.readouterr().err and v < 600.0
+    tw = TrackerlessTripwire(line, read[0].shape[:2], sc.fps, TripwireParams(radius=10, v_max=v))
+    ev = [e for n, f in enumerate(read, 1) for e in tw.process(f, n)] + tw.finish()
+    assert [int(x.split(",")[0]) for x in out.read_text().splitlines()[1:]] == [e.frame for e in ev]
+    assert main(["tripwire", str(tmp_path / "road"), "--line", text, "--v-max", "fast", "--out", str(out)]) == 2
+    assert "--v-max must be a number or 'auto'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("shift", [(3, -2), (14, 5), (27, -19), (-40, 33)])
+def test_ssd_motion_searching_near_first_gives_the_whole_windows_answer(monkeypatch, shift):
+    """With the prior, the search over +-NEAR_SEARCH px first, widened only as far as the prior lets a better match
+    lie, returns what the whole window returns: small motions, motions past the first window, near the edge."""
+    import cv2
+
+    import pftrack.events.scoring as scoring
+
+    rng = np.random.default_rng(7)
+    img = np.clip(cv2.GaussianBlur(rng.normal(128, 40, (160, 200)), (0, 0), 2.0), 0, 255).astype(np.uint8)
+    moved = np.roll(np.roll(img, shift[0], axis=1), shift[1], axis=0)
+    noisy = np.clip(moved + rng.normal(0, 6, moved.shape), 0, 255).astype(np.uint8)
+    mask = (rng.random(img.shape) < 0.7).astype(np.uint8)
+    for centre, pen, m in (((100, 80), 1.0, None), ((100, 80), 0.2, mask), ((20, 150), 0.5, mask),
+                           ((100, 80), 0.05, None)):
+        got = ssd_motion(img, noisy, centre, 8, 60, mask=m, penalty=pen)
+        monkeypatch.setattr(scoring, "NEAR_SEARCH", 10 ** 6)
+        whole = ssd_motion(img, noisy, centre, 8, 60, mask=m, penalty=pen)
+        monkeypatch.setattr(scoring, "NEAR_SEARCH", 16)
+        # the same displacement; OpenCV's correlation rounds differently over a smaller window (sub-pixel step)
+        np.testing.assert_allclose(got[0], whole[0], atol=0.01)
+        assert got[1] == pytest.approx(whole[1], rel=1e-3, abs=1e-2)
