@@ -56,7 +56,7 @@ def test_file_sources_read_ahead_on_a_thread_that_stops_with_the_source(tmp_path
 
     path = _write_clip(tmp_path / "clip.avi", 12, 20)
     with open_source(str(path)) as src:
-        assert src.prefetch > 0
+        src.prefetch = 4
         ahead = list(src.numbered())
     with open_source(str(path)) as src:
         src.prefetch = 0
@@ -64,10 +64,40 @@ def test_file_sources_read_ahead_on_a_thread_that_stops_with_the_source(tmp_path
     assert [n for n, _ in ahead] == list(range(1, 13))
     assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(ahead, inline, strict=True))
     src = open_source(str(path))
+    src.prefetch = 4
     it = src.numbered()
     assert next(it)[0] == 1 and next(it)[0] == 2
     src.close()  # the consumer stops early: the reader stops before the decoder is released
     assert not any(t.name == "pftrack-prefetch" and t.is_alive() for t in threading.enumerate())
+
+
+def test_file_sources_decode_in_the_callers_thread_on_one_cpu(tmp_path, monkeypatch):
+    """With one CPU to run on there is no second core to decode ahead on: the file sources read in the caller's
+    thread, with the same frames."""
+    import os
+
+    from pftrack.io import prefetch as pf
+
+    path = _write_clip(tmp_path / "clip.avi", 6, 20)
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0}, raising=False)
+    assert pf.usable_cpus() == 1 and pf.default_depth() == 0
+    with open_source(str(path)) as src:
+        assert src.prefetch == 0
+        one = list(src.numbered())
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    assert pf.default_depth() == pf.DEPTH > 0
+    with open_source(str(path)) as src:
+        assert src.prefetch == pf.DEPTH
+        two = list(src.numbered())
+    assert [n for n, _ in one] == [n for n, _ in two] == list(range(1, 7))
+    assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(one, two, strict=True))
+
+    def no_affinity(pid):
+        raise OSError("not supported")
+
+    monkeypatch.setattr(os, "sched_getaffinity", no_affinity, raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    assert pf.usable_cpus() == 1 and pf.default_depth() == 0
 
 
 def test_missing_empty_and_fake_sources(tmp_path):

@@ -24,7 +24,7 @@ import numpy as np
 
 from .._numba import njit, numba_enabled
 from ..errors import ParameterError, SourceError
-from .prefetch import prefetch
+from .prefetch import default_depth, prefetch
 
 BLOCK = 4
 
@@ -124,7 +124,8 @@ class MVSource:
         if codec not in ("h264", "mpeg4", "h263", "mpeg2video", "mpeg1video", "hevc"):
             raise SourceError(f"{path}: codec {codec} exports no motion vectors (use H.264 or MPEG-4 Part 2)")
         self.current: MVFrame | None = None
-        self.prefetch = 4  # frames decoded ahead on a second thread (0: decode in the caller's thread)
+        self.prefetch = default_depth()  # frames decoded ahead on a second thread (0, the default on one CPU:
+        # decode in the caller's thread)
         # an optional per-frame analysis run where the frames are decoded (with prefetch, on the second thread),
         # its result kept in each frame's ``analysis``: the mv detector's groups are found there
         self.analyse = None

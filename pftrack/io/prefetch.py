@@ -3,14 +3,33 @@
 Frame decoders (FFmpeg through OpenCV or PyAV, image codecs) release the GIL, so a source read on a
 second thread overlaps the tracker's work on the first.  Used by the file sources (videos, image
 folders, compressed-domain videos); live cameras are read in the caller's thread, since frames queued
-ahead would be stale.
+ahead would be stale. A process that may run on one CPU only (``taskset -c 0``, a one-core container) reads in the
+caller's thread too (:func:`default_depth`): there is no second core to decode on, and the thread's switches would
+interrupt the tracker's timed work.
 """
 
 from __future__ import annotations
 
+import os
 import queue
 import threading
 from collections.abc import Iterator
+
+#: frames decoded ahead when a second CPU is there to decode them
+DEPTH = 4
+
+
+def usable_cpus() -> int:
+    """The CPUs this process may run on (its affinity where the system tells it, else the machine's count)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def default_depth() -> int:
+    """How many frames the file sources decode ahead: :data:`DEPTH`, or 0 (the caller's thread) on one CPU."""
+    return DEPTH if usable_cpus() > 1 else 0
 
 
 def prefetch(items: Iterator, depth: int = 4) -> Iterator:

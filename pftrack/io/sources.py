@@ -23,7 +23,7 @@ from ..errors import FrameError, SourceError
 from ..frames import as_bgr_uint8
 from .datasets import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, mot_target, otb_targets, read_otb,
                        read_sequence)
-from .prefetch import prefetch
+from .prefetch import default_depth, prefetch
 from .quiet import quiet_opencv
 from .video_frames import VideoFrame, read_video_folder, read_video_frame, single_video
 
@@ -53,8 +53,9 @@ class FrameSource:
         self.size: tuple[int, int] | None = None  # (width, height) once known
         self.sequence: Sequence | None = None
         self.skipped: list[int] = []
-        #: frames decoded ahead on a second thread (pftrack.io.prefetch); 0 reads in the caller's thread
-        self.prefetch = 4
+        #: frames decoded ahead on a second thread (pftrack.io.prefetch); 0 reads in the caller's thread (the
+        #: default on one CPU)
+        self.prefetch = default_depth()
         self._reading: Iterator | None = None
 
     # -- overridden by subclasses -------------------------------------------------------
