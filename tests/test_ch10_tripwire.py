@@ -272,6 +272,41 @@ def test_tripwire_cli(tmp_path):
     assert main(["tripwire", "--from-tracks", str(bad), "--line", wire, "--out", str(out)]) == 2
 
 
+def test_tripwire_cli_counts_several_lines_in_one_pass_as_each_alone(tmp_path, capsys):
+    """Repeated --line: each line's rows (numbered in the last column) are those of the line run alone, with the
+    radius read for that line; the tracker-based tripwire numbers its rows the same way; a bad second line names
+    itself and exits 2."""
+    sc = traffic_scene(8, kind="sparse", n_vehicles=4)
+    road = tmp_path / "road"
+    export_traffic(sc, road)
+    lines = ["99,120;221,120", "20,90;300,90"]
+    alone = []
+    for k, text in enumerate(lines, 1):
+        out = tmp_path / f"alone{k}.csv"
+        assert main(["tripwire", str(road), "--line", text, "--out", str(out), "--quiet"]) == 0
+        alone.append([r.rsplit(",", 1) for r in out.read_text().splitlines()[1:]])
+        assert all(n == "1" for _, n in alone[-1]) and alone[-1]
+    capsys.readouterr()
+    both = tmp_path / "both.csv"
+    assert main(["tripwire", str(road), "--line", lines[0], "--line", lines[1], "--out", str(both), "--quiet"]) == 0
+    rows = both.read_text().splitlines()
+    assert rows[0].endswith(",line")
+    for k in (1, 2):
+        assert sorted(r for r, n in (x.rsplit(",", 1) for x in rows[1:]) if n == str(k)) == sorted(
+            r for r, _ in alone[k - 1])
+    err = capsys.readouterr().err
+    assert "line 1: " in err and "line 2: " in err and "on 2 lines" in err
+    tracks = tmp_path / "tracks.csv"
+    assert main(["tripwire", "--from-tracks", str(road / "gt" / "gt.txt"), "--line", lines[0], "--line", lines[1],
+                 "--point", "centre", "--out", str(tracks)]) == 0
+    got = [r.split(",") for r in tracks.read_text().splitlines()]
+    assert got[0] == ["frame", "direction", "track", "x", "y", "line"]
+    assert [r[5] for r in got[1:]].count("1") == 4 and [r[5] for r in got[1:]].count("2") == 4
+    assert [float(r[0]) for r in got[1:]] == sorted(float(r[0]) for r in got[1:])
+    assert main(["tripwire", str(road), "--line", lines[0], "--line", "5,5", "--out", str(both), "--quiet"]) == 2
+    assert "--line 2: " in capsys.readouterr().err
+
+
 def test_tripwire_cli_radius_auto_and_overlay_video(tmp_path, capsys):
     """``--radius auto`` measures the blobs near the wire over the first 10 s and counts as the API does with that
     radius; ``--video-out`` writes one overlay frame per processed frame."""

@@ -10,7 +10,8 @@ import numpy as np
 from ..errors import Interrupted
 from .common import close_all, counted, progress
 
-EVENTS_HEADER = "frame,direction,time_s,to_patch,from_patch,tau_frame,score,s_color,s_motion,x,y,vx,vy"
+EVENTS_HEADER = "frame,direction,time_s,to_patch,from_patch,tau_frame,score,s_color,s_motion,x,y,vx,vy,line"
+TRACK_EVENTS_HEADER = "frame,direction,track,x,y,line"
 
 
 def add_tripwire(sub) -> None:
@@ -23,10 +24,13 @@ def add_tripwire(sub) -> None:
                     "patches, colour histories and block-matching motion; with --point foot or centre also the "
                     "foot points of the foreground blobs near the line, --param feet=false to turn off); "
                     "--from-tracks runs the conventional tripwire on MOTChallenge tracks instead. Writes "
-                    "frame,direction,... per crossing, flushed.")
+                    "frame,direction,... per crossing, flushed; the last column, line, numbers the --line options "
+                    "from 1 (several lines are counted in one pass over the video).")
     p.add_argument("source", nargs="?", help="video file, frame folder or MOTChallenge folder (not needed with "
                                              "--from-tracks)")
-    p.add_argument("--line", required=True, help='polyline "X1,Y1;X2,Y2[;...]" (at least two points)')
+    p.add_argument("--line", required=True, action="append",
+                   help='polyline "X1,Y1;X2,Y2[;...]" (at least two points); repeat to count several lines, each with '
+                        "its own patches and radius")
     p.add_argument("--out", default="events.csv", help="CSV output (default events.csv)")
     p.add_argument("--from-tracks", help="MOTChallenge tracks file (frame,id,x,y,w,h,...): the tracker-based tripwire")
     p.add_argument("--point", choices=["foot", "centre", "match"], default="foot",
@@ -52,57 +56,127 @@ def add_tripwire(sub) -> None:
     p.set_defaults(func=cmd_tripwire)
 
 
-def _line(text: str) -> np.ndarray:
+def _option(k: int, n: int) -> str:
+    """``--line``, or ``--line K`` when several lines are given."""
+    return f"--line {k}" if n > 1 else "--line"
+
+
+def _lines(texts: list[str]) -> list[np.ndarray]:
     from ..errors import ParameterError
     from ..events.geometry import parse_polyline
 
-    try:
-        return parse_polyline(text)
-    except ValueError as exc:
-        raise ParameterError(f"--line: {exc}") from None
+    out = []
+    for k, text in enumerate(texts, 1):
+        try:
+            out.append(parse_polyline(text))
+        except ValueError as exc:
+            raise ParameterError(f"{_option(k, len(texts))}: {exc}") from None
+    return out
 
 
-def _tracks_mode(args, line: np.ndarray) -> int:
+def _tracks_mode(args, lines: list[np.ndarray]) -> int:
     from ..events.eval import track_crossings
     from ..io.datasets import read_mot_txt
     from ..io.sinks import _TextSink, prepare_output
 
     prepare_output(args.out)
     rows = read_mot_txt(args.from_tracks)  # a missing or malformed file is a one-line error
-    found = track_crossings(rows, line, hysteresis=args.hysteresis, min_frames=args.min_frames, stride=args.stride,
-                            point=args.point)
+    found = sorted(((c, k) for k, line in enumerate(lines, 1)
+                    for c in track_crossings(rows, line, hysteresis=args.hysteresis, min_frames=args.min_frames,
+                                             stride=args.stride, point=args.point)),
+                   key=lambda ck: (ck[0].frame, ck[1]))
     with _TextSink(args.out) as out:
-        out._write("frame,direction,track,x,y")
-        for c in found:
-            out._write(f"{c.frame:.2f},{'positive' if c.direction > 0 else 'negative'},{c.track},{c.x:.1f},{c.y:.1f}")
+        out._write(TRACK_EVENTS_HEADER)
+        for c, k in found:
+            out._write(f"{c.frame:.2f},{'positive' if c.direction > 0 else 'negative'},{c.track},{c.x:.1f},{c.y:.1f},"
+                       f"{k}")
     n_tracks = len(np.unique(rows[:, 1])) if len(rows) else 0
-    print(f"{counted(len(found), 'crossing')} of {counted(n_tracks, 'track')} -> {args.out}", file=sys.stderr)
+    per_line = (" (" + ", ".join(f"line {k}: {sum(1 for _, j in found if j == k)}" for k in range(1, len(lines) + 1))
+                + ")") if len(lines) > 1 else ""
+    print(f"{counted(len(found), 'crossing')}{per_line} of {counted(n_tracks, 'track')} -> {args.out}",
+          file=sys.stderr)
     return 0
 
 
-def _event_row(e) -> str:
+def _event_row(e, line: int) -> str:
     return (f"{e.frame},{'positive' if e.direction > 0 else 'negative'},{e.time_s:.3f},{e.to_patch},{e.from_patch},"
-            f"{e.tau_frame},{e.score:.4f},{e.s_color:.4f},{e.s_motion:.4f},{e.x:.1f},{e.y:.1f},{e.vx:.2f},{e.vy:.2f}")
+            f"{e.tau_frame},{e.score:.4f},{e.s_color:.4f},{e.s_motion:.4f},{e.x:.1f},{e.y:.1f},{e.vx:.2f},{e.vy:.2f},"
+            f"{line}")
+
+
+def _line_params(args, source, fps: float, lines: list[np.ndarray], extra: dict, v_auto: bool) -> list:
+    """Each line's TripwireParams: ``extra``, with the radius (``--radius auto``) and the speed limit (``--v-max
+    auto``) read per line from the first 10 s of ``source``, which is closed when they were read."""
+    from ..errors import ParameterError
+    from ..events.blobs import estimate_speed
+    from ..events.tripwire import TripwireParams, dark_levels, estimate_radius
+    from ..io.sources import VideoSource
+
+    if args.radius != "auto" and not v_auto:
+        return [TripwireParams.from_mapping(extra) for _ in lines]
+    if isinstance(source, VideoSource) and str(args.source).strip().isdigit():
+        source.close()
+        raise ParameterError("--radius auto and --v-max auto need a file or folder (they read the first 10 s "
+                             "twice); give --radius")
+    calib = []
+    for number, frame in source.numbered():
+        if (number - 1) % args.stride == 0:
+            calib.append(frame)
+        if number >= 10 * fps:
+            break
+    source.close()
+    early = TripwireParams.from_mapping({k: v for k, v in extra.items() if k != "radius"})
+    gain, smooth = dark_levels(calib[0], early) if calib else (1.0, False)
+    out = []
+    for line in lines:
+        mine = dict(extra)
+        if args.radius == "auto":
+            mine["radius"] = estimate_radius(calib, line, grey_shadow_threshold=early.bgs_grey_shadow_threshold,
+                                             gain=gain, smooth=smooth)
+        if v_auto:
+            mine["v_max"] = estimate_speed(calib, line, fps / args.stride, gain=gain, smooth=smooth,
+                                           grey_shadow_threshold=early.bgs_grey_shadow_threshold)
+        out.append(TripwireParams.from_mapping(mine))
+    return out
+
+
+def _overlay(img: np.ndarray, tws: list, flash: list, count: dict) -> np.ndarray:
+    """The frame with each line, its patches by state (red: foreground; orange / green: the inner / outer side) and
+    the recent events (yellow), and the counts so far."""
+    import cv2
+
+    canvas = img.copy()
+    for tw in tws:
+        pts = np.round(tw.polyline).astype(np.int32).reshape(-1, 1, 2)
+        cv2.polylines(canvas, [pts], False, (255, 255, 255), 2, cv2.LINE_AA)
+        for k, c in enumerate(tw.layout.centres):
+            col = (0, 0, 255) if tw.patches[k].fg else ((255, 160, 0) if tw.layout.side[k] < 0 else (0, 200, 0))
+            cv2.circle(canvas, (round(float(c[0])), round(float(c[1]))), round(tw.params.radius), col, 1)
+    for item in flash:
+        e, r = item[0], item[2]
+        cv2.circle(canvas, (int(e.x), int(e.y)), int(2 * r), (0, 255, 255), 3)
+        item[1] -= 1
+    flash[:] = [f for f in flash if f[1] > 0]
+    cv2.putText(canvas, f"+{count[1]}  -{count[-1]}", (10, 30), cv2.FONT_HERSHEY_SIMPLEX, 1.0,
+                (0, 255, 255), 2, cv2.LINE_AA)
+    return canvas
 
 
 def cmd_tripwire(args) -> int:
-    import cv2
-
     from ..errors import ParameterError, SourceError
-    from ..events.blobs import estimate_speed
-    from ..events.tripwire import TrackerlessTripwire, TripwireParams, dark_levels, estimate_radius
+    from ..events.tripwire import TrackerlessTripwire
     from ..io.sinks import VideoSink, _TextSink, prepare_output, prepare_video_output
     from ..io.sources import open_source
     from ..params import parse_param_assignments
     from ..pipeline import interrupt_on_sigterm
 
-    line = _line(args.line)
+    lines = _lines(args.line)
     if args.stride < 1:
         raise ParameterError("--stride must be >= 1")
     if args.from_tracks:
         if args.point == "match":
             raise ParameterError("--point match is for the trackerless tripwire; with --from-tracks use foot or centre")
-        return _tracks_mode(args, line)
+        return _tracks_mode(args, lines)
     if not args.source:
         raise ParameterError("a SOURCE is needed (or --from-tracks)")
     extra = {"timing": args.point, **parse_param_assignments(args.param)}
@@ -122,44 +196,25 @@ def cmd_tripwire(args) -> int:
         prepare_video_output(args.video_out)
     source = open_source(args.source)
     fps = float(args.fps or source.fps or 25.0)
+    params = _line_params(args, source, fps, lines, extra, v_auto)
     if args.radius == "auto" or v_auto:
-        from ..io.sources import VideoSource
-
-        if isinstance(source, VideoSource) and str(args.source).strip().isdigit():
-            source.close()
-            raise ParameterError("--radius auto and --v-max auto need a file or folder (they read the first 10 s "
-                                 "twice); give --radius")
-        calib = []
-        for number, frame in source.numbered():
-            if (number - 1) % args.stride == 0:
-                calib.append(frame)
-            if number >= 10 * fps:
-                break
-        source.close()
-        early = TripwireParams.from_mapping({k: v for k, v in extra.items() if k != "radius"})
-        gain, smooth = dark_levels(calib[0], early) if calib else (1.0, False)
-        if args.radius == "auto":
-            extra["radius"] = estimate_radius(calib, line, grey_shadow_threshold=early.bgs_grey_shadow_threshold,
-                                              gain=gain, smooth=smooth)
-        if v_auto:
-            extra["v_max"] = estimate_speed(calib, line, fps / args.stride, gain=gain, smooth=smooth,
-                                            grey_shadow_threshold=early.bgs_grey_shadow_threshold)
-        del calib
-        source = open_source(args.source)
-    params = TripwireParams.from_mapping(extra)
+        source = open_source(args.source)  # read again from the start
     sinks: list = []
     bar = None
-    count = {1: 0, -1: 0}
+    counts = [{1: 0, -1: 0} for _ in lines]
+    total = {1: 0, -1: 0}
     try:
         frames = source.numbered()
         try:
             number, frame = next(frames)
         except StopIteration:
             raise SourceError(f"{args.source}: no frames") from None
-        try:
-            tw = TrackerlessTripwire(line, frame.shape[:2], fps, params, stride=args.stride)
-        except ValueError as exc:
-            raise ParameterError(f"--line: {exc}") from None
+        tws = []
+        for k, (line, par) in enumerate(zip(lines, params), 1):
+            try:
+                tws.append(TrackerlessTripwire(line, frame.shape[:2], fps, par, stride=args.stride))
+            except ValueError as exc:
+                raise ParameterError(f"{_option(k, len(lines))}: {exc}") from None
         out = _TextSink(args.out)
         out._write(EVENTS_HEADER)
         sinks.append(out)
@@ -168,33 +223,24 @@ def cmd_tripwire(args) -> int:
             sinks.append(video)
         bar = progress(source.length, "tripwire", args.quiet)
         flash: list = []
+        timed = [0, 0.0]  # frames processed, seconds inside the tripwires (decode and overlay excluded)
 
-        timed = [0, 0.0]  # frames processed, seconds inside the tripwire (decode and overlay excluded)
+        def emit(found, k: int, radius: float) -> None:
+            for e in found:
+                counts[k - 1][e.direction] += 1
+                total[e.direction] += 1
+                out._write(_event_row(e, k))
+                flash.append([e, 6, radius])
 
         def handle(num: int, img) -> None:
             t0 = time.perf_counter()
-            found = tw.process(img, num)
+            found = [tw.process(img, num) for tw in tws]
             timed[0] += 1
             timed[1] += time.perf_counter() - t0
-            for e in found:
-                count[e.direction] += 1
-                out._write(_event_row(e))
-                flash.append([e, 6])
+            for k, (tw, f) in enumerate(zip(tws, found), 1):
+                emit(f, k, tw.params.radius)
             if video:
-                canvas = img.copy()
-                pts = np.round(line).astype(np.int32).reshape(-1, 1, 2)
-                cv2.polylines(canvas, [pts], False, (255, 255, 255), 2, cv2.LINE_AA)
-                for k, c in enumerate(tw.layout.centres):
-                    col = (0, 0, 255) if tw.patches[k].fg else ((255, 160, 0) if tw.layout.side[k] < 0 else (0, 200, 0))
-                    cv2.circle(canvas, (round(float(c[0])), round(float(c[1]))), round(tw.params.radius), col, 1)
-                for item in flash:
-                    e = item[0]
-                    cv2.circle(canvas, (int(e.x), int(e.y)), int(2 * tw.params.radius), (0, 255, 255), 3)
-                    item[1] -= 1
-                flash[:] = [f for f in flash if f[1] > 0]
-                cv2.putText(canvas, f"+{count[1]}  -{count[-1]}", (10, 30), cv2.FONT_HERSHEY_SIMPLEX, 1.0,
-                            (0, 255, 255), 2, cv2.LINE_AA)
-                video.write(canvas)
+                video.write(_overlay(img, tws, flash, total))
             bar.update(args.stride)
 
         with interrupt_on_sigterm() as stop:
@@ -204,15 +250,24 @@ def cmd_tripwire(args) -> int:
                     continue
                 handle(number, frame)
                 stop.check()
-            for e in tw.finish():
-                count[e.direction] += 1
-                out._write(_event_row(e))
+            for k, tw in enumerate(tws, 1):
+                emit(tw.finish(), k, tw.params.radius)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; events so far are in {args.out}") from None
     finally:
         close_all(bar, sinks, source)
-    noun = "crossing" if count[1] + count[-1] == 1 else "crossings"
     speed = f", {timed[0] / timed[1]:.0f} frames/s decode excluded" if timed[1] > 0 else ""
-    print(f"{count[1]} positive and {count[-1]} negative {noun} (r = {params.radius:.1f} px, "
-          f"v_max = {params.v_max:.0f} px/s{speed}) -> {args.out}", file=sys.stderr)
+
+    def said(c: dict, par) -> str:
+        noun = "crossing" if c[1] + c[-1] == 1 else "crossings"
+        return f"{c[1]} positive and {c[-1]} negative {noun} (r = {par.radius:.1f} px, v_max = {par.v_max:.0f} px/s"
+
+    if len(lines) == 1:
+        print(f"{said(counts[0], params[0])}{speed}) -> {args.out}", file=sys.stderr)
+    else:
+        for k, (c, par) in enumerate(zip(counts, params), 1):
+            print(f"line {k}: {said(c, par)})", file=sys.stderr)
+        lines_noun = f"{len(lines)} lines"
+        print(f"{total[1]} positive and {total[-1]} negative on {lines_noun}{speed.replace(', ', ' (', 1)}"
+              f"{')' if speed else ''} -> {args.out}", file=sys.stderr)
     return 0
