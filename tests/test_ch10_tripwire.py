@@ -1,5 +1,7 @@
 """Book ch. 10: the trackerless tripwire, crossings of tracks, event scoring, the command (ch10.md §5)."""
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -249,8 +251,14 @@ def test_synthetic_sparse_traffic_is_counted():
     assert tp / gt >= 0.65 and tp / det >= 0.7, (gt, det, tp)
 
 
+@functools.lru_cache(maxsize=1)
+def _sparse_road():
+    """The sparse traffic scene of the command's tests, rendered once (not changed by them)."""
+    return traffic_scene(8, kind="sparse", n_vehicles=4)
+
+
 def test_tripwire_cli(tmp_path):
-    sc = traffic_scene(8, kind="sparse", n_vehicles=4)
+    sc = _sparse_road()
     export_traffic(sc, tmp_path / "road")
     wire = (tmp_path / "road" / "wire.txt").read_text().strip()
     out = tmp_path / "ev.csv"
@@ -276,19 +284,20 @@ def test_tripwire_cli_counts_several_lines_in_one_pass_as_each_alone(tmp_path, c
     """Repeated --line: each line's rows (numbered in the last column) are those of the line run alone, with the
     radius read for that line; the tracker-based tripwire numbers its rows the same way; a bad second line names
     itself and exits 2."""
-    sc = traffic_scene(8, kind="sparse", n_vehicles=4)
+    sc = _sparse_road()
     road = tmp_path / "road"
     export_traffic(sc, road)
     lines = ["99,120;221,120", "20,90;300,90"]
     alone = []
     for k, text in enumerate(lines, 1):
         out = tmp_path / f"alone{k}.csv"
-        assert main(["tripwire", str(road), "--line", text, "--out", str(out), "--quiet"]) == 0
+        assert main(["tripwire", str(road), "--line", text, "--stride", "3", "--out", str(out), "--quiet"]) == 0
         alone.append([r.rsplit(",", 1) for r in out.read_text().splitlines()[1:]])
         assert all(n == "1" for _, n in alone[-1]) and alone[-1]
     capsys.readouterr()
     both = tmp_path / "both.csv"
-    assert main(["tripwire", str(road), "--line", lines[0], "--line", lines[1], "--out", str(both), "--quiet"]) == 0
+    assert main(["tripwire", str(road), "--line", lines[0], "--line", lines[1], "--stride", "3", "--out", str(both),
+                 "--quiet"]) == 0
     rows = both.read_text().splitlines()
     assert rows[0].endswith(",line")
     for k in (1, 2):
@@ -315,7 +324,7 @@ def test_tripwire_cli_radius_auto_and_overlay_video(tmp_path, capsys):
     from pftrack.events.geometry import parse_polyline
     from pftrack.io import open_source
 
-    sc = traffic_scene(8, kind="sparse", n_vehicles=4)
+    sc = _sparse_road()
     export_traffic(sc, tmp_path / "road")
     wire = (tmp_path / "road" / "wire.txt").read_text().strip()
     out, video = tmp_path / "ev.csv", tmp_path / "overlay.mp4"
