@@ -76,3 +76,37 @@ def test_mog2_detector_finds_a_mid_grey_target_on_grey_video():
     x, y, w, h = boxes[GREY_SHADOW_THRESHOLD][0][:4]
     assert max(abs(x - 90), abs(y - 40), abs(w - 40), abs(h - 40)) <= 2  # the last frame's square
     assert len(boxes[OPENCV_SHADOW_THRESHOLD]) == 0  # taken for a shadow
+
+
+def test_rate_k_sets_mog2s_learning_schedule_and_keeps_a_still_object_foreground_longer():
+    """rate_k = 2 is OpenCV's own schedule (the same masks); another k learns at 1 / min(k n, history), which is
+    what OpenCV's MOG2 does when given that rate on each frame; a slower start keeps an object that stops in view
+    foreground for more frames."""
+    rng = np.random.default_rng(2)
+    ground = np.clip(rng.normal(120, 10, (60, 80, 3)), 0, 255).astype(np.uint8)
+    frames = []
+    for t in range(60):
+        f = ground.copy()
+        x = min(10 + 3 * t, 40)  # moves in, then stands still from frame 10 on
+        f[20:40, x:x + 15] = (30, 40, 200)
+        frames.append(f)
+    ref = cv2.createBackgroundSubtractorMOG2(history=100, varThreshold=16.0, detectShadows=True)
+    two = Foreground(100, rate_k=2.0)
+    for f in frames:
+        np.testing.assert_array_equal(two.apply(f), (ref.apply(f) == 255).astype(np.uint8))
+    ref = cv2.createBackgroundSubtractorMOG2(history=100, varThreshold=16.0, detectShadows=True)
+    eight = Foreground(100, rate_k=8.0)
+    still = {2: 0, 8: 0}
+    two = Foreground(100)
+    for n, f in enumerate(frames, 1):
+        want = (ref.apply(f, learningRate=1.0 / min(8 * n, 100)) == 255).astype(np.uint8)
+        got = eight.apply(f)
+        np.testing.assert_array_equal(got, want)
+        if n > 10:
+            still[8] += int(got[22:38, 42:53].mean() > 0.5)
+            still[2] += int(two.apply(f)[22:38, 42:53].mean() > 0.5)
+        else:
+            two.apply(f)
+    assert still[8] > still[2] + 5, still
+    with pytest.raises(ValueError):
+        Foreground(rate_k=0)

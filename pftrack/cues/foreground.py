@@ -100,15 +100,23 @@ class Foreground:
 
     ``scale``: MOG2 models the frame reduced by this factor (block means, ``(w // scale, h // scale)``; ``rects`` are
     then in the reduced frame's pixels), and the mask is brought back to the frame's size by nearest neighbour.
+
+    ``rate_k``: on its n-th frame MOG2 learns at 1 / min(rate_k n, history) (OpenCV's own schedule is rate_k = 2,
+    which is left to OpenCV); a larger value starts more slowly, so that a slow object is not taken into the
+    background within the first seconds.
     """
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0, *,
-                 grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD, rects=None, scale: int = 1):
+                 grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD, rects=None, scale: int = 1,
+                 rate_k: float = 2.0):
         if not 0.0 <= grey_shadow_threshold <= 1.0:
             raise ValueError(f"grey_shadow_threshold must be in [0, 1], got {grey_shadow_threshold}")
         if int(scale) < 1:
             raise ValueError(f"scale must be >= 1, got {scale}")
         self.scale = int(scale)
+        if rate_k <= 0:
+            raise ValueError(f"rate_k must be > 0, got {rate_k}")
+        self.rate_k, self.history, self.frames = float(rate_k), int(history), 0
         self.grey_shadow_threshold = float(grey_shadow_threshold)
         self.rects = None if rects is None else [tuple(int(v) for v in r) for r in rects]
         if self.rects is not None and not self.rects:
@@ -127,6 +135,9 @@ class Foreground:
             for m in self._models:
                 m.setShadowThreshold(self.grey_shadow_threshold if grey else OPENCV_SHADOW_THRESHOLD)
             self.grey = grey
+        self.frames += 1
+        if learning_rate < 0 and self.rate_k != 2.0:
+            learning_rate = 1.0 / min(self.rate_k * self.frames, self.history)
         h, w = frame.shape[:2]
         k = self.scale
         if k > 1:

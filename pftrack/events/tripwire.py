@@ -141,7 +141,7 @@ class TrackerlessTripwire:
                                reach / k + (k > 1)) if p.bgs_band else None
             rects = rects or None  # no pixel within reach (a wire outside the view): the whole box
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold,
-                                   rects=rects, scale=k)
+                                   rects=rects, scale=k, rate_k=p.bgs_rate_k)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
         self._cast = None if p.faithful else frame_undo(p)
         self._denoise = False
