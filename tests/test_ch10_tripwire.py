@@ -272,6 +272,8 @@ def test_tripwire_cli(tmp_path):
                  "--point", "centre", "--out", str(gt)]) == 0
     assert len(gt.read_text().splitlines()) == 1 + 4
     assert main(["tripwire", str(tmp_path / "road"), "--line", "10,10", "--out", str(out), "--quiet"]) == 2
+    for fps in ("0", "-5", "nan", "inf"):
+        assert main(["tripwire", str(tmp_path / "road"), "--line", wire, "--fps", fps, "--out", str(out)]) == 2
     assert main(["tripwire", "--from-tracks", str(tmp_path / "none.txt"), "--line", wire, "--out", str(out)]) == 2
     assert main(["tripwire", "--from-tracks", str(tmp_path / "road" / "gt" / "gt.txt"), "--line", wire,
                  "--point", "match", "--out", str(gt)]) == 2

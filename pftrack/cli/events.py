@@ -173,6 +173,8 @@ def cmd_tripwire(args) -> int:
     lines = _lines(args.line)
     if args.stride < 1:
         raise ParameterError("--stride must be >= 1")
+    if args.fps is not None and not (np.isfinite(args.fps) and args.fps > 0):
+        raise ParameterError(f"--fps must be a positive number, got {args.fps:g}")
     if args.from_tracks:
         if args.point == "match":
             raise ParameterError("--point match is for the trackerless tripwire; with --from-tracks use foot or centre")
@@ -195,7 +197,8 @@ def cmd_tripwire(args) -> int:
     if args.video_out:
         prepare_video_output(args.video_out)
     source = open_source(args.source)
-    fps = float(args.fps or source.fps or 25.0)
+    stated = source.fps if source.fps is not None and np.isfinite(source.fps) and source.fps > 0 else None
+    fps = float(args.fps or stated or 25.0)
     params = _line_params(args, source, fps, lines, extra, v_auto)
     if args.radius == "auto" or v_auto:
         source = open_source(args.source)  # read again from the start
