@@ -259,18 +259,18 @@ def cmd_tripwire(args) -> int:
         raise Interrupted(f"interrupted; events so far are in {args.out}") from None
     finally:
         close_all(bar, sinks, source)
-    speed = f", {timed[0] / timed[1]:.0f} frames/s decode excluded" if timed[1] > 0 else ""
+    rate = f"{timed[0] / timed[1]:.0f} frames/s decode excluded" if timed[1] > 0 else ""
 
-    def said(c: dict, par) -> str:
+    def said(c: dict, par, *more: str) -> str:
         noun = "crossing" if c[1] + c[-1] == 1 else "crossings"
-        return f"{c[1]} positive and {c[-1]} negative {noun} (r = {par.radius:.1f} px, v_max = {par.v_max:.0f} px/s"
+        what = ", ".join([f"r = {par.radius:.1f} px", f"v_max = {par.v_max:.0f} px/s", *filter(None, more)])
+        return f"{c[1]} positive and {c[-1]} negative {noun} ({what})"
 
     if len(lines) == 1:
-        print(f"{said(counts[0], params[0])}{speed}) -> {args.out}", file=sys.stderr)
+        print(f"{said(counts[0], params[0], rate)} -> {args.out}", file=sys.stderr)
     else:
         for k, (c, par) in enumerate(zip(counts, params), 1):
-            print(f"line {k}: {said(c, par)})", file=sys.stderr)
-        lines_noun = f"{len(lines)} lines"
-        print(f"{total[1]} positive and {total[-1]} negative on {lines_noun}{speed.replace(', ', ' (', 1)}"
-              f"{')' if speed else ''} -> {args.out}", file=sys.stderr)
+            print(f"line {k}: {said(c, par)}", file=sys.stderr)
+        print(f"{total[1]} positive and {total[-1]} negative on {len(lines)} lines" + (f" ({rate})" if rate else "")
+              + f" -> {args.out}", file=sys.stderr)
     return 0

@@ -113,10 +113,10 @@ class Foreground:
             raise ValueError(f"grey_shadow_threshold must be in [0, 1], got {grey_shadow_threshold}")
         if int(scale) < 1:
             raise ValueError(f"scale must be >= 1, got {scale}")
-        self.scale = int(scale)
         if rate_k <= 0:
             raise ValueError(f"rate_k must be > 0, got {rate_k}")
-        self.rate_k, self.history, self.frames = float(rate_k), int(history), 0
+        self.scale = int(scale)
+        self.rate_k, self.history, self.frames = float(rate_k), int(history), 0  # frames: those applied so far
         self.grey_shadow_threshold = float(grey_shadow_threshold)
         self.rects = None if rects is None else [tuple(int(v) for v in r) for r in rects]
         if self.rects is not None and not self.rects:
