@@ -298,8 +298,14 @@ def test_tripwire_cli_counts_several_lines_in_one_pass_as_each_alone(tmp_path, c
         assert all(n == "1" for _, n in alone[-1]) and alone[-1]
     capsys.readouterr()
     both = tmp_path / "both.csv"
+    video = tmp_path / "both.mp4"
     assert main(["tripwire", str(road), "--line", lines[0], "--line", lines[1], "--stride", "3", "--out", str(both),
-                 "--quiet"]) == 0
+                 "--video-out", str(video), "--quiet"]) == 0
+    import cv2
+
+    cap = cv2.VideoCapture(str(video))
+    assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == len(range(0, len(sc.frames), 3))
+    cap.release()
     rows = both.read_text().splitlines()
     assert rows[0].endswith(",line")
     for k in (1, 2):
