@@ -238,7 +238,8 @@ def cmd_tripwire(args) -> int:
                 counts[k - 1][e.direction] += 1
                 total[e.direction] += 1
                 out._write(_event_row(e, k))
-                flash.append([e, 6, radius])
+                if video:  # drawn around the event for its next 6 frames
+                    flash.append([e, 6, radius])
 
         def handle(num: int, img) -> None:
             t0 = time.perf_counter()

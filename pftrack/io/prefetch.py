@@ -32,7 +32,7 @@ def default_depth() -> int:
     return DEPTH if usable_cpus() > 1 else 0
 
 
-def prefetch(items: Iterator, depth: int = 4) -> Iterator:
+def prefetch(items: Iterator, depth: int = DEPTH) -> Iterator:
     """Yield ``items`` in order while a background thread produces up to ``depth`` of them ahead.
 
     FFmpeg decodes and converts with the GIL released, so the decoding overlaps the caller's work on a
