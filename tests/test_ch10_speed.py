@@ -119,6 +119,38 @@ def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire
     assert sorted(e.direction for e in ev) == [-1, 1]
 
 
+def test_mog_on_rectangles_labels_as_the_whole_frame_and_the_tripwire_counts_with_it():
+    """bgs = "mog" (an option, docs/rules/tripwire_bgs_mog_rule.txt): OpenCV contrib's MOG on the band's rectangles
+    gives each pixel the whole frame's label, and the two movers are counted in their directions."""
+    from pftrack.cues.foreground import Foreground
+
+    rng = np.random.default_rng(5)
+    rects = [(0, 10, 0, 64), (10, 30, 5, 40), (30, 48, 20, 64)]
+    whole, parts = Foreground(50, model="mog"), Foreground(50, model="mog", rects=rects)
+    inside = np.zeros((48, 64), bool)
+    for y0, y1, x0, x1 in rects:
+        inside[y0:y1, x0:x1] = True
+    for t in range(40):
+        f = np.clip(rng.normal(120, 6, (48, 64, 3)), 0, 255).astype(np.uint8)
+        f[8:30, (t % 50):(t % 50) + 12] = (30, 200, 60)
+        a, b = whole.apply(f), parts.apply(f)
+        np.testing.assert_array_equal(b[inside], a[inside])
+        assert not b[~inside].any()
+    assert a[10:28, (39 % 50) + 2:(39 % 50) + 10].all() and a[40:, :30].sum() == 0  # the mover, not the ground
+    assert {type(m).__name__ for m in parts._models} == {"BackgroundSubtractorMOG"}
+    with pytest.raises(ValueError):
+        Foreground(model="knn")
+    with pytest.raises(ValueError):
+        Foreground(model="mog", mog_ratio=0.0)
+    wire, frames = _two_movers()
+    tw = TrackerlessTripwire(wire, frames[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50, bgs="mog"))
+    assert tw._bgs.model == "mog"
+    ev = []
+    for n, f in enumerate(frames, 1):
+        ev += tw.process(f, n)
+    assert sorted(e.direction for e in ev) == [-1, 1]
+
+
 def test_estimate_speed_reads_the_movers_speed_and_v_max_auto_counts_as_the_api_with_it(tmp_path, capsys):
     from pftrack.events.blobs import estimate_speed
     from pftrack.events.geometry import parse_polyline

@@ -104,11 +104,20 @@ class Foreground:
     ``rate_k``: on its n-th frame MOG2 learns at 1 / min(rate_k n, history) (OpenCV's own schedule is rate_k = 2,
     which is left to OpenCV); a larger value starts more slowly, so that a slow object is not taken into the
     background within the first seconds.
+
+    ``model``: "mog2", or "mog": OpenCV contrib's Gaussian mixture of KaewTraKulPong and Bowden
+    (BackgroundSubtractorMOG; ``history``, 5 mixtures, ``mog_ratio`` of the weight as background, OpenCV's automatic
+    learning rate), which has no shadow test (``grey_shadow_threshold`` and ``rate_k`` apply to MOG2 only). Each
+    pixel is modelled on its own, as with MOG2.
     """
 
     def __init__(self, history: int = 500, var_threshold: float = 16.0, *,
                  grey_shadow_threshold: float = GREY_SHADOW_THRESHOLD, rects=None, scale: int = 1,
-                 rate_k: float = 2.0):
+                 rate_k: float = 2.0, model: str = "mog2", mog_ratio: float = 0.7):
+        if model not in ("mog2", "mog"):
+            raise ValueError(f"model must be 'mog2' or 'mog', got {model!r}")
+        if not 0.0 < mog_ratio <= 1.0:
+            raise ValueError(f"mog_ratio must be in (0, 1], got {mog_ratio}")
         if not 0.0 <= grey_shadow_threshold <= 1.0:
             raise ValueError(f"grey_shadow_threshold must be in [0, 1], got {grey_shadow_threshold}")
         if int(scale) < 1:
@@ -121,22 +130,27 @@ class Foreground:
         self.rects = None if rects is None else [tuple(int(v) for v in r) for r in rects]
         if self.rects is not None and not self.rects:
             raise ValueError("rects is empty: give None for the whole frame")
-        self._models = [cv2.createBackgroundSubtractorMOG2(history=int(history), varThreshold=float(var_threshold),
-                                                           detectShadows=True)
-                        for _ in (self.rects if self.rects is not None else [None])]
-        for m in self._models:
-            m.setShadowThreshold(OPENCV_SHADOW_THRESHOLD)
+        self.model = model
+        n = len(self.rects) if self.rects is not None else 1
+        if model == "mog":
+            self._models = [cv2.bgsegm.createBackgroundSubtractorMOG(int(history), 5, float(mog_ratio))
+                            for _ in range(n)]
+        else:
+            self._models = [cv2.createBackgroundSubtractorMOG2(history=int(history), varThreshold=float(var_threshold),
+                                                               detectShadows=True) for _ in range(n)]
+            for m in self._models:
+                m.setShadowThreshold(OPENCV_SHADOW_THRESHOLD)
         self.grey = False
 
     def apply(self, frame: np.ndarray, learning_rate: float = -1.0) -> np.ndarray:
         # a lattice of every 16th pixel is enough to tell a grey frame (about 1700 pixels of a 768 x 576 frame)
-        grey = self.grey_shadow_threshold != OPENCV_SHADOW_THRESHOLD and is_gray(frame, stride=16)
+        grey = self.model == "mog2" and self.grey_shadow_threshold != OPENCV_SHADOW_THRESHOLD and is_gray(frame, stride=16)
         if grey != self.grey:
             for m in self._models:
                 m.setShadowThreshold(self.grey_shadow_threshold if grey else OPENCV_SHADOW_THRESHOLD)
             self.grey = grey
         self.frames += 1
-        if learning_rate < 0 and self.rate_k != 2.0:
+        if learning_rate < 0 and self.rate_k != 2.0 and self.model == "mog2":
             learning_rate = 1.0 / min(self.rate_k * self.frames, self.history)
         h, w = frame.shape[:2]
         k = self.scale

@@ -134,14 +134,14 @@ class TrackerlessTripwire:
         # the prior is on the object's speed: a displacement over K frames is K times one frame's
         self._prior = 0.0 if p.faithful else p.motion_prior / self.stride ** 2
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
-        if p.bgs == "mog2":
+        if p.bgs in ("mog2", "mog"):
             k = p.bgs_scale
             reach = min(pad + r, p.bgs_reach * r) if p.bgs_reach > 0 else pad + r
             rects = band_rects(self.polyline / k, (self.x0 / k, self.y0 / k), (max(rh // k, 1), max(rw // k, 1)),
                                reach / k + (k > 1)) if p.bgs_band else None
             rects = rects or None  # no pixel within reach (a wire outside the view): the whole box
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold,
-                                   rects=rects, scale=k, rate_k=p.bgs_rate_k)
+                                   rects=rects, scale=k, rate_k=p.bgs_rate_k, model=p.bgs, mog_ratio=p.bgs_mog_ratio)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
         self._cast = None if p.faithful else frame_undo(p)
         self._denoise = False
@@ -167,7 +167,7 @@ class TrackerlessTripwire:
     # -- per frame ------------------------------------------------------------------------------
     def foreground(self, roi: np.ndarray, gray: np.ndarray) -> np.ndarray:
         p = self.params
-        if p.bgs == "mog2":
+        if p.bgs in ("mog2", "mog"):
             fg = self._bgs.apply(roi)
         else:
             if self._prev_gray is None or self._prev2_gray is None:
