@@ -10,7 +10,7 @@ from pftrack.events.scoring import ssd_motion
 from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams
 from pftrack.synth.traffic import export_traffic, traffic_scene
 
-from .test_ch10_tripwire import _two_movers
+from .test_ch10_tripwire import _sparse_road, _two_movers
 
 
 def test_band_rects_hold_every_pixel_within_reach_and_leave_out_an_oblique_wires_corners():
@@ -199,3 +199,74 @@ def test_ssd_motion_searching_near_first_gives_the_whole_windows_answer(monkeypa
         # the same displacement; OpenCV's correlation rounds differently over a smaller window (sub-pixel step)
         np.testing.assert_allclose(got[0], whole[0], atol=0.01)
         assert got[1] == pytest.approx(whole[1], rel=1e-3, abs=1e-2)
+
+
+def test_radius_auto_on_a_camera_reads_its_first_seconds_once_and_counts_them(tmp_path, monkeypatch, capsys):
+    """A camera cannot be read twice: ``--radius auto`` keeps the first 10 s it reads and counts them, then the live
+    stream goes on, with the same rows as the same frames given as a folder (formerly: exit 2, "give --radius")."""
+    import cv2
+
+    import pftrack.io.sources as sources
+
+    sc = _sparse_road()
+    real = cv2.VideoCapture
+    reads = []
+
+    class Camera:  # camera 0 serves the scene's frames once, at 30 fps; anything else is OpenCV's
+        def __init__(self, target):
+            self.live = isinstance(target, int)
+            self.cap = None if self.live else real(target)
+            self.left = list(sc.frames)
+
+        def isOpened(self):
+            return True if self.live else self.cap.isOpened()
+
+        def read(self):
+            if not self.live:
+                return self.cap.read()
+            reads.append(1)
+            return (True, self.left.pop(0)) if self.left else (False, None)
+
+        def get(self, prop):
+            if not self.live:
+                return self.cap.get(prop)
+            return 30.0 if prop == cv2.CAP_PROP_FPS else 0.0
+
+        def grab(self):
+            return self.read()[0]
+
+        def release(self):
+            if self.cap is not None:
+                self.cap.release()
+
+    export_traffic(sc, tmp_path / "road")
+    wire = (tmp_path / "road" / "wire.txt").read_text().strip()
+    folder = tmp_path / "folder.csv"
+    assert main(["tripwire", str(tmp_path / "road"), "--line", wire, "--fps", "30", "--stride", "2",
+                 "--out", str(folder), "--quiet"]) == 0
+    said = capsys.readouterr().err
+    # the folder's JPEG frames, as the command read them, served by the camera
+    from pftrack.io import open_source
+
+    sc = type(sc)([f for _, f in open_source(tmp_path / "road").numbered()], sc.tracks, sc.wire, sc.fps, sc.meta)
+    monkeypatch.setattr(sources.cv2, "VideoCapture", Camera)
+    live = tmp_path / "live.csv"
+    assert main(["tripwire", "0", "--line", wire, "--stride", "2", "--out", str(live), "--quiet"]) == 0
+    assert live.read_text() == folder.read_text() and len(folder.read_text().splitlines()) > 1
+    assert len(reads) == len(sc.frames) + 1  # every frame read once (and the end of the stream)
+    radius = said.split("r = ")[1].split(" px")[0]
+    assert f"r = {radius} px" in capsys.readouterr().err
+    # a camera whose first 10 s would not fit the memory allowed reads a shorter window, still once
+    import pftrack.cli.events as events
+
+    import pftrack.events.tripwire as tripwire
+
+    monkeypatch.setattr(events, "CAMERA_CALIBRATION_BYTES", 20 * sc.frames[0].nbytes)
+    seen = []
+    radius = tripwire.estimate_radius
+    monkeypatch.setattr(tripwire, "estimate_radius", lambda frames, *a, **k: seen.append(len(frames)) or radius(
+        frames, *a, **k))
+    reads.clear()
+    assert main(["tripwire", "0", "--line", wire, "--stride", "2", "--out", str(live), "--quiet"]) == 0
+    assert seen == [20]  # 20 processed frames, not the 10 s
+    assert len(reads) == len(sc.frames) + 1 and live.read_text().startswith("frame,direction")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import sys
 import time
 
@@ -26,8 +27,9 @@ def add_tripwire(sub) -> None:
                     "--from-tracks runs the conventional tripwire on MOTChallenge tracks instead. Writes "
                     "frame,direction,... per crossing, flushed; the last column, line, numbers the --line options "
                     "from 1 (several lines are counted in one pass over the video).")
-    p.add_argument("source", nargs="?", help="video file, frame folder or MOTChallenge folder (not needed with "
-                                             "--from-tracks)")
+    p.add_argument("source", nargs="?", help="video file, frame folder, MOTChallenge folder or camera index (not "
+                                             "needed with --from-tracks; from a camera, --radius auto reads its first "
+                                             "10 s, which are then counted)")
     p.add_argument("--line", required=True, action="append",
                    help='polyline "X1,Y1;X2,Y2[;...]" (at least two points); repeat to count several lines, each with '
                         "its own patches and radius")
@@ -104,27 +106,40 @@ def _event_row(e, line: int) -> str:
             f"{line}")
 
 
-def _line_params(args, source, fps: float, lines: list[np.ndarray], extra: dict, v_auto: bool) -> list:
+#: a camera cannot be read twice: the frames of its first 10 s that ``--radius auto`` / ``--v-max auto`` read are
+#: kept to be counted after, up to this many bytes (a shorter window beyond it)
+CAMERA_CALIBRATION_BYTES = 512 * 2 ** 20
+
+
+def _calibration(args, source, fps: float) -> tuple[list, list, object]:
+    """``(calib, kept, rest)``: the processed frames (every ``--stride``-th) of the first 10 s of ``source``, which
+    ``--radius auto`` and ``--v-max auto`` read; for a camera those frames numbered, to be counted first
+    (``CAMERA_CALIBRATION_BYTES`` at most), and the stream that goes on where the window ended (None for a file or
+    folder, which is read again from the start)."""
+    from ..io.sources import VideoSource
+
+    camera = isinstance(source, VideoSource) and isinstance(source.target, int)
+    calib, kept, size = [], [], 0
+    stream = source.numbered()
+    for number, frame in stream:
+        if (number - 1) % args.stride == 0:
+            calib.append(frame)
+            size += frame.nbytes
+            if camera:
+                kept.append((number, frame))
+        if number >= 10 * fps or (camera and size >= CAMERA_CALIBRATION_BYTES):
+            break
+    return calib, kept, stream if camera else None
+
+
+def _line_params(args, calib: list, fps: float, lines: list[np.ndarray], extra: dict, v_auto: bool) -> list:
     """Each line's TripwireParams: ``extra``, with the radius (``--radius auto``) and the speed limit (``--v-max
-    auto``) read per line from the first 10 s of ``source``, which is closed when they were read."""
-    from ..errors import ParameterError
+    auto``) read per line from the processed frames ``calib`` of the first 10 s (:func:`_calibration`)."""
     from ..events.blobs import estimate_speed
     from ..events.tripwire import TripwireParams, dark_levels, estimate_radius
-    from ..io.sources import VideoSource
 
     if args.radius != "auto" and not v_auto:
         return [TripwireParams.from_mapping(extra) for _ in lines]
-    if isinstance(source, VideoSource) and str(args.source).strip().isdigit():
-        source.close()
-        raise ParameterError("--radius auto and --v-max auto need a file or folder (they read the first 10 s "
-                             "twice); give --radius")
-    calib = []
-    for number, frame in source.numbered():
-        if (number - 1) % args.stride == 0:
-            calib.append(frame)
-        if number >= 10 * fps:
-            break
-    source.close()
     early = TripwireParams.from_mapping({k: v for k, v in extra.items() if k != "radius"})
     gain, smooth = dark_levels(calib[0], early) if calib else (1.0, False)
     out = []
@@ -204,15 +219,20 @@ def cmd_tripwire(args) -> int:
     source = open_source(args.source)
     stated = source.fps if source.fps is not None and np.isfinite(source.fps) and source.fps > 0 else None
     fps = float(args.fps or stated or 25.0)
-    params = _line_params(args, source, fps, lines, extra, v_auto)
+    calib, kept, rest = [], [], None
     if args.radius == "auto" or v_auto:
-        source = open_source(args.source)  # read again from the start
+        calib, kept, rest = _calibration(args, source, fps)
+        if rest is None:  # a file or folder: read again from the start
+            source.close()
+            source = open_source(args.source)
+    params = _line_params(args, calib, fps, lines, extra, v_auto)
     sinks: list = []
     bar = None
     counts = [{1: 0, -1: 0} for _ in lines]
     total = {1: 0, -1: 0}
     try:
-        frames = source.numbered()
+        # a camera's first seconds, read for the radius or speed limit, are counted first, then the live stream
+        frames = itertools.chain(kept, rest if rest is not None else source.numbered())
         try:
             number, frame = next(frames)
         except StopIteration:
