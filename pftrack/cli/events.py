@@ -106,16 +106,13 @@ def _event_row(e, line: int) -> str:
             f"{line}")
 
 
-#: a camera cannot be read twice: the frames of its first 10 s that ``--radius auto`` / ``--v-max auto`` read are
-#: kept to be counted after, up to this many bytes (a shorter window beyond it)
+#: a camera cannot be read twice: at most this many bytes of its first 10 s are kept to be counted after calibration
 CAMERA_CALIBRATION_BYTES = 512 * 2 ** 20
 
 
 def _calibration(args, source, fps: float) -> tuple[list, list, object]:
-    """``(calib, kept, rest)``: the processed frames (every ``--stride``-th) of the first 10 s of ``source``, which
-    ``--radius auto`` and ``--v-max auto`` read; for a camera those frames numbered, to be counted first
-    (``CAMERA_CALIBRATION_BYTES`` at most), and the stream that goes on where the window ended (None for a file or
-    folder, which is read again from the start)."""
+    """``(calib, kept, rest)``: the processed frames of the first 10 s of ``source`` (``--radius auto``, ``--v-max
+    auto``); for a camera those frames numbered, to be counted first, and its stream from there (else None)."""
     from ..io.sources import VideoSource
 
     camera = isinstance(source, VideoSource) and isinstance(source.target, int)
