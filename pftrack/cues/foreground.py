@@ -144,7 +144,8 @@ class Foreground:
 
     def apply(self, frame: np.ndarray, learning_rate: float = -1.0) -> np.ndarray:
         # a lattice of every 16th pixel is enough to tell a grey frame (about 1700 pixels of a 768 x 576 frame)
-        grey = self.model == "mog2" and self.grey_shadow_threshold != OPENCV_SHADOW_THRESHOLD and is_gray(frame, stride=16)
+        grey = (self.model == "mog2" and self.grey_shadow_threshold != OPENCV_SHADOW_THRESHOLD
+                and is_gray(frame, stride=16))
         if grey != self.grey:
             for m in self._models:
                 m.setShadowThreshold(self.grey_shadow_threshold if grey else OPENCV_SHADOW_THRESHOLD)

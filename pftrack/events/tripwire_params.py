@@ -22,7 +22,9 @@ class TripwireParams(Params):
     bgs: Literal["mog2", "mog", "diff"] = param("mog2", doc=(
         "foreground: MOG2 (shadows as background), MOG (OpenCV contrib's Gaussian mixture without a shadow test; "
         "bgs_history, bgs_mog_ratio; the band options apply to it too) or 3-frame difference"))
-    bgs_mog_ratio: float = param(0.7, gt=0, le=1, doc="with bgs = 'mog': the share of the mixture's weight that is background")
+    bgs_mog_ratio: float = param(0.7, gt=0, le=1, doc=(
+        "with bgs = 'mog': the share of the mixture's weight that is background (OpenCV's default; "
+        "docs/rules/tripwire_bgs_mog_rule.txt)"))
     bgs_history: int = param(500, ge=2, doc="MOG2 history in frames")
     bgs_rate_k: float = param(2.0, gt=0, doc=(
         "MOG2 learns at 1 / min(k n, bgs_history) on its n-th frame; 2 is OpenCV's own schedule, a larger k a slower "
