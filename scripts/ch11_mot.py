@@ -30,20 +30,12 @@ from pathlib import Path
 import numpy as np
 
 from pftrack.cli import main as pftrack
+from pftrack.geometry import iou
 from pftrack.io.datasets import read_mot_txt
 from pftrack.synth.twocam import export_twocam, twocam_scene
 
 SPLITS = ((300, 390), (340, 430), (380, 470))
 SCENES = {"report": ((201, 400), (100, 101, 102, 103, 104)), "tune": ((1, 200), (0, 1, 2))}
-
-
-def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU of box ``a`` (x, y, w, h) with each row of ``b``."""
-    x0, y0 = np.maximum(a[0], b[:, 0]), np.maximum(a[1], b[:, 1])
-    x1 = np.minimum(a[0] + a[2], b[:, 0] + b[:, 2])
-    y1 = np.minimum(a[1] + a[3], b[:, 1] + b[:, 3])
-    inter = np.clip(x1 - x0, 0, None) * np.clip(y1 - y0, 0, None)
-    return inter / (a[2] * a[3] + b[:, 2] * b[:, 3] - inter)
 
 
 def persons_of(rows: np.ndarray, gt: np.ndarray, identity: dict, cam: str, min_frames: int = 3) -> dict[int, int]:

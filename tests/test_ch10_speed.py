@@ -270,3 +270,13 @@ def test_radius_auto_on_a_camera_reads_its_first_seconds_once_and_counts_them(tm
     assert main(["tripwire", "0", "--line", wire, "--stride", "2", "--out", str(live), "--quiet"]) == 0
     assert seen == [20]  # 20 processed frames, not the 10 s
     assert len(reads) == len(sc.frames) + 1 and live.read_text().startswith("frame,direction")
+
+
+def test_a_cameras_calibration_frames_are_let_go_as_they_are_counted():
+    from pftrack.cli.events import _let_go
+
+    kept = [(1, "a"), (3, "b"), (5, "c")]
+    seen = []
+    for item in _let_go(kept):
+        seen.append((item, len(kept)))
+    assert seen == [((1, "a"), 2), ((3, "b"), 1), ((5, "c"), 0)] and kept == []

@@ -129,6 +129,13 @@ def _calibration(args, source, fps: float) -> tuple[list, list, object]:
     return calib, kept, stream if camera else None
 
 
+def _let_go(items: list):
+    """Yield the items of ``items`` in order, removing each from the list as it goes."""
+    items.reverse()
+    while items:
+        yield items.pop()
+
+
 def _line_params(args, calib: list, fps: float, lines: list[np.ndarray], extra: dict, v_auto: bool) -> list:
     """Each line's TripwireParams: ``extra``, with the radius (``--radius auto``) and the speed limit (``--v-max
     auto``) read per line from the processed frames ``calib`` of the first 10 s (:func:`_calibration`)."""
@@ -152,33 +159,6 @@ def _line_params(args, calib: list, fps: float, lines: list[np.ndarray], extra: 
     return out
 
 
-def _overlay(img: np.ndarray, tws: list, flash: list, count: dict, counts: list[dict]) -> np.ndarray:
-    """The frame with each line, its patches by state (red: foreground; orange / green: the inner / outer side) and
-    the recent events (yellow), and the counts so far (with several lines, each line's beside its first point)."""
-    import cv2
-
-    canvas = img.copy()
-    for k, tw in enumerate(tws):
-        pts = np.round(tw.polyline).astype(np.int32).reshape(-1, 1, 2)
-        cv2.polylines(canvas, [pts], False, (255, 255, 255), 2, cv2.LINE_AA)
-        if len(tws) > 1:
-            x, y = int(pts[0, 0, 0]), int(pts[0, 0, 1])
-            for colour, width in (((0, 0, 0), 4), ((0, 255, 255), 2)):  # yellow on a dark outline
-                cv2.putText(canvas, f"{k + 1}: +{counts[k][1]} -{counts[k][-1]}", (x + 4, max(y - 8, 20)),
-                            cv2.FONT_HERSHEY_SIMPLEX, 0.7, colour, width, cv2.LINE_AA)
-        for j, c in enumerate(tw.layout.centres):
-            col = (0, 0, 255) if tw.patches[j].fg else ((255, 160, 0) if tw.layout.side[j] < 0 else (0, 200, 0))
-            cv2.circle(canvas, (round(float(c[0])), round(float(c[1]))), round(tw.params.radius), col, 1)
-    for item in flash:
-        e, r = item[0], item[2]
-        cv2.circle(canvas, (int(e.x), int(e.y)), int(2 * r), (0, 255, 255), 3)
-        item[1] -= 1
-    flash[:] = [f for f in flash if f[1] > 0]
-    cv2.putText(canvas, f"+{count[1]}  -{count[-1]}", (10, 30), cv2.FONT_HERSHEY_SIMPLEX, 1.0,
-                (0, 255, 255), 2, cv2.LINE_AA)
-    return canvas
-
-
 def cmd_tripwire(args) -> int:
     from ..errors import ParameterError, SourceError
     from ..events.tripwire import TrackerlessTripwire
@@ -186,6 +166,7 @@ def cmd_tripwire(args) -> int:
     from ..io.sources import open_source
     from ..params import parse_param_assignments
     from ..pipeline import interrupt_on_sigterm
+    from ..viz.tripwire import tripwire_overlay
 
     lines = _lines(args.line)
     if args.stride < 1:
@@ -223,13 +204,14 @@ def cmd_tripwire(args) -> int:
             source.close()
             source = open_source(args.source)
     params = _line_params(args, calib, fps, lines, extra, v_auto)
+    del calib  # not held for the whole run (a camera's kept frames are let go as they are counted)
     sinks: list = []
     bar = None
     counts = [{1: 0, -1: 0} for _ in lines]
     total = {1: 0, -1: 0}
     try:
         # a camera's first seconds, read for the radius or speed limit, are counted first, then the live stream
-        frames = itertools.chain(kept, rest if rest is not None else source.numbered())
+        frames = itertools.chain(_let_go(kept), rest if rest is not None else source.numbered())
         try:
             number, frame = next(frames)
         except StopIteration:
@@ -266,7 +248,7 @@ def cmd_tripwire(args) -> int:
             for k, (tw, f) in enumerate(zip(tws, found), 1):
                 emit(f, k, tw.params.radius)
             if video:
-                video.write(_overlay(img, tws, flash, total, counts))
+                video.write(tripwire_overlay(img, tws, flash, total, counts))
             bar.update(args.stride)
 
         with interrupt_on_sigterm() as stop:

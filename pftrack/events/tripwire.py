@@ -134,6 +134,7 @@ class TrackerlessTripwire:
         # the prior is on the object's speed: a displacement over K frames is K times one frame's
         self._prior = 0.0 if p.faithful else p.motion_prior / self.stride ** 2
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
+        self._bgs: Foreground | None = None  # the background model (None: 3-frame difference)
         if p.bgs in ("mog2", "mog"):
             k = p.bgs_scale
             reach = min(pad + r, p.bgs_reach * r) if p.bgs_reach > 0 else pad + r
@@ -167,7 +168,7 @@ class TrackerlessTripwire:
     # -- per frame ------------------------------------------------------------------------------
     def foreground(self, roi: np.ndarray, gray: np.ndarray) -> np.ndarray:
         p = self.params
-        if p.bgs in ("mog2", "mog"):
+        if self._bgs is not None:
             fg = self._bgs.apply(roi)
         else:
             if self._prev_gray is None or self._prev2_gray is None:
