@@ -34,11 +34,29 @@ def test_band_rects_hold_every_pixel_within_reach_and_leave_out_an_oblique_wires
     assert len(flat) <= 8 and flat[0][0] == 8 and flat[-1][1] == 96
 
 
+def test_the_rectangles_strips_cover_each_of_their_pixels_once_side_by_side():
+    from pftrack.cues.foreground import PACK_ROWS, pack_strips
+
+    rects = [(0, 10, 0, 64), (10, 30, 5, 40), (30, 48, 20, 64), (48, 51, 0, 3)]
+    strips = pack_strips(rects)
+    seen = np.zeros((51, 64), int)
+    for y0, y1, x0, x1, _ in strips:
+        assert 0 < y1 - y0 <= PACK_ROWS
+        seen[y0:y1, x0:x1] += 1
+    inside = np.zeros((51, 64), bool)
+    for y0, y1, x0, x1 in rects:
+        inside[y0:y1, x0:x1] = True
+    assert (seen[inside] == 1).all() and not seen[~inside].any()
+    # laid side by side: each strip starts where the one before ends
+    np.testing.assert_array_equal(strips[1:, 4], np.cumsum(strips[:-1, 3] - strips[:-1, 2]))
+    assert strips[0, 4] == 0
+
+
 def test_foreground_on_rectangles_labels_their_pixels_as_the_whole_frame_does():
     from pftrack.cues.foreground import Foreground
 
     rng = np.random.default_rng(4)
-    rects = [(0, 10, 0, 64), (10, 30, 5, 40), (30, 48, 20, 64)]
+    rects = [(0, 10, 0, 64), (10, 30, 5, 40), (30, 45, 20, 64)]  # strips of 8, 2, 8, 8, 4, 8, 7 rows
     whole, parts = Foreground(50, 16.0), Foreground(50, 16.0, rects=rects)
     for t in range(40):
         f = np.clip(rng.normal(120, 6, (48, 64, 3)), 0, 255).astype(np.uint8)
