@@ -135,14 +135,18 @@ class TrackerlessTripwire:
         self._prior = 0.0 if p.faithful else p.motion_prior / self.stride ** 2
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
         self._bgs: Foreground | None = None  # the background model (None: 3-frame difference)
+        self._bgs_near: tuple[Foreground, np.ndarray] | None = None  # bgs_outer_scale: the full-size model, its mask
         if p.bgs in ("mog2", "mog"):
             k = p.bgs_scale
             reach = min(pad + r, p.bgs_reach * r) if p.bgs_reach > 0 else pad + r
             rects = band_rects(self.polyline / k, (self.x0 / k, self.y0 / k), (max(rh // k, 1), max(rw // k, 1)),
                                reach / k + (k > 1)) if p.bgs_band else None
             rects = rects or None  # no pixel within reach (a wire outside the view): the whole box
-            self._bgs = Foreground(p.bgs_history, p.bgs_threshold, grey_shadow_threshold=p.bgs_grey_shadow_threshold,
-                                   rects=rects, scale=k, rate_k=p.bgs_rate_k, model=p.bgs, mog_ratio=p.bgs_mog_ratio)
+            kw = dict(grey_shadow_threshold=p.bgs_grey_shadow_threshold, rate_k=p.bgs_rate_k, model=p.bgs,
+                      mog_ratio=p.bgs_mog_ratio)
+            self._bgs = Foreground(p.bgs_history, p.bgs_threshold, rects=rects, scale=k, **kw)
+            if p.bgs_outer_scale > 1 and p.bgs_band and k == 1 and p.bgs_near * r < reach:
+                self._bgs_near = self._near_model(p, kw, rh, rw, p.bgs_near * r, reach)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
         self._cast = None if p.faithful else frame_undo(p)
         self._denoise = False
@@ -165,11 +169,32 @@ class TrackerlessTripwire:
                         if p.bgs_bootstrap > 0 and p.bgs == "mog2" and not p.faithful else 0)
         self._held: list[tuple[np.ndarray, int]] | None = [] if self._boot_n else None
 
+    def _near_model(self, p: TripwireParams, kw: dict, rh: int, rw: int, near: float, reach: float):
+        """``bgs_outer_scale``: the band at that reduction replaces ``self._bgs``; returns the full-size model of
+        the pixels within ``near`` of the wire and the mask of those pixels (1 inside their rectangles)."""
+        k = p.bgs_outer_scale
+        outer = band_rects(self.polyline / k, (self.x0 / k, self.y0 / k), (max(rh // k, 1), max(rw // k, 1)),
+                           reach / k + 1)
+        if outer:
+            self._bgs = Foreground(p.bgs_history, p.bgs_threshold, rects=outer, scale=k, **kw)
+        rects = band_rects(self.polyline, (self.x0, self.y0), (rh, rw), near)
+        inside = np.zeros((rh, rw), bool)
+        for y0, y1, x0, x1 in rects:
+            inside[y0:y1, x0:x1] = True
+        return Foreground(p.bgs_history, p.bgs_threshold, rects=rects, **kw), inside
+
     # -- per frame ------------------------------------------------------------------------------
+    def _apply_bgs(self, roi: np.ndarray) -> np.ndarray:
+        fg = self._bgs.apply(roi)
+        if self._bgs_near is not None:
+            model, inside = self._bgs_near
+            np.copyto(fg, model.apply(roi), where=inside)
+        return fg
+
     def foreground(self, roi: np.ndarray, gray: np.ndarray) -> np.ndarray:
         p = self.params
         if self._bgs is not None:
-            fg = self._bgs.apply(roi)
+            fg = self._apply_bgs(roi)
         else:
             if self._prev_gray is None or self._prev2_gray is None:
                 fg = np.zeros(gray.shape, np.uint8)
@@ -198,7 +223,8 @@ class TrackerlessTripwire:
         """``bgs_bootstrap``: start the background from the held frames, then process them."""
         held, self._held = self._held or [], None
         if held:
-            self._bgs.prime([r for r, _ in held])
+            for model in [self._bgs] + ([self._bgs_near[0]] if self._bgs_near is not None else []):
+                model.prime([r for r, _ in held])
         return [ev for roi, n in held for ev in self._process(roi, n)]
 
     def _process(self, roi: np.ndarray, number: int) -> list[CrossingEvent]:
