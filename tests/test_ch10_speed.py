@@ -116,6 +116,41 @@ def test_bgs_reach_narrows_the_band_to_its_radii_but_never_widens_it_and_keeps_t
         assert polyline_project(pts, wire)[0].max() < k * 12 + 10
 
 
+def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_events():
+    """bgs_outer_scale (an option, docs/rules/tripwire_outer_scale_rule.txt): within bgs_near r of the wire (every
+    disc and block) the mask is the full-size model's; beyond it the reduced model's, brought back to full size."""
+    from pftrack.synth.walkers import walkers_scene
+
+    sc = walkers_scene(3, wire="oblique", n_frames=120)
+    shape = sc.frames[0].shape[:2]
+    base = TrackerlessTripwire(sc.wire, shape, sc.fps, TripwireParams(radius=8))
+    tw = TrackerlessTripwire(sc.wire, shape, sc.fps, TripwireParams(radius=8, bgs_outer_scale=2, bgs_near=3))
+    near, inside = tw._bgs_near
+    assert tw._bgs.scale == 2 and near.scale == 1 and 0.1 < inside.mean() < 0.9
+    assert inside.ravel()[tw._disc].all()  # every disc is labelled at full size
+    ys, xs = np.nonzero(inside)
+    pts = np.stack([xs + tw.x0, ys + tw.y0], 1).astype(float)
+    assert polyline_project(pts, sc.wire)[0].max() < 3 * 8 + 10
+    agree = []
+    for f in sc.frames:
+        roi = f[tw.y0:tw.y1, tw.x0:tw.x1]
+        a, b = base._apply_bgs(roi), tw._apply_bgs(roi)
+        np.testing.assert_array_equal(b[inside], a[inside])
+        band = np.zeros(a.shape, bool)
+        for y0, y1, x0, x1 in base._bgs.rects:
+            band[y0:y1, x0:x1] = True
+        outer = band & ~inside
+        if a[outer].any():
+            agree.append((a[outer] & b[outer]).sum() / max(a[outer].sum(), b[outer].sum()))
+    assert len(agree) > 50 and np.median(agree) > 0.8  # the walkers beyond the near band, at half the resolution
+    runs = []
+    for params in (TripwireParams(radius=8), TripwireParams(radius=8, bgs_outer_scale=2, bgs_near=3)):
+        t = TrackerlessTripwire(sc.wire, shape, sc.fps, params)
+        ev = [e for n, f in enumerate(sc.frames, 1) for e in t.process(f, n)] + t.finish()
+        runs.append(sorted((e.frame, e.direction) for e in ev))
+    assert runs[1] == runs[0] and runs[0]  # this scene's seven events, the same
+
+
 def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire_still_counts():
     from pftrack.cues.foreground import Foreground
 
