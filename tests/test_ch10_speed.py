@@ -78,7 +78,8 @@ def test_an_oblique_wire_gives_the_same_events_with_its_band_only():
     sc = walkers_scene(3, wire="oblique", n_frames=120)
     runs = {}
     for band in (False, True):
-        tw = TrackerlessTripwire(sc.wire, sc.frames[0].shape[:2], sc.fps, TripwireParams(radius=8, bgs_band=band))
+        tw = TrackerlessTripwire(sc.wire, sc.frames[0].shape[:2], sc.fps, TripwireParams(radius=8, bgs_band=band,
+                                                                                     bgs_outer_scale=1))
         ev = []
         for n, f in enumerate(sc.frames, 1):
             ev += tw.process(f, n)
@@ -94,7 +95,7 @@ def test_bgs_reach_narrows_the_band_to_its_radii_but_never_widens_it_and_keeps_t
     shape = (576, 768)
 
     def band(**kw):
-        tw = TrackerlessTripwire(wire, shape, 7.0, TripwireParams(radius=12, **kw))
+        tw = TrackerlessTripwire(wire, shape, 7.0, TripwireParams(radius=12, bgs_outer_scale=1, **kw))
         inside = np.zeros((tw.y1 - tw.y0, tw.x1 - tw.x0), bool)
         for y0, y1, x0, x1 in tw._bgs.rects:
             inside[y0:y1, x0:x1] = True
@@ -117,13 +118,13 @@ def test_bgs_reach_narrows_the_band_to_its_radii_but_never_widens_it_and_keeps_t
 
 
 def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_events():
-    """bgs_outer_scale (an option, docs/rules/tripwire_outer_scale_rule.txt): within bgs_near r of the wire (every
+    """bgs_outer_scale (2 by default, docs/rules/tripwire_outer_scale_rule.txt): within bgs_near r of the wire (every
     disc and block) the mask is the full-size model's; beyond it the reduced model's, brought back to full size."""
     from pftrack.synth.walkers import walkers_scene
 
     sc = walkers_scene(3, wire="oblique", n_frames=120)
     shape = sc.frames[0].shape[:2]
-    base = TrackerlessTripwire(sc.wire, shape, sc.fps, TripwireParams(radius=8))
+    base = TrackerlessTripwire(sc.wire, shape, sc.fps, TripwireParams(radius=8, bgs_outer_scale=1))
     tw = TrackerlessTripwire(sc.wire, shape, sc.fps, TripwireParams(radius=8, bgs_outer_scale=2, bgs_near=3))
     near, inside = tw._bgs_near
     assert tw._bgs.scale == 2 and near.scale == 1 and 0.1 < inside.mean() < 0.9
@@ -144,7 +145,7 @@ def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_e
             agree.append((a[outer] & b[outer]).sum() / max(a[outer].sum(), b[outer].sum()))
     assert len(agree) > 50 and np.median(agree) > 0.8  # the walkers beyond the near band, at half the resolution
     runs = []
-    for params in (TripwireParams(radius=8), TripwireParams(radius=8, bgs_outer_scale=2, bgs_near=3)):
+    for params in (TripwireParams(radius=8, bgs_outer_scale=1), TripwireParams(radius=8, bgs_near=3)):
         t = TrackerlessTripwire(sc.wire, shape, sc.fps, params)
         ev = [e for n, f in enumerate(sc.frames, 1) for e in t.process(f, n)] + t.finish()
         runs.append(sorted((e.frame, e.direction) for e in ev))

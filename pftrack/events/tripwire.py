@@ -145,7 +145,7 @@ class TrackerlessTripwire:
             kw = dict(grey_shadow_threshold=p.bgs_grey_shadow_threshold, rate_k=p.bgs_rate_k, model=p.bgs,
                       mog_ratio=p.bgs_mog_ratio)
             self._bgs = Foreground(p.bgs_history, p.bgs_threshold, rects=rects, scale=k, **kw)
-            if p.bgs_outer_scale > 1 and p.bgs_band and k == 1 and p.bgs_near * r < reach:
+            if p.bgs_outer_scale > 1 and p.bgs_band and k == 1 and p.bgs_near * r < reach and not p.faithful:
                 self._bgs_near = self._near_model(p, kw, rh, rw, p.bgs_near * r, reach)
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
         self._cast = None if p.faithful else frame_undo(p)
