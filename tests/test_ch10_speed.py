@@ -165,6 +165,22 @@ def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire
     assert m.shape == (49, 65) and m[12:28, 22:38].all() and m[:, :16].sum() == 0
     with pytest.raises(ValueError):
         Foreground(scale=0)
+    # on rectangles (in the reduced frame's pixels) only their blocks are reduced: on a frame of whole blocks each
+    # label inside them is the whole frame's
+    rects = [(0, 5, 0, 32), (5, 20, 4, 20), (20, 24, 10, 32)]
+    whole, parts = Foreground(30, 16.0, scale=2), Foreground(30, 16.0, scale=2, rects=rects)
+    inside = np.zeros((48, 64), bool)
+    for y0, y1, x0, x1 in rects:
+        inside[2 * y0:2 * y1, 2 * x0:2 * x1] = True
+    seen = 0
+    for t in range(30):
+        f = np.clip(rng.normal(120, 6, (48, 64, 3)), 0, 255).astype(np.uint8)
+        f[8:30, (2 * t) % 50:(2 * t) % 50 + 12] = (30, 200, 60)
+        a, b = whole.apply(f), parts.apply(f)
+        assert b.shape == (48, 64) and not b[~inside].any()
+        np.testing.assert_array_equal(b[inside], a[inside])
+        seen += int(a[inside].sum())
+    assert seen > 500  # the mover, labelled inside the rectangles
     wire, frames = _two_movers()
     tw = TrackerlessTripwire(wire, frames[0].shape[:2], 30.0, TripwireParams(radius=10, bgs_history=50, bgs_scale=2))
     ev = []

@@ -119,7 +119,9 @@ class Foreground:
     model's time.
 
     ``scale``: MOG2 models the frame reduced by this factor (block means, ``(w // scale, h // scale)``; ``rects`` are
-    then in the reduced frame's pixels), and the mask is brought back to the frame's size by nearest neighbour.
+    then in the reduced frame's pixels), and the mask is brought back to the frame's size by nearest neighbour. With
+    ``rects``, only their blocks of ``scale`` x ``scale`` pixels are reduced (a last row or column of pixels that fills
+    no whole block is left out, as background).
 
     ``rate_k``: on its n-th frame MOG2 learns at 1 / min(rate_k n, history) (OpenCV's own schedule is rate_k = 2,
     which is left to OpenCV); a larger value starts more slowly, so that a slow object is not taken into the
@@ -177,27 +179,32 @@ class Foreground:
             learning_rate = 1.0 / min(self.rate_k * self.frames, self.history)
         h, w = frame.shape[:2]
         k = self.scale
+        if self.rects is not None:
+            return self._apply_strips(frame, learning_rate)
         if k > 1:
             frame = cv2.resize(frame, (max(w // k, 1), max(h // k, 1)), interpolation=cv2.INTER_AREA)
-        if self.rects is None:
-            out = _foreground_only(self._models[0].apply(frame, learningRate=learning_rate))
-        else:
-            out = self._apply_strips(frame, learning_rate)
+        out = _foreground_only(self._models[0].apply(frame, learningRate=learning_rate))
         return out if k == 1 else cv2.resize(out, (w, h), interpolation=cv2.INTER_NEAREST)
 
     def _apply_strips(self, frame: np.ndarray, learning_rate: float) -> np.ndarray:
-        """The mask of ``rects``: their strips copied side by side, labelled by one call of the model, and put back."""
-        shape = (PACK_ROWS, self._width) + frame.shape[2:]
+        """The mask of ``rects``: their strips copied side by side, labelled by one call of the model, and put back.
+        With ``scale`` k, the strips' pixels of the frame (k times their rows and columns) are copied and reduced
+        together (block means of k x k), and each label covers its block."""
+        k = self.scale
+        shape = (k * PACK_ROWS, k * self._width) + frame.shape[2:]
         if self._packed is None or self._packed.shape != shape or self._packed.dtype != frame.dtype:
             self._packed = np.zeros(shape, frame.dtype)  # unused rows of short strips stay 0 (always background)
         buf = self._packed
         strips = self._strips
         for y0, y1, x0, x1, a in strips:
-            buf[:y1 - y0, a:a + x1 - x0] = frame[y0:y1, x0:x1]
-        mask = _foreground_only(self._models[0].apply(buf, learningRate=learning_rate))
+            buf[:k * (y1 - y0), k * a:k * (a + x1 - x0)] = frame[k * y0:k * y1, k * x0:k * x1]
+        small = buf if k == 1 else cv2.resize(buf, (self._width, PACK_ROWS), interpolation=cv2.INTER_AREA)
+        mask = _foreground_only(self._models[0].apply(small, learningRate=learning_rate))
+        if k > 1:
+            mask = cv2.resize(mask, (k * self._width, k * PACK_ROWS), interpolation=cv2.INTER_NEAREST)
         out = np.zeros(frame.shape[:2], np.uint8)
         for y0, y1, x0, x1, a in strips:
-            out[y0:y1, x0:x1] = mask[:y1 - y0, a:a + x1 - x0]
+            out[k * y0:k * y1, k * x0:k * x1] = mask[:k * (y1 - y0), k * a:k * (a + x1 - x0)]
         return out
 
     def prime(self, frames, diff: float = BOOTSTRAP_DIFF) -> None:
