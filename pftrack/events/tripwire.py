@@ -144,9 +144,13 @@ class TrackerlessTripwire:
             rects = rects or None  # no pixel within reach (a wire outside the view): the whole box
             kw = dict(grey_shadow_threshold=p.bgs_grey_shadow_threshold, rate_k=p.bgs_rate_k, model=p.bgs,
                       mog_ratio=p.bgs_mog_ratio)
-            self._bgs = Foreground(p.bgs_history, p.bgs_threshold, rects=rects, scale=k, **kw)
-            if p.bgs_outer_scale > 1 and p.bgs_band and k == 1 and p.bgs_near * r < reach and not p.faithful:
-                self._bgs_near = self._near_model(p, kw, rh, rw, p.bgs_near * r, reach)
+            split = (rects is not None and p.bgs_outer_scale > 1 and k == 1 and p.bgs_near * r < reach
+                     and not p.faithful)
+            models = self._split_models(p, kw, rh, rw, p.bgs_near * r, reach) if split else None
+            if models is None:
+                self._bgs = Foreground(p.bgs_history, p.bgs_threshold, rects=rects, scale=k, **kw)
+            else:
+                self._bgs, self._bgs_near = models
         self._gain: float | None = None  # dark_stretch's gain and dark_denoise's decision, on the first frame
         self._cast = None if p.faithful else frame_undo(p)
         self._denoise = False
@@ -169,19 +173,21 @@ class TrackerlessTripwire:
                         if p.bgs_bootstrap > 0 and p.bgs == "mog2" and not p.faithful else 0)
         self._held: list[tuple[np.ndarray, int]] | None = [] if self._boot_n else None
 
-    def _near_model(self, p: TripwireParams, kw: dict, rh: int, rw: int, near: float, reach: float):
-        """``bgs_outer_scale``: the band at that reduction replaces ``self._bgs``; returns the full-size model of
-        the pixels within ``near`` of the wire and the mask of those pixels (1 inside their rectangles)."""
+    def _split_models(self, p: TripwireParams, kw: dict, rh: int, rw: int, near: float, reach: float):
+        """``bgs_outer_scale``: the model of the band at that reduction, and the full-size model of the pixels
+        within ``near`` of the wire with the mask of those pixels (True inside their rectangles); None when either
+        region holds no pixel of the view."""
         k = p.bgs_outer_scale
         outer = band_rects(self.polyline / k, (self.x0 / k, self.y0 / k), (max(rh // k, 1), max(rw // k, 1)),
                            reach / k + 1)
-        if outer:
-            self._bgs = Foreground(p.bgs_history, p.bgs_threshold, rects=outer, scale=k, **kw)
         rects = band_rects(self.polyline, (self.x0, self.y0), (rh, rw), near)
+        if not outer or not rects:
+            return None
         inside = np.zeros((rh, rw), bool)
         for y0, y1, x0, x1 in rects:
             inside[y0:y1, x0:x1] = True
-        return Foreground(p.bgs_history, p.bgs_threshold, rects=rects, **kw), inside
+        return (Foreground(p.bgs_history, p.bgs_threshold, rects=outer, scale=k, **kw),
+                (Foreground(p.bgs_history, p.bgs_threshold, rects=rects, **kw), inside))
 
     # -- per frame ------------------------------------------------------------------------------
     def _apply_bgs(self, roi: np.ndarray) -> np.ndarray:
