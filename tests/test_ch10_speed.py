@@ -150,6 +150,9 @@ def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_e
         ev = [e for n, f in enumerate(sc.frames, 1) for e in t.process(f, n)] + t.finish()
         runs.append(sorted((e.frame, e.direction) for e in ev))
     assert runs[1] == runs[0] and runs[0]  # this scene's seven events, the same
+    for wire in ([[0.0, 0.0], [300.0, 0.0]], [[-50.0, -40.0], [400.0, -40.0]]):  # on the view's edge, and beyond it
+        t = TrackerlessTripwire(np.array(wire), shape, sc.fps, TripwireParams(radius=8))
+        assert t.process(sc.frames[0], 1) == [] and t._fg.shape == (t.y1 - t.y0, t.x1 - t.x0)
 
 
 def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire_still_counts():
