@@ -155,6 +155,55 @@ def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_e
         assert t.process(sc.frames[0], 1) == [] and t._fg.shape == (t.y1 - t.y0, t.x1 - t.x0)
 
 
+
+def test_blocks_outside_leave_out_only_wide_runs_of_blocks_wholly_inside():
+    from pftrack.events.geometry import blocks_outside
+
+    inside = np.zeros((40, 80), bool)
+    inside[4:36, 20:61] = True  # full-size pixels; with k = 2, block columns 10-29 wholly inside on block rows 2-17
+    rects = [(0, 20, 0, 40)]
+    kept = blocks_outside(rects, inside, 2, rows=8, min_cols=8)
+    cover = np.zeros((20, 40), int)
+    for y0, y1, x0, x1 in kept:
+        assert y1 - y0 <= 8 and y0 // 8 == (y1 - 1) // 8  # within one band of 8 rows
+        cover[y0:y1, x0:x1] += 1
+    assert cover.max() == 1
+    blocks_in = inside.reshape(20, 2, 40, 2).all(axis=(1, 3))
+    assert cover[~blocks_in].all()  # every block not wholly inside is kept
+    assert cover[8:16, 10:30].sum() == 0  # the band whose 8 block rows are all inside loses those columns
+    assert cover[0:8].all() and cover[16:20].all()  # bands with a block row outside keep every column
+    # a run narrower than min_cols stays, and nothing left gives the rectangles back
+    assert blocks_outside(rects, inside, 2, rows=8, min_cols=21) == [(0, 8, 0, 40), (8, 16, 0, 40), (16, 20, 0, 40)]
+    assert blocks_outside([(8, 16, 10, 30)], inside, 2) == [(8, 16, 10, 30)]
+
+
+def test_the_reduced_model_skips_the_full_size_models_blocks_and_the_mask_is_the_same(monkeypatch):
+    """The reduced model labels no block the full-size model labels wholly (``blocks_outside``); the mask is the
+    one the two models give when the reduced one labels its whole band and the full-size labels are copied over."""
+    import pftrack.events.tripwire as tripwire_module
+    from pftrack.synth.walkers import walkers_scene
+
+    sc = walkers_scene(5, wire="oblique", n_frames=60)
+    shape = sc.frames[0].shape[:2]
+    tw = TrackerlessTripwire(sc.wire, shape, sc.fps, TripwireParams(radius=8))
+    monkeypatch.setattr(tripwire_module, "blocks_outside", lambda rects, *a, **k: rects)
+    ref = TrackerlessTripwire(sc.wire, shape, sc.fps, TripwireParams(radius=8))
+    near, inside = ref._bgs_near
+    assert tw._bgs_near[0].rects == near.rects and (tw._bgs_near[1] == inside).all()
+
+    def area(rects):
+        return sum((y1 - y0) * (x1 - x0) for y0, y1, x0, x1 in rects)
+
+    assert area(tw._bgs.rects) < 0.8 * area(ref._bgs.rects)
+    for f in sc.frames:
+        roi = f[tw.y0:tw.y1, tw.x0:tw.x1]
+        want = ref._bgs.apply(roi)
+        np.copyto(want, near.apply(roi), where=inside)
+        np.testing.assert_array_equal(tw._apply_bgs(roi), want)
+    with pytest.raises(ValueError):  # out= is for a model of rectangles, of the frame's size
+        near.apply(sc.frames[0][tw.y0:tw.y1, tw.x0:tw.x1], out=np.zeros((3, 3), np.uint8))
+
+
 def test_foreground_at_a_reduced_scale_returns_a_full_size_mask_and_the_tripwire_still_counts():
     from pftrack.cues.foreground import Foreground
 
@@ -210,7 +259,7 @@ def test_mog_on_rectangles_labels_as_the_whole_frame_and_the_tripwire_counts_wit
         np.testing.assert_array_equal(b[inside], a[inside])
         assert not b[~inside].any()
     assert a[10:28, (39 % 50) + 2:(39 % 50) + 10].all() and a[40:, :30].sum() == 0  # the mover, not the ground
-    assert {type(m).__name__ for m in parts._models} == {"BackgroundSubtractorMOG"}
+    assert type(parts._model).__name__ == "BackgroundSubtractorMOG"
     with pytest.raises(ValueError):
         Foreground(model="knn")
     with pytest.raises(ValueError):

@@ -163,16 +163,21 @@ class Foreground:
             m = cv2.createBackgroundSubtractorMOG2(history=int(history), varThreshold=float(var_threshold),
                                                    detectShadows=True)
             m.setShadowThreshold(OPENCV_SHADOW_THRESHOLD)
-        self._models = [m]  # one model: the rectangles' strips are labelled in one image
+        self._model = m  # one model: the rectangles' strips are labelled in one image
         self.grey = False
 
-    def apply(self, frame: np.ndarray, learning_rate: float = -1.0) -> np.ndarray:
+    def apply(self, frame: np.ndarray, learning_rate: float = -1.0, out: np.ndarray | None = None) -> np.ndarray:
+        """The mask of ``frame`` (see the class). ``out`` (with ``rects`` only): a uint8 array of the frame's size into
+        which the rectangles' labels are written, the rest of it left as it is; returned."""
+        if out is not None and self.rects is None:
+            raise ValueError("out is for a model of rects only")
+        if out is not None and (out.shape != frame.shape[:2] or out.dtype != np.uint8):
+            raise ValueError(f"out must be uint8 of shape {frame.shape[:2]}, got {out.dtype} {out.shape}")
         # a lattice of every 16th pixel is enough to tell a grey frame (about 1700 pixels of a 768 x 576 frame)
         grey = (self.model == "mog2" and self.grey_shadow_threshold != OPENCV_SHADOW_THRESHOLD
                 and is_gray(frame, stride=16))
         if grey != self.grey:
-            for m in self._models:
-                m.setShadowThreshold(self.grey_shadow_threshold if grey else OPENCV_SHADOW_THRESHOLD)
+            self._model.setShadowThreshold(self.grey_shadow_threshold if grey else OPENCV_SHADOW_THRESHOLD)
             self.grey = grey
         self.frames += 1
         if learning_rate < 0 and self.rate_k != 2.0 and self.model == "mog2":
@@ -180,13 +185,13 @@ class Foreground:
         h, w = frame.shape[:2]
         k = self.scale
         if self.rects is not None:
-            return self._apply_strips(frame, learning_rate)
+            return self._apply_strips(frame, learning_rate, out)
         if k > 1:
             frame = cv2.resize(frame, (max(w // k, 1), max(h // k, 1)), interpolation=cv2.INTER_AREA)
-        out = _foreground_only(self._models[0].apply(frame, learningRate=learning_rate))
+        out = _foreground_only(self._model.apply(frame, learningRate=learning_rate))
         return out if k == 1 else cv2.resize(out, (w, h), interpolation=cv2.INTER_NEAREST)
 
-    def _apply_strips(self, frame: np.ndarray, learning_rate: float) -> np.ndarray:
+    def _apply_strips(self, frame: np.ndarray, learning_rate: float, out: np.ndarray | None = None) -> np.ndarray:
         """The mask of ``rects``: their strips copied side by side, labelled by one call of the model, and put back.
         With ``scale`` k, the strips' pixels of the frame (k times their rows and columns) are copied and reduced
         together (block means of k x k), and each label covers its block."""
@@ -199,10 +204,11 @@ class Foreground:
         for y0, y1, x0, x1, a in strips:
             buf[:k * (y1 - y0), k * a:k * (a + x1 - x0)] = frame[k * y0:k * y1, k * x0:k * x1]
         small = buf if k == 1 else cv2.resize(buf, (self._width, PACK_ROWS), interpolation=cv2.INTER_AREA)
-        mask = _foreground_only(self._models[0].apply(small, learningRate=learning_rate))
+        mask = _foreground_only(self._model.apply(small, learningRate=learning_rate))
         if k > 1:
             mask = cv2.resize(mask, (k * self._width, k * PACK_ROWS), interpolation=cv2.INTER_NEAREST)
-        out = np.zeros(frame.shape[:2], np.uint8)
+        if out is None:
+            out = np.zeros(frame.shape[:2], np.uint8)
         for y0, y1, x0, x1, a in strips:
             out[k * y0:k * y1, k * x0:k * x1] = mask[:k * (y1 - y0), k * a:k * (a + x1 - x0)]
         return out

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Crossing", "PatchLayout", "band_rects", "build_patches", "crossings_of_track", "parse_polyline",
+__all__ = ["Crossing", "PatchLayout", "band_rects", "blocks_outside", "build_patches", "crossings_of_track", "parse_polyline",
            "polyline_project"]
 
 
@@ -94,6 +94,28 @@ def band_rects(pts: np.ndarray, origin: tuple[int, int], shape: tuple[int, int],
             rects.append((y0, y1, x0, x1))
     return rects
 
+
+
+def blocks_outside(rects, inside: np.ndarray, k: int, rows: int = 8,
+                   min_cols: int = 8) -> list[tuple[int, int, int, int]]:
+    """``rects`` ``(y0, y1, x0, x1)`` of a region reduced by ``k`` (each of their pixels the block of ``k`` x ``k``
+    pixels of the full region), cut into bands of ``rows`` rows, with each band's runs of at least ``min_cols``
+    columns whose blocks lie wholly in ``inside`` (a boolean mask of the full region) left out: what another model
+    labels at full size needs no label here (``bgs_outer_scale``). ``rects`` itself when nothing is left."""
+    out: list[tuple[int, int, int, int]] = []
+    for y0, y1, x0, x1 in rects:
+        for ya in range(y0, y1, rows):
+            yb = min(ya + rows, y1)
+            blocks = inside[k * ya:k * yb, k * x0:k * x1]
+            full = blocks.reshape(blocks.shape[0], x1 - x0, k).all(axis=(0, 2))
+            edges = np.flatnonzero(np.diff(np.r_[0, full.astype(np.int8), 0]))
+            drop = [(a, b) for a, b in zip(edges[::2], edges[1::2]) if b - a >= min_cols]
+            start = 0
+            for a, b in drop + [(x1 - x0, x1 - x0)]:
+                if a > start:
+                    out.append((ya, yb, x0 + start, x0 + int(a)))
+                start = int(b)
+    return out or [tuple(r) for r in rects]
 
 @dataclass
 class PatchLayout:

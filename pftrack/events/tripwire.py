@@ -35,10 +35,10 @@ import cv2
 import numpy as np
 
 from ..cues import foreground as _fg
-from ..cues.foreground import Foreground, apply_levels
+from ..cues.foreground import PACK_ROWS, Foreground, apply_levels
 from ..cues.still_gain import frame_undo
 from .blobs import FootCrossings, estimate_radius
-from .geometry import PatchLayout, band_rects, build_patches
+from .geometry import PatchLayout, band_rects, blocks_outside, build_patches
 from .scoring import bhattacharyya_distance, colour_bins, patch_similarity, ssd_motion
 from .timing import CrossingTimer
 from .tripwire_params import TripwireParams
@@ -186,15 +186,15 @@ class TrackerlessTripwire:
         inside = np.zeros((rh, rw), bool)
         for y0, y1, x0, x1 in rects:
             inside[y0:y1, x0:x1] = True
+        outer = blocks_outside(outer, inside, k, PACK_ROWS)  # the full-size model's blocks need no reduced label
         return (Foreground(p.bgs_history, p.bgs_threshold, rects=outer, scale=k, **kw),
                 (Foreground(p.bgs_history, p.bgs_threshold, rects=rects, **kw), inside))
 
     # -- per frame ------------------------------------------------------------------------------
     def _apply_bgs(self, roi: np.ndarray) -> np.ndarray:
         fg = self._bgs.apply(roi)
-        if self._bgs_near is not None:
-            model, inside = self._bgs_near
-            np.copyto(fg, model.apply(roi), where=inside)
+        if self._bgs_near is not None:  # its rectangles' labels written over the reduced model's (``inside``)
+            self._bgs_near[0].apply(roi, out=fg)
         return fg
 
     def foreground(self, roi: np.ndarray, gray: np.ndarray) -> np.ndarray:
