@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Crossing", "PatchLayout", "band_rects", "blocks_outside", "build_patches", "crossings_of_track", "parse_polyline",
-           "polyline_project"]
+__all__ = ["Crossing", "PatchLayout", "band_rects", "blocks_outside", "build_patches", "crossings_of_track",
+           "parse_polyline", "polyline_project"]
 
 
 def parse_polyline(text: str) -> np.ndarray:
@@ -95,7 +95,6 @@ def band_rects(pts: np.ndarray, origin: tuple[int, int], shape: tuple[int, int],
     return rects
 
 
-
 def blocks_outside(rects, inside: np.ndarray, k: int, rows: int = 8,
                    min_cols: int = 8) -> list[tuple[int, int, int, int]]:
     """``rects`` ``(y0, y1, x0, x1)`` of a region reduced by ``k`` (each of their pixels the block of ``k`` x ``k``
@@ -116,6 +115,7 @@ def blocks_outside(rects, inside: np.ndarray, k: int, rows: int = 8,
                     out.append((ya, yb, x0 + start, x0 + int(a)))
                 start = int(b)
     return out or [tuple(r) for r in rects]
+
 
 @dataclass
 class PatchLayout:
