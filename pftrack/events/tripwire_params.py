@@ -56,7 +56,7 @@ class TripwireParams(Params):
         "by nearest neighbour, as pftrack mot's detector does. An option: 2 ran 1.86x as fast on the PETS tune "
         "frames but lost F1 on four of the six tune families (mean 0.798 against 0.815), failing its rule "
         "(docs/rules/tripwire_bgs_scale_rule.txt)"))
-    bgs_outer_scale: int = param(2, ge=1, le=4, doc=(
+    bgs_outer_scale: int = param(4, ge=1, le=4, doc=(
         "MOG2 models the band beyond bgs_near * r of the wire reduced by this factor (block means of the band's "
         "blocks, its mask brought back by nearest neighbour), and the pixels within bgs_near * r at full size, each "
         "with a model of its own (1: the whole band at full size). The patches' discs and blocks (within 2 r) keep "
@@ -64,7 +64,9 @@ class TripwireParams(Params):
         "bgs_near 5, chosen under docs/rules/tripwire_outer_scale_rule.txt: 1.21x as fast on the PETS tune frames "
         "(median of six lines), mean F1 over the six tune families 0.812 against 0.815 (PETS stride 3: one more "
         "false event; the walkers: one more), dark tune half 0.755 against 0.742, casts 0.817 against 0.831; "
-        "bgs_near 3 lost crossings of the walkers. Not with faithful"))
+        "bgs_near 3 lost crossings of the walkers. Then 4, under docs/rules/tripwire_outer_scale_34_rule.txt: 1.10x "
+        "as fast as 2, mean F1 0.814 against 0.812, dark 0.753 against 0.755, casts 0.820 against 0.817 (3: 1.02x, "
+        "too little). Not with faithful"))
     bgs_near: float = param(5.0, gt=0, doc=(
         "with bgs_outer_scale > 1, the reach of the full-size model, in patch radii r"))
     bgs_bootstrap: float = param(0.0, ge=0, doc=(
