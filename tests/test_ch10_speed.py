@@ -118,7 +118,7 @@ def test_bgs_reach_narrows_the_band_to_its_radii_but_never_widens_it_and_keeps_t
 
 
 def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_events():
-    """bgs_outer_scale (2 by default, docs/rules/tripwire_outer_scale_rule.txt): within bgs_near r of the wire (every
+    """bgs_outer_scale (4 by default, docs/rules/tripwire_outer_scale_34_rule.txt): within bgs_near r of the wire (every
     disc and block) the mask is the full-size model's; beyond it the reduced model's, brought back to full size."""
     from pftrack.synth.walkers import walkers_scene
 
@@ -145,11 +145,15 @@ def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_e
             agree.append((a[outer] & b[outer]).sum() / max(a[outer].sum(), b[outer].sum()))
     assert len(agree) > 50 and np.median(agree) > 0.8  # the walkers beyond the near band, at half the resolution
     runs = []
-    for params in (TripwireParams(radius=8, bgs_outer_scale=1), TripwireParams(radius=8, bgs_near=3)):
+    for params in (TripwireParams(radius=8, bgs_outer_scale=1), TripwireParams(radius=8, bgs_outer_scale=2, bgs_near=3),
+                   TripwireParams(radius=8)):
         t = TrackerlessTripwire(sc.wire, shape, sc.fps, params)
         ev = [e for n, f in enumerate(sc.frames, 1) for e in t.process(f, n)] + t.finish()
         runs.append(sorted((e.frame, e.direction) for e in ev))
-    assert runs[1] == runs[0] and runs[0]  # this scene's seven events, the same
+    assert runs[1] == runs[0] and len(runs[0]) == 7  # this scene's seven events, the same
+    # the default (a quarter beyond 5 r): the same events, one of them a frame earlier (103 against 104)
+    assert [d for _, d in runs[2]] == [d for _, d in runs[0]]
+    assert max(abs(a - b) for (a, _), (b, _) in zip(runs[2], runs[0])) <= 1
     for wire in ([[0.0, 0.0], [300.0, 0.0]], [[-50.0, -40.0], [400.0, -40.0]]):  # on the view's edge, and beyond it
         t = TrackerlessTripwire(np.array(wire), shape, sc.fps, TripwireParams(radius=8))
         assert t.process(sc.frames[0], 1) == [] and t._fg.shape == (t.y1 - t.y0, t.x1 - t.x0)
