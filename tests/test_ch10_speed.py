@@ -145,8 +145,8 @@ def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_e
             agree.append((a[outer] & b[outer]).sum() / max(a[outer].sum(), b[outer].sum()))
     assert len(agree) > 50 and np.median(agree) > 0.8  # the walkers beyond the near band, at half the resolution
     runs = []
-    for params in (TripwireParams(radius=8, bgs_outer_scale=1), TripwireParams(radius=8, bgs_outer_scale=2, bgs_near=3),
-                   TripwireParams(radius=8)):
+    for params in (TripwireParams(radius=8, bgs_outer_scale=1),
+                   TripwireParams(radius=8, bgs_outer_scale=2, bgs_near=3), TripwireParams(radius=8)):
         t = TrackerlessTripwire(sc.wire, shape, sc.fps, params)
         ev = [e for n, f in enumerate(sc.frames, 1) for e in t.process(f, n)] + t.finish()
         runs.append(sorted((e.frame, e.direction) for e in ev))
@@ -157,7 +157,6 @@ def test_bgs_outer_scale_keeps_the_full_size_labels_near_the_wire_and_the_same_e
     for wire in ([[0.0, 0.0], [300.0, 0.0]], [[-50.0, -40.0], [400.0, -40.0]]):  # on the view's edge, and beyond it
         t = TrackerlessTripwire(np.array(wire), shape, sc.fps, TripwireParams(radius=8))
         assert t.process(sc.frames[0], 1) == [] and t._fg.shape == (t.y1 - t.y0, t.x1 - t.x0)
-
 
 
 def test_blocks_outside_leave_out_only_wide_runs_of_blocks_wholly_inside():
