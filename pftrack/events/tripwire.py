@@ -135,7 +135,7 @@ class TrackerlessTripwire:
         self._prior = 0.0 if p.faithful else p.motion_prior / self.stride ** 2
         self.patches = [_Patch() for _ in range(len(self.layout.centres))]
         self._bgs: Foreground | None = None  # the background model (None: 3-frame difference)
-        self._bgs_near: tuple[Foreground, np.ndarray] | None = None  # bgs_outer_scale: the full-size model, its mask
+        self._bgs_near: Foreground | None = None  # bgs_outer_scale: the full-size model of the pixels near the wire
         if p.bgs in ("mog2", "mog"):
             k = p.bgs_scale
             reach = min(pad + r, p.bgs_reach * r) if p.bgs_reach > 0 else pad + r
@@ -174,9 +174,9 @@ class TrackerlessTripwire:
         self._held: list[tuple[np.ndarray, int]] | None = [] if self._boot_n else None
 
     def _split_models(self, p: TripwireParams, kw: dict, rh: int, rw: int, near: float, reach: float):
-        """``bgs_outer_scale``: the model of the band at that reduction, and the full-size model of the pixels
-        within ``near`` of the wire with the mask of those pixels (True inside their rectangles); None when either
-        region holds no pixel of the view."""
+        """``bgs_outer_scale``: the model of the band at that reduction, without the blocks that lie wholly among
+        the pixels within ``near`` of the wire, and the full-size model of those pixels; None when either region
+        holds no pixel of the view."""
         k = p.bgs_outer_scale
         outer = band_rects(self.polyline / k, (self.x0 / k, self.y0 / k), (max(rh // k, 1), max(rw // k, 1)),
                            reach / k + 1)
@@ -188,13 +188,13 @@ class TrackerlessTripwire:
             inside[y0:y1, x0:x1] = True
         outer = blocks_outside(outer, inside, k, PACK_ROWS)  # the full-size model's blocks need no reduced label
         return (Foreground(p.bgs_history, p.bgs_threshold, rects=outer, scale=k, **kw),
-                (Foreground(p.bgs_history, p.bgs_threshold, rects=rects, **kw), inside))
+                Foreground(p.bgs_history, p.bgs_threshold, rects=rects, **kw))
 
     # -- per frame ------------------------------------------------------------------------------
     def _apply_bgs(self, roi: np.ndarray) -> np.ndarray:
         fg = self._bgs.apply(roi)
-        if self._bgs_near is not None:  # its rectangles' labels written over the reduced model's (``inside``)
-            self._bgs_near[0].apply(roi, out=fg)
+        if self._bgs_near is not None:  # its rectangles' labels written over the reduced model's
+            self._bgs_near.apply(roi, out=fg)
         return fg
 
     def foreground(self, roi: np.ndarray, gray: np.ndarray) -> np.ndarray:
@@ -229,7 +229,7 @@ class TrackerlessTripwire:
         """``bgs_bootstrap``: start the background from the held frames, then process them."""
         held, self._held = self._held or [], None
         if held:
-            for model in [self._bgs] + ([self._bgs_near[0]] if self._bgs_near is not None else []):
+            for model in [self._bgs] + ([self._bgs_near] if self._bgs_near is not None else []):
                 model.prime([r for r, _ in held])
         return [ev for roi, n in held for ev in self._process(roi, n)]
 
