@@ -25,7 +25,8 @@ from ..errors import ParameterError
 from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, reachable_roi
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
-from .quantize import level_gain, level_range, make_lut, quantize, quantize_region, shift_form, stretched_lut
+from .quantize import (level_gain, level_range, make_lut, quantize, quantize_cells, quantize_region, shift_form,
+                       stretched_lut)
 from .still_gain import cast_undo, reference_lattice, still_gain
 
 FEATURE_SPACES = ("auto", "rgb", "hsv", "gray")
@@ -308,6 +309,7 @@ class ColorCue:
         self.feature_bins = int(np.prod(self.bins))  # the bins a pixel's features take
         self.n_bins = self.feature_bins * self.parts  # a histogram's bins (parts of feature_bins each)
         self._qbuf = np.empty(0, dtype=np.uint16)
+        self._cbuf = np.empty((0, 0), dtype=np.uint16)  # prepare_cells' lattice of the whole frame
         self._hbuf = np.empty((0, self.n_bins))
         self._tbuf = np.empty(0)
         self._rbuf = np.empty(0)
@@ -359,6 +361,37 @@ class ColorCue:
             else:
                 quantize(region, self.lut, out)
         return ColorFeatures(out, x0, y0, pitch)
+
+    def prepare_cells(self, frame: np.ndarray, pitch: int, ellipses: np.ndarray) -> ColorFeatures | None:
+        """The whole frame's features (:meth:`prepare` of ``(0, 0, W, H)`` at ``pitch``) with only the lattice pixels
+        that ``ellipses`` can read quantised: each ellipse's bounding box and two lattice pixels around it. The
+        ellipses' coefficients (:meth:`rho`) are then those of the whole frame's features, at a cost that does not
+        grow with the frame: the background statistics' ellipses of a small target cover a few per cent of a large
+        frame. None where that saves nothing or does not apply (grey or HSV features, a frame other than 8-bit BGR,
+        ellipses that cover half of the lattice or more): call :meth:`prepare` then."""
+        if (self.color_space != "rgb" or frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8
+                or self.lut is None):
+            return None
+        p = max(int(pitch), 1)
+        h, w = frame.shape[:2]
+        rows, cols = -(-h // p), -(-w // p)
+        e = np.asarray(ellipses, dtype=np.float64).reshape(-1, 4)
+        if rows == 0 or cols == 0 or e.shape[0] == 0:
+            return None
+        cells = np.empty((e.shape[0], 4), np.int64)  # in lattice pixels; pixel k's centre lies at image k p + 0.5
+        cells[:, 0] = np.floor((e[:, 1] - e[:, 3] - 0.5) / p) - 2
+        cells[:, 1] = np.ceil((e[:, 1] + e[:, 3] - 0.5) / p) + 3
+        cells[:, 2] = np.floor((e[:, 0] - e[:, 2] - 0.5) / p) - 2
+        cells[:, 3] = np.ceil((e[:, 0] + e[:, 2] - 0.5) / p) + 3
+        np.clip(cells[:, :2], 0, rows, out=cells[:, :2])
+        np.clip(cells[:, 2:], 0, cols, out=cells[:, 2:])
+        area = (cells[:, 1] - cells[:, 0]) * (cells[:, 3] - cells[:, 2])
+        if 2 * int(area.sum()) >= rows * cols:  # as much as the whole lattice (and the kernel would scan it all)
+            return None
+        if self._cbuf.shape != (rows, cols):
+            self._cbuf = np.zeros((rows, cols), dtype=np.uint16)  # outside the cells: never read
+        quantize_cells(frame, p, cells, self.lut, self._cbuf)
+        return ColorFeatures(self._cbuf, 0, 0, p)
 
     def prepare_frame(self, frame: np.ndarray, pitch: int = 1) -> ColorFeatures:
         return self.prepare(frame, (0, 0, frame.shape[1], frame.shape[0]), pitch)

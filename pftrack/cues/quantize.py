@@ -46,6 +46,32 @@ def _quantize_numba(img, lut, out):
     return out
 
 
+@njit
+def _quantize_cells_numba(img, pitch, cells, lut, out):
+    for k in range(cells.shape[0]):
+        for j in range(cells[k, 0], cells[k, 1]):
+            row = img[j * pitch]
+            o = out[j]
+            for i in range(cells[k, 2], cells[k, 3]):
+                x = i * pitch
+                o[i] = lut[0, row[x, 0]] + lut[1, row[x, 1]] + lut[2, row[x, 2]]
+    return out
+
+
+def quantize_cells(img: np.ndarray, pitch: int, cells: np.ndarray, lut: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """:func:`quantize` of the lattice ``img[::pitch, ::pitch]`` in the blocks ``cells`` only (rows ``(r0, r1, c0,
+    c1)`` of lattice indices): ``out[r0:r1, c0:c1]`` gets the bins of those lattice pixels, the rest of ``out`` is
+    left as it is. The same bins as :func:`quantize` of the whole lattice, where they are written."""
+    cells = np.ascontiguousarray(cells, dtype=np.int64).reshape(-1, 4)
+    if numba_enabled():
+        return _quantize_cells_numba(img, int(pitch), cells, lut, out)
+    for r0, r1, c0, c1 in cells.tolist():
+        if r1 > r0 and c1 > c0:
+            q = quantize(img[r0 * pitch:r1 * pitch:pitch, c0 * pitch:c1 * pitch:pitch], lut)
+            out[r0:r1, c0:c1] = q
+    return out
+
+
 def quantize(img: np.ndarray, lut: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Map an ``(h, w, 3)`` uint8 image to ``(h, w)`` uint16 bin indices."""
     if out is None:

@@ -31,12 +31,17 @@ class LikelihoodMixin:
         ell[:, 2:4] = states[:, HX:HY + 1]
         return ell
 
-    def _rho(self, frame: np.ndarray, ellipses: np.ndarray, roi=None):
-        """Bhattacharyya coefficients and kernel masses of a batch of ellipses, plus the features."""
+    def _rho(self, frame: np.ndarray, ellipses: np.ndarray, roi=None, *, cells: bool = False):
+        """Bhattacharyya coefficients and kernel masses of a batch of ellipses, plus the features. ``cells`` (with
+        the whole frame as ``roi``): only what the ellipses read is quantised where that is less
+        (:meth:`~pftrack.cues.histogram_cue.HistogramCue.prepare_cells`; the same coefficients)."""
         h, w = self._shape
         if roi is None:
             roi = reachable_roi(ellipses, w, h)
-        feats = self.cue.prepare(frame, roi, self.cue.step_for(ellipses))
+        pitch = self.cue.step_for(ellipses)
+        feats = self.cue.prepare_cells(frame, pitch, ellipses) if cells else None
+        if feats is None:
+            feats = self.cue.prepare(frame, roi, pitch)
         rho, tot = self._cue_rho(feats, ellipses)
         return rho, tot, feats
 
@@ -78,7 +83,7 @@ class LikelihoodMixin:
             return  # nothing left that is background: keep the previous statistics
         # The background histograms are computed exactly like the samples' (a subsampled frame would
         # shift mu and sigma and with them the appearance threshold).
-        rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h))
+        rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h), cells=(w, h) == frame.shape[1::-1])
         if self._raw_check is not None:
             self._raw_check.set_background(self._raw, ell)
         if self._structure_check is not None:
