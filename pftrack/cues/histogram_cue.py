@@ -385,7 +385,7 @@ class ColorCue:
         cells[:, 3] = np.ceil((e[:, 0] + e[:, 2] - 0.5) / p) + 3
         np.clip(cells[:, :2], 0, rows, out=cells[:, :2])
         np.clip(cells[:, 2:], 0, cols, out=cells[:, 2:])
-        area = (cells[:, 1] - cells[:, 0]) * (cells[:, 3] - cells[:, 2])
+        area = np.maximum(cells[:, 1] - cells[:, 0], 0) * np.maximum(cells[:, 3] - cells[:, 2], 0)
         if 2 * int(area.sum()) >= rows * cols:  # as much as the whole lattice (and the kernel would scan it all)
             return None
         if self._cbuf.shape != (rows, cols):

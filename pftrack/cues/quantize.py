@@ -48,6 +48,7 @@ def _quantize_numba(img, lut, out):
 
 @njit
 def _quantize_cells_numba(img, pitch, cells, lut, out):
+    """:func:`quantize_cells`, compiled: the lattice pixels of each block, looked up in the three tables."""
     for k in range(cells.shape[0]):
         for j in range(cells[k, 0], cells[k, 1]):
             row = img[j * pitch]

@@ -34,7 +34,7 @@ class LikelihoodMixin:
     def _rho(self, frame: np.ndarray, ellipses: np.ndarray, roi=None, *, cells: bool = False):
         """Bhattacharyya coefficients and kernel masses of a batch of ellipses, plus the features. ``cells`` (with
         the whole frame as ``roi``): only what the ellipses read is quantised where that is less
-        (:meth:`~pftrack.cues.histogram_cue.HistogramCue.prepare_cells`; the same coefficients)."""
+        (:meth:`~pftrack.cues.histogram_cue.ColorCue.prepare_cells`; the same coefficients)."""
         h, w = self._shape
         if roi is None:
             roi = reachable_roi(ellipses, w, h)
