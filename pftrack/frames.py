@@ -28,6 +28,17 @@ from .errors import FrameError
 _GREY_ORIGINS: dict[int, tuple[weakref.ReferenceType, np.ndarray]] = {}
 
 
+def bgr_view(region: np.ndarray) -> np.ndarray:
+    """``region`` (a 3-channel image) as OpenCV can read it without a copy: itself when each row's pixels and
+    channels are adjacent in memory (any row step, as in a rectangle cut from a frame), else a contiguous copy. A
+    rectangle of a large frame costs OpenCV's conversions no copy this way (the same numbers)."""
+    a = region
+    if (a.ndim == 3 and a.strides[2] == a.itemsize and a.strides[1] == a.itemsize * a.shape[2]
+            and a.strides[0] >= a.strides[1] * a.shape[1]):
+        return a
+    return np.ascontiguousarray(a)
+
+
 def _from_grey(gray: np.ndarray, fresh: bool) -> np.ndarray:
     """BGR of the contiguous uint8 grey image ``gray``, remembering a copy of ``gray`` (``gray`` itself when
     ``fresh``: made here, so nobody else can change it) as its origin.  Exact both ways: OpenCV's fixed-point grey

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
-from ..frames import grey_origin
+from ..frames import bgr_view, grey_origin
 from .gray_kernels import exact_gray_available, gray_bins, lattice_levels_gradients
 from .lk import ncc as patch_ncc
 
@@ -78,7 +78,7 @@ def to_gray(region: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(region)
     if region.shape[2] == 1:
         return np.ascontiguousarray(region[..., 0])
-    return cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2GRAY)
+    return cv2.cvtColor(bgr_view(region), cv2.COLOR_BGR2GRAY)
 
 
 def equalization_lut(frame: np.ndarray, *, stride: int = 4, gray: np.ndarray | None = None) -> np.ndarray:

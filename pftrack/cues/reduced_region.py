@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
-from ..frames import grey_origin
+from ..frames import bgr_view, grey_origin
 
 
 def gray_region(frame: np.ndarray, roi: tuple[int, int, int, int]) -> np.ndarray:
@@ -23,7 +23,7 @@ def gray_region(frame: np.ndarray, roi: tuple[int, int, int, int]) -> np.ndarray
     x0, y0, x1, y1 = roi
     sub = frame[y0:y1, x0:x1]
     if sub.ndim == 3 and sub.shape[2] == 3:
-        sub = cv2.cvtColor(np.ascontiguousarray(sub), cv2.COLOR_BGR2GRAY)
+        sub = cv2.cvtColor(bgr_view(sub), cv2.COLOR_BGR2GRAY)
     elif sub.ndim == 3:
         sub = sub[..., 0]
     return np.ascontiguousarray(sub)

@@ -1,6 +1,8 @@
-"""The background statistics quantise only what their ellipses read (``ColorCue.prepare_cells``): the same bins
-where they are written, the same coefficients as the whole frame's features, the same tracks."""
+"""Large frames cost what the target needs: the background statistics quantise only what their ellipses read
+(``ColorCue.prepare_cells``: the same bins where they are written, the same coefficients as the whole frame's
+features, the same tracks), and a rectangle of a frame reaches OpenCV's conversions without a copy (``bgr_view``)."""
 
+import cv2
 import numpy as np
 import pytest
 
@@ -8,6 +10,7 @@ import pftrack
 from pftrack._numba import NUMBA_INSTALLED, set_numba_enabled
 from pftrack.cues.histogram_cue import ColorCue
 from pftrack.cues.quantize import make_lut, quantize, quantize_cells
+from pftrack.frames import bgr_view
 from pftrack.geometry import background_grid
 
 BACKENDS = [False, True] if NUMBA_INSTALLED else [False]
@@ -103,3 +106,14 @@ def test_fusion_pf_tracks_a_small_target_in_a_large_frame_as_before(monkeypatch)
     for a, b in zip(now, before):
         assert a[0] == b[0] and a[1] == b[1] and a[2] == b[2]
         assert np.array_equal(a[3], b[3]) and np.array_equal(a[4], b[4])
+
+
+def test_a_rectangle_of_a_frame_reaches_opencv_without_a_copy_and_converts_the_same():
+    frame = _frame(120, 160)
+    rect = frame[7:90, 11:150]
+    assert bgr_view(rect) is rect
+    assert np.array_equal(cv2.cvtColor(bgr_view(rect), cv2.COLOR_BGR2GRAY),
+                          cv2.cvtColor(np.ascontiguousarray(rect), cv2.COLOR_BGR2GRAY))
+    for odd in (frame[::2, ::3], frame[::-1], frame[..., ::-1], np.asfortranarray(frame)):
+        v = bgr_view(odd)
+        assert v.flags.c_contiguous and np.array_equal(v, odd)
