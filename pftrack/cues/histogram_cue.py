@@ -22,6 +22,7 @@ import numpy as np
 
 from .._numba import njit, numba_enabled
 from ..errors import ParameterError
+from ..frames import bgr_view
 from .color import DEFAULT_BINS, KERNELS, ColorSpace, KernelName, ellipse_histograms, ellipse_rho, reachable_roi
 from .intensity import (channel_equalization_maps, channel_levels, equalization_lut, gain_maps, is_gray,
                         quantize_gray)
@@ -350,7 +351,7 @@ class ColorCue:
             return ColorFeatures(out, x0, y0, pitch)
         region = frame[y0:y1:pitch, x0:x1:pitch]
         if self.color_space == "hsv" and region.size:
-            region = cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2HSV)
+            region = cv2.cvtColor(bgr_view(region), cv2.COLOR_BGR2HSV)
         h, w = region.shape[:2]
         if self._qbuf.size < h * w:
             self._qbuf = np.empty(h * w, dtype=np.uint16)

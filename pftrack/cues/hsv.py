@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 
 from .._numba import njit, numba_enabled
+from ..frames import bgr_view
 
 
 @njit
@@ -65,7 +66,7 @@ class HSVHistogramCue:
         self._lut_sv = (v * self.n_bins // 256).astype(np.uint8)
 
     def bin_maps(self, region: np.ndarray) -> np.ndarray:
-        hsv = cv2.cvtColor(np.ascontiguousarray(region), cv2.COLOR_BGR2HSV)
+        hsv = cv2.cvtColor(bgr_view(region), cv2.COLOR_BGR2HSV)
         return np.stack([self._lut_h[hsv[..., 0]], self._lut_sv[hsv[..., 1]], self._lut_sv[hsv[..., 2]]])
 
     def prepare(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> HSVFeatures:

@@ -83,7 +83,7 @@ class LikelihoodMixin:
             return  # nothing left that is background: keep the previous statistics
         # The background histograms are computed exactly like the samples' (a subsampled frame would
         # shift mu and sigma and with them the appearance threshold).
-        rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h), cells=(w, h) == frame.shape[1::-1])
+        rho, tot, _ = self._rho(frame, ell, roi=(0, 0, w, h), cells=True)
         if self._raw_check is not None:
             self._raw_check.set_background(self._raw, ell)
         if self._structure_check is not None:
