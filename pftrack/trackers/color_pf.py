@@ -64,6 +64,7 @@ from .color_pf_params import ColorPFParams
 from .color_search import SearchMixin
 from .denoise import NoiseGateMixin
 from .distractors import DistractorMemory, score_gradual
+from .entering import EnteringMixin
 from .input_switch import InputSwitchMixin
 from .persistence import PersistenceMixin
 from .probation import ProbationMixin
@@ -79,7 +80,7 @@ _ELL_COLS = np.array([X, Y, HX, HY])
 
 
 class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, SearchMixin, VetoMixin, ProbationMixin,
-                          PersistenceMixin, SceneTestMixin, ColorHooks, Tracker):
+                          PersistenceMixin, SceneTestMixin, EnteringMixin, ColorHooks, Tracker):
     """A colour-histogram particle filter with the machinery of Nummiaro et al.
 
     Subclasses choose the state layout and dynamics (:meth:`_propagate`) and may
@@ -234,6 +235,7 @@ class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, Sea
         self._background_stats(frame, ell)
         self.last_box = tuple(float(v) for v in box)
         self.last_score = 1.0
+        self._entering_start(frame, box)  # a first box at the frame's edge (.entering)
         return self._state(box=self.last_box, score=1.0, lost=False)
 
     def _resume_search(self) -> None:
@@ -256,6 +258,8 @@ class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, Sea
             self._structure_check.new_frame()
         if self.mode == "tracking":
             state = self._track(frame)
+            if self._entering is not None:
+                state = self._entering_step(frame, state)
         elif self.mode == "detecting":
             box = self._best_detection(frame)
             state = (self._state(box=(0.0, 0.0, 0.0, 0.0), score=0.0, lost=True) if box is None

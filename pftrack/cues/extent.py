@@ -1,0 +1,96 @@
+"""The extent of a target that enters the view through a frame's edge, measured on a foreground-probability map.
+
+A first box that touches the frame's edge may hold only the part of the target already in view: a sliver, when the
+target is coming in.  A colour model cannot correct that box by itself: every part of a uniform target matches the
+sliver's histogram as well as the whole does, so the box keeps its first width.  While such a target enters, its
+extent across the edge is measured on each frame instead:
+
+- at the first frame, each colour bin ``u`` gets ``P(u) = H_O(u) / (H_O(u) + H_S(u))`` from the pixel counts inside
+  the box (``H_O``) and in a surround of half the box's larger side around it (``H_S``), as the object-vs-surround
+  models of :mod:`pftrack.cues.contrast` do (:func:`object_surround_lut`);
+- on a later frame, the band of rows (for a left or right edge; columns for the top or bottom) the tracked box spans
+  is read across the frame: the share ``f(c)`` of each line ``c`` of the band whose pixels are object-like
+  (``P > 1/2``), smoothed over three lines (:func:`band_profile`);
+- from the line of the tracked box where ``f`` peaks, the run of lines with ``f >= share * f_peak`` is the target's
+  extent (:func:`grow_run`); the box spans it (:func:`extent_box`).
+
+While the run still reaches the edge the target is still coming in; once it has left the edge the target is in view
+and the tracker may start again from that box.  Pure functions: arrays in, arrays out.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .contrast import foreground_lut
+
+__all__ = ["band_profile", "edge_sides", "extent_box", "grow_run", "object_surround_lut", "surround_roi"]
+
+
+def edge_sides(box, width: int, height: int, tol: float = 1.0) -> str:
+    """The frame's edges a box ``(x, y, w, h)`` touches (within ``tol`` pixels), as letters of ``"LTRB"``."""
+    x, y, w, h = (float(v) for v in box)
+    touch = (x <= tol, y <= tol, x + w >= width - tol, y + h >= height - tol)
+    return "".join(s for s, t in zip("LTRB", touch) if t)
+
+
+def surround_roi(box, width: int, height: int) -> tuple[int, int, int, int]:
+    """The region ``(x0, y0, x1, y1)`` of the box grown by half its larger side on each side, cut to the frame."""
+    x, y, w, h = (float(v) for v in box)
+    m = 0.5 * max(w, h)
+    return (max(int(math.floor(x - m)), 0), max(int(math.floor(y - m)), 0),
+            min(int(math.ceil(x + w + m)), width), min(int(math.ceil(y + h + m)), height))
+
+
+def object_surround_lut(bins: np.ndarray, x0: int, y0: int, box, n_bins: int) -> np.ndarray:
+    """``P(u)`` per bin (float32) from the pixels of ``box`` against the rest of the quantised region ``bins``
+    (whose top-left pixel is ``(x0, y0)``, every pixel quantised); 1/2 for a bin seen in neither."""
+    x, y, w, h = (float(v) for v in box)
+    rh, rw = bins.shape
+    ix0, ix1 = max(int(math.floor(x)) - x0, 0), min(int(math.ceil(x + w)) - x0, rw)
+    iy0, iy1 = max(int(math.floor(y)) - y0, 0), min(int(math.ceil(y + h)) - y0, rh)
+    inside = np.bincount(bins[iy0:iy1, ix0:ix1].ravel(), minlength=n_bins).astype(np.float64)
+    every = np.bincount(bins.ravel(), minlength=n_bins).astype(np.float64)
+    return foreground_lut(inside, every - inside)
+
+
+def band_profile(bins: np.ndarray, lut: np.ndarray, axis: int) -> np.ndarray:
+    """The share of object-like pixels (``lut[bin] > 1/2``) of each line of a band of bins, smoothed over three
+    lines: along ``axis = 1`` the band's columns (a band of rows), along ``axis = 0`` its rows."""
+    like = (lut > 0.5)[bins]
+    share = like.mean(axis=1 - axis) if like.size else np.zeros(bins.shape[axis])
+    if share.size >= 3:
+        padded = np.concatenate(([share[0]], share, [share[-1]]))
+        share = (padded[:-2] + padded[1:-1] + padded[2:]) / 3.0
+    return share
+
+
+def grow_run(profile: np.ndarray, lo: int, hi: int, *, share: float = 0.2, min_peak: float = 0.25
+             ) -> tuple[int, int] | None:
+    """The run of lines around the profile's peak within ``[lo, hi)`` whose value is at least ``share`` times the
+    peak's, as ``(first, last + 1)``; None when that peak is below ``min_peak`` (nothing object-like there)."""
+    n = profile.size
+    lo, hi = max(int(lo), 0), min(int(hi), n)
+    if hi <= lo:
+        return None
+    seed = lo + int(np.argmax(profile[lo:hi]))
+    peak = float(profile[seed])
+    if peak < min_peak:
+        return None
+    below = np.flatnonzero(profile < share * peak)
+    left = below[below < seed]
+    right = below[below > seed]
+    return (int(left[-1]) + 1 if left.size else 0), (int(right[0]) if right.size else n)
+
+
+def extent_box(box, run: tuple[int, int], offset: int, axis: int, max_extent: float) -> tuple[float, ...]:
+    """``box`` with its extent along ``axis`` (1: x, 0: y) set to the run of lines ``[first, last)`` of a band that
+    starts at pixel ``offset``; a run longer than ``max_extent`` is cut to that length around the box's centre."""
+    x, y, w, h = (float(v) for v in box)
+    a0, a1 = float(run[0] + offset), float(run[1] + offset)
+    if a1 - a0 > max_extent:
+        c = x + 0.5 * w if axis == 1 else y + 0.5 * h
+        a0, a1 = max(a0, c - 0.5 * max_extent), min(a1, c + 0.5 * max_extent)
+    return (a0, y, a1 - a0, h) if axis == 1 else (x, a0, w, a1 - a0)

@@ -1,0 +1,107 @@
+"""A first box at the frame's edge: the extent of a target still entering the view (``enter_extent``).
+
+When the first box touches an edge of the frame, the target may be coming in and the box hold only its visible part.
+For at most ``enter_extent`` frames the colour particle filters then measure the target's extent across that edge on
+each tracked frame (:mod:`pftrack.cues.extent`: the band the tracked box spans, read on the first frame's
+object-vs-surround colour table) and report the box spanning it, the far side where the target reaches and the near
+side at the edge.  The particle filter meanwhile follows the part it was given.  Once the measured extent has left the
+edge (the target is in view) or the frames are spent, the tracker starts again from the measured box on that frame,
+keeping its velocity; a declared loss ends the phase with nothing changed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..cues.extent import band_profile, edge_sides, extent_box, grow_run, object_surround_lut, surround_roi
+from ..filtering.dynamics import VX, VY
+from ..geometry import visible_box
+from .base import TrackState
+
+__all__ = ["EnteringMixin", "MAX_EXTENT_RATIO"]
+
+#: the measured extent is at most this many times the box's other side
+MAX_EXTENT_RATIO = 3.0
+
+
+class EnteringMixin:
+    """``enter_extent`` for :class:`~pftrack.trackers.color_pf.ColorParticleFilter` (see the module docstring)."""
+
+    _entering: dict | None = None
+    _entering_restart = False
+
+    def _entering_start(self, frame: np.ndarray, box) -> None:
+        """At a first box (not the tracker's own restart): arm the phase when the box touches an edge."""
+        self._entering = None
+        if self.params.enter_extent <= 0 or self._entering_restart:
+            return
+        fh, fw = self._shape
+        sides = edge_sides(box, fw, fh)
+        # the side across which the box is thinnest for its other side; a box that spans the frame has no such side
+        w, h = max(float(box[2]), 1e-9), max(float(box[3]), 1e-9)
+        options = []
+        for pair, axis, ratio in (("LR", 1, w / h), ("TB", 0, h / w)):
+            touched = [s for s in sides if s in pair]
+            if len(touched) == 1:
+                options.append((ratio, touched[0], axis))
+        if not options:
+            return
+        _, side, axis = min(options)
+        roi = surround_roi(box, fw, fh)
+        feats = self.cue.prepare(frame, roi, 1)
+        lut = object_surround_lut(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins)
+        self._entering = {"side": side, "axis": axis, "lut": lut, "until": self.frame_index + self.params.enter_extent}
+
+    def _entering_step(self, frame: np.ndarray, state: TrackState) -> TrackState:
+        """After a tracked frame of the phase: the measured box, or a restart from it (see the module docstring)."""
+        ent = self._entering
+        if state.lost or self.mode != "tracking":
+            self._entering = None
+            return state
+        fh, fw = self._shape
+        box = visible_box(state.box, fw, fh) or tuple(state.box)
+        measured = self._measure_extent(frame, box, ent)
+        if measured is None:
+            return state
+        new_box, at_edge = measured
+        if at_edge and self.frame_index < ent["until"]:
+            return TrackState(box=new_box, score=state.score, lost=state.lost, particles=state.particles,
+                              weights=state.weights, state_names=state.state_names,
+                              info={**state.info, "entering": True, "box_tracked": state.box})
+        velocity = self.estimate[[VX, VY]].copy()
+        self._entering = None
+        self._entering_restart = True
+        try:
+            restarted = self._init(frame, new_box)
+        finally:
+            self._entering_restart = False
+        self.ps.states[:, VX] = velocity[0]
+        self.ps.states[:, VY] = velocity[1]
+        self.estimate[[VX, VY]] = velocity
+        return TrackState(box=restarted.box, score=state.score, lost=False, particles=restarted.particles,
+                          weights=restarted.weights, state_names=restarted.state_names,
+                          info={**state.info, "entered": True, "box_tracked": state.box})
+
+    def _measure_extent(self, frame: np.ndarray, box, ent: dict):
+        """``(box, at_edge)``: the tracked ``box`` with its extent across the phase's edge measured on ``frame``;
+        None when nothing object-like lies on the tracked box's lines."""
+        fh, fw = self._shape
+        x, y, w, h = box
+        axis = ent["axis"]
+        if axis == 1:  # a band of the box's rows across the frame
+            roi = (0, max(int(np.floor(y)), 0), fw, min(int(np.ceil(y + h)), fh))
+            lo, hi, size, other = int(np.floor(x)), int(np.ceil(x + w)), fw, h
+        else:
+            roi = (max(int(np.floor(x)), 0), 0, min(int(np.ceil(x + w)), fw), fh)
+            lo, hi, size, other = int(np.floor(y)), int(np.ceil(y + h)), fh, w
+        if roi[2] <= roi[0] or roi[3] <= roi[1]:
+            return None
+        feats = self.cue.prepare(frame, roi, 1)
+        run = grow_run(band_profile(feats.bins, ent["lut"], axis), lo, hi)
+        if run is None:
+            return None
+        new_box = extent_box(box, run, 0, axis, MAX_EXTENT_RATIO * other)
+        side = ent["side"]
+        first, last = (new_box[0], new_box[0] + new_box[2]) if axis == 1 else (new_box[1], new_box[1] + new_box[3])
+        at_edge = first <= 0.5 if side in "LT" else last >= size - 0.5
+        return new_box, at_edge
