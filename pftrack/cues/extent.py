@@ -87,10 +87,12 @@ def grow_run(profile: np.ndarray, lo: int, hi: int, *, share: float = 0.2, min_p
 
 def extent_box(box, run: tuple[int, int], offset: int, axis: int, max_extent: float) -> tuple[float, ...]:
     """``box`` with its extent along ``axis`` (1: x, 0: y) set to the run of lines ``[first, last)`` of a band that
-    starts at pixel ``offset``; a run longer than ``max_extent`` is cut to that length around the box's centre."""
+    starts at pixel ``offset``; of a run longer than ``max_extent``, the part of that length nearest to being centred
+    on the box."""
     x, y, w, h = (float(v) for v in box)
     a0, a1 = float(run[0] + offset), float(run[1] + offset)
-    if a1 - a0 > max_extent:
+    if a1 - a0 > max_extent:  # the window of that length within the run nearest to being centred on the box
         c = x + 0.5 * w if axis == 1 else y + 0.5 * h
-        a0, a1 = max(a0, c - 0.5 * max_extent), min(a1, c + 0.5 * max_extent)
+        a0 = min(max(c - 0.5 * max_extent, a0), a1 - max_extent)
+        a1 = a0 + max_extent
     return (a0, y, a1 - a0, h) if axis == 1 else (x, a0, w, a1 - a0)

@@ -1,0 +1,167 @@
+"""A first box at the frame's edge: the target's extent measured while it comes in (``enter_extent``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.cues.extent import band_profile, edge_sides, extent_box, grow_run, object_surround_lut, surround_roi
+from pftrack.geometry import iou, visible_box
+from pftrack.synth import entering_scene, simple_scene
+
+from .conftest import render_scene
+
+
+# ------------------------------------------------------------------------------ pure functions
+def test_edge_sides():
+    assert edge_sides((0, 50, 3, 60), 320, 240) == "L"
+    assert edge_sides((0.8, 0, 10, 10), 320, 240) == "LT"
+    assert edge_sides((300, 200, 20, 40), 320, 240) == "RB"
+    assert edge_sides((2, 2, 10, 10), 320, 240) == ""
+    assert edge_sides((0, 10, 320, 20), 320, 240) == "LR"
+
+
+def test_surround_roi_is_cut_to_the_frame():
+    assert surround_roi((0, 100, 4, 60), 320, 240) == (0, 70, 34, 190)
+    assert surround_roi((10, 10, 20, 10), 320, 240) == (0, 0, 40, 30)
+
+
+def test_object_surround_lut():
+    bins = np.full((20, 30), 2, dtype=np.uint16)
+    bins[5:15, 0:4] = 1  # the box
+    bins[0, 0] = 3  # one surround pixel of a bin also seen... nowhere inside
+    lut = object_surround_lut(bins, 100, 50, (100, 55, 4, 10), 5)
+    assert lut[1] == 1.0 and lut[2] == 0.0 and lut[3] == 0.0
+    assert lut[0] == lut[4] == 0.5  # seen in neither
+    # a bin shared half and half is not object-like
+    bins[5:15, 2:4] = 2
+    bins[0:10, 20:22] = 1
+    lut = object_surround_lut(bins, 100, 50, (100, 55, 4, 10), 5)
+    assert lut[1] == pytest.approx(0.5) and lut[2] < 0.5
+
+
+def test_band_profile_rows_and_columns():
+    bins = np.zeros((10, 12), dtype=np.uint16)
+    bins[:, 3:7] = 1
+    bins[:5, 7] = 1  # half a column
+    lut = np.array([0.0, 1.0], dtype=np.float32)
+    cols = band_profile(bins, lut, 1)
+    assert cols.shape == (12,)
+    raw = np.array([0, 0, 0, 1, 1, 1, 1, 0.5, 0, 0, 0, 0])
+    padded = np.concatenate(([raw[0]], raw, [raw[-1]]))
+    np.testing.assert_allclose(cols, (padded[:-2] + padded[1:-1] + padded[2:]) / 3)
+    rows = band_profile(bins.T.copy(), lut, 0)
+    np.testing.assert_allclose(rows, cols)
+
+
+def test_grow_run():
+    prof = np.array([0.9, 0.8, 0.9, 0.5, 0.1, 0.0, 0.3, 0.9, 0.9])
+    assert grow_run(prof, 1, 3) == (0, 4)  # peak 0.9 at line 2; 0.1 < 0.2 * 0.9 stops it at line 4
+    assert grow_run(prof, 7, 9) == (6, 9)  # runs to the band's end
+    assert grow_run(prof, 4, 6, min_peak=0.25) is None  # nothing object-like on those lines
+    assert grow_run(prof, 1, 3, share=0.6) == (0, 3)
+    assert grow_run(prof, 5, 5) is None
+
+
+def test_extent_box_and_its_cap():
+    assert extent_box((0, 50, 4, 60), (0, 25), 0, 1, 180) == (0.0, 50, 25.0, 60)
+    assert extent_box((10, 5, 30, 8), (2, 40), 100, 0, 1000) == (10, 102.0, 30, 38.0)
+    x, y, w, h = extent_box((0, 50, 4, 60), (0, 300), 0, 1, 180)
+    assert (x, y, w, h) == (0, 50, 180, 60)  # centred on the box as far as the run allows
+    assert extent_box((150, 50, 4, 60), (0, 300), 0, 1, 180)[:3] == (62.0, 50, 180.0)
+    assert extent_box((290, 50, 4, 60), (0, 300), 0, 1, 180)[:3] == (120.0, 50, 180.0)
+
+
+# ------------------------------------------------------------------------------ trackers
+def _scene(seed: int, orient: str):
+    """An entering scene (from the left), mirrored (from the right) or transposed (from the top): frames and the
+    boxes in view."""
+    scene, frames, _ = render_scene(entering_scene(seed, enter_at=15))
+    gt = scene.groundtruth(0)
+    if orient == "right":
+        frames = [np.ascontiguousarray(f[:, ::-1]) for f in frames]
+        gt = np.column_stack([frames[0].shape[1] - gt[:, 0] - gt[:, 2], gt[:, 1], gt[:, 2], gt[:, 3]])
+    elif orient == "top":
+        frames = [np.ascontiguousarray(f.transpose(1, 0, 2)) for f in frames]
+        gt = gt[:, [1, 0, 3, 2]]
+    h, w = frames[0].shape[:2]
+    cut = np.full_like(gt, np.nan)
+    for t, b in enumerate(gt):
+        if np.isfinite(b[0]) and b[0] < w and b[1] < h and b[0] + b[2] > 0 and b[1] + b[3] > 0:
+            cut[t] = visible_box(tuple(b), w, h) or tuple(b)
+    return frames, cut
+
+
+def _run(name, frames, gt, **params):
+    first = int(np.flatnonzero(np.isfinite(gt[:, 0]))[0])
+    tr = pftrack.create_tracker(name, seed=0, **params)
+    states = [tr.init(frames[first], gt[first])]
+    states += [tr.update(f) for f in frames[first + 1:]]
+    overlap = np.array([iou(s.box, g) for s, g in zip(states, gt[first:])])
+    return states, overlap
+
+
+@pytest.mark.parametrize("orient", ["left", "right", "top"])
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
+def test_a_sliver_at_the_edge_grows_to_the_target(name, orient):
+    means_on, means_off = [], []
+    for seed in (0, 1, 2):
+        frames, gt = _scene(seed, orient)
+        assert np.nanmin(gt[:, 2 if orient != "top" else 3]) < 5  # the first box is a sliver
+        states, on = _run(name, frames, gt, enter_extent=30)
+        _, off = _run(name, frames, gt, enter_extent=0)
+        means_on.append(on[10:].mean())
+        means_off.append(off[10:].mean())
+        flags = [s.info.get("entering", False) for s in states]
+        assert any(flags) and not flags[0]
+        assert sum(bool(s.info.get("entered")) for s in states) == 1  # one restart, once the target is in
+        assert not any(s.lost for s in states)
+    assert min(means_on) > 0.7, means_on
+    assert np.mean(means_on) > np.mean(means_off) + 0.4, (means_on, means_off)
+
+
+def test_while_entering_the_box_reaches_the_edge_and_the_target():
+    frames, gt = _scene(3, "left")
+    states, overlap = _run("color-pf", frames, gt, enter_extent=30)
+    entering = [i for i, s in enumerate(states) if s.info.get("entering")]
+    assert entering
+    for i in entering:
+        assert states[i].box[0] == 0.0
+    assert overlap[entering].mean() > 0.75
+
+
+def test_a_box_off_the_edges_changes_nothing():
+    scene, frames, _ = render_scene(simple_scene(4))
+    gt = scene.groundtruth(0)
+    a = pftrack.create_tracker("fusion-pf", seed=1)
+    b = pftrack.create_tracker("fusion-pf", seed=1, enter_extent=30)
+    sa, sb = a.init(frames[0], gt[0]), b.init(frames[0], gt[0])
+    assert b._entering is None
+    for f in frames[1:25]:
+        sa, sb = a.update(f), b.update(f)
+        assert sa.box == sb.box and sa.score == sb.score
+        np.testing.assert_array_equal(sa.particles, sb.particles)
+
+
+def test_a_box_spanning_the_frame_is_not_armed_across_it():
+    frames, gt = _scene(0, "left")
+    h, w = frames[0].shape[:2]
+    tr = pftrack.create_tracker("color-pf", seed=0, enter_extent=30)
+    tr.init(frames[40], (0, 50, w, 60))
+    assert tr._entering is None
+    tr.init(frames[40], (0, 0, w, 60))  # only its other axis may be measured
+    assert tr._entering is not None and (tr._entering["side"], tr._entering["axis"]) == ("T", 0)
+    tr.init(frames[40], (0, 0, w, h))
+    assert tr._entering is None
+
+
+def test_the_phase_ends_after_its_frames():
+    frames, gt = _scene(0, "left")
+    first = int(np.flatnonzero(np.isfinite(gt[:, 0]))[0])
+    tr = pftrack.create_tracker("color-pf", seed=0, enter_extent=3)
+    tr.init(frames[first], gt[first])
+    states = [tr.update(f) for f in frames[first + 1:first + 6]]
+    assert [bool(s.info.get("entering")) for s in states[:2]] == [True, True]
+    assert states[2].info.get("entered")  # restarted from the box still at the edge
+    assert tr._entering is None and not any(s.info.get("entering") for s in states[3:])
