@@ -205,6 +205,7 @@ class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, Sea
         self._last_search = None
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
+        first = self.frame_index == 0 or self.mode == "detecting"  # a box given, not one of the tracker's restarts
         self._reset()
         self.cue.adapt_to(frame)  # grey features on grey input ("auto")
         self.cue.new_frame(frame)
@@ -235,7 +236,7 @@ class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, Sea
         self._background_stats(frame, ell)
         self.last_box = tuple(float(v) for v in box)
         self.last_score = 1.0
-        self._entering_start(frame, box)  # a first box at the frame's edge (.entering)
+        self._entering_start(frame, box if first else None)  # a first box at the frame's edge (.entering)
         return self._state(box=self.last_box, score=1.0, lost=False)
 
     def _resume_search(self) -> None:

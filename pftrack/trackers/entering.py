@@ -28,12 +28,11 @@ class EnteringMixin:
     """``enter_extent`` for :class:`~pftrack.trackers.color_pf.ColorParticleFilter` (see the module docstring)."""
 
     _entering: dict | None = None
-    _entering_restart = False
 
     def _entering_start(self, frame: np.ndarray, box) -> None:
-        """At a first box (not the tracker's own restart): arm the phase when the box touches an edge."""
+        """At a first box (None at the tracker's own restarts): arm the phase when the box touches an edge."""
         self._entering = None
-        if self.params.enter_extent <= 0 or self._entering_restart:
+        if self.params.enter_extent <= 0 or box is None:
             return
         fh, fw = self._shape
         sides = edge_sides(box, fw, fh)
@@ -69,17 +68,12 @@ class EnteringMixin:
                               weights=state.weights, state_names=state.state_names,
                               info={**state.info, "entering": True, "box_tracked": state.box})
         velocity = self.estimate[[VX, VY]].copy()
-        self._entering = None
-        self._entering_restart = True
-        try:
-            restarted = self._init(frame, new_box)
-        finally:
-            self._entering_restart = False
+        restarted = self._init(frame, new_box)  # not a first box: the phase is not armed again
         self.ps.states[:, VX] = velocity[0]
         self.ps.states[:, VY] = velocity[1]
         self.estimate[[VX, VY]] = velocity
-        return TrackState(box=restarted.box, score=state.score, lost=False, particles=restarted.particles,
-                          weights=restarted.weights, state_names=restarted.state_names,
+        return TrackState(box=restarted.box, score=state.score, lost=False, particles=self.ps.states.copy(),
+                          weights=self.ps.w / self.ps.w.sum(), state_names=restarted.state_names,
                           info={**state.info, "entered": True, "box_tracked": state.box})
 
     def _measure_extent(self, frame: np.ndarray, box, ent: dict):
