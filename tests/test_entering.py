@@ -71,6 +71,10 @@ def test_extent_box_and_its_cap():
     assert (x, y, w, h) == (0, 50, 180, 60)  # centred on the box as far as the run allows
     assert extent_box((150, 50, 4, 60), (0, 300), 0, 1, 180)[:3] == (62.0, 50, 180.0)
     assert extent_box((290, 50, 4, 60), (0, 300), 0, 1, 180)[:3] == (120.0, 50, 180.0)
+    # with keep, never narrower than the box
+    assert extent_box((0, 50, 30, 60), (0, 10), 0, 1, 180, keep=True) == (0.0, 50, 30.0, 60)
+    assert extent_box((0, 50, 30, 60), (0, 45), 0, 1, 180, keep=True) == (0.0, 50, 45.0, 60)
+    assert extent_box((5, 10, 40, 20), (0, 12), 8, 0, 100, keep=True) == (5, 8.0, 40, 22.0)
 
 
 # ------------------------------------------------------------------------------ trackers
@@ -165,3 +169,27 @@ def test_the_phase_ends_after_its_frames():
     assert [bool(s.info.get("entering")) for s in states[:2]] == [True, True]
     assert states[2].info.get("entered")  # restarted from the box still at the edge
     assert tr._entering is None and not any(s.info.get("entering") for s in states[3:])
+
+
+def test_a_whole_target_at_the_edge_is_not_cut_to_its_most_distinct_part():
+    """A first box holding the whole target, at the edge; only its left third has colours the surround lacks (the
+    rest is the surround's colour): the box reported is never narrower than the tracked one, and no restart."""
+    rng = np.random.default_rng(5)
+    frames = []
+    for t in range(12):
+        f = rng.normal(120, 6, (240, 320, 3)).clip(0, 255).astype(np.uint8)
+        f[:, 45:] = (40, 160, 40)  # the surround's colour beyond a gap
+        f[100:160, 0:10] = (30, 30, 200)
+        f[100:160, 10:30] = (40, 160, 40)
+        frames.append(f)
+    box = (0.0, 100.0, 30.0, 60.0)
+    tr = pftrack.create_tracker("color-pf", seed=0, enter_extent=8)
+    tr.init(frames[0], box)
+    assert tr._entering is not None
+    states = [tr.update(f) for f in frames[1:]]
+    for s in states:
+        tracked = s.info.get("box_tracked", s.box)
+        tracked = visible_box(tracked, 320, 240) or tracked  # the part in view
+        assert s.box[2] >= tracked[2] - 1e-9
+    assert not any(s.info.get("entered") for s in states)
+    assert tr._entering is None  # the frames were spent

@@ -12,7 +12,8 @@ extent across the edge is measured on each frame instead:
   is read across the frame: the share ``f(c)`` of each line ``c`` of the band whose pixels are object-like
   (``P > 1/2``), smoothed over three lines (:func:`band_profile`);
 - from the line of the tracked box where ``f`` peaks, the run of lines with ``f >= share * f_peak`` is the target's
-  extent (:func:`grow_run`); the box spans it (:func:`extent_box`).
+  extent (:func:`grow_run`); the box spans it and the tracked box's own span (:func:`extent_box`): a box given
+  covers at least the visible target, and a run may be only the part of it whose colours stand out most.
 
 While the run still reaches the edge the target is still coming in; once it has left the edge the target is in view
 and the tracker may start again from that box.  Pure functions: arrays in, arrays out.
@@ -85,12 +86,16 @@ def grow_run(profile: np.ndarray, lo: int, hi: int, *, share: float = 0.2, min_p
     return (int(left[-1]) + 1 if left.size else 0), (int(right[0]) if right.size else n)
 
 
-def extent_box(box, run: tuple[int, int], offset: int, axis: int, max_extent: float) -> tuple[float, ...]:
+def extent_box(box, run: tuple[int, int], offset: int, axis: int, max_extent: float, *, keep: bool = False
+               ) -> tuple[float, ...]:
     """``box`` with its extent along ``axis`` (1: x, 0: y) set to the run of lines ``[first, last)`` of a band that
-    starts at pixel ``offset``; of a run longer than ``max_extent``, the part of that length nearest to being centred
-    on the box."""
+    starts at pixel ``offset`` (with ``keep``, to the union of the run and the box's own span); of an extent longer
+    than ``max_extent``, the part of that length nearest to being centred on the box."""
     x, y, w, h = (float(v) for v in box)
     a0, a1 = float(run[0] + offset), float(run[1] + offset)
+    if keep:
+        b0, b1 = (x, x + w) if axis == 1 else (y, y + h)
+        a0, a1 = min(a0, b0), max(a1, b1)
     if a1 - a0 > max_extent:  # the window of that length within the run nearest to being centred on the box
         c = x + 0.5 * w if axis == 1 else y + 0.5 * h
         a0 = min(max(c - 0.5 * max_extent, a0), a1 - max_extent)

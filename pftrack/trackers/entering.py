@@ -3,10 +3,13 @@
 When the first box touches an edge of the frame, the target may be coming in and the box hold only its visible part.
 For at most ``enter_extent`` frames the colour particle filters then measure the target's extent across that edge on
 each tracked frame (:mod:`pftrack.cues.extent`: the band the tracked box spans, read on the first frame's
-object-vs-surround colour table) and report the box spanning it, the far side where the target reaches and the near
-side at the edge.  The particle filter meanwhile follows the part it was given.  Once the measured extent has left the
-edge (the target is in view) or the frames are spent, the tracker starts again from the measured box on that frame,
-keeping its velocity; a declared loss ends the phase with nothing changed.
+object-vs-surround colour table), never narrower than the tracked box, and report the box spanning it: the far side
+where the target reaches, the near side at the edge.  The particle filter meanwhile follows the part it was given.
+Once the measured extent has left the edge (the target is in view) or the frames are spent, the tracker starts again
+from the measured box on that frame, keeping its velocity, if that box is at least :data:`GROWN` times the tracked
+one across the edge; otherwise (the first box held the target already) the phase ends with nothing changed.  A
+declared loss ends it too.  Armed only at a box given (the first frame's, or a detector's), never at the tracker's
+own restarts.
 """
 
 from __future__ import annotations
@@ -18,10 +21,12 @@ from ..filtering.dynamics import VX, VY
 from ..geometry import visible_box
 from .base import TrackState
 
-__all__ = ["EnteringMixin", "MAX_EXTENT_RATIO"]
+__all__ = ["EnteringMixin", "GROWN", "MAX_EXTENT_RATIO"]
 
 #: the measured extent is at most this many times the box's other side
 MAX_EXTENT_RATIO = 3.0
+#: the tracker restarts from the measured box only when it spans at least this many times the tracked box
+GROWN = 1.25
 
 
 class EnteringMixin:
@@ -62,11 +67,14 @@ class EnteringMixin:
         measured = self._measure_extent(frame, box, ent)
         if measured is None:
             return state
-        new_box, at_edge = measured
+        new_box, at_edge, grown = measured
         if at_edge and self.frame_index < ent["until"]:
             return TrackState(box=new_box, score=state.score, lost=state.lost, particles=state.particles,
                               weights=state.weights, state_names=state.state_names,
                               info={**state.info, "entering": True, "box_tracked": state.box})
+        self._entering = None
+        if not grown:  # the tracked box held the target already
+            return state
         velocity = self.estimate[[VX, VY]].copy()
         restarted = self._init(frame, new_box)  # not a first box: the phase is not armed again
         self.ps.states[:, VX] = velocity[0]
@@ -77,8 +85,9 @@ class EnteringMixin:
                           info={**state.info, "entered": True, "box_tracked": state.box})
 
     def _measure_extent(self, frame: np.ndarray, box, ent: dict):
-        """``(box, at_edge)``: the tracked ``box`` with its extent across the phase's edge measured on ``frame``;
-        None when nothing object-like lies on the tracked box's lines."""
+        """``(box, at_edge, grown)``: the tracked ``box`` with its extent across the phase's edge measured on
+        ``frame`` (never narrower than the box), whether it reaches the edge, and whether it is at least
+        :data:`GROWN` times the box's span; None when nothing object-like lies on the tracked box's lines."""
         fh, fw = self._shape
         x, y, w, h = box
         axis = ent["axis"]
@@ -94,8 +103,8 @@ class EnteringMixin:
         run = grow_run(band_profile(feats.bins, ent["lut"], axis), lo, hi)
         if run is None:
             return None
-        new_box = extent_box(box, run, 0, axis, MAX_EXTENT_RATIO * other)
+        new_box = extent_box(box, run, 0, axis, MAX_EXTENT_RATIO * other, keep=True)
         side = ent["side"]
         first, last = (new_box[0], new_box[0] + new_box[2]) if axis == 1 else (new_box[1], new_box[1] + new_box[3])
         at_edge = first <= 0.5 if side in "LT" else last >= size - 0.5
-        return new_box, at_edge
+        return new_box, at_edge, last - first >= GROWN * (w if axis == 1 else h)
