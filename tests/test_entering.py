@@ -138,7 +138,7 @@ def test_while_entering_the_box_reaches_the_edge_and_the_target():
 def test_a_box_off_the_edges_changes_nothing():
     scene, frames, _ = render_scene(simple_scene(4))
     gt = scene.groundtruth(0)
-    a = pftrack.create_tracker("fusion-pf", seed=1)
+    a = pftrack.create_tracker("fusion-pf", seed=1, enter_extent=0)
     b = pftrack.create_tracker("fusion-pf", seed=1, enter_extent=30)
     sa, sb = a.init(frames[0], gt[0]), b.init(frames[0], gt[0])
     assert b._entering is None
