@@ -193,3 +193,21 @@ def test_a_whole_target_at_the_edge_is_not_cut_to_its_most_distinct_part():
         assert s.box[2] >= tracked[2] - 1e-9
     assert not any(s.info.get("entered") for s in states)
     assert tr._entering is None  # the frames were spent
+
+
+def test_a_detectors_first_box_at_the_edge_arms_it():
+    """A detection that starts the tracking after frames without one is a box given, as the first frame's is."""
+    frames, gt = _scene(1, "left")
+    first = int(np.flatnonzero(np.isfinite(gt[:, 0]))[0])
+
+    def detector(frame):
+        t = next(i for i, f in enumerate(frames) if f is frame)
+        return [] if t < first else [tuple(gt[t]) + (0.9,)]
+
+    tr = pftrack.create_tracker("color-pf", seed=0, detector=detector)
+    assert tr.init_detect(frames[0]).lost
+    states = [tr.update(f) for f in frames[1:first + 8]]
+    assert tr.mode == "tracking"
+    entering = [bool(s.info.get("entering")) for s in states[first:]]
+    assert entering[:3] == [True, True, True]
+    assert states[first + 2].box[2] > 2 * gt[first][2]  # grown beyond the sliver detected
