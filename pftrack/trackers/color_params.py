@@ -195,8 +195,8 @@ class ColorModelParams(Params):
         "Datasets that mark a target absent once it is mostly out of the frame (TLD) favour about 0.4."))
     enter_extent: int = param(0, ge=0, le=100_000, doc=(
         "A first box touching the frame's edge may hold only the part of a target coming in: for at most this many "
-        "frames the extent across that edge is measured on each frame and reported, and the tracker starts again "
-        "from that box once it has left the edge (trackers.entering, cues.extent). 0: off."))
+        "frames its extent across that edge, never narrower than the box followed, is measured and reported; once "
+        "it has left the edge the tracker restarts from it if 1.25x wider (trackers.entering, cues.extent). 0: off."))
     edge_share: float = param(0.0, ge=0, le=1, doc=(
         "With loss_test='likelihood': while less than this fraction of the estimate's box lies inside the frame, "
         "the loss test scores it as the in-frame fraction / edge_share of its score plus the rest of the mean score "
