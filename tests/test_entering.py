@@ -211,3 +211,45 @@ def test_a_detectors_first_box_at_the_edge_arms_it():
     entering = [bool(s.info.get("entering")) for s in states[first:]]
     assert entering[:3] == [True, True, True]
     assert states[first + 2].box[2] > 2 * gt[first][2]  # grown beyond the sliver detected
+
+
+def test_change_mask():
+    from pftrack.cues.extent import change_mask
+
+    first = np.full((10, 20), 100, np.uint8)
+    now = first.copy()
+    now[2:8, 3:9] = 130
+    now[0, 0] = 110  # within the levels
+    mask = change_mask(now, first)
+    assert mask.dtype == np.uint8 and mask.sum() == 36 and mask[2:8, 3:9].all()
+    assert change_mask(np.full_like(first, 160), first) is None  # the light changed, not a target
+
+
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
+def test_a_grey_sliver_grows_by_what_changed(name):
+    """On grey input the entering targets have their ground's levels: the extent is read on what changed against
+    the first frame, and the filter restarts as soon as that has grown."""
+    means_on, means_off = [], []
+    for seed in (0, 1, 2):
+        frames, gt = _scene(seed, "left")
+        frames = [np.repeat(f.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2) for f in frames]
+        states, on = _run(name, frames, gt, enter_extent=30, enter_grey=True)
+        _, off = _run(name, frames, gt, enter_extent=30, enter_grey=False)
+        means_on.append(on.mean())
+        means_off.append(off.mean())
+        assert any(s.info.get("entered") for s in states)
+    assert np.mean(means_on) > np.mean(means_off) + 0.3, (means_on, means_off)
+
+
+def test_a_grey_view_whose_light_changes_measures_nothing():
+    frames, gt = _scene(0, "left")
+    frames = [np.repeat(f.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2) for f in frames]
+    first = int(np.flatnonzero(np.isfinite(gt[:, 0]))[0])
+    lit = [frames[first]] + [np.clip(f.astype(np.int16) + 60, 0, 255).astype(np.uint8) for f in frames[first + 1:]]
+    tr = pftrack.create_tracker("fusion-pf", seed=0, enter_extent=30, enter_grey=True)
+    tr.init(lit[0], gt[first])
+    assert tr._entering is not None and "first" in tr._entering
+    states = [tr.update(f) for f in lit[1:6]]
+    assert not any(s.info.get("entered") for s in states)
+    for s in states:
+        assert s.box[2] <= 2 * gt[first][2] + 2  # nothing measured: the box followed

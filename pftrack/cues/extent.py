@@ -16,18 +16,30 @@ extent across the edge is measured on each frame instead:
   covers at least the visible target, and a run may be only the part of it whose colours stand out most.
 
 While the run still reaches the edge the target is still coming in; once it has left the edge the target is in view
-and the tracker may start again from that box.  Pure functions: arrays in, arrays out.
+and the tracker may start again from that box.
+
+On grey input the target's levels are often the ground's, so no bin is more frequent inside the first box than around
+it.  There the object-like pixels of a band are instead those more than :data:`CHANGE_LEVELS` levels from the first
+frame's at the same place (:func:`change_mask`): what the target covers now and did not then.  Light that changes or
+a camera that moves changes most of the band, and nothing is measured then.  Pure functions: arrays in, arrays out.
 """
 
 from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 
 from .contrast import foreground_lut
 
-__all__ = ["band_profile", "edge_sides", "extent_box", "grow_run", "object_surround_lut", "surround_roi"]
+__all__ = ["CHANGE_LEVELS", "GLOBAL_CHANGE", "band_profile", "change_mask", "edge_sides", "extent_box", "grow_run",
+           "object_surround_lut", "surround_roi"]
+
+#: on grey input a pixel is the target's where it differs from the first frame's by more than this many levels
+CHANGE_LEVELS = 12
+#: ... unless more than this share of the band changed (light or camera motion: nothing is measured then)
+GLOBAL_CHANGE = 0.5
 
 
 def edge_sides(box, width: int, height: int, tol: float = 1.0) -> str:
@@ -101,3 +113,14 @@ def extent_box(box, run: tuple[int, int], offset: int, axis: int, max_extent: fl
         a0 = min(max(c - 0.5 * max_extent, a0), a1 - max_extent)
         a1 = a0 + max_extent
     return (a0, y, a1 - a0, h) if axis == 1 else (x, a0, w, a1 - a0)
+
+
+def change_mask(band: np.ndarray, first: np.ndarray, levels: float = CHANGE_LEVELS,
+                global_share: float = GLOBAL_CHANGE) -> np.ndarray | None:
+    """``uint8`` 0/1: the pixels of a grey ``band`` more than ``levels`` from the first frame's ``first`` (same
+    shape); None when more than ``global_share`` of them changed (the light or the view, not a target)."""
+    diff = cv2.absdiff(band, first)
+    mask = (diff > levels).view(np.uint8)
+    if mask.size == 0 or np.count_nonzero(mask) > global_share * mask.size:
+        return None
+    return mask

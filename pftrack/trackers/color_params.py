@@ -47,8 +47,7 @@ class ColorModelParams(Params):
         "unseen; 'equalize' equalises each channel over the frame; 'still' divides each channel by the frame's "
         "gain against the initialisation frame, measured on the same pixels (the median of their log-ratios) and "
         "taken only while the view is still (their median absolute deviation at most 0.1), held otherwise "
-        "(pftrack.cues.still_gain; an exposure that settles, lights coming on); 'none' uses raw colours (the "
-        "paper)."))
+        "(pftrack.cues.still_gain; an exposure that settles, lights coming on); 'none': raw colours (the paper)."))
     dark_stretch: float = param(0.0, ge=0, le=8, doc=(
         "RGB features of a dark camera: when the initialisation frame's bright end (its 99.5th percentile over "
         "the channels) needs a gain of at least this to reach level 255, the 8x8x8 bins are spread over the "
@@ -89,8 +88,7 @@ class ColorModelParams(Params):
         "sequences read at most 0.110 (an exposure settling), lamps times 1.3 0.26 "
         "(docs/rules/sot_light_jump_rule.txt)."))
     normalize_rate: float = param(0.05, ge=0, le=1, doc=(
-        "'adaptive' normalisation: how fast the reference levels follow the frames the loss test is confident "
-        "on."))
+        "'adaptive' normalisation: how fast the reference levels follow the frames the loss test trusts."))
     illumination: Literal["none", "quotient"] = param("none", doc=(
         "Grey input under changing light: 'quotient' divides every grey frame by its own smoothed copy (the "
         "self-quotient image, pftrack.cues.illumination; Wang et al. 2004, a single-scale Retinex), so that a "
@@ -197,6 +195,9 @@ class ColorModelParams(Params):
         "A first box touching the frame's edge may hold only the part of a target coming in: for at most this many "
         "frames its extent across that edge, never narrower than the box followed, is measured and reported; once "
         "it has left the edge the tracker restarts from it if 1.25x wider (trackers.entering, cues.extent). 0: off."))
+    enter_grey: bool = param(False, doc=(
+        "enter_extent on grey input: read the extent on what changed against the first frame, restarting once it is "
+        "1.25x the box followed (cues.extent.change_mask). Off: failed docs/rules/enter_extent_grey_rule.txt."))
     edge_share: float = param(0.0, ge=0, le=1, doc=(
         "With loss_test='likelihood': while less than this fraction of the estimate's box lies inside the frame, "
         "the loss test scores it as the in-frame fraction / edge_share of its score plus the rest of the mean score "

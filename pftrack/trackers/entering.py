@@ -10,14 +10,21 @@ from the measured box on that frame, keeping its velocity, if that box is at lea
 one across the edge; otherwise (the first box held the target already) the phase ends with nothing changed.  A
 declared loss ends it too.  Armed only at a box given (the first frame's, or a detector's), never at the tracker's
 own restarts.
+
+With ``enter_grey`` (an option, off), on grey input the extent is read instead on what changed against the first
+frame (:func:`~pftrack.cues.extent.change_mask`), and the filter restarts as soon as the measured box is
+:data:`GROWN` times the followed one, the phase going on: a grey sliver holds too little for the filter to follow.
 """
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
-from ..cues.extent import band_profile, edge_sides, extent_box, grow_run, object_surround_lut, surround_roi
+from ..cues.extent import (band_profile, change_mask, edge_sides, extent_box, grow_run, object_surround_lut,
+                           surround_roi)
 from ..filtering.dynamics import VX, VY
+from ..frames import bgr_view
 from ..geometry import visible_box
 from .base import TrackState
 
@@ -27,6 +34,8 @@ __all__ = ["EnteringMixin", "GROWN", "MAX_EXTENT_RATIO"]
 MAX_EXTENT_RATIO = 3.0
 #: the tracker restarts from the measured box only when it spans at least this many times the tracked box
 GROWN = 1.25
+#: a change mask's values as "object-like" through band_profile's table
+_MASK_LUT = np.array([0.0, 1.0], dtype=np.float32)
 
 
 class EnteringMixin:
@@ -51,10 +60,14 @@ class EnteringMixin:
         if not options:
             return
         _, side, axis = min(options)
-        roi = surround_roi(box, fw, fh)
-        feats = self.cue.prepare(frame, roi, 1)
-        lut = object_surround_lut(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins)
-        self._entering = {"side": side, "axis": axis, "lut": lut, "until": self.frame_index + self.params.enter_extent}
+        ent = {"side": side, "axis": axis, "until": self.frame_index + self.params.enter_extent}
+        if self.cue.color_space == "gray" and self.params.enter_grey:  # what changes against this frame
+            ent["first"] = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+            ent["lut"] = _MASK_LUT
+        else:
+            feats = self.cue.prepare(frame, surround_roi(box, fw, fh), 1)
+            ent["lut"] = object_surround_lut(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins)
+        self._entering = ent
 
     def _entering_step(self, frame: np.ndarray, state: TrackState) -> TrackState:
         """After a tracked frame of the phase: the measured box, or a restart from it (see the module docstring)."""
@@ -68,7 +81,9 @@ class EnteringMixin:
         if measured is None:
             return state
         new_box, at_edge, grown = measured
-        if at_edge and self.frame_index < ent["until"]:
+        ends = not at_edge or self.frame_index >= ent["until"]
+        early = "first" in ent and grown and not ends  # grey: a sliver holds too little to follow; restart now
+        if not ends and not early:
             return TrackState(box=new_box, score=state.score, lost=state.lost, particles=state.particles,
                               weights=state.weights, state_names=state.state_names,
                               info={**state.info, "entering": True, "box_tracked": state.box})
@@ -76,13 +91,15 @@ class EnteringMixin:
         if not grown:  # the tracked box held the target already
             return state
         velocity = self.estimate[[VX, VY]].copy()
-        restarted = self._init(frame, new_box)  # not a first box: the phase is not armed again
+        restarted = self._init(frame, new_box)  # not a first box: the phase is not armed again ...
+        if early:
+            self._entering = ent  # ... but for a grey restart while the target still comes in
         self.ps.states[:, VX] = velocity[0]
         self.ps.states[:, VY] = velocity[1]
         self.estimate[[VX, VY]] = velocity
         return TrackState(box=restarted.box, score=state.score, lost=False, particles=self.ps.states.copy(),
                           weights=self.ps.w / self.ps.w.sum(), state_names=restarted.state_names,
-                          info={**state.info, "entered": True, "box_tracked": state.box})
+                          info={**state.info, "entered": True, "entering": early, "box_tracked": state.box})
 
     def _measure_extent(self, frame: np.ndarray, box, ent: dict):
         """``(box, at_edge, grown)``: the tracked ``box`` with its extent across the phase's edge measured on
@@ -99,8 +116,15 @@ class EnteringMixin:
             lo, hi, size, other = int(np.floor(y)), int(np.ceil(y + h)), fh, w
         if roi[2] <= roi[0] or roi[3] <= roi[1]:
             return None
-        feats = self.cue.prepare(frame, roi, 1)
-        run = grow_run(band_profile(feats.bins, ent["lut"], axis), lo, hi)
+        if "first" in ent:
+            x0, y0, x1, y1 = roi
+            band = change_mask(cv2.cvtColor(bgr_view(frame[y0:y1, x0:x1]), cv2.COLOR_BGR2GRAY),
+                               ent["first"][y0:y1, x0:x1])
+            if band is None:
+                return None
+        else:
+            band = self.cue.prepare(frame, roi, 1).bins
+        run = grow_run(band_profile(band, ent["lut"], axis), lo, hi)
         if run is None:
             return None
         new_box = extent_box(box, run, 0, axis, MAX_EXTENT_RATIO * other, keep=True)
