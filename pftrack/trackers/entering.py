@@ -18,13 +18,13 @@ frame (:func:`~pftrack.cues.extent.change_mask`), and the filter restarts as soo
 
 from __future__ import annotations
 
-import cv2
+from dataclasses import replace
+
 import numpy as np
 
 from ..cues.extent import (band_profile, change_mask, edge_sides, extent_box, grow_run, object_surround_lut,
                            surround_roi)
 from ..filtering.dynamics import VX, VY
-from ..frames import bgr_view
 from ..geometry import visible_box
 from .base import TrackState
 
@@ -62,7 +62,7 @@ class EnteringMixin:
         _, side, axis = min(options)
         ent = {"side": side, "axis": axis, "until": self.frame_index + self.params.enter_extent}
         if self.cue.color_space == "gray" and self.params.enter_grey:  # what changes against this frame
-            ent["first"] = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+            ent["first"] = self._frame_gray(frame).copy()  # the tracker's one grey image of the frame
             ent["lut"] = _MASK_LUT
         else:
             feats = self.cue.prepare(frame, surround_roi(box, fw, fh), 1)
@@ -84,9 +84,7 @@ class EnteringMixin:
         ends = not at_edge or self.frame_index >= ent["until"]
         early = "first" in ent and grown and not ends  # grey: a sliver holds too little to follow; restart now
         if not ends and not early:
-            return TrackState(box=new_box, score=state.score, lost=state.lost, particles=state.particles,
-                              weights=state.weights, state_names=state.state_names,
-                              info={**state.info, "entering": True, "box_tracked": state.box})
+            return replace(state, box=new_box, info={**state.info, "entering": True, "box_tracked": state.box})
         self._entering = None
         if not grown:  # the tracked box held the target already
             return state
@@ -97,9 +95,8 @@ class EnteringMixin:
         self.ps.states[:, VX] = velocity[0]
         self.ps.states[:, VY] = velocity[1]
         self.estimate[[VX, VY]] = velocity
-        return TrackState(box=restarted.box, score=state.score, lost=False, particles=self.ps.states.copy(),
-                          weights=self.ps.w / self.ps.w.sum(), state_names=restarted.state_names,
-                          info={**state.info, "entered": True, "entering": early, "box_tracked": state.box})
+        return self._state(box=restarted.box, score=state.score, lost=False,
+                           info={**state.info, "entered": True, "entering": early, "box_tracked": state.box})
 
     def _measure_extent(self, frame: np.ndarray, box, ent: dict):
         """``(box, at_edge, grown)``: the tracked ``box`` with its extent across the phase's edge measured on
@@ -118,8 +115,7 @@ class EnteringMixin:
             return None
         if "first" in ent:
             x0, y0, x1, y1 = roi
-            band = change_mask(cv2.cvtColor(bgr_view(frame[y0:y1, x0:x1]), cv2.COLOR_BGR2GRAY),
-                               ent["first"][y0:y1, x0:x1])
+            band = change_mask(self._frame_gray(frame)[y0:y1, x0:x1], ent["first"][y0:y1, x0:x1])
             if band is None:
                 return None
         else:
