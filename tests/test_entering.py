@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 import pftrack
-from pftrack.cues.extent import band_profile, edge_sides, extent_box, grow_run, object_surround_lut, surround_roi
+import pftrack.trackers.entering as entering_mod
+from pftrack.cues.extent import (SURROUND, band_profile, edge_sides, extent_box, grow_run, object_surround_lut,
+                                 surround_roi)
 from pftrack.geometry import iou, visible_box
 from pftrack.synth import entering_scene, simple_scene
 
@@ -23,8 +25,11 @@ def test_edge_sides():
 
 
 def test_surround_roi_is_cut_to_the_frame():
-    assert surround_roi((0, 100, 4, 60), 320, 240) == (0, 70, 34, 190)
-    assert surround_roi((10, 10, 20, 10), 320, 240) == (0, 0, 40, 30)
+    assert surround_roi((0, 100, 4, 60), 320, 240, 0.5) == (0, 70, 34, 190)
+    assert surround_roi((10, 10, 20, 10), 320, 240, 0.5) == (0, 0, 40, 30)
+    assert SURROUND == 0.75
+    assert surround_roi((0, 100, 4, 60), 320, 240) == (0, 55, 49, 205)
+    assert surround_roi((300, 10, 20, 10), 320, 240) == (285, 0, 320, 35)
 
 
 def test_object_surround_lut():
@@ -193,6 +198,47 @@ def test_a_whole_target_at_the_edge_is_not_cut_to_its_most_distinct_part():
         assert s.box[2] >= tracked[2] - 1e-9
     assert not any(s.info.get("entered") for s in states)
     assert tr._entering is None  # the frames were spent
+
+
+def _walker_leaving_the_edge(n: int = 14):
+    """A walker (red over blue, 20 x 60) whose first box, at the right edge, holds a strip of ground whose colour the
+    first box's near surround lacks (it lies 36-56 px to the left); he walks away from the edge at 4 px a frame."""
+    rng = np.random.default_rng(11)
+    ground = (60, 110, 150)
+    frames, boxes = [], []
+    for t in range(n):
+        f = rng.normal(128, 10, (240, 320, 3)).clip(0, 255).astype(np.uint8)
+        f[100:180, 236:256] = ground
+        f[100:180, 290:320] = ground
+        x = 296 - 4 * t
+        f[110:140, x:x + 20] = (40, 40, 210)
+        f[140:170, x:x + 20] = (200, 90, 30)
+        frames.append(f)
+        boxes.append((x - 4.0, 105.0, 28.0, 70.0))
+    boxes[0] = (292.0, 105.0, 28.0, 70.0)  # touches the right edge
+    return frames, boxes
+
+
+@pytest.mark.parametrize("name", ["color-pf", "fusion-pf"])
+def test_ground_a_walker_hid_at_the_edge_is_not_taken_for_him(name, monkeypatch):
+    """Ground that the first box hid reads as background on the first frame's table when the surround reaches far
+    enough (SURROUND): the walker's box is not widened to the edge.  With the former half side it was."""
+    frames, boxes = _walker_leaving_the_edge()
+
+    def run():
+        tr = pftrack.create_tracker(name, seed=0, enter_extent=8)
+        tr.init(frames[0], boxes[0])
+        assert tr._entering is not None
+        states = [tr.update(f) for f in frames[1:]]
+        return states, [s.box[2] for s in states]
+
+    states, widths = run()
+    assert not any(s.info.get("entered") for s in states)
+    assert max(widths) < 1.25 * 28
+    assert np.mean([iou(s.box, b) for s, b in zip(states, boxes[1:])]) > 0.5
+    monkeypatch.setattr(entering_mod, "surround_roi", lambda box, w, h: surround_roi(box, w, h, 0.5))
+    states, widths = run()
+    assert max(widths) > 1.25 * 28  # the former surround took the ground for him
 
 
 def test_a_detectors_first_box_at_the_edge_arms_it():

@@ -6,8 +6,8 @@ sliver's histogram as well as the whole does, so the box keeps its first width. 
 extent across the edge is measured on each frame instead:
 
 - at the first frame, each colour bin ``u`` gets ``P(u) = H_O(u) / (H_O(u) + H_S(u))`` from the pixel counts inside
-  the box (``H_O``) and in a surround of half the box's larger side around it (``H_S``), as the object-vs-surround
-  models of :mod:`pftrack.cues.contrast` do (:func:`object_surround_lut`);
+  the box (``H_O``) and in a surround of :data:`SURROUND` times the box's larger side around it (``H_S``), as the
+  object-vs-surround models of :mod:`pftrack.cues.contrast` do (:func:`object_surround_lut`);
 - on a later frame, the band of rows (for a left or right edge; columns for the top or bottom) the tracked box spans
   is read across the frame: the share ``f(c)`` of each line ``c`` of the band whose pixels are object-like
   (``P > 1/2``), smoothed over three lines (:func:`band_profile`);
@@ -33,9 +33,13 @@ import numpy as np
 
 from .contrast import foreground_lut
 
-__all__ = ["CHANGE_LEVELS", "GLOBAL_CHANGE", "band_profile", "change_mask", "edge_sides", "extent_box", "grow_run",
-           "object_surround_lut", "surround_roi"]
+__all__ = ["CHANGE_LEVELS", "GLOBAL_CHANGE", "SURROUND", "band_profile", "change_mask", "edge_sides", "extent_box",
+           "grow_run", "object_surround_lut", "surround_roi"]
 
+#: the first frame's surround reaches this many times the box's larger side beyond the box on each side: at an edge
+#: one side of it is missing, and with 0.5 the ground a walker hid on the first frame read as object-like when he
+#: walked away from a window's edge (0.75 chosen under docs/rules/enter_extent_surround_rule.txt)
+SURROUND = 0.75
 #: on grey input a pixel is the target's where it differs from the first frame's by more than this many levels
 CHANGE_LEVELS = 12
 #: ... unless more than this share of the band changed (light or camera motion: nothing is measured then)
@@ -49,10 +53,11 @@ def edge_sides(box, width: int, height: int, tol: float = 1.0) -> str:
     return "".join(s for s, t in zip("LTRB", touch) if t)
 
 
-def surround_roi(box, width: int, height: int) -> tuple[int, int, int, int]:
-    """The region ``(x0, y0, x1, y1)`` of the box grown by half its larger side on each side, cut to the frame."""
+def surround_roi(box, width: int, height: int, margin: float = SURROUND) -> tuple[int, int, int, int]:
+    """The region ``(x0, y0, x1, y1)`` of the box grown by ``margin`` times its larger side on each side, cut to the
+    frame."""
     x, y, w, h = (float(v) for v in box)
-    m = 0.5 * max(w, h)
+    m = margin * max(w, h)
     return (max(int(math.floor(x - m)), 0), max(int(math.floor(y - m)), 0),
             min(int(math.ceil(x + w + m)), width), min(int(math.ceil(y + h + m)), height))
 
