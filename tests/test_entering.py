@@ -7,8 +7,8 @@ import pytest
 
 import pftrack
 import pftrack.trackers.entering as entering_mod
-from pftrack.cues.extent import (SURROUND, band_profile, edge_sides, extent_box, grow_run, object_surround_lut,
-                                 surround_roi)
+from pftrack.cues.extent import (SURROUND, SURROUND_GREY, band_profile, edge_sides, extent_box, grow_run,
+                                 object_surround_lut, surround_roi)
 from pftrack.geometry import iou, visible_box
 from pftrack.synth import entering_scene, simple_scene
 
@@ -236,9 +236,23 @@ def test_ground_a_walker_hid_at_the_edge_is_not_taken_for_him(name, monkeypatch)
     assert not any(s.info.get("entered") for s in states)
     assert max(widths) < 1.25 * 28
     assert np.mean([iou(s.box, b) for s, b in zip(states, boxes[1:])]) > 0.5
-    monkeypatch.setattr(entering_mod, "surround_roi", lambda box, w, h: surround_roi(box, w, h, 0.5))
+    monkeypatch.setattr(entering_mod, "SURROUND", 0.5)
     states, widths = run()
     assert max(widths) > 1.25 * 28  # the former surround took the ground for him
+
+
+def test_grey_features_keep_the_former_surround():
+    """The wider surround was chosen on colour input; a grey frame's table is taken over the former half side."""
+    frames, boxes = _walker_leaving_the_edge()
+    grey = np.repeat(frames[0].mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2)
+    for frame, margin in ((frames[0], SURROUND), (grey, SURROUND_GREY)):
+        tr = pftrack.create_tracker("color-pf", seed=0, enter_extent=8)
+        tr.init(frame, boxes[0])
+        assert (tr.cue.color_space == "gray") == (frame is grey)
+        feats = tr.cue.prepare(frame, surround_roi(boxes[0], 320, 240, margin), 1)
+        expect = object_surround_lut(feats.bins, feats.x0, feats.y0, boxes[0], tr.cue.feature_bins)
+        np.testing.assert_array_equal(tr._entering["lut"], expect)
+    assert SURROUND_GREY == 0.5 < SURROUND
 
 
 def test_a_detectors_first_box_at_the_edge_arms_it():

@@ -33,13 +33,16 @@ import numpy as np
 
 from .contrast import foreground_lut
 
-__all__ = ["CHANGE_LEVELS", "GLOBAL_CHANGE", "SURROUND", "band_profile", "change_mask", "edge_sides", "extent_box",
-           "grow_run", "object_surround_lut", "surround_roi"]
+__all__ = ["CHANGE_LEVELS", "GLOBAL_CHANGE", "SURROUND", "SURROUND_GREY", "band_profile", "change_mask", "edge_sides",
+           "extent_box", "grow_run", "object_surround_lut", "surround_roi"]
 
 #: the first frame's surround reaches this many times the box's larger side beyond the box on each side: at an edge
 #: one side of it is missing, and with 0.5 the ground a walker hid on the first frame read as object-like when he
-#: walked away from a window's edge (0.75 chosen under docs/rules/enter_extent_surround_rule.txt)
+#: walked away from a window's edge (0.75 chosen on colour input under docs/rules/enter_extent_surround_rule.txt)
 SURROUND = 0.75
+#: ... on grey features (levels x orientations), where that rule was not run: as before (0.75 there cost the grey
+#: copies of the tune entering scenes and windows, docs/robustness-exits.md)
+SURROUND_GREY = 0.5
 #: on grey input a pixel is the target's where it differs from the first frame's by more than this many levels
 CHANGE_LEVELS = 12
 #: ... unless more than this share of the band changed (light or camera motion: nothing is measured then)

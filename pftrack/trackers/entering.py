@@ -22,8 +22,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..cues.extent import (band_profile, change_mask, edge_sides, extent_box, grow_run, object_surround_lut,
-                           surround_roi)
+from ..cues.extent import (SURROUND, SURROUND_GREY, band_profile, change_mask, edge_sides, extent_box, grow_run,
+                           object_surround_lut, surround_roi)
 from ..filtering.dynamics import VX, VY
 from ..geometry import visible_box
 from .base import TrackState
@@ -65,7 +65,8 @@ class EnteringMixin:
             ent["first"] = self._frame_gray(frame).copy()  # the tracker's one grey image of the frame
             ent["lut"] = _MASK_LUT
         else:
-            feats = self.cue.prepare(frame, surround_roi(box, fw, fh), 1)
+            margin = SURROUND_GREY if self.cue.color_space == "gray" else SURROUND
+            feats = self.cue.prepare(frame, surround_roi(box, fw, fh, margin), 1)
             ent["lut"] = object_surround_lut(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins)
         self._entering = ent
 
