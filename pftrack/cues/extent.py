@@ -6,8 +6,9 @@ sliver's histogram as well as the whole does, so the box keeps its first width. 
 extent across the edge is measured on each frame instead:
 
 - at the first frame, each colour bin ``u`` gets ``P(u) = H_O(u) / (H_O(u) + H_S(u))`` from the pixel counts inside
-  the box (``H_O``) and in a surround of :data:`SURROUND` times the box's larger side around it (``H_S``), as the
-  object-vs-surround models of :mod:`pftrack.cues.contrast` do (:func:`object_surround_lut`);
+  the box (``H_O``) and in a surround of :data:`SURROUND` times the box's larger side around it (``H_S``;
+  :data:`SURROUND_GREY` on grey features), as the object-vs-surround models of :mod:`pftrack.cues.contrast` do
+  (:func:`object_surround_lut`);
 - on a later frame, the band of rows (for a left or right edge; columns for the top or bottom) the tracked box spans
   is read across the frame: the share ``f(c)`` of each line ``c`` of the band whose pixels are object-like
   (``P > 1/2``), smoothed over three lines (:func:`band_profile`);
