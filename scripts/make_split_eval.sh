@@ -5,8 +5,8 @@
 #           the people of PETS 2009 S2.L1 frames 1-200 (one sequence each, scripts/make_mot_sot.py),
 #           synthetic vanish/leave/exit/varied/camouflage/teleport scenes, seeds 0-7   (defaults were chosen here);
 #           and, in a run of their own, the PETS walkers of frames 1-200 seen through four narrower windows
-#           (scripts/make_pets_views.py: real exits among look-alikes), and the five real targets seen through the
-#           same windows (exits of one target)
+#           (scripts/make_pets_views.py: real exits among look-alikes; in another run, windows of 40 % and 70 %),
+#           and the five real targets seen through the same windows (exits of one target)
 #   report: otb_motorrolling, tld_pedestrian2, davis16_blackswan, davis16_car-shadow, their grey and grey+light
 #           variants, the people of PETS frames 201-400, freshly seeded synthetic scenes, seeds 100-107
 #           (never tuned on); and the PETS windows of frames 201-400, and the four real targets' windows
@@ -40,6 +40,13 @@ for s in otb_motorrolling tld_pedestrian2 davis16_blackswan davis16_car-shadow; 
   --out "$WORK/tune_views"
 [ -d "$WORK/report_views" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 201-400 \
   --out "$WORK/report_views"
+# the same walkers through windows of 40 % and 70 % of the frame (docs/rules/enter_extent_surround_rule.txt)
+for share in 40 70; do
+  [ -d "$WORK/tune_views$share" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 1-200 \
+    --share "0.$share" --out "$WORK/tune_views$share"
+  [ -d "$WORK/report_views$share" ] || "$PY" scripts/make_pets_views.py "$DATA/pets09_s2l1_dev" --frames 201-400 \
+    --share "0.$share" --out "$WORK/report_views$share"
+done
 for split in tune report; do
   if [ ! -d "$WORK/${split}_exits" ]; then
     for s in "$WORK/${split}_real"/*; do "$PY" scripts/make_pets_views.py "$s" --out "$WORK/${split}_exits"; done
@@ -62,6 +69,9 @@ for split in tune report; do
   # real exits: PETS walkers through narrower windows (docs/robustness.md), a run of their own
   "$PFTRACK" eval "$WORK/${split}_views" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
     --report "$WORK/${split}_views_eval" --title "pftrack: $split split, PETS views" > "$WORK/${split}_views.md"
+  "$PFTRACK" eval "$WORK/${split}_views40" "$WORK/${split}_views70" --trackers "$TRACKERS" --seeds "$SEEDS" \
+    --workers 2 --quiet --report "$WORK/${split}_views_more_eval" \
+    --title "pftrack: $split split, PETS views of 40 % and 70 %" > "$WORK/${split}_views_more.md"
   # exits of one target: the real sequences of the split through the same windows
   "$PFTRACK" eval "$WORK/${split}_exits" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
     --report "$WORK/${split}_exits_eval" --title "pftrack: $split split, windows of the real sequences" \
