@@ -61,12 +61,12 @@ class EnteringMixin:
             return
         _, side, axis = min(options)
         ent = {"side": side, "axis": axis, "until": self.frame_index + self.params.enter_extent}
-        if self.cue.color_space == "gray" and self.params.enter_grey:  # what changes against this frame
+        grey = self.cue.color_space == "gray"
+        if grey and self.params.enter_grey:  # what changes against this frame
             ent["first"] = self._frame_gray(frame).copy()  # the tracker's one grey image of the frame
             ent["lut"] = _MASK_LUT
-        else:
-            margin = SURROUND_GREY if self.cue.color_space == "gray" else SURROUND
-            feats = self.cue.prepare(frame, surround_roi(box, fw, fh, margin), 1)
+        else:  # the wider surround was chosen on colour input; grey features keep the former one
+            feats = self.cue.prepare(frame, surround_roi(box, fw, fh, SURROUND_GREY if grey else SURROUND), 1)
             ent["lut"] = object_surround_lut(feats.bins, feats.x0, feats.y0, box, self.cue.feature_bins)
         self._entering = ent
 
