@@ -172,6 +172,8 @@ class LossDetector:
         self.mu_t = float(initial_score)
         self.var_t = max(float(sd), self.sd_floor_target) ** 2
         self.unseen = 0
+        self.learned = False  # no score learned since this reset: the history is still the prior
+        self.refused: list[float] = []  # scores of confident frames refused while the history is the prior
         self.mu_b = self.app_mu = 0.0
         self.sd_b = self.app_sd = self.sd_floor_background
         self.miss = 0
@@ -240,8 +242,19 @@ class LossDetector:
             self.mu_t += a * d
             self.var_t = max((1.0 - a) * (self.var_t + a * d * d), self.sd_floor_target ** 2)
             self.unseen = 0
+            self.learned = True
         else:
             self.unseen += 1
+
+    def seed(self, s: float) -> None:
+        """Start the history at ``s``, keeping the prior's spread: what the target scores when the prior (a
+        self-match at the first frame) did not hold for it (see :meth:`FusedLoss._learn`)."""
+        if self.frozen:
+            return
+        self.mu_t = float(s)
+        self.unseen = 0
+        self.learned = True
+        self.refused = []
 
     def confident(self, s: float, *, llr: float | None = None, z: float | None = None) -> bool:
         """Is ``s`` clearly the target's (its ratio ``llr``, default the last one computed, above
@@ -282,6 +295,11 @@ class LossDetector:
             return self.confident(s, llr=llr, z=self._acquire_bound(llr)), llr
         finally:
             self.unseen -= 1
+
+
+#: Confident frames on which a cue's score is refused, its history never having learned, before their median
+#: replaces the history's prior (:meth:`FusedLoss._learn`).
+SEED_AFTER = 10
 
 
 class FusedLoss:
@@ -373,12 +391,26 @@ class FusedLoss:
 
     def _learn(self, s: list[float], own: list[float | None]) -> None:
         """Each cue learns its score when the fused ratio is confident, the score within ``learn_z`` of its history
-        and its own ratio (``own``, computed on the same statistics) target-like."""
+        and its own ratio (``own``, computed on the same statistics) target-like.
+
+        A cue's history starts as a prior: the score of the first frame's box against itself (1 for a correlation
+        or a Bhattacharyya coefficient). A target whose structure does not repeat from frame to frame (a patch of
+        one colour: its correlation is 0 on every frame, or sensor noise on such a patch) never scores near that
+        prior, so its history could never learn, and it would veto every model update and every re-acquisition
+        for good. So once the usual rule has refused a cue's scores on :data:`SEED_AFTER` confident frames
+        before its history ever learned, their median starts the history; from then on the usual rule holds. (On
+        the development sequences a history that learns does so after at most two refusals.) A cue whose history
+        then equals its background's discriminates nothing and adds no evidence (:func:`score_llr`)."""
         if self.frozen:
             return
         confident = self.llr > self.reacquire_margin
         for m, v, r in zip(self.members, s, own):
-            m.learn(v, confident and r is not None and (v - m.mu_t) / m.sd_t > -m.learn_z and r >= 0.0)
+            ok = confident and r is not None and (v - m.mu_t) / m.sd_t > -m.learn_z and r >= 0.0
+            m.learn(v, ok)
+            if confident and not ok and not m.learned and r is not None:
+                m.refused.append(v)
+                if len(m.refused) >= SEED_AFTER:
+                    m.seed(float(np.median(m.refused)))
 
     def unlike_history(self, s: list[float]) -> bool:
         """With ``history_miss_z`` > 0: at least two cues are available and every available cue's score lies more
