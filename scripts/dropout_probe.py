@@ -1,7 +1,7 @@
 """A camera that drops out, fades or freezes: how the trackers come through it (docs/robustness-cameras.md).
 
     python scripts/dropout_probe.py [--kinds none,black,white,fade,frozen] \
-        [--trackers fusion-pf,color-pf,local-motion-pf,opencv-csrt] [--seeds 5]
+        [--trackers fusion-pf,color-pf,local-motion-pf,opencv-csrt] [--seeds 0-4]
 
 Each scene (seeded, 300 frames of 160 x 120) is a two-colour box of 16 x 24 pixels circling over a background of
 random 8 x 8 blocks. Frames 100-109 are then all black (``black``) or all white (``white``), repeat frame 99
@@ -76,9 +76,9 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--kinds", default=",".join(KINDS))
     ap.add_argument("--trackers", default="fusion-pf,color-pf,local-motion-pf,opencv-csrt")
-    ap.add_argument("--seeds", default="5", help="a count (5: seeds 0-4), or e.g. 0-9 or 1,4,7")
+    ap.add_argument("--seeds", default="0-4", help="e.g. 0-9 or 1,4,7 (default 0-4)")
     args = ap.parse_args(argv)
-    seeds = list(range(int(args.seeds))) if args.seeds.isdigit() else parse_seeds(args.seeds)
+    seeds = parse_seeds(args.seeds)
     print("kind | tracker | IoU >= 0.5, frames 51-99 | width after 150 | IoU >= 0.5 after 150 | lost: visible, blank")
     for kind in args.kinds.split(","):
         for spec in parse_tracker_list(args.trackers):
