@@ -135,3 +135,24 @@ def face_proxy_run(name: str, seed: int, frames: int = 150, *, dim: tuple[float,
     states = [t.update(f) for f in imgs[1:]]
     iou = frame_ious(np.array([s.box for s in states]), gt[1:])
     return float(iou.mean()), [bool(s.lost) for s in states]
+
+
+#: :func:`hidden_box_frame`'s cycle: the box is seen for ``HIDDEN_PERIOD - HIDDEN_FRAMES`` frames, then hidden
+HIDDEN_PERIOD, HIDDEN_FRAMES = 400, 100
+#: its box at frame 0 (x, y, w, h)
+HIDDEN_BOX_START = (70.0, 70.0, 16.0, 24.0)
+
+
+def hidden_box_frame(bg: np.ndarray, t: int, noise: float = 0.0, rng: np.random.Generator | None = None
+                     ) -> np.ndarray:
+    """Frame ``t`` of a red box of one flat colour (16 x 24) circling over the 120 x 160 background ``bg``, hidden
+    on the last :data:`HIDDEN_FRAMES` frames of every :data:`HIDDEN_PERIOD`; with Gaussian noise of spread ``noise``
+    (drawn from ``rng``) on every pixel."""
+    f = bg.astype(np.float32)
+    if t % HIDDEN_PERIOD < HIDDEN_PERIOD - HIDDEN_FRAMES:
+        x = int(70 + 40 * np.sin(t / 30.0))
+        y = int(50 + 20 * np.cos(t / 45.0))
+        f[y:y + 24, x:x + 16] = (30, 40, 220)
+    if noise:
+        f += rng.normal(0.0, noise, f.shape).astype(np.float32)
+    return np.clip(f, 0, 255).astype(np.uint8)

@@ -16,8 +16,10 @@ import pytest
 from pftrack.filtering.loss import SEED_AFTER, FusedLoss
 from pftrack.trackers.registry import create_tracker
 
+from .conftest import HIDDEN_BOX_START, HIDDEN_FRAMES, HIDDEN_PERIOD, hidden_box_frame
+
 H, W = 120, 160
-PERIOD, HIDDEN = 400, 100
+PERIOD, HIDDEN = HIDDEN_PERIOD, HIDDEN_FRAMES
 
 
 def _fused(rng) -> FusedLoss:
@@ -73,25 +75,14 @@ def test_no_seed_before_a_confident_frame_nor_while_frozen():
     assert structure.mu_t == 1.0 and not structure.learned
 
 
-def _frame(bg: np.ndarray, t: int, noise: float, rng: np.random.Generator) -> np.ndarray:
-    f = bg.astype(np.float32)
-    if t % PERIOD < PERIOD - HIDDEN:
-        x = int(70 + 40 * np.sin(t / 30.0))
-        y = int(50 + 20 * np.cos(t / 45.0))
-        f[y:y + 24, x:x + 16] = (30, 40, 220)
-    if noise:
-        f += rng.normal(0.0, noise, f.shape).astype(np.float32)
-    return np.clip(f, 0, 255).astype(np.uint8)
-
-
 @pytest.mark.parametrize("noise", [0.0, 2.0])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_fusion_pf_finds_a_flat_target_again_after_each_occlusion(seed, noise):
     rng = np.random.default_rng(100 + seed)
     bg = rng.integers(0, 255, (H, W, 3), dtype=np.uint8)
     tracker = create_tracker("fusion-pf", seed=seed)
-    tracker.init(_frame(bg, 0, noise, rng), (70.0, 70.0, 16.0, 24.0))
-    lost = np.array([tracker.update(_frame(bg, t, noise, rng)).lost for t in range(1, 2 * PERIOD)])
+    tracker.init(hidden_box_frame(bg, 0, noise, rng), HIDDEN_BOX_START)
+    lost = np.array([tracker.update(hidden_box_frame(bg, t, noise, rng)).lost for t in range(1, 2 * PERIOD)])
     hidden = np.array([t % PERIOD >= PERIOD - HIDDEN for t in range(1, 2 * PERIOD)])
     assert lost[hidden].mean() > 0.9  # raised while the box is hidden
     second = np.arange(1, 2 * PERIOD) >= PERIOD + 15  # the second cycle, from 15 frames after the return

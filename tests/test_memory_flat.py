@@ -18,8 +18,10 @@ import pytest
 
 from pftrack.trackers.registry import create_tracker
 
+from .conftest import HIDDEN_BOX_START, HIDDEN_FRAMES, HIDDEN_PERIOD, hidden_box_frame
+
 H, W = 120, 160
-PERIOD, HIDDEN = 400, 100
+PERIOD, HIDDEN = HIDDEN_PERIOD, HIDDEN_FRAMES
 #: allowed growth of the traced heap over two cycles (800 frames): a list growing by one small tuple a frame
 #: (~100 bytes) would exceed it
 GROWTH_BYTES = 48 * 1024
@@ -30,18 +32,9 @@ def _background() -> np.ndarray:
     return rng.integers(0, 255, (H, W, 3), dtype=np.uint8)
 
 
-def _frame(bg: np.ndarray, t: int) -> np.ndarray:
-    f = bg.copy()
-    if t % PERIOD < PERIOD - HIDDEN:
-        x = int(70 + 40 * np.sin(t / 30.0))
-        y = int(50 + 20 * np.cos(t / 45.0))
-        f[y:y + 24, x:x + 16] = (30, 40, 220)
-    return f
-
-
 def _traced_after(tracker, bg: np.ndarray, start: int, stop: int) -> int:
     for t in range(start, stop):
-        tracker.update(_frame(bg, t))
+        tracker.update(hidden_box_frame(bg, t))
     gc.collect()
     return tracemalloc.get_traced_memory()[0]
 
@@ -50,7 +43,7 @@ def _traced_after(tracker, bg: np.ndarray, start: int, stop: int) -> int:
 def test_memory_is_flat_over_repeated_loss_cycles(name):
     bg = _background()
     tracker = create_tracker(name, seed=0)
-    tracker.init(_frame(bg, 0), (70.0, 70.0, 16.0, 24.0))
+    tracker.init(hidden_box_frame(bg, 0), HIDDEN_BOX_START)
     tracemalloc.start()
     try:
         first = _traced_after(tracker, bg, 1, PERIOD + 50)  # one cycle: lost, searched and re-acquired once
@@ -60,12 +53,13 @@ def test_memory_is_flat_over_repeated_loss_cycles(name):
     assert later - first < GROWTH_BYTES, f"{name}: the heap grew by {(later - first) / 1024:.0f} KB over 800 frames"
 
 
-def test_the_scene_makes_each_tracker_lose_and_find_the_target():
+@pytest.mark.parametrize("name", ["fusion-pf", "color-pf", "local-motion-pf"])
+def test_the_scene_makes_each_tracker_lose_and_find_the_target(name):
     """The cycles above mean something only if the trackers do lose the target and find it again."""
     bg = _background()
-    tracker = create_tracker("fusion-pf", seed=0)
-    tracker.init(_frame(bg, 0), (70.0, 70.0, 16.0, 24.0))
-    lost = [tracker.update(_frame(bg, t)).lost for t in range(1, 2 * PERIOD)]
+    tracker = create_tracker(name, seed=0)
+    tracker.init(hidden_box_frame(bg, 0), HIDDEN_BOX_START)
+    lost = [tracker.update(hidden_box_frame(bg, t)).lost for t in range(1, 2 * PERIOD)]
     hidden = [t % PERIOD >= PERIOD - HIDDEN for t in range(1, 2 * PERIOD)]
     assert np.mean([flag for flag, h in zip(lost, hidden) if h]) > 0.8
     assert np.mean([flag for flag, h in zip(lost, hidden) if not h]) < 0.1
@@ -86,7 +80,7 @@ class _Leaky:
 def test_the_check_catches_a_per_frame_leak():
     bg = _background()
     inner = create_tracker("color-pf", seed=0)
-    inner.init(_frame(bg, 0), (70.0, 70.0, 16.0, 24.0))
+    inner.init(hidden_box_frame(bg, 0), HIDDEN_BOX_START)
     tracker = _Leaky(inner)
     tracemalloc.start()
     try:
