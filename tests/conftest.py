@@ -143,16 +143,23 @@ HIDDEN_PERIOD, HIDDEN_FRAMES = 400, 100
 HIDDEN_BOX_START = (70.0, 70.0, 16.0, 24.0)
 
 
+def hidden_box(t: int) -> tuple[int, int, int, int] | None:
+    """:func:`hidden_box_frame`'s box at frame ``t`` (x, y, w, h), None while it is hidden."""
+    if t % HIDDEN_PERIOD >= HIDDEN_PERIOD - HIDDEN_FRAMES:
+        return None
+    return int(70 + 40 * np.sin(t / 30.0)), int(50 + 20 * np.cos(t / 45.0)), 16, 24
+
+
 def hidden_box_frame(bg: np.ndarray, t: int, noise: float = 0.0, rng: np.random.Generator | None = None
                      ) -> np.ndarray:
     """Frame ``t`` of a red box of one flat colour (16 x 24) circling over the 120 x 160 background ``bg``, hidden
     on the last :data:`HIDDEN_FRAMES` frames of every :data:`HIDDEN_PERIOD`; with Gaussian noise of spread ``noise``
     (drawn from ``rng``) on every pixel."""
     f = bg.astype(np.float32)
-    if t % HIDDEN_PERIOD < HIDDEN_PERIOD - HIDDEN_FRAMES:
-        x = int(70 + 40 * np.sin(t / 30.0))
-        y = int(50 + 20 * np.cos(t / 45.0))
-        f[y:y + 24, x:x + 16] = (30, 40, 220)
+    box = hidden_box(t)
+    if box is not None:
+        x, y, w, h = box
+        f[y:y + h, x:x + w] = (30, 40, 220)
     if noise:
         f += rng.normal(0.0, noise, f.shape).astype(np.float32)
     return np.clip(f, 0, 255).astype(np.uint8)

@@ -14,6 +14,11 @@ not grow with the target.
 
 ``lost`` is raised after ``lost_frames`` frames whose peak is unreliable: for the normalised criteria
 a best score below ``lost_score``, for the others a peak-to-sidelobe ratio below ``lost_psr``.
+
+A template of one flat colour has no structure for NCC or mutual information to find: its correlation with any
+window is the noise's, about 0, and its entropy is 0. When the template's contrast, net of the camera's noise, is
+below the noise (``flat_fallback``; the noise read from the first two frames by
+:func:`pftrack.cues.noise.temporal_noise`), those criteria give way to SAD, which matches the level itself.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ import numpy as np
 
 from ..cues import ssim as S
 from ..cues import template as T
+from ..cues.noise import temporal_noise
 from ..filtering.loss import LossDetector
 from ..geometry import Box
 from ..params import Params, param
@@ -33,6 +39,8 @@ from .base import Tracker, TrackState
 
 Metric = Literal["ssd", "ccorr", "ncc", "ncc_uncentred", "sad", "morph", "morph_normed", "mi", "nmi"]
 _BOUNDED = {"ncc", "ncc_uncentred"}
+#: criteria that see a template's structure only, not its level: undefined on a flat template
+_STRUCTURAL = {"ncc", "ncc_uncentred", "mi", "nmi"}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -66,6 +74,11 @@ class TemplateParams(Params):
     reacquire_margin: float = param(1.0, ge=0, le=20, doc=(
         "Normalised criteria: the loss test of pftrack.filtering.loss compares the peak with the window's best "
         "clutter and with the target's history; a lost target is re-acquired when its LLR exceeds this."))
+    flat_fallback: Literal["sad", "off"] = param("sad", doc=(
+        "For ncc, ncc_uncentred, mi and nmi: when the template is flat (its grey levels' variance below twice the "
+        "noise's, plus 1, the noise read from the first two frames), match by this criterion instead; 'off' keeps "
+        "the metric. No first box of the development data falls back, nor of its copies with noise of 12 grey "
+        "levels or dimmed to a quarter (the nearest at 2.1 times the bound; docs/template.md)."))
 
 
 class TemplateTracker(Tracker):
@@ -84,12 +97,32 @@ class TemplateTracker(Tracker):
         self.c = np.array([x + w / 2.0, y + h / 2.0])
         gray = S.to_gray(frame)
         self.template = self._sample(gray, self.c, self.tshape)
+        self.metric = p.metric  # the criterion in use (flat_fallback may change it on the first update)
+        self._levelled = 0.0  # with the fallback: the scale d of its score 1 - mean |R - S| / d
+        self._first: np.ndarray | None = gray if p.metric in _STRUCTURAL and p.flat_fallback != "off" else None
         self.miss = 0
         self.lost = False
         self.loss = LossDetector(lost_frames=1, reacquire_margin=p.reacquire_margin, sd_floor_target=0.05,
                                  sd_floor_background=0.05)
         self.loss.reset(1.0, sd=0.2)
-        return TrackState(box=tuple(float(v) for v in box), score=1.0, lost=False, info={"metric": p.metric})
+        return TrackState(box=tuple(float(v) for v in box), score=1.0, lost=False, info={"metric": self.metric})
+
+    def _check_flat(self, gray: np.ndarray) -> None:
+        """On the first update: fall back to ``flat_fallback`` if the template's variance is below twice the
+        noise's variance plus 1 (its structure, net of the noise, below the noise: a flat template)."""
+        first, self._first = self._first, None
+        if first is None or first.shape != gray.shape:
+            return
+        sigma = temporal_noise(first, gray)
+        if float(self.template.var()) < 2.0 * sigma * sigma + 1.0:
+            self.metric = self.params.flat_fallback
+            self._levelled = 2.0 * max(float(first.std()), 1.0)
+
+    @property
+    def _bounded(self) -> bool:
+        """Whether the scores are bounded (NCC's, or the fallback's mean absolute difference on the scale of
+        the scene's contrast) and go through the loss test, rather than the peak-to-sidelobe ratio."""
+        return self.metric in _BOUNDED or self._levelled > 0
 
     def _sample(self, gray: np.ndarray, centre: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
         st = np.array([[centre[0], centre[1], self.pitch]])
@@ -101,7 +134,10 @@ class TemplateTracker(Tracker):
         mk = max(1, int(round(margin_px / self.pitch)))
         m, n = self.tshape
         window = self._sample(gray, self.c, (m + 2 * mk, n + 2 * mk))
-        surface = T.match_surface(window, self.template, p.metric, bins=p.mi_bins)
+        surface = T.match_surface(window, self.template, self.metric, bins=p.mi_bins)
+        if self._levelled:  # -SAD as 1 - mean |R - S| / d, d twice the first frame's grey spread: a window of
+            # the scene's clutter scores about 0.5, as it does by NCC (the peak-to-sidelobe ratio is unchanged)
+            surface = 1.0 + surface / (self.template.size * self._levelled)
         peak = T.best_offset(surface)
         centre = self.c + np.array([(peak.l - mk) * self.pitch, (peak.k - mk) * self.pitch])
         self._surface = surface
@@ -119,19 +155,21 @@ class TemplateTracker(Tracker):
     def _reliable(self, peak: T.Peak) -> bool:
         """The bounded criteria are judged by their value, the others by the peak-to-sidelobe ratio."""
         p = self.params
-        if p.metric in _BOUNDED:
+        if self._bounded:
             return peak.value >= p.lost_score
         return peak.psr >= p.lost_psr
 
     def _score(self, peak: T.Peak) -> float:
         """A confidence in [0, 1]: the bounded criteria's value, else the PSR scaled (PSR 20 -> 1)."""
-        if self.params.metric in _BOUNDED:
+        if self._bounded:
             return float(np.clip(peak.value, 0.0, 1.0))
         return float(np.clip(peak.psr / 20.0, 0.0, 1.0)) if math.isfinite(peak.psr) else 1.0
 
     def _update(self, frame: np.ndarray) -> TrackState:
         p = self.params
         gray = S.to_gray(frame)
+        if self._first is not None:
+            self._check_flat(gray)
         base = max(8.0, p.search_margin * max(self.size))
         margin = base * (p.enlarge if self.lost else 1.0)
         centre, peak = self._match(gray, margin)
@@ -147,7 +185,7 @@ class TemplateTracker(Tracker):
                 centre, peak, surface = c2, pk2, surface2
         self._surface = surface  # the surface of the chosen peak (for the sidelobe of the loss test)
         ok = self._reliable(peak) and not peak.on_border
-        if p.metric in _BOUNDED:
+        if self._bounded:
             # the loss test of the colour trackers: the peak against the best clutter of the window (absent
             # hypothesis) and against the peaks of confident frames (target history), with hysteresis
             side = self._sidelobe(peak)
@@ -172,7 +210,7 @@ class TemplateTracker(Tracker):
                 self.template = (1.0 - p.template_update) * self.template + p.template_update * patch
         w, h = self.size
         box = (float(self.c[0] - w / 2), float(self.c[1] - h / 2), float(w), float(h))
-        info = {"metric": p.metric, "value": peak.value, "psr": peak.psr, "on_border": peak.on_border,
+        info = {"metric": self.metric, "value": peak.value, "psr": peak.psr, "on_border": peak.on_border,
                 "enlarged": enlarged}
         return TrackState(box=box, score=self._score(peak) if ok else min(self._score(peak), 0.5), lost=self.lost,
                           info=info)
