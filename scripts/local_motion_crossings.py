@@ -1,6 +1,6 @@
 """Local motion on same-colour crossings: failures and time of local-motion-pf against its colour-only variant.
 
-    python scripts/local_motion_crossings.py [--scene crossing|waving] [--seeds 100-147] [KEY=VALUE ...]
+    python scripts/local_motion_crossings.py [--scene crossing|waving] [--seeds 100-147] [--texture T] [KEY=VALUE ...]
 
 Freshly seeded scenes where a distractor with the target's colours passes in front of it:
 
@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -37,6 +38,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", choices=["crossing", "waving"], default="crossing")
     ap.add_argument("--seeds", default="100-147")
+    ap.add_argument("--texture", type=float, default=None, help=(
+        "speckle amplitude of both objects (grey levels; default: the scene's own, 12); 0 gives objects of two "
+        "flat colours"))
     ap.add_argument("params", nargs="*", help="local-motion-pf parameters KEY=VALUE")
     args = ap.parse_args()
     a, b = (int(v) for v in args.seeds.split("-"))
@@ -49,7 +53,10 @@ def main() -> None:
         warm_up(name, p)
     res = {k: [0, 0.0, 0] for k in cfgs}
     for seed in range(a, b + 1):
-        scene = Scene(make(seed))
+        spec = make(seed)
+        if args.texture is not None:
+            spec = replace(spec, targets=tuple(replace(t, texture=args.texture) for t in spec.targets))
+        scene = Scene(spec)
         frames, gt = scene.frames(), scene.groundtruth(0)
         for label, (name, p) in cfgs.items():
             tr = pftrack.create_tracker(name, seed=0, **p)
@@ -62,7 +69,8 @@ def main() -> None:
             res[label][2] += len(frames) - 1
             res[label][0] += int(iou(np.array(boxes[-10:]), gt[-10:]).mean() < 0.3)
     n = b - a + 1
-    print(f"| tracker ({args.scene}, seeds {args.seeds}) | failures | ms per frame |")
+    what = args.scene if args.texture is None else f"{args.scene}, texture {args.texture:g}"
+    print(f"| tracker ({what}, seeds {args.seeds}) | failures | ms per frame |")
     print("|---|---|---|")
     for label, (fails, sec, frames) in res.items():
         print(f"| {label} | {fails} / {n} | {1e3 * sec / frames:.2f} |")
