@@ -74,6 +74,12 @@ class TemplateParams(Params):
     reacquire_margin: float = param(1.0, ge=0, le=20, doc=(
         "Normalised criteria: the loss test of pftrack.filtering.loss compares the peak with the window's best "
         "clutter and with the target's history; a lost target is re-acquired when its LLR exceeds this."))
+    search: Literal["local", "frame"] = param("local", doc=(
+        "While lost: 'local' holds the box and searches a window enlarge times the usual one around it (the "
+        "chapter's enlarged search); 'frame' matches the template over the whole frame, then judges the best place "
+        "as a tracked frame would be judged (the loss test on its window), and holds the box where it was if that "
+        "fails. Only for the bounded scores (ncc, ncc_uncentred, and the flat template's fallback); the others "
+        "search locally."))
     flat_fallback: Literal["sad", "off"] = param("sad", doc=(
         "For ncc, ncc_uncentred, mi and nmi: when the template is flat (its grey levels' variance below twice the "
         "noise's, plus 1, the noise read from the first two frames), match by this criterion instead; 'off' keeps "
@@ -143,6 +149,18 @@ class TemplateTracker(Tracker):
         self._surface = surface
         return centre, peak
 
+    def _search_frame(self, gray: np.ndarray) -> np.ndarray:
+        """The centre of the template's best match over the whole frame (sampled on the template's grid)."""
+        p = self.params
+        fh, fw = gray.shape[:2]
+        m, n = self.tshape
+        big_m, big_n = max(m, int(fh / self.pitch)), max(n, int(fw / self.pitch))
+        cf = np.array([fw / 2.0, fh / 2.0])
+        whole = S.sample_patches(gray, np.array([[cf[0], cf[1], self.pitch]]), (big_m, big_n))[0]
+        surface = T.match_surface(whole.astype(np.float64), self.template, self.metric, bins=p.mi_bins)
+        k, l = np.unravel_index(int(np.argmax(surface)), surface.shape)
+        return cf + np.array([(l - (big_n - n) / 2.0) * self.pitch, (k - (big_m - m) / 2.0) * self.pitch])
+
     def _sidelobe(self, peak: T.Peak) -> np.ndarray:
         """Scores of the last surface at offsets that overlap the peak's window by less than half."""
         s = self._surface
@@ -171,7 +189,10 @@ class TemplateTracker(Tracker):
         if self._first is not None:
             self._check_flat(gray)
         base = max(8.0, p.search_margin * max(self.size))
-        margin = base * (p.enlarge if self.lost else 1.0)
+        held = None  # search="frame" while lost: where the box is held, the frame's best match tried instead
+        if self.lost and p.search == "frame" and self._bounded:
+            held, self.c = self.c, self._search_frame(gray)
+        margin = base * (p.enlarge if self.lost and held is None else 1.0)
         centre, peak = self._match(gray, margin)
         surface = self._surface
         enlarged = False
@@ -205,6 +226,8 @@ class TemplateTracker(Tracker):
             # follow the best match unless the target is judged gone (then hold and search wider)
             fh, fw = self._shape
             self.c = np.clip(centre, [0.0, 0.0], [fw, fh])
+        elif held is not None:
+            self.c = held
             if p.template_update > 0 and ok:
                 patch = self._sample(gray, self.c, self.tshape)
                 self.template = (1.0 - p.template_update) * self.template + p.template_update * patch
