@@ -125,7 +125,7 @@ def test_an_unknown_parameter_is_told_in_a_short_line():
     with pytest.raises(ParameterError) as err:
         create_tracker("color-pf", nosuch=1)
     assert "pftrack list" in str(err.value) and len(str(err.value)) < 120
-    with pytest.raises(ParameterError, match="valid: enlarge, lost_frames"):
+    with pytest.raises(ParameterError, match="valid: enlarge, flat_fallback, lost_frames"):
         create_tracker("template", nosuch=1)
 
 

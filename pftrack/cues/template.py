@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .._numba import njit, numba_enabled, prange
+from .._numba import njit, numba_enabled
 from ..geometry import parabola_peak
 
 METHODS = ("ssd", "ccorr", "ncc", "ncc_uncentred", "sad", "morph", "morph_normed", "mi", "nmi")
@@ -40,7 +40,7 @@ _OPENCV = {"ssd": cv2.TM_SQDIFF, "ccorr": cv2.TM_CCORR, "ncc": cv2.TM_CCOEFF_NOR
 
 # ------------------------------------------------------------------------------ compiled kernels
 
-@njit(parallel=True)
+@njit
 def _sad_morph(search, tmpl, out, normed, morph):
     hs, ws = search.shape
     m, n = tmpl.shape
@@ -48,7 +48,7 @@ def _sad_morph(search, tmpl, out, normed, morph):
     for i in range(m):
         for j in range(n):
             rsum += tmpl[i, j]
-    for k in prange(hs - m + 1):  # offsets are independent: rows of offsets in parallel
+    for k in range(hs - m + 1):
         for l in range(ws - n + 1):
             acc = 0.0
             ssum = 0.0
@@ -69,7 +69,7 @@ def _sad_morph(search, tmpl, out, normed, morph):
     return out
 
 
-@njit(parallel=True)
+@njit
 def _mutual_information(sq, tq, bins, out, normalised):
     """MI (9) of the quantised template ``tq`` with every window of the quantised search image ``sq``.
 
@@ -91,7 +91,7 @@ def _mutual_information(sq, tq, bins, out, normalised):
     for b in range(bins):
         sr += clog[pr[b]]
     er = logt - sr / total
-    for k in prange(hs - m + 1):
+    for k in range(hs - m + 1):
         joint = np.zeros((bins, bins), np.int64)
         ps = np.zeros(bins, np.int64)
         for l in range(ws - n + 1):
