@@ -14,8 +14,8 @@ model for visual tracking", Pattern Recognition 42 (2009) — ``shared/seeds/000
   estimate, by how much the tracker's estimated velocity agrees with it (Eqs. 8–9),
   so it stops adapting when an occluder moving differently covers the target.
 * The colour model update is the same as ``color-pf``'s.
-* ``motion=false search=false`` gives exactly the paper's reference colour tracker ``T_ref``:
-  the same dynamics, colour likelihood only (``motion`` alone is the paper's ablation).
+* ``motion=false search=false max_size_change=0.15`` gives exactly the paper's reference colour tracker
+  ``T_ref``: the same dynamics, colour likelihood only (``motion`` alone is the paper's ablation).
 
 By default the tracker also detects the target's loss with ``color-pf``'s loss test and searches the frame to
 re-acquire it (``search``, chosen on the tune split); ``search=false`` is the paper's Algorithm 1 as written, which
@@ -71,7 +71,8 @@ class LocalMotionPFParams(ColorModelParams):
         "re-acquisitions no worse."))
     motion: bool = param(True, doc=(
         "Multiply the local-motion likelihood into the colour likelihood (Eq. 11). False gives the paper's "
-        "reference colour tracker T_ref (same dynamics, colour likelihood only; with search=false, as in the paper)."))
+        "reference colour tracker T_ref (same dynamics, colour likelihood only; with search=false and "
+        "max_size_change=0.15, as in the paper)."))
     sigma_xy: float = param(3.0, gt=0, le=1000, doc=(
         "Std (px) of the white acceleration of the nearly-constant-velocity model (Eq. 10; §5 uses 1 px, "
         "3 px for hands). Larger follows more abrupt motion. Default 3, selected on the tune split: mean AUC "
