@@ -317,19 +317,27 @@ class StructureCue:
         return float(ncc_scores(self.patch(frame, (cx, cy, hx, hy)).reshape(ph, pw)[part].ravel()[None, :], t,
                                 weights=w)[0])
 
-    def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
+    def size_scores(self, frame: np.ndarray, ellipse, ratios, *, anchor_only: bool = False) -> list[float]:
         """NCC of the box of ``ellipse`` ``(cx, cy, hx, hy)`` at each of the half-axis ``ratios`` (same centre) with
         the reference, as :meth:`scores` gives them: one compiled call per size on this frame's region (a size
         search after the estimate, three sizes a frame, where building a batch cost more than scoring it).  A ratio
-        may be a pair ``(rx, ry)``, one per half-axis (a search of the box's shape)."""
+        may be a pair ``(rx, ry)``, one per half-axis (a search of the box's shape).  ``anchor_only``: with the
+        first frame's reference alone (when the cue keeps one), not the better of it and the running mean."""
         cx, cy, hx, hy = (float(x) for x in ellipse)
         pairs = ratio_pairs(ratios)
+        tw, w = self._prepared
+        anchored = anchor_only and self.anchor and tw.shape[0] > 1
+        if anchored:
+            tw = tw[-1:]  # the anchor is the last reference
         if not numba_enabled():
             e = np.array([[cx, cy, hx * rx, hy * ry] for rx, ry in pairs])
-            return self.scores(frame, None, e).tolist()
+            if not anchored:
+                return self.scores(frame, None, e).tolist()
+            red = self._region(frame, None, e)
+            return ncc_reduced(red, e, self.shape, self._templates[-1:], weights=self.weights,
+                               prepared=(tw, w)).tolist()
         top_x, top_y = max([rx for rx, _ in pairs]), max([ry for _, ry in pairs])
         red = self._region(frame, None, np.array([[cx, cy, hx * top_x, hy * top_y]]))
-        tw, w = self._prepared
         u, v = _grid(self.shape)
         gray = red.levels_for(u.size * v.size)
         dots = np.empty(tw.shape[0])

@@ -394,11 +394,14 @@ class HogStructure:
         z = standardize_descriptors(descs.reshape(3, ny, nx, -1)[:, cells[0], cells[1]].reshape(3, -1))
         return float(np.max(z[:2] @ z[2]))
 
-    def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
-        """:meth:`scores` of the box at each half-axis ratio (a number, or a pair ``(rx, ry)``), same centre."""
+    def size_scores(self, frame: np.ndarray, ellipse, ratios, *, anchor_only: bool = False) -> list[float]:
+        """:meth:`scores` of the box at each half-axis ratio (a number, or a pair ``(rx, ry)``), same centre
+        (``anchor_only``: the NCC with the first frame's descriptor alone)."""
         cx, cy, hx, hy = (float(x) for x in np.asarray(ellipse, dtype=np.float64).reshape(4))
         pairs = ratio_pairs(ratios)
         e = np.array([[cx, cy, hx * rx, hy * ry] for rx, ry in pairs])
+        if anchor_only:
+            return self._correlate(frame, None, e)[1][:, 1].tolist()
         return self.scores(frame, None, e).tolist()
 
     def update(self, frame: np.ndarray, ellipse, rate: float, anchor_gate: float = -1.0) -> bool:
@@ -458,10 +461,10 @@ class BestStructure:
             s = np.maximum(s, c.scores(frame, roi, ellipses))
         return s
 
-    def size_scores(self, frame: np.ndarray, ellipse, ratios) -> list[float]:
-        s = self.cues[0].size_scores(frame, ellipse, ratios)
+    def size_scores(self, frame: np.ndarray, ellipse, ratios, **kw) -> list[float]:
+        s = self.cues[0].size_scores(frame, ellipse, ratios, **kw)
         for c in self.cues[1:]:
-            s = [max(a, b) for a, b in zip(s, c.size_scores(frame, ellipse, ratios))]
+            s = [max(a, b) for a, b in zip(s, c.size_scores(frame, ellipse, ratios, **kw))]
         return s
 
     def update(self, frame: np.ndarray, ellipse, rate: float, anchor_gate: float = -1.0) -> bool:

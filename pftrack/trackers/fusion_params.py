@@ -140,6 +140,11 @@ class FusionPFParams(ColorPFParams):
     scale_search_rate: float = param(0.25, ge=0, le=1, doc=(
         "Fraction (in log scale) of the scale search's vertex applied per frame: at most (1+s)^rate, 0.75 % with "
         "s = 0.03 and this default, so noise in the three scores moves the size little."))
+    scale_search_reference: Literal["both", "anchor"] = param("both", doc=(
+        "The references the size search compares the three sizes with: 'both' (default), the better of the first "
+        "frame's patch and the running mean, as the cue scores the samples; 'anchor', the first frame's patch "
+        "alone, so a size the running mean learnt from a drifted box does not hold the box there "
+        "(docs/rules/scale_anchor_rule.txt)."))
     aspect_search: float = param(0.0, ge=0, le=0.5, doc=(
         "a > 0: after the size search, the estimate's box at the shapes (hx/(1+a), hy(1+a)), (hx, hy) and "
         "(hx(1+a), hy/(1+a)) (the same area) is compared with the structural cue's references by NCC, and the "

@@ -270,7 +270,8 @@ class FusionPF(ColorPF):
         patch best matches the structural references."""
         p = self.params
         self._scale_size(estimate, size_factor(self.structure, frame, estimate[_ELL_COLS], p.scale_search,
-                                               p.scale_search_rate))
+                                               p.scale_search_rate,
+                                               anchor_only=p.scale_search_reference == "anchor"))
         if p.aspect_search > 0 and p.aspect_search_rate > 0 and self.loss.llr > self.loss.reacquire_margin:
             f = aspect_factor(self.structure, frame, estimate[_ELL_COLS], p.aspect_search, p.aspect_search_rate)
             if f != 1.0:
