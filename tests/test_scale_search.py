@@ -192,3 +192,30 @@ def test_fusion_pf_scale_search_follows_a_growing_target(seed):
     true = np.sqrt(gt[-1, 2] * gt[-1, 3])
     assert abs(sizes[0.03] / true - 1.0) < 0.15, (sizes, true)
     assert sizes[0.0] == pytest.approx(np.sqrt(gt[0, 2] * gt[0, 3]), rel=0.02)
+
+
+@pytest.mark.parametrize("kind", ["ncc", "ncc-numpy", "hog"])
+def test_the_size_search_can_compare_sizes_with_the_anchor_alone(kind):
+    """``anchor_only``: the sizes are compared with the first frame's reference alone, the running mean ignored, so
+    a cue whose running mean learnt another box scores them as a cue that learnt nothing."""
+    from pftrack._numba import set_numba_enabled
+    from pftrack.cues.structure_hog import HogStructure
+
+    rng = np.random.default_rng(3)
+    ell, ratios = (160.0, 120.0, 24.0, 36.0), (1 / 1.05, 1.0, 1.05)
+    first, later = _textured_frame(rng, 1.0), _textured_frame(rng, 0.95)  # the target shrank by 5 %
+    make = (lambda: HogStructure()) if kind == "hog" else (lambda: StructureCue(template_pixels=256, anchor=True))
+    previous = set_numba_enabled(kind != "ncc-numpy")
+    try:
+        learnt, fresh = make(), make()
+        learnt.init(first, ell)
+        fresh.init(first, ell)
+        assert learnt.update(later, ell, 1.0)  # the running mean learnt the shrunken target at the old size
+        learnt.new_frame()
+        fresh.new_frame()
+        both = learnt.size_scores(later, ell, ratios)
+        anchor = learnt.size_scores(later, ell, ratios, anchor_only=True)
+        assert anchor == pytest.approx(fresh.size_scores(later, ell, ratios), abs=1e-6)
+        assert both[1] > anchor[1] + 0.01  # with it, the old size matches its own patch best
+    finally:
+        set_numba_enabled(previous)
