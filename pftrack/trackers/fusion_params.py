@@ -143,8 +143,9 @@ class FusionPFParams(ColorPFParams):
     scale_search_reference: Literal["both", "anchor"] = param("both", doc=(
         "The references the size search compares the three sizes with: 'both' (default), the better of the first "
         "frame's patch and the running mean, as the cue scores the samples; 'anchor', the first frame's patch "
-        "alone, so a size the running mean learnt from a drifted box does not hold the box there "
-        "(docs/rules/scale_anchor_rule.txt)."))
+        "alone, so a size the running mean learnt from a drifted box does not hold the box there. An option: it "
+        "failed its rule on the tune data (docs/rules/scale_anchor_rule.txt, docs/fusion-pf-selection.md: PETS "
+        "people 0.407 against 0.427, split mean AUC 0.703 against 0.705)."))
     aspect_search: float = param(0.0, ge=0, le=0.5, doc=(
         "a > 0: after the size search, the estimate's box at the shapes (hx/(1+a), hy(1+a)), (hx, hy) and "
         "(hx(1+a), hy/(1+a)) (the same area) is compared with the structural cue's references by NCC, and the "
