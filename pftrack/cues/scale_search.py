@@ -107,7 +107,8 @@ def best_shape_score(cue, frame: np.ndarray, ellipse, step: float) -> float:
     return max(cue.size_scores(frame, (cx, cy, hx, hy), [(a, b) for a in f for b in f]))
 
 
-def _vertex_factor(cue, frame: np.ndarray, ellipse, ratios, step: float, rate: float, **kw) -> float:
+def _vertex_factor(cue, frame: np.ndarray, ellipse, ratios, step: float, rate: float, *,
+                   anchor_only: bool = False) -> float:
     """``exp(rate log(1+step) v)``, ``v`` the vertex (:func:`vertex_offset`) of the NCC of the boxes of ``ellipse`` at
     the three half-axis ``ratios`` (scalars, or ``(rx, ry)`` pairs); 1 when a box ``1+step`` times as large on both
     axes is not inside the frame (the part of a box beyond the border has no pixels to correlate, and comparing
@@ -115,7 +116,7 @@ def _vertex_factor(cue, frame: np.ndarray, ellipse, ratios, step: float, rate: f
     cx, cy, hx, hy = np.asarray(ellipse, dtype=np.float64).ravel()[:4].tolist()
     if not _fits(frame, cx, cy, (1.0 + step) * hx, (1.0 + step) * hy):
         return 1.0
-    lo, mid, hi = cue.size_scores(frame, (cx, cy, hx, hy), ratios, **kw)
+    lo, mid, hi = cue.size_scores(frame, (cx, cy, hx, hy), ratios, anchor_only=anchor_only)
     if not (math.isfinite(lo) and math.isfinite(mid) and math.isfinite(hi)):
         return 1.0
     return math.exp(vertex_offset(lo, mid, hi) * math.log1p(step) * rate)
@@ -130,8 +131,8 @@ def size_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float, *, an
     1 when the largest of the three boxes is not inside the frame: the part of a box beyond the border has no
     pixels to correlate, and comparing sizes there favours the box that fits (docs/robustness.md).  ``anchor_only``:
     the cue's first-frame reference alone (:meth:`~pftrack.cues.structure.StructureCue.size_scores`)."""
-    kw = {"anchor_only": True} if anchor_only else {}
-    return _vertex_factor(cue, frame, ellipse, (1.0 / (1.0 + step), 1.0, 1.0 + step), step, rate, **kw)
+    return _vertex_factor(cue, frame, ellipse, (1.0 / (1.0 + step), 1.0, 1.0 + step), step, rate,
+                          anchor_only=anchor_only)
 
 
 def aspect_factor(cue, frame: np.ndarray, ellipse, step: float, rate: float) -> float:

@@ -461,10 +461,10 @@ class BestStructure:
             s = np.maximum(s, c.scores(frame, roi, ellipses))
         return s
 
-    def size_scores(self, frame: np.ndarray, ellipse, ratios, **kw) -> list[float]:
-        s = self.cues[0].size_scores(frame, ellipse, ratios, **kw)
+    def size_scores(self, frame: np.ndarray, ellipse, ratios, *, anchor_only: bool = False) -> list[float]:
+        s = self.cues[0].size_scores(frame, ellipse, ratios, anchor_only=anchor_only)
         for c in self.cues[1:]:
-            s = [max(a, b) for a, b in zip(s, c.size_scores(frame, ellipse, ratios, **kw))]
+            s = [max(a, b) for a, b in zip(s, c.size_scores(frame, ellipse, ratios, anchor_only=anchor_only))]
         return s
 
     def update(self, frame: np.ndarray, ellipse, rate: float, anchor_gate: float = -1.0) -> bool:

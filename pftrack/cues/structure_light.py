@@ -93,11 +93,11 @@ class LitStructure:
             s = np.maximum(s, self.levels.scores(frame, roi, ellipses))
         return s
 
-    def size_scores(self, frame: np.ndarray, ellipse, ratios, **kw) -> list[float]:
+    def size_scores(self, frame: np.ndarray, ellipse, ratios, *, anchor_only: bool = False) -> list[float]:
         """:meth:`StructureCue.size_scores`, the larger of the two cues' at each size (as :meth:`scores`)."""
-        s = self.quotient.size_scores(self._qf(frame), ellipse, ratios, **kw)
+        s = self.quotient.size_scores(self._qf(frame), ellipse, ratios, anchor_only=anchor_only)
         if self.levels is not None:
-            s = [max(a, b) for a, b in zip(s, self.levels.size_scores(frame, ellipse, ratios, **kw))]
+            s = [max(a, b) for a, b in zip(s, self.levels.size_scores(frame, ellipse, ratios, anchor_only=anchor_only))]
         return s
 
     def update(self, frame: np.ndarray, ellipse, rate: float, anchor_gate: float = -1.0) -> bool:

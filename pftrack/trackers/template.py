@@ -117,8 +117,6 @@ class TemplateTracker(Tracker):
         """On the first update: fall back to ``flat_fallback`` if the template's variance is below twice the
         noise's variance plus 1 (its structure, net of the noise, below the noise: a flat template)."""
         first, self._first = self._first, None
-        if first is None or first.shape != gray.shape:
-            return
         sigma = temporal_noise(first, gray)
         if float(self.template.var()) < 2.0 * sigma * sigma + 1.0:
             self.metric = self.params.flat_fallback
