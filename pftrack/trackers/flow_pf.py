@@ -46,8 +46,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
-from typing import Callable, Literal, Sequence
+from typing import Callable, Sequence
 
 import cv2
 import numpy as np
@@ -62,8 +61,11 @@ from ..filtering.particles import ParticleSet
 from ..filtering.resampling import get_resampler
 from ..frames import as_bgr_uint8
 from ..geometry import Box, background_grid, iou, validate_box
-from ..params import Params, param
 from .base import Tracker, TrackState
+from .flow_params import FlowPFParams
+from .flow_search import Persistence, best_candidate, scan_centres
+
+__all__ = ["FlowPF", "FlowPFGroup", "FlowPFParams", "haar_face_detector"]
 
 
 def haar_face_detector(min_size: int = 24) -> Callable[[np.ndarray], np.ndarray]:
@@ -81,77 +83,6 @@ def haar_face_detector(min_size: int = 24) -> Callable[[np.ndarray], np.ndarray]
         return np.column_stack([np.asarray(found, dtype=np.float64), np.ones(len(found))])
 
     return detect
-
-
-@dataclass(frozen=True, kw_only=True)
-class FlowPFParams(Params):
-    """Parameters of ``flow-pf``; defaults from Tung & Matsuyama §5 where given."""
-
-    n_particles: int = param(200, ge=1, le=1_000_000, doc="P, the number of particles (§5: 200).")
-    bins: int = param(10, ge=2, le=256, doc="N_h = N_s = N_v, bins of each of the three histograms (§5: 10).")
-    kernel_levels: int = param(2, ge=1, le=16, doc=(
-        "1: plain counts over the window (Eq. 5 as printed); L > 1: the mean of L nested boxes' histograms, a "
-        "kernel density estimate weighting the centre more (the text calls q a kernel density estimate). 2 was "
-        "selected on the dev sequences plus synthetic scenes (docs/flow-pf.md)."))
-    templates: int = param(5, ge=1, le=1000, doc="k, the size of the colour-model subspace (§5: 5).")
-    sigma2: float = param(0.1, gt=0, doc="sigma^2 of the likelihood exp(-E / sigma^2) (Eq. 4; §5: 0.1).")
-    anchor: bool = param(True, doc=(
-        "Keep the initial colour model in the subspace besides the last k - 1 responses (the drift correction of "
-        "Matthews et al.'s template update problem); False is the paper's subspace of the last k responses."))
-    distance: Literal["emd", "bhattacharyya"] = param("emd", doc=(
-        "Colour distance D: the Earth Mover's Distance (§4.3), or the Bhattacharyya distance sqrt(1 - rho) "
-        "(the ablation)."))
-    grey_value_only: bool = param(True, doc=(
-        "On grey input (the first frame's channels equal) the colour distance is V's alone: hue and saturation "
-        "are 0 everywhere there (proposed; the paper's sequences are in colour)."))
-    grey_bins: int = param(20, ge=0, le=256, doc=(
-        "Bins of the histograms on grey input, where V alone is compared (grey_value_only); 0: `bins`. EMD is in "
-        "bins, so finer bins also sharpen the likelihood and the gates. 20 chosen on the tune split's 64 grey "
-        "sequences (docs/flow-pf.md): mean AUC 0.435 against 0.379 with 10, re-acquired 10 of 41 against 6, "
-        "false-lost 0.033 against 0.005 (14: 0.412; 32: 0.437 with false-lost 0.065)."))
-    motion: bool = param(True, doc="Add the motion energies E_m and E_d (§4.4); False for the ablation.")
-    motion_weight: float = param(0.5, ge=0, doc=(
-        "alpha of E_m = alpha ||x - y~|| per window size: a particle one window away from the flow-predicted "
-        "position pays this energy. The paper tunes alpha to the frame size; per window keeps it scale-free. 0.5 was "
-        "selected on the dev sequences plus synthetic scenes (docs/flow-pf.md)."))
-    drift_weight: float = param(0.0, ge=0, doc=(
-        "beta of E_d = beta C (Eq. 11), C in [0, 1] the share of a particle's features not among the tracked ones. "
-        "0 by default: with the gated subspace update it no longer helped on the dev or synthetic sequences "
-        "(docs/flow-pf.md); 0.2 was the best non-zero value."))
-    position_noise: float = param(0.15, ge=0, le=10, doc="Std of the position noise, fraction of the window size.")
-    velocity_noise: float = param(0.05, ge=0, le=10, doc="Std of the velocity noise, fraction of the window size.")
-    klt_window: int = param(15, ge=3, le=101, doc="KLT window (px).")
-    klt_levels: int = param(3, ge=1, le=6, doc="KLT pyramid levels.")
-    max_features: int = param(300, ge=1, le=100_000, doc=(
-        "Shi-Tomasi features per frame in the search region (the strongest, on a lattice; lambda_min > 1e-3)."))
-    search: float = param(1.0, ge=0, le=10, doc=(
-        "The features are detected in the previous window widened by this many window sizes (plus the last "
-        "displacement) on every side: the region the particles reach."))
-    flow_tolerance: float = param(1.0, gt=0, le=100, doc=(
-        "A feature belongs to the tracked set Y_t when its displacement differs from the target's median "
-        "displacement by at most this (px) plus 20 % of that displacement."))
-    min_tracked: int = param(3, ge=1, le=10_000, doc=(
-        "Fewest tracked features for a flow prediction y~; with fewer the particles move at constant velocity and "
-        "E_m is left out."))
-    update_distance: float = param(0.3, gt=0, doc=(
-        "The estimate's model joins the subspace only when its colour distance to the nearest template is at most "
-        "this (EMD, bins; a detection's always does) — the gated update of Nummiaro et al. applied to the subspace, "
-        "so that a drifting estimate does not teach the subspace the background. The paper adds every frame's "
-        "(set a large value); 0.3 was selected on the dev sequences plus synthetic scenes (docs/flow-pf.md)."))
-    lost_distance: float = param(1.5, gt=0, doc=(
-        "Report lost when the colour distance of the estimate to the nearest template exceeds this (bins for EMD; "
-        "loss_test 'distance')."))
-    loss_test: Literal["distance", "likelihood"] = param("distance", doc=(
-        "'distance': lost while the estimate's colour distance d exceeds lost_distance, state.score = 1 / (1 + d). "
-        "'likelihood': the colour PFs' two-class test (pftrack.filtering.loss) of the score 1 / (1 + d) against the "
-        "target's own score history and the upper tail of the scores of background boxes of its size, on a grid "
-        "away from the estimate, every background_every frames; lost after 3 frames below, found again above a "
-        "margin, state.score its confidence. The tracks are the same either way (the grid is fixed)."))
-    background_every: int = param(10, ge=1, le=1000, doc=(
-        "Frames between two background statistics of the 'likelihood' loss test."))
-    detector_min_iou: float = param(0.0, ge=0, le=1, doc=(
-        "A detection replaces the response only if it overlaps the estimate by more than this (any overlap by "
-        "default), so a detector does not jump between objects."))
 
 
 class FlowPF(Tracker):
@@ -251,6 +182,8 @@ class FlowPF(Tracker):
         self.subspace: deque = deque(maxlen=max(p.templates - (1 if p.anchor else 0), 1))
         self.subspace.append(self.first)
         self._prev_gray = to_gray(frame)
+        self._lost, self._d_est = False, 0.0
+        self._persist = Persistence(p.lost_search_frames, 0.5 * self.window)
         self.loss: LossDetector | None = None
         if p.loss_test == "likelihood":
             self.loss = LossDetector()
@@ -333,6 +266,8 @@ class FlowPF(Tracker):
         fh, fw = self._shape
         w, h = self.size
         win = self.window
+        if p.lost_search == "frame" and self._lost:
+            self._search_frame(frame)
         prev_est = self.estimate.copy()
         gray = to_gray(frame)
         disp = tracked = None
@@ -390,9 +325,35 @@ class FlowPF(Tracker):
         self._prev_gray = gray
         if self.loss is not None:
             lost, score = self._loss_step(frame, d_est, ok)
-            return self._state(box, score, lost, det=det_box is not None)
-        lost = (not ok) or d_est > p.lost_distance
-        return self._state(box, 1.0 / (1.0 + d_est), lost, det=det_box is not None)
+        else:
+            lost, score = (not ok) or d_est > p.lost_distance, 1.0 / (1.0 + d_est)
+        self._lost, self._d_est = bool(lost), d_est
+        if not lost:
+            self._persist.reset()
+        return self._state(box, score, lost, det=det_box is not None)
+
+    def _search_frame(self, frame: np.ndarray) -> None:
+        """The whole-frame search while lost (``lost_search``, :mod:`pftrack.trackers.flow_search`): the best box of
+        the target's size on a grid over the frame, when within ``lost_search_distance`` of the models and nearer
+        them than the last estimate for ``lost_search_frames`` frames in one place, re-centres the particles."""
+        p = self.params
+        fh, fw = self._shape
+        w, h = self.size
+        centres = scan_centres(fw, fh, w, h, p.lost_search_step * self.window)
+        hist, npx = self._histograms(self.cue.prepare(frame, (0, 0, fw, fh)), self._boxes(centres))
+        d = self._colour_energy(hist)[1]
+        d[npx <= 0] = np.inf
+        best = best_candidate(centres, d, (w, h))
+        gated = None
+        if (best is not None and best[1] <= p.lost_search_distance and best[1] < self._d_est
+                and best[1] <= p.lost_search_ratio * best[2]):
+            gated = best[0]
+        if not self._persist.offer(gated):
+            return
+        s = self.ps.states
+        s[:, 0:2] = gated
+        s[:, 2:4] = 0.0
+        self.estimate = np.array([gated[0], gated[1], 0.0, 0.0])
 
     def _detection(self, frame: np.ndarray, est: np.ndarray) -> Box | None:
         fh, fw = frame.shape[:2]
