@@ -51,7 +51,7 @@ from typing import Callable, Sequence
 import cv2
 import numpy as np
 
-from ..cues.emd import emd_circular, emd_linear
+from ..cues.emd import emd_circular, emd_linear, min_emd_hsv
 from ..cues.hsv import HSVHistogramCue
 from ..cues.intensity import is_gray
 from ..cues.motion import to_gray
@@ -63,7 +63,7 @@ from ..frames import as_bgr_uint8
 from ..geometry import Box, background_grid, iou, validate_box
 from .base import Tracker, TrackState
 from .flow_params import FlowPFParams
-from .flow_search import Persistence, best_candidate, scan_centres
+from .flow_search import Persistence, best_candidate, sample_step, scan_centres
 
 __all__ = ["FlowPF", "FlowPFGroup", "FlowPFParams", "haar_face_detector"]
 
@@ -340,8 +340,14 @@ class FlowPF(Tracker):
         fh, fw = self._shape
         w, h = self.size
         centres = scan_centres(fw, fh, w, h, p.lost_search_step * self.window)
-        hist, npx = self._histograms(self.cue.prepare(frame, (0, 0, fw, fh)), self._boxes(centres))
-        d = self._colour_energy(hist)[1]
+        k = sample_step(w, h)  # every k-th pixel of every k-th row: the histograms' cost falls k^2 times
+        small = frame[::k, ::k]
+        feats = self.cue.prepare(small, (0, 0, small.shape[1], small.shape[0]))
+        hist, npx = self._histograms(feats, self._boxes(centres) / k)
+        if p.distance == "emd":  # the particles' distance, compiled for the many boxes
+            d = min_emd_hsv(hist, np.stack(self._templates()), value_only=self._grey and p.grey_value_only)
+        else:
+            d = self._colour_energy(hist)[1]
         d[npx <= 0] = np.inf
         best = best_candidate(centres, d, (w, h))
         gated = None

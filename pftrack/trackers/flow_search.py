@@ -3,7 +3,8 @@
 Tung & Matsuyama's filter looks for the target only where its particles are: once the target has walked off or
 been hidden, the particles wait where it was lost, and a target that comes back elsewhere is found only if it passes
 near them again.  While the tracker is lost, :func:`scan_centres` lays boxes of the target's size over the whole
-frame, each is scored by the same colour distance as the particles (the nearest model of the subspace), and
+frame, each is scored by the same colour distance as the particles (the nearest model of the subspace; the frame
+read at every k-th pixel, :func:`sample_step`, so that a search costs about what a tracked frame does), and
 :class:`Persistence` asks the best of them to stay in one place for a few frames before the particles are moved
 there: a look-alike that crosses the view once is not taken.
 """
@@ -33,6 +34,16 @@ def scan_centres(width: int, height: int, w: float, h: float, step: float) -> np
     out[:, 0] = np.tile(xs, len(ys))
     out[:, 1] = np.repeat(ys, len(xs))
     return out
+
+
+#: the whole-frame search reads every k-th pixel of every k-th row, k chosen so that the box's shorter side keeps
+#: at least this many samples (the colours stay the frame's own: no interpolation mixes them)
+SEARCH_SAMPLES = 12
+
+
+def sample_step(w: float, h: float) -> int:
+    """The sampling step ``k`` of the whole-frame search for a ``w`` x ``h`` box (1 for boxes under 24 px)."""
+    return max(1, int(min(w, h) // SEARCH_SAMPLES))
 
 
 def best_candidate(centres: np.ndarray, distance: np.ndarray,

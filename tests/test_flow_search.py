@@ -1,0 +1,143 @@
+"""``flow-pf``'s whole-frame search while lost (``lost_search``, :mod:`pftrack.trackers.flow_search`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pftrack
+from pftrack.eval.metrics import frame_ious
+from pftrack.trackers.flow_search import Persistence, best_candidate, scan_centres
+
+H, W = 180, 240
+SIZE = (20, 28)
+HIDE, BACK, END = 30, 42, 90
+
+
+def test_scan_centres_keep_every_box_in_the_frame():
+    c = scan_centres(240, 180, 20, 28, 5.0)
+    assert (c[:, 0] - 10 >= 0).all() and (c[:, 0] + 10 <= 240).all()
+    assert (c[:, 1] - 14 >= 0).all() and (c[:, 1] + 14 <= 180).all()
+    xs, ys = np.unique(c[:, 0]), np.unique(c[:, 1])
+    assert np.allclose(np.diff(xs), 5.0) and np.allclose(np.diff(ys), 5.0)
+    assert len(c) == len(xs) * len(ys)
+    assert xs[0] - 10 < 5 and 240 - (xs[-1] + 10) < 5  # the grid reaches both sides within a step
+    one = scan_centres(30, 20, 40, 10, 4.0)  # wider than the frame: one column, in the middle
+    assert np.allclose(np.unique(one[:, 0]), [15.0])
+
+
+def test_best_candidate_reports_the_runner_up_one_box_away():
+    c = np.array([[10.0, 10.0], [14.0, 10.0], [60.0, 10.0], [10.0, 80.0]])
+    best = best_candidate(c, np.array([0.2, 0.1, 0.5, np.nan]), (20, 20))
+    assert np.allclose(best[0], [14, 10]) and best[1] == pytest.approx(0.1)
+    assert best[2] == pytest.approx(0.5)  # (10, 10) is within one box of the best and does not count
+    assert best_candidate(c, np.full(4, np.inf), (20, 20)) is None
+    alone = best_candidate(c[:2], np.array([0.3, 0.2]), (20, 20))
+    assert alone[2] == np.inf
+
+
+def test_persistence_needs_frames_in_one_place():
+    p = Persistence(2, 5.0)
+    assert not p.offer(np.array([10.0, 10.0]))
+    assert not p.offer(np.array([40.0, 10.0]))  # moved: the streak starts again
+    assert p.offer(np.array([42.0, 11.0]))
+    assert not p.offer(np.array([42.0, 11.0]))  # taken: reset
+    assert not p.offer(None) and p.streak == 0
+
+
+def _box(t: int) -> tuple[float, float, float, float] | None:
+    """A target that walks right, is hidden, and comes back far away (bottom right), walking left."""
+    if t < HIDE:
+        return 30.0 + t, 30.0, *SIZE
+    if t < BACK:
+        return None
+    return 190.0 - (t - BACK), 130.0, *SIZE
+
+
+def _frame(bg: np.ndarray, tex: np.ndarray, t: int, rng: np.random.Generator, twin: bool = False) -> np.ndarray:
+    f = bg.astype(np.float32).copy()
+    box = _box(t)
+    if box is not None:
+        x, y, w, h = (int(round(v)) for v in box)
+        f[y:y + h, x:x + w] = tex
+    if twin and box is None:  # two look-alikes side by side in the middle while the target is away
+        for x in (90, 150):
+            f[80:80 + SIZE[1], x:x + SIZE[0]] = tex
+    f += rng.normal(0.0, 2.0, f.shape)
+    return np.clip(f, 0, 255).astype(np.uint8)
+
+
+def _run(seed: int, twin: bool = False, **params) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(300 + seed)
+    bg = np.clip(rng.normal(110, 25, (H, W, 3)), 0, 255)
+    bg[..., 2] *= 0.4  # a bluish-green background; the target is red with texture
+    tex = np.zeros((SIZE[1], SIZE[0], 3))
+    tex[..., 2] = 200 + rng.normal(0, 20, SIZE[::-1])
+    tex[..., 1] = 40 + rng.normal(0, 15, SIZE[::-1])
+    tex[..., 0] = 40
+    tracker = pftrack.create_tracker("flow-pf", seed=seed, **params)
+    tracker.init(_frame(bg, tex, 0, rng, twin), _box(0))
+    iou, lost = [], []
+    for t in range(1, END):
+        state = tracker.update(_frame(bg, tex, t, rng, twin))
+        box = _box(t)
+        iou.append(np.nan if box is None else frame_ious(np.array([state.box]), np.array([box]))[0])
+        lost.append(state.lost)
+    return np.array(iou), np.array(lost)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_target_back_far_away_is_found_by_the_frame_search(seed):
+    iou, lost = _run(seed, lost_search="frame")
+    before = iou[: HIDE - 1]
+    assert (before >= 0.5).mean() > 0.9
+    assert lost[HIDE + 3: BACK - 1].mean() > 0.9  # hidden: lost
+    after = iou[BACK - 1 + 6:]  # found within 6 frames of its return and followed
+    assert (after >= 0.5).mean() > 0.9
+    assert lost[BACK - 1 + 6:].mean() < 0.1
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_without_the_search_the_far_return_is_missed(seed):
+    iou, _ = _run(seed)  # the negative control: the paper's filter waits where the target was lost
+    assert (iou[BACK - 1 + 6:] >= 0.5).mean() < 0.2
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_two_look_alikes_are_not_taken(seed):
+    iou, lost = _run(seed, twin=True, lost_search="frame")
+    assert lost[HIDE + 3: BACK - 1].mean() > 0.9  # neither twin passes the uniqueness test
+    assert (iou[BACK - 1 + 6:] >= 0.5).mean() > 0.9  # and the target is found when it is back
+    _, lost_any = _run(seed, twin=True, lost_search="frame", lost_search_ratio=1.0)
+    assert lost_any[HIDE + 3: BACK - 1].mean() < 0.5  # the negative control: without the test a twin is taken
+
+
+def test_sample_step_keeps_twelve_samples_across_the_box():
+    from pftrack.trackers.flow_search import sample_step
+    assert sample_step(20, 28) == 1 and sample_step(23, 100) == 1
+    assert sample_step(50, 60) == 4 and sample_step(300, 36) == 3
+
+
+@pytest.mark.parametrize("value_only", [False, True])
+def test_compiled_min_emd_matches_the_numpy_path(value_only):
+    from pftrack._numba import numba_enabled, set_numba_enabled
+    from pftrack.cues.emd import emd_circular, emd_linear, min_emd_hsv
+
+    rng = np.random.default_rng(5)
+    h, t = rng.random((300, 3, 10)), rng.random((4, 3, 10))
+    h[7] = 0.0  # an empty box: uniform, as _normalise takes it
+    want = []
+    for tk in t:
+        dv = emd_linear(h[:, 2], tk[2])
+        want.append(dv if value_only else (emd_circular(h[:, 0], tk[0]) + emd_linear(h[:, 1], tk[1]) + dv) / 3)
+    want = np.min(want, axis=0)
+    previous = set_numba_enabled(True)
+    try:
+        got = min_emd_hsv(h, t, value_only=value_only)
+        set_numba_enabled(False)
+        ref = min_emd_hsv(h, t, value_only=value_only)
+    finally:
+        set_numba_enabled(previous)
+    assert np.allclose(got, want, atol=1e-12) and np.allclose(ref, want, atol=1e-12)
+    if numba_enabled():
+        assert not np.allclose(min_emd_hsv(h, t[:1], value_only=value_only), want)  # the min over templates matters
