@@ -78,7 +78,7 @@ class FlowPFParams(Params):
         "A detection replaces the response only if it overlaps the estimate by more than this (any overlap by "
         "default), so a detector does not jump between objects."))
     lost_search: Literal["off", "frame"] = param("off", doc=(
-        "While lost, look for the target over the whole frame (pftrack's addition; pftrack.trackers.flow_search): "
+        "While lost, look for the target over the whole frame (pftrack's addition; pftrack.trackers.frame_search): "
         "boxes of its size on a grid of lost_search_step windows, scored by the particles' colour distance; the "
         "best one, when within lost_search_distance and nearer the models than the estimate, re-centres the "
         "particles after lost_search_frames frames in one place. 'off': the paper's filter, which finds a target "

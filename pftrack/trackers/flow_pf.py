@@ -63,7 +63,7 @@ from ..frames import as_bgr_uint8
 from ..geometry import Box, background_grid, iou, validate_box
 from .base import Tracker, TrackState
 from .flow_params import FlowPFParams
-from .flow_search import Persistence, best_candidate, sample_step, scan_centres
+from .frame_search import Persistence, best_candidate, sample_step, scan_centres
 
 __all__ = ["FlowPF", "FlowPFGroup", "FlowPFParams", "haar_face_detector"]
 
@@ -333,7 +333,7 @@ class FlowPF(Tracker):
         return self._state(box, score, lost, det=det_box is not None)
 
     def _search_frame(self, frame: np.ndarray) -> None:
-        """The whole-frame search while lost (``lost_search``, :mod:`pftrack.trackers.flow_search`): the best box of
+        """The whole-frame search while lost (``lost_search``, :mod:`pftrack.trackers.frame_search`): the best box of
         the target's size on a grid over the frame, when within ``lost_search_distance`` of the models and nearer
         them than the last estimate for ``lost_search_frames`` frames in one place, re-centres the particles."""
         p = self.params

@@ -1,4 +1,4 @@
-"""``flow-pf``'s whole-frame search while lost (``lost_search``, :mod:`pftrack.trackers.flow_search`)."""
+"""``flow-pf``'s whole-frame search while lost (``lost_search``, :mod:`pftrack.trackers.frame_search`)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 
 import pftrack
 from pftrack.eval.metrics import frame_ious
-from pftrack.trackers.flow_search import Persistence, best_candidate, scan_centres
+from pftrack.trackers.frame_search import Persistence, best_candidate, scan_centres
 
 H, W = 180, 240
 SIZE = (20, 28)
@@ -113,7 +113,7 @@ def test_two_look_alikes_are_not_taken(seed):
 
 
 def test_sample_step_keeps_twelve_samples_across_the_box():
-    from pftrack.trackers.flow_search import sample_step
+    from pftrack.trackers.frame_search import sample_step
     assert sample_step(20, 28) == 1 and sample_step(23, 100) == 1
     assert sample_step(50, 60) == 4 and sample_step(300, 36) == 3
 
