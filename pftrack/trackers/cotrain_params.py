@@ -134,7 +134,7 @@ class CoTrainPFParams(Params):
         "rho; the best one, when 1 - rho is within lost_search_distance, below the estimate's, at most "
         "lost_search_ratio times the best 1 - rho at least one box away, and in one place for lost_search_frames "
         "frames, moves the particles and the box there. 'off': they spread about where the target was lost."))
-    lost_search_distance: float = param(0.2, gt=0, le=1, doc=(
+    lost_search_distance: float = param(0.3, gt=0, le=1, doc=(
         "Largest 1 - rho (the colour term's Bhattacharyya coefficient) of a whole-frame candidate the search takes."))
     lost_search_ratio: float = param(0.5, gt=0, le=1, doc=(
         "A whole-frame candidate's 1 - rho must be at most this fraction of the best one at least one box away."))

@@ -47,7 +47,7 @@ from ..geometry import Box, box_to_ellipse
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams
 from .cotrain_params import CoTrainPFParams
-from .frame_search import Persistence, best_candidate, scan_centres
+from .frame_search import Persistence, frame_candidate, scan_centres
 
 __all__ = ["CoTrainPF", "CoTrainPFParams"]
 
@@ -273,18 +273,20 @@ class CoTrainPF(Tracker):
         p = self.params
         fh, fw = frame.shape[:2]
         w, h = self.box[2], self.box[3]
-        centres = scan_centres(fw, fh, w, h, p.lost_search_step * 0.5 * (w + h))
-        ell = np.empty((len(centres) + 1, 4))
-        ell[:-1, :2] = centres
-        ell[-1, :2] = self.mu  # the estimate's, last
-        ell[:, 2], ell[:, 3] = w / 2, h / 2
-        feats = self.ccue.prepare(frame, (0, 0, fw, fh), self.ccue.step_for(ell))
-        d = 1.0 - self.ccue.rho(feats, ell, self._sqrt_q, reuse=False)[0]
-        best = best_candidate(centres, d[:-1], (w, h))
+        step = p.lost_search_step * 0.5 * (w + h)
+        centres = scan_centres(fw, fh, w, h, step)
+        feats = self.ccue.prepare(frame, (0, 0, fw, fh), self.ccue.step_for(np.array([[0.0, 0.0, w / 2, h / 2]])))
+
+        def score(c: np.ndarray) -> np.ndarray:
+            e = np.column_stack([c, np.full(len(c), w / 2), np.full(len(c), h / 2)])
+            return 1.0 - self.ccue.rho(feats, e, self._sqrt_q, reuse=False)[0]
+
+        d_here = float(score(self.mu[None])[0])
+        best = frame_candidate(score, centres, (w, h), step)
         gated = None
-        if (best is not None and best[1] <= p.lost_search_distance and best[1] < d[-1]
-                and best[1] <= p.lost_search_ratio * best[2]):
-            gated = best[0]
+        if (best is not None and best.distance <= p.lost_search_distance and best.distance < d_here
+                and best.distance <= p.lost_search_ratio * best.runner_up):
+            gated = best.centre
         if not self._persist.offer(gated):
             return
         self.mu = gated.copy()

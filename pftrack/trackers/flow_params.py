@@ -83,7 +83,7 @@ class FlowPFParams(Params):
         "best one, when within lost_search_distance and nearer the models than the estimate, re-centres the "
         "particles after lost_search_frames frames in one place. 'off': the paper's filter, which finds a target "
         "only where its particles wait."))
-    lost_search_distance: float = param(0.6, gt=0, doc=(
+    lost_search_distance: float = param(0.3, gt=0, doc=(
         "Largest colour distance (EMD bins, as lost_distance) of a whole-frame candidate the search takes."))
     lost_search_ratio: float = param(0.5, gt=0, le=1, doc=(
         "A whole-frame candidate is taken only when its distance is at most this fraction of the best distance at "

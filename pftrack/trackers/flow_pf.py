@@ -63,7 +63,7 @@ from ..frames import as_bgr_uint8
 from ..geometry import Box, background_grid, iou, validate_box
 from .base import Tracker, TrackState
 from .flow_params import FlowPFParams
-from .frame_search import Persistence, best_candidate, sample_step, scan_centres
+from .frame_search import Persistence, frame_candidate, sample_step, scan_centres
 
 __all__ = ["FlowPF", "FlowPFGroup", "FlowPFParams", "haar_face_detector"]
 
@@ -339,21 +339,26 @@ class FlowPF(Tracker):
         p = self.params
         fh, fw = self._shape
         w, h = self.size
-        centres = scan_centres(fw, fh, w, h, p.lost_search_step * self.window)
+        step = p.lost_search_step * self.window
         k = sample_step(w, h)  # every k-th pixel of every k-th row: the histograms' cost falls k^2 times
         small = frame[::k, ::k]
         feats = self.cue.prepare(small, (0, 0, small.shape[1], small.shape[0]))
-        hist, npx = self._histograms(feats, self._boxes(centres) / k)
-        if p.distance == "emd":  # the particles' distance, compiled for the many boxes
-            d = min_emd_hsv(hist, np.stack(self._templates()), value_only=self._grey and p.grey_value_only)
-        else:
-            d = self._colour_energy(hist)[1]
-        d[npx <= 0] = np.inf
-        best = best_candidate(centres, d, (w, h))
+        value_only = self._grey and p.grey_value_only
+
+        def score(centres: np.ndarray) -> np.ndarray:
+            hist, npx = self._histograms(feats, self._boxes(centres) / k)
+            if p.distance == "emd":  # the particles' distance, compiled for the many boxes
+                d = min_emd_hsv(hist, np.stack(self._templates()), value_only=value_only)
+            else:
+                d = self._colour_energy(hist)[1]
+            d[npx <= 0] = np.inf
+            return d
+
+        best = frame_candidate(score, scan_centres(fw, fh, w, h, step), (w, h), step)
         gated = None
-        if (best is not None and best[1] <= p.lost_search_distance and best[1] < self._d_est
-                and best[1] <= p.lost_search_ratio * best[2]):
-            gated = best[0]
+        if (best is not None and best.distance <= p.lost_search_distance and best.distance < self._d_est
+                and best.distance <= p.lost_search_ratio * best.runner_up):
+            gated = best.centre
         if not self._persist.offer(gated):
             return
         s = self.ps.states

@@ -1,19 +1,32 @@
-"""Whole-frame re-acquisition for ``flow-pf`` while it is lost (pftrack's addition; the paper does not search).
+"""Whole-frame re-acquisition while a tracker is lost (pftrack's addition to ``flow-pf`` and ``cotrain-pf``).
 
-Tung & Matsuyama's filter looks for the target only where its particles are: once the target has walked off or
-been hidden, the particles wait where it was lost, and a target that comes back elsewhere is found only if it passes
-near them again.  While the tracker is lost, :func:`scan_centres` lays boxes of the target's size over the whole
-frame, each is scored by the same colour distance as the particles (the nearest model of the subspace; the frame
-read at every k-th pixel, :func:`sample_step`, so that a search costs about what a tracked frame does), and
-:class:`Persistence` asks the best of them to stay in one place for a few frames before the particles are moved
-there: a look-alike that crosses the view once is not taken.
+Those filters look for the target only where their particles are: once the target has walked off or been hidden,
+the particles wait about where it was lost, and a target that comes back elsewhere is found only if it passes near
+them again.  While the tracker is lost, :func:`scan_centres` lays boxes of the target's size over the whole frame,
+the tracker scores each by its own appearance distance (``flow-pf``: the particles' EMD to the nearest model of the
+subspace, the frame read at every k-th pixel, :func:`sample_step`; ``cotrain-pf``: 1 - rho of its colour term), and
+:func:`frame_candidate` takes the best one and the best at least one box away from it (the runner-up), each refined
+on a finer grid about it so that neither gains from where the coarse grid happened to fall.  The tracker takes the
+best when it is near enough its models and at most a fraction of the runner-up's distance (among several look-alikes
+none is taken), and :class:`Persistence` asks it to stay in one place for a few frames.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
+
+#: the whole-frame search reads every k-th pixel of every k-th row, k chosen so that the box's shorter side keeps
+#: at least this many samples (the colours stay the frame's own: no interpolation mixes them)
+SEARCH_SAMPLES = 12
+
+
+def sample_step(w: float, h: float) -> int:
+    """The sampling step ``k`` of the whole-frame search for a ``w`` x ``h`` box (1 for boxes under 24 px)."""
+    return max(1, int(min(w, h) // SEARCH_SAMPLES))
 
 
 def scan_centres(width: int, height: int, w: float, h: float, step: float) -> np.ndarray:
@@ -36,29 +49,59 @@ def scan_centres(width: int, height: int, w: float, h: float, step: float) -> np
     return out
 
 
-#: the whole-frame search reads every k-th pixel of every k-th row, k chosen so that the box's shorter side keeps
-#: at least this many samples (the colours stay the frame's own: no interpolation mixes them)
-SEARCH_SAMPLES = 12
-
-
-def sample_step(w: float, h: float) -> int:
-    """The sampling step ``k`` of the whole-frame search for a ``w`` x ``h`` box (1 for boxes under 24 px)."""
-    return max(1, int(min(w, h) // SEARCH_SAMPLES))
+def local_grid(centre: np.ndarray, step: float, n: int = 2) -> np.ndarray:
+    """``((2n + 1)^2, 2)`` centres spaced ``step / (2n)`` about ``centre``, out to half a coarse ``step`` each way:
+    the finer grid that refines a coarse grid's cell."""
+    off = np.linspace(-0.5 * step, 0.5 * step, 2 * n + 1)
+    out = np.empty((off.size * off.size, 2))
+    out[:, 0] = centre[0] + np.tile(off, off.size)
+    out[:, 1] = centre[1] + np.repeat(off, off.size)
+    return out
 
 
 def best_candidate(centres: np.ndarray, distance: np.ndarray,
-                   size: tuple[float, float]) -> tuple[np.ndarray, float, float] | None:
-    """The centre of the smallest finite distance, that distance, and the smallest distance of the centres at least
-    one box ``size = (w, h)`` away from it along x or y (inf when there is none): the runner-up elsewhere in the
-    frame, for a uniqueness test. None when no distance is finite."""
+                   size: tuple[float, float]) -> tuple[np.ndarray, float, np.ndarray | None, float] | None:
+    """The centre of the smallest finite distance and that distance, and the centre and distance of the best of the
+    centres at least one box ``size = (w, h)`` away from it along x or y (None and inf when there is none): the
+    runner-up elsewhere in the frame, for a uniqueness test. None when no distance is finite."""
     d = np.where(np.isfinite(distance), distance, np.inf)
     if not d.size or not np.isfinite(d.min()):
         return None
     k = int(np.argmin(d))
     c = centres[k]
-    away = (np.abs(centres[:, 0] - c[0]) >= size[0]) | (np.abs(centres[:, 1] - c[1]) >= size[1])
-    second = float(d[away].min()) if away.any() else float("inf")
-    return c.copy(), float(d[k]), second
+    away = np.flatnonzero((np.abs(centres[:, 0] - c[0]) >= size[0]) | (np.abs(centres[:, 1] - c[1]) >= size[1]))
+    if not away.size or not np.isfinite(d[away].min()):
+        return c.copy(), float(d[k]), None, float("inf")
+    j = int(away[np.argmin(d[away])])
+    return c.copy(), float(d[k]), centres[j].copy(), float(d[j])
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A whole-frame search's best place (``centre``, ``distance``) and the runner-up's distance (inf: none)."""
+
+    centre: np.ndarray
+    distance: float
+    runner_up: float
+
+
+def frame_candidate(score: Callable[[np.ndarray], np.ndarray], centres: np.ndarray, size: tuple[float, float],
+                    step: float) -> Candidate | None:
+    """Score the coarse grid ``centres`` (``score``: ``(M, 2)`` centres -> ``(M,)`` distances, inf where a box
+    cannot be scored), take the best and the runner-up at least one box away (:func:`best_candidate`), and refine
+    each on :func:`local_grid` about it; None when nothing could be scored."""
+    coarse = best_candidate(centres, score(centres), size)
+    if coarse is None:
+        return None
+    c, d, c2, d2 = coarse
+    fine = local_grid(c, step)
+    df = score(fine)
+    k = int(np.argmin(np.where(np.isfinite(df), df, np.inf)))
+    if np.isfinite(df[k]) and df[k] < d:
+        c, d = fine[k].copy(), float(df[k])
+    if c2 is not None:
+        d2 = min(d2, float(np.min(np.where(np.isfinite(f := score(local_grid(c2, step))), f, np.inf))))
+    return Candidate(c, d, d2)
 
 
 class Persistence:
