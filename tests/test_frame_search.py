@@ -161,3 +161,19 @@ def test_compiled_min_emd_matches_the_numpy_path(value_only):
     assert np.allclose(got, want, atol=1e-12) and np.allclose(ref, want, atol=1e-12)
     if numba_enabled():
         assert not np.allclose(min_emd_hsv(h, t[:1], value_only=value_only), want)  # the min over templates matters
+
+
+@pytest.mark.parametrize("name", ["opencv-csrt", "template"])
+def test_the_monitor_search_restarts_any_tracker_on_the_far_return(name):
+    iou, lost = _run(0, name=name, monitor=True, monitor_search="frame")
+    assert lost[HIDE + 3: BACK - 1].mean() > 0.9
+    assert (iou[BACK - 1 + 6:] >= 0.5).mean() > 0.9 and lost[BACK - 1 + 6:].mean() < 0.1
+    iou_off, lost_off = _run(0, name=name, monitor=True)  # the negative control: the monitor alone only flags
+    assert (iou_off[BACK - 1 + 6:] >= 0.5).mean() < 0.2 and lost_off[BACK - 1 + 6:].mean() > 0.9
+
+
+def test_the_monitor_search_takes_neither_of_two_look_alikes():
+    _, lost = _run(1, twin=2, name="opencv-csrt", monitor=True, monitor_search="frame")
+    assert lost[HIDE + 3: BACK - 1].mean() > 0.9
+    _, lost_one = _run(1, twin=1, name="opencv-csrt", monitor=True, monitor_search="frame")
+    assert lost_one[HIDE + 3: BACK - 1].mean() < 0.5  # a single look-alike is taken: colour cannot tell it

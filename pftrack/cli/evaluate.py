@@ -157,5 +157,6 @@ def cmd_list(args) -> int:
     if not args.name:
         print("\n'pftrack list NAME' shows a tracker's parameters; set them with --param KEY=VALUE. Every tracker "
               "also takes monitor=true: a calibrated lost flag on its boxes (monitor_cues=fused: with fusion-pf's "
-              "structural score), and grey_restart=N: grey features once N frames in a row are grey.")
+              "structural score; monitor_search=frame: while lost, a whole-frame search that starts the tracker "
+              "again on the target), and grey_restart=N: grey features once N frames in a row are grey.")
     return 0

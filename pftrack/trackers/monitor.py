@@ -54,9 +54,10 @@ from ..cues.color import blend_model, model_rho, normalized_model, reachable_roi
 from ..cues.histogram_cue import ColorCue
 from ..cues.lit_histogram import LitHistogram
 from ..filtering.loss import FusedLoss, LossDetector, confidence
-from ..geometry import Box, background_grid, box_to_ellipse
+from ..geometry import Box, background_grid, box_to_ellipse, ellipse_to_box
 from ..params import Params, param
 from .base import Tracker, TrackState
+from .frame_search import Persistence, frame_candidate, scan_centres
 from .structure_check import ANCHOR_GATE, RATE, StructureCheck, fused_test
 
 __all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions", "wrapper_options"]
@@ -101,6 +102,19 @@ class MonitorParams(Params):
         "false alarms on camouflaged targets and under changing light, fewer hidden frames flagged behind trackers "
         "that match grey structure themselves (docs/evaluation.md: tune split, 7 trackers, false-lost 0.047 against "
         "0.082, lost recall 0.888 against 0.952)."))
+    search: Literal["off", "frame"] = param("off", doc=(
+        "While the test calls the target lost, look for it over the whole frame (pftrack.trackers.frame_search): "
+        "ellipses of its size on a grid of a quarter window, scored by their coefficient with the model; the best, "
+        "when the test would end the loss on it, when 1 - rho is at most search_ratio times the best one at least a "
+        "box away and search_gap below it (unique in the frame) and when it stays in one place for search_frames frames, starts the tracker "
+        "again there (its init on that box). 'off': the tracker alone decides where it looks."))
+    search_ratio: float = param(0.5, gt=0, le=1, doc=(
+        "The search's uniqueness test: the best 1 - rho at most this fraction of the runner-up's."))
+    search_gap: float = param(0.02, ge=0, le=1, doc=(
+        "... and the runner-up's 1 - rho at least this above the best's: with a fine model two look-alikes of one "
+        "colour both score about 0, where a ratio alone tells nothing."))
+    search_frames: int = param(2, ge=1, le=100, doc=(
+        "Consecutive frames the search's best candidate must pass in one place (within half a window)."))
     structure_features: Literal["ncc", "hog-on-grey"] = param("hog-on-grey", doc=(
         "With cues='fused', what the structural score correlates: 'ncc' grey patches (the better of the grey "
         "levels' and their self-quotient image's NCC) on every input; 'hog-on-grey' histograms of oriented "
@@ -179,6 +193,38 @@ class LossMonitor:
                 self.loss.set_background(np.column_stack([np.where(tot > 0, rho, np.nan),
                                                           self.structure.scores(frame, grid)]))
 
+    def find(self, frame: np.ndarray, persist: Persistence) -> Box | None:
+        """While lost (``search="frame"``): the whole frame's best ellipse of the target's size, when the test would
+        end the loss on it, it is unique in the frame and ``persist`` has seen it in one place long enough; its box,
+        else None. The test's state does not change (the box is then checked as any reported box)."""
+        p = self.params
+        self.cue.new_frame(frame)
+        h, w = frame.shape[:2]
+        hx, hy = self._half
+        step = 0.25 * (hx + hy)  # a quarter of the window (the mean of the box's sides)
+        feats = self.cue.prepare(frame, (0, 0, w, h), self.cue.step_for(np.array([[0.0, 0.0, hx, hy]])))
+
+        def score(c: np.ndarray) -> np.ndarray:
+            e = np.column_stack([c, np.full(len(c), hx), np.full(len(c), hy)])
+            rho, tot = self.cue.rho(feats, e, self._sqrt_q, reuse=False)
+            return np.where(tot > 0, 1.0 - rho, np.inf)
+
+        best = frame_candidate(score, scan_centres(w, h, 2 * hx, 2 * hy, step), (2 * hx, 2 * hy), step)
+        gated = None
+        if (best is not None and best.distance <= p.search_ratio * best.runner_up
+                and best.runner_up - best.distance >= p.search_gap):
+            rho = 1.0 - best.distance
+            ell = np.array([best.centre[0], best.centre[1], hx, hy])
+            s_in: float | list[float] = rho
+            if self.structure is not None:
+                self.structure.new_frame()
+                s_in = [rho, float(self.structure.scores(frame, ell[None])[0])]
+            if self.loss.would_acquire(s_in)[0]:
+                gated = best.centre
+        if not persist.offer(gated):
+            return None
+        return tuple(float(v) for v in ellipse_to_box(np.array([gated[0], gated[1], hx, hy])).reshape(4))
+
     def check(self, frame: np.ndarray, box: Box) -> tuple[bool, float, float]:
         """``(lost, score, rho)`` of the box reported on this frame (the test's state advances)."""
         if self.q is None:
@@ -240,19 +286,32 @@ class Monitored(Tracker):
         self.stochastic = inner.stochastic
         self.state_names = getattr(inner, "state_names", ())
         self.monitor = LossMonitor(self.params)
+        self._persist = Persistence(self.params.search_frames, 1.0)
+        self._lost = False
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         st = self.inner.init(frame, box)
         self.monitor.start(frame, box)
+        self._persist = Persistence(self.params.search_frames, 0.25 * (box[2] + box[3]))
+        self._lost = False
         return replace(st, info={**st.info, "tracker_score": st.score, "tracker_lost": st.lost})
 
     def _update(self, frame: np.ndarray) -> TrackState:
-        st = self.inner.update(frame)
+        found = None
+        if self.params.search == "frame" and self._lost:
+            found = self.monitor.find(frame, self._persist)
+        if found is not None:  # the tracker starts again on the found box (its own state is that of a first frame)
+            st = self.inner.init(frame, found)
+        else:
+            st = self.inner.update(frame)
         box = st.info.get("box_full", st.box)
         lost, score, rho = self.monitor.check(frame, box)
-        return replace(st, lost=bool(st.lost or lost), score=score,
+        self._lost = bool(st.lost or lost)
+        if not self._lost:
+            self._persist.reset()
+        return replace(st, lost=self._lost, score=score,
                        info={**st.info, "tracker_score": st.score, "tracker_lost": st.lost, "monitor_rho": rho,
-                             "monitor_llr": self.monitor.loss.llr})
+                             "monitor_llr": self.monitor.loss.llr, "restarted": found is not None})
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -270,6 +329,10 @@ class WrapperOptions(Params):
         "With monitor_cues=fused, the structural score's features (MonitorParams.structure_features)."))
     monitor_grey_histogram: Literal["levels", "both"] = param("levels", doc=(
         "The monitor's histograms on grey input (MonitorParams.grey_histogram)."))
+    monitor_search: Literal["off", "frame"] = param("off", doc=(
+        "While the monitor calls the target lost, search the whole frame with its colour model and start the tracker "
+        "again on a unique, steady candidate the test accepts (MonitorParams.search): re-acquisition for any "
+        "tracker, OpenCV's included."))
     grey_restart: int = param(0, ge=0, le=1000, doc=(
         "Input that turns grey mid-sequence: after this many grey frames in a row, a tracker that started on colour "
         "frames is started again on the grey copy of the last frame where its target was seen, so that it chooses "
@@ -280,7 +343,7 @@ class WrapperOptions(Params):
     def monitor_params(self) -> MonitorParams:
         """The loss monitor's parameters these options set."""
         return MonitorParams(cues=self.monitor_cues, structure_features=self.monitor_structure,
-                             grey_histogram=self.monitor_grey_histogram)
+                             grey_histogram=self.monitor_grey_histogram, search=self.monitor_search)
 
 
 def wrapper_options(*sources: Mapping[str, Any] | None) -> WrapperOptions:
