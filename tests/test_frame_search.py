@@ -177,3 +177,28 @@ def test_the_monitor_search_takes_neither_of_two_look_alikes():
     assert lost[HIDE + 3: BACK - 1].mean() > 0.9
     _, lost_one = _run(1, twin=1, name="opencv-csrt", monitor=True, monitor_search="frame")
     assert lost_one[HIDE + 3: BACK - 1].mean() < 0.5  # a single look-alike is taken: colour cannot tell it
+
+
+@pytest.mark.parametrize("case", ["one-pixel", "corner", "larger-than-frame", "bgra", "uint16", "small-frame"])
+@pytest.mark.parametrize("name", ["meanshift+monitor", "cotrain-pf", "flow-pf"])
+def test_the_searches_keep_the_protocol_on_awkward_starts(name, case):
+    """The awkward starts of the protocol test, then the target gone for six frames (so every search runs) and back:
+    a clean input error at init or valid states throughout, whatever the box and pixel type."""
+    from pftrack.errors import InputError
+
+    from .test_every_tracker import _check, _edge_frames
+
+    frames, box = _edge_frames(case)
+    h, w = frames[0].shape[:2]
+    blank = np.full_like(frames[0], 90)
+    seq = frames + [blank] * 6 + frames
+    params = {"monitor": True, "monitor_search": "frame"} if name.endswith("+monitor") else {"lost_search": "frame"}
+    tracker = pftrack.create_tracker(name.split("+")[0], seed=0, **params)
+    try:
+        state = tracker.init(seq[0], box)
+    except InputError as exc:
+        assert case in ("one-pixel", "larger-than-frame", "small-frame") and "\n" not in str(exc)
+        return
+    _check(state, w, h)
+    for f in seq[1:]:
+        _check(tracker.update(f), w, h)
