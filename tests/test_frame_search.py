@@ -136,6 +136,8 @@ def test_sample_step_keeps_twelve_samples_across_the_box():
     from pftrack.trackers.frame_search import sample_step
     assert sample_step(20, 28) == 1 and sample_step(23, 100) == 1
     assert sample_step(50, 60) == 4 and sample_step(300, 36) == 3
+    assert sample_step(12, 12, 640, 480) == 1 and sample_step(12, 12, 1920, 1080) == 2  # a million pixels at most
+    assert sample_step(12, 12, 3840, 2160) == 3 and sample_step(50, 60, 1920, 1080) == 4
 
 
 @pytest.mark.parametrize("value_only", [False, True])
@@ -202,3 +204,10 @@ def test_the_searches_keep_the_protocol_on_awkward_starts(name, case):
     _check(state, w, h)
     for f in seq[1:]:
         _check(tracker.update(f), w, h)
+
+
+def test_a_small_box_in_a_large_frame_widens_the_grid():
+    c = scan_centres(1920, 1080, 8, 8, 2.0)  # 2 px would be about 510 000 centres
+    assert 15_000 < len(c) <= 20_500
+    assert len(scan_centres(1920, 1080, 8, 8, 2.0, max_centres=1000)) <= 1100
+    assert len(scan_centres(640, 480, 20, 30, 6.25)) == len(scan_centres(640, 480, 20, 30, 6.25, max_centres=10**9))

@@ -340,7 +340,7 @@ class FlowPF(Tracker):
         fh, fw = self._shape
         w, h = self.size
         step = p.lost_search_step * self.window
-        k = sample_step(w, h)  # every k-th pixel of every k-th row: the histograms' cost falls k^2 times
+        k = sample_step(w, h, fw, fh)  # every k-th pixel of every k-th row: the histograms' cost falls k^2 times
         small = frame[::k, ::k]
         feats = self.cue.prepare(small, (0, 0, small.shape[1], small.shape[0]))
         value_only = self._grey and p.grey_value_only

@@ -24,15 +24,29 @@ import numpy as np
 SEARCH_SAMPLES = 12
 
 
-def sample_step(w: float, h: float) -> int:
-    """The sampling step ``k`` of the whole-frame search for a ``w`` x ``h`` box (1 for boxes under 24 px)."""
-    return max(1, int(min(w, h) // SEARCH_SAMPLES))
+#: ... and so that it reads at most about this many pixels of a large frame
+SEARCH_PIXELS = 1_000_000
 
 
-def scan_centres(width: int, height: int, w: float, h: float, step: float) -> np.ndarray:
+def sample_step(w: float, h: float, width: int = 0, height: int = 0) -> int:
+    """The sampling step ``k`` of the whole-frame search for a ``w`` x ``h`` box in a ``width`` x ``height`` frame
+    (1 for boxes under 24 px in frames of up to a million pixels)."""
+    k = max(1, int(min(w, h) // SEARCH_SAMPLES))
+    return max(k, math.ceil(math.sqrt(width * height / SEARCH_PIXELS)))
+
+
+#: the most centres a whole-frame search scores: a small box in a large frame widens the grid's step instead (the
+#: development and synthetic sequences ask at most about 4 800)
+MAX_CENTRES = 20_000
+
+
+def scan_centres(width: int, height: int, w: float, h: float, step: float,
+                 max_centres: int = MAX_CENTRES) -> np.ndarray:
     """``(M, 2)`` centres of ``w`` x ``h`` boxes on a grid of ``step`` px over a ``width`` x ``height`` frame, row by
-    row, every box inside the frame (one centre per axis, the frame's middle, when the box is wider than the frame)."""
-    step = max(float(step), 1.0)
+    row, every box inside the frame (one centre per axis, the frame's middle, when the box is wider than the frame);
+    the step is widened so that there are at most about ``max_centres``."""
+    free = max(width - w, 1.0) * max(height - h, 1.0)
+    step = max(float(step), 1.0, math.sqrt(free / max(max_centres, 1)))
 
     def axis(extent: float, size: float) -> np.ndarray:
         lo, hi = size / 2.0, extent - size / 2.0
