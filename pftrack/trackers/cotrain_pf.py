@@ -21,7 +21,10 @@ Per frame (ch03.md §1.8):
 7. retraining of both classifiers when the score passes ``update_gate`` (positives from the box's
    core, chosen per ``label_mode``; negatives from outside the enlarged box, class-balanced) and of the
    colour histogram (``colour_rate``), and
-   the lost flag when it stays below ``lost_gate`` for ``lost_frames`` frames.
+   the lost flag when it stays below ``lost_gate`` for ``lost_frames`` frames;
+8. while lost, before step 1, the whole frame is searched with the colour term's model (``lost_search="frame"``,
+   not in the chapter, :mod:`pftrack.trackers.frame_search`): a unique, steady best place moves the particles, the
+   gate's centre and the box there.
 
 Every change from the chapter is measured on the tune split in docs/cotrain.md.
 """

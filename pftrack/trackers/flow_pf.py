@@ -38,6 +38,9 @@ driven by optical flow" — ``shared/seeds/003_*.txt``.
   detection near the target replaces the response (``z_t = y_t``), re-centres the
   particles and feeds the subspace; without one the tracker runs in tracking mode alone.
 
+* **While lost** (``lost_search="frame"``, an option; not in the paper): the whole frame is searched with the same
+  colour distance (:mod:`pftrack.trackers.frame_search`), and a unique, steady best place re-centres the particles.
+
 :class:`FlowPFGroup` tracks several objects at once (M objects with their own
 subspaces, §3.2) and returns the per-object states.
 """
