@@ -34,7 +34,10 @@ levels' histogram and ``color-pf``'s second one, of the self-quotient image (:mo
 each against its own model: an option as well (docs/evaluation.md).
 
 The tracker itself is not changed: its boxes, particles and information pass through, and the grid is fixed, so the
-tracks are the same with or without the monitor.  ``lost`` is raised when the tracker or the test raises it;
+tracks are the same with or without the monitor. Unless ``search="frame"`` (``monitor_search=frame``): then, while the
+test calls the target lost, the whole frame is searched with the test's model (:mod:`pftrack.trackers.frame_search`),
+and a candidate that is unique in the frame, steady for ``search_frames`` frames and accepted by the test starts the
+tracker again there (its ``init`` on that box; ``info["restarted"]``).  ``lost`` is raised when the tracker or the test raises it;
 ``score`` is the test's posterior P(target | rho), at most one half on a frame the test calls lost (the tracker's
 own score is ``info["tracker_score"]``).
 
