@@ -144,5 +144,8 @@ class CoTrainPFParams(Params):
         "A whole-frame candidate's 1 - rho must be at most this fraction of the best one at least one box away."))
     lost_search_frames: int = param(2, ge=1, le=100, doc=(
         "Consecutive frames the best candidate must pass the gates within half a window of the frame before."))
+    lost_search_exit: bool = param(False, doc=(
+        "When the last sure box lay within half its size of an edge of the frame (the target left through it), "
+        "the whole-frame search keeps to the band within 1.5 box sizes of that edge, where it comes back."))
     lost_search_step: float = param(0.25, gt=0, le=4, doc=(
         "Grid step of the whole-frame search, a fraction of the window (the mean of the box's sides)."))

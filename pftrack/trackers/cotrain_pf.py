@@ -50,7 +50,7 @@ from ..geometry import Box, box_to_ellipse
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams
 from .cotrain_params import CoTrainPFParams
-from .frame_search import Persistence, frame_candidate, scan_centres
+from .frame_search import Persistence, exit_band, exit_side, frame_candidate, scan_centres
 
 __all__ = ["CoTrainPF", "CoTrainPFParams"]
 
@@ -278,6 +278,12 @@ class CoTrainPF(Tracker):
         w, h = self.box[2], self.box[3]
         step = p.lost_search_step * 0.5 * (w + h)
         centres = scan_centres(fw, fh, w, h, step)
+        side = exit_side(self.box, fw, fh) if p.lost_search_exit else None
+        if side is not None:  # it left through that edge: the band along it
+            centres = centres[exit_band(centres, side, fw, fh, w, h)]
+            if not len(centres):
+                self._persist.offer(None)
+                return
         feats = self.ccue.prepare(frame, (0, 0, fw, fh), self.ccue.step_for(np.array([[0.0, 0.0, w / 2, h / 2]])))
 
         def score(c: np.ndarray) -> np.ndarray:

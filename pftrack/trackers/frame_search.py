@@ -63,6 +63,28 @@ def scan_centres(width: int, height: int, w: float, h: float, step: float,
     return out
 
 
+def exit_side(box, width: float, height: float, near: float = 0.5) -> int | None:
+    """The edge (0 left, 1 right, 2 top, 3 bottom) the box ``(x, y, w, h)`` lies within ``near`` of its own size of
+    (the nearest), or None when it lies further inside: the edge a target whose last sure box this was left by."""
+    x, y, w, h = (float(v) for v in box)
+    gaps = (x / max(w, 1.0), (width - x - w) / max(w, 1.0), y / max(h, 1.0), (height - y - h) / max(h, 1.0))
+    k = int(np.argmin(gaps))
+    return k if gaps[k] <= near else None
+
+
+def exit_band(centres: np.ndarray, side: int, width: float, height: float, w: float, h: float,
+              depth: float = 1.5) -> np.ndarray:
+    """``(M,)`` bool: the centres within ``depth`` box sizes of edge ``side`` (:func:`exit_side`), where a target
+    that left through it comes back."""
+    if side == 0:
+        return centres[:, 0] <= depth * w
+    if side == 1:
+        return centres[:, 0] >= width - depth * w
+    if side == 2:
+        return centres[:, 1] <= depth * h
+    return centres[:, 1] >= height - depth * h
+
+
 def local_grid(centre: np.ndarray, step: float, n: int = 2) -> np.ndarray:
     """``((2n + 1)^2, 2)`` centres spaced ``step / (2n)`` about ``centre``, out to half a coarse ``step`` each way:
     the finer grid that refines a coarse grid's cell."""

@@ -60,7 +60,7 @@ from ..filtering.loss import FusedLoss, LossDetector, confidence
 from ..geometry import Box, background_grid, box_to_ellipse, ellipse_to_box
 from ..params import Params, param
 from .base import Tracker, TrackState
-from .frame_search import Persistence, frame_candidate, scan_centres
+from .frame_search import Persistence, exit_band, exit_side, frame_candidate, scan_centres
 from .structure_check import ANCHOR_GATE, RATE, StructureCheck, fused_test
 
 __all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions", "wrapper_options"]
@@ -116,6 +116,9 @@ class MonitorParams(Params):
     search_gap: float = param(0.02, ge=0, le=1, doc=(
         "... and the runner-up's 1 - rho at least this above the best's: with a fine model two look-alikes of one "
         "colour both score about 0, where a ratio alone tells nothing."))
+    search_exit: bool = param(True, doc=(
+        "When the tracker's last box before the loss lay within half its size of an edge of the frame (the target "
+        "left through it), the search keeps to the band within 1.5 box sizes of that edge, where it comes back."))
     search_frames: int = param(2, ge=1, le=100, doc=(
         "Consecutive frames the search's best candidate must pass in one place (within half a window)."))
     structure_features: Literal["ncc", "hog-on-grey"] = param("hog-on-grey", doc=(
@@ -196,7 +199,7 @@ class LossMonitor:
                 self.loss.set_background(np.column_stack([np.where(tot > 0, rho, np.nan),
                                                           self.structure.scores(frame, grid)]))
 
-    def find(self, frame: np.ndarray, persist: Persistence) -> Box | None:
+    def find(self, frame: np.ndarray, persist: Persistence, last: Box | None = None) -> Box | None:
         """While lost (``search="frame"``): the whole frame's best ellipse of the target's size, when the test would
         end the loss on it, it is unique in the frame and ``persist`` has seen it in one place long enough; its box,
         else None. The test's state does not change (the box is then checked as any reported box)."""
@@ -212,7 +215,11 @@ class LossMonitor:
             rho, tot = self.cue.rho(feats, e, self._sqrt_q, reuse=False)
             return np.where(tot > 0, 1.0 - rho, np.inf)
 
-        best = frame_candidate(score, scan_centres(w, h, 2 * hx, 2 * hy, step), (2 * hx, 2 * hy), step)
+        centres = scan_centres(w, h, 2 * hx, 2 * hy, step)
+        side = exit_side(last, w, h) if (p.search_exit and last is not None) else None
+        if side is not None:  # the target left through that edge: the band along it
+            centres = centres[exit_band(centres, side, w, h, 2 * hx, 2 * hy)]
+        best = frame_candidate(score, centres, (2 * hx, 2 * hy), step) if len(centres) else None
         gated = None
         if (best is not None and best.distance <= p.search_ratio * best.runner_up
                 and best.runner_up - best.distance >= p.search_gap):
@@ -291,18 +298,20 @@ class Monitored(Tracker):
         self.monitor = LossMonitor(self.params)
         self._persist = Persistence(self.params.search_frames, 1.0)
         self._lost = False
+        self._last_box: Box | None = None
 
     def _init(self, frame: np.ndarray, box: Box) -> TrackState:
         st = self.inner.init(frame, box)
         self.monitor.start(frame, box)
         self._persist = Persistence(self.params.search_frames, 0.25 * (box[2] + box[3]))
         self._lost = False
+        self._last_box = box
         return replace(st, info={**st.info, "tracker_score": st.score, "tracker_lost": st.lost})
 
     def _update(self, frame: np.ndarray) -> TrackState:
         found = None
         if self.params.search == "frame" and self._lost:
-            found = self.monitor.find(frame, self._persist)
+            found = self.monitor.find(frame, self._persist, self._last_box)
         if found is not None:  # the tracker starts again on the found box (its own state is that of a first frame)
             st = self.inner.init(frame, found)
         else:
@@ -312,6 +321,7 @@ class Monitored(Tracker):
         self._lost = bool(st.lost or lost)
         if not self._lost:
             self._persist.reset()
+            self._last_box = box  # the last box before a loss: the edge a target that left went through
         return replace(st, lost=self._lost, score=score,
                        info={**st.info, "tracker_score": st.score, "tracker_lost": st.lost, "monitor_rho": rho,
                              "monitor_llr": self.monitor.loss.llr, "restarted": found is not None})
