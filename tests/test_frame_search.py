@@ -211,3 +211,64 @@ def test_a_small_box_in_a_large_frame_widens_the_grid():
     assert 15_000 < len(c) <= 20_500
     assert len(scan_centres(1920, 1080, 8, 8, 2.0, max_centres=1000)) <= 1100
     assert len(scan_centres(640, 480, 20, 30, 6.25)) == len(scan_centres(640, 480, 20, 30, 6.25, max_centres=10**9))
+
+
+def test_exit_side_and_band():
+    from pftrack.trackers.frame_search import exit_band, exit_side
+
+    assert exit_side((225, 80, 20, 28), 240, 180) == 1 and exit_side((2, 80, 20, 28), 240, 180) == 0
+    assert exit_side((100, 3, 20, 28), 240, 180) == 2 and exit_side((100, 160, 20, 28), 240, 180) == 3
+    assert exit_side((100, 80, 20, 28), 240, 180) is None and exit_side((205, 80, 20, 28), 240, 180) is None
+    c = scan_centres(240, 180, 20, 28, 5.0)
+    band = exit_band(c, 1, 240, 180, 20, 28)
+    assert band.any() and (c[band, 0] >= 210).all() and (c[~band, 0] < 210).all()
+    assert (c[exit_band(c, 2, 240, 180, 20, 28), 1] <= 42).all()
+
+
+def _exit_box(t: int) -> tuple[float, float, float, float] | None:
+    """A target that walks out through the right edge, stays away, and walks back in through it."""
+    if t < 20:
+        return 180.0 + 3 * t, 80.0, *SIZE  # gone past x = 240 by frame 20
+    if t < 45:
+        return None
+    return 240.0 - 2 * (t - 45), 80.0, *SIZE
+
+
+@pytest.mark.parametrize("name, params", [("cotrain-pf", {"lost_search_exit": True}),
+                                          ("template", {"monitor": True, "monitor_search": "frame"})])
+def test_a_target_that_left_by_an_edge_is_looked_for_there(name, params):
+    """While it is away a look-alike stands in the middle of the view; the search keeps to the edge it left by, so
+    the look-alike is not taken and the target is found when it walks back in."""
+    rng = np.random.default_rng(11)
+    bg = np.clip(rng.normal(110, 25, (H, W, 3)), 0, 255)
+    bg[..., 2] *= 0.4
+    tex = np.zeros((SIZE[1], SIZE[0], 3))
+    tex[..., 2] = 200 + rng.normal(0, 20, SIZE[::-1])
+    tex[..., 1] = 40 + rng.normal(0, 15, SIZE[::-1])
+    tex[..., 0] = 40
+
+    def frame(t):
+        f = bg.copy()
+        box = _exit_box(t)
+        if box is not None:
+            x, y, w, h = (int(round(v)) for v in box)
+            f[y:y + h, max(x, 0):min(x + w, W)] = tex[:, : max(min(x + w, W) - max(x, 0), 0)]
+        else:
+            f[120:120 + SIZE[1], 60:60 + SIZE[0]] = tex  # the look-alike, far from that edge
+        return np.clip(f + rng.normal(0.0, 2.0, f.shape), 0, 255).astype(np.uint8)
+
+    def run(**extra):
+        tracker = pftrack.create_tracker(name, seed=0, **{**params, **extra})
+        tracker.init(frame(0), _exit_box(0))
+        states = [tracker.update(frame(t)) for t in range(1, 90)]
+        lost = np.array([s.lost for s in states])
+        far = np.array([abs(s.box[0] + s.box[2] / 2 - 70) < 15 and abs(s.box[1] + s.box[3] / 2 - 134) < 15
+                        for s in states])
+        return lost, far
+
+    lost, far = run()
+    assert lost[25:43].mean() > 0.9 and not far.any()  # the look-alike is never taken
+    assert lost[60:].mean() < 0.2  # the target, back through the edge, is found
+    off = {"lost_search_exit": False} if name == "cotrain-pf" else {"monitor_search_exit": False}
+    _, far_any = run(**off)
+    assert far_any.any()  # the negative control: searched over the whole frame, the lone look-alike is taken

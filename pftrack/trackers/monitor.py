@@ -346,6 +346,9 @@ class WrapperOptions(Params):
         "While the monitor calls the target lost, search the whole frame with its colour model and start the tracker "
         "again on a unique, steady candidate the test accepts (MonitorParams.search): re-acquisition for any "
         "tracker, OpenCV's included."))
+    monitor_search_exit: bool = param(True, doc=(
+        "With monitor_search=frame, a target whose last box lay at an edge of the frame is looked for in the band "
+        "along that edge (MonitorParams.search_exit)."))
     grey_restart: int = param(0, ge=0, le=1000, doc=(
         "Input that turns grey mid-sequence: after this many grey frames in a row, a tracker that started on colour "
         "frames is started again on the grey copy of the last frame where its target was seen, so that it chooses "
@@ -356,7 +359,8 @@ class WrapperOptions(Params):
     def monitor_params(self) -> MonitorParams:
         """The loss monitor's parameters these options set."""
         return MonitorParams(cues=self.monitor_cues, structure_features=self.monitor_structure,
-                             grey_histogram=self.monitor_grey_histogram, search=self.monitor_search)
+                             grey_histogram=self.monitor_grey_histogram, search=self.monitor_search,
+                             search_exit=self.monitor_search_exit)
 
 
 def wrapper_options(*sources: Mapping[str, Any] | None) -> WrapperOptions:
