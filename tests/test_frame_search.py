@@ -235,7 +235,8 @@ def _exit_box(t: int) -> tuple[float, float, float, float] | None:
 
 
 @pytest.mark.parametrize("name, params", [("cotrain-pf", {"lost_search_exit": True}),
-                                          ("template", {"monitor": True, "monitor_search": "frame"})])
+                                          ("template", {"monitor": True, "monitor_search": "frame",
+                                                        "monitor_search_exit": True})])
 def test_a_target_that_left_by_an_edge_is_looked_for_there(name, params):
     """While it is away a look-alike stands in the middle of the view; the search keeps to the edge it left by, so
     the look-alike is not taken and the target is found when it walks back in."""

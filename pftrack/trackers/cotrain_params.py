@@ -146,6 +146,7 @@ class CoTrainPFParams(Params):
         "Consecutive frames the best candidate must pass the gates within half a window of the frame before."))
     lost_search_exit: bool = param(False, doc=(
         "When the last sure box lay within half its size of an edge of the frame (the target left through it), "
-        "the whole-frame search keeps to the band within 1.5 box sizes of that edge, where it comes back."))
+        "the whole-frame search keeps to the band within 1.5 box sizes of that edge, where it comes back. Off: it "
+        "failed its rule on the tune views (pooled lost recall 0.406 against 0.413; docs/cotrain.md)."))
     lost_search_step: float = param(0.25, gt=0, le=4, doc=(
         "Grid step of the whole-frame search, a fraction of the window (the mean of the box's sides)."))

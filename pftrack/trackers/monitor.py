@@ -116,9 +116,11 @@ class MonitorParams(Params):
     search_gap: float = param(0.02, ge=0, le=1, doc=(
         "... and the runner-up's 1 - rho at least this above the best's: with a fine model two look-alikes of one "
         "colour both score about 0, where a ratio alone tells nothing."))
-    search_exit: bool = param(True, doc=(
+    search_exit: bool = param(False, doc=(
         "When the tracker's last box before the loss lay within half its size of an edge of the frame (the target "
-        "left through it), the search keeps to the band within 1.5 box sizes of that edge, where it comes back."))
+        "left through it), the search keeps to the band within 1.5 box sizes of that edge, where it comes back. "
+        "Off: on the tune PETS views and windows it changed little (CSRT's pooled lost recall 0.341 against 0.313, "
+        "template's re-acquisitions 8 against 9 of 22; docs/evaluation.md)."))
     search_frames: int = param(2, ge=1, le=100, doc=(
         "Consecutive frames the search's best candidate must pass in one place (within half a window)."))
     structure_features: Literal["ncc", "hog-on-grey"] = param("hog-on-grey", doc=(
@@ -346,7 +348,7 @@ class WrapperOptions(Params):
         "While the monitor calls the target lost, search the whole frame with its colour model and start the tracker "
         "again on a unique, steady candidate the test accepts (MonitorParams.search): re-acquisition for any "
         "tracker, OpenCV's included."))
-    monitor_search_exit: bool = param(True, doc=(
+    monitor_search_exit: bool = param(False, doc=(
         "With monitor_search=frame, a target whose last box lay at an edge of the frame is looked for in the band "
         "along that edge (MonitorParams.search_exit)."))
     grey_restart: int = param(0, ge=0, le=1000, doc=(
