@@ -1,4 +1,5 @@
-"""Whole-frame re-acquisition while a tracker is lost (pftrack's addition to ``flow-pf`` and ``cotrain-pf``).
+"""Whole-frame re-acquisition while a tracker is lost (pftrack's addition to ``flow-pf``, ``cotrain-pf`` and the loss
+monitor's ``monitor_search``, :mod:`pftrack.trackers.monitor`).
 
 Those filters look for the target only where their particles are: once the target has walked off or been hidden,
 the particles wait about where it was lost, and a target that comes back elsewhere is found only if it passes near
@@ -22,7 +23,6 @@ import numpy as np
 #: the whole-frame search reads every k-th pixel of every k-th row, k chosen so that the box's shorter side keeps
 #: at least this many samples (the colours stay the frame's own: no interpolation mixes them)
 SEARCH_SAMPLES = 12
-
 
 #: ... and so that it reads at most about this many pixels of a large frame
 SEARCH_PIXELS = 1_000_000

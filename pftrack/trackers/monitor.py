@@ -37,9 +37,10 @@ The tracker itself is not changed: its boxes, particles and information pass thr
 tracks are the same with or without the monitor. Unless ``search="frame"`` (``monitor_search=frame``): then, while the
 test calls the target lost, the whole frame is searched with the test's model (:mod:`pftrack.trackers.frame_search`),
 and a candidate that is unique in the frame, steady for ``search_frames`` frames and accepted by the test starts the
-tracker again there (its ``init`` on that box; ``info["restarted"]``).  ``lost`` is raised when the tracker or the test raises it;
-``score`` is the test's posterior P(target | rho), at most one half on a frame the test calls lost (the tracker's
-own score is ``info["tracker_score"]``).
+tracker again there (its ``init`` on that box; ``info["restarted"]``).
+
+``lost`` is raised when the tracker or the test raises it; ``score`` is the test's posterior P(target | rho), at
+most one half on a frame the test calls lost (the tracker's own score is ``info["tracker_score"]``).
 
     tracker = pftrack.create_tracker("opencv-csrt", monitor=True)      # or Monitored(create_tracker(...))
     pftrack eval SEQ --trackers "opencv-csrt,opencv-csrt[monitor=true]"
@@ -109,8 +110,9 @@ class MonitorParams(Params):
         "While the test calls the target lost, look for it over the whole frame (pftrack.trackers.frame_search): "
         "ellipses of its size on a grid of a quarter window, scored by their coefficient with the model; the best, "
         "when the test would end the loss on it, when 1 - rho is at most search_ratio times the best one at least a "
-        "box away and search_gap below it (unique in the frame) and when it stays in one place for search_frames frames, starts the tracker "
-        "again there (its init on that box). 'off': the tracker alone decides where it looks."))
+        "box away and search_gap below it (unique in the frame) and when it stays in one place for search_frames "
+        "frames, starts the tracker again there (its init on that box). 'off': the tracker alone decides where it "
+        "looks."))
     search_ratio: float = param(0.5, gt=0, le=1, doc=(
         "The search's uniqueness test: the best 1 - rho at most this fraction of the runner-up's."))
     search_gap: float = param(0.02, ge=0, le=1, doc=(
