@@ -84,14 +84,20 @@ def _frame(bg: np.ndarray, tex: np.ndarray, t: int, rng: np.random.Generator, tw
     return np.clip(f, 0, 255).astype(np.uint8)
 
 
-def _run(seed: int, twin: int = 0, name: str = "flow-pf", **params) -> tuple[np.ndarray, np.ndarray]:
-    rng = np.random.default_rng(300 + seed)
+def _scene(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """A bluish-green background and the target's texture, red (drawn from ``rng`` in this order)."""
     bg = np.clip(rng.normal(110, 25, (H, W, 3)), 0, 255)
-    bg[..., 2] *= 0.4  # a bluish-green background; the target is red with texture
+    bg[..., 2] *= 0.4
     tex = np.zeros((SIZE[1], SIZE[0], 3))
     tex[..., 2] = 200 + rng.normal(0, 20, SIZE[::-1])
     tex[..., 1] = 40 + rng.normal(0, 15, SIZE[::-1])
     tex[..., 0] = 40
+    return bg, tex
+
+
+def _run(seed: int, twin: int = 0, name: str = "flow-pf", **params) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(300 + seed)
+    bg, tex = _scene(rng)
     tracker = pftrack.create_tracker(name, seed=seed, **params)
     tracker.init(_frame(bg, tex, 0, rng, twin), _box(0))
     iou, lost = [], []
@@ -241,12 +247,7 @@ def test_a_target_that_left_by_an_edge_is_looked_for_there(name, params):
     """While it is away a look-alike stands in the middle of the view; the search keeps to the edge it left by, so
     the look-alike is not taken and the target is found when it walks back in."""
     rng = np.random.default_rng(11)
-    bg = np.clip(rng.normal(110, 25, (H, W, 3)), 0, 255)
-    bg[..., 2] *= 0.4
-    tex = np.zeros((SIZE[1], SIZE[0], 3))
-    tex[..., 2] = 200 + rng.normal(0, 20, SIZE[::-1])
-    tex[..., 1] = 40 + rng.normal(0, 15, SIZE[::-1])
-    tex[..., 0] = 40
+    bg, tex = _scene(rng)
 
     def frame(t):
         f = bg.copy()

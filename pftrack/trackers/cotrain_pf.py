@@ -294,7 +294,7 @@ class CoTrainPF(Tracker):
         best = frame_candidate(score, centres, (w, h), step)
         gated = None
         if (best is not None and best.distance <= p.lost_search_distance and best.distance < d_here
-                and best.distance <= p.lost_search_ratio * best.runner_up):
+                and best.unique(p.lost_search_ratio)):
             gated = best.centre
         if not self._persist.offer(gated):
             return

@@ -347,11 +347,12 @@ class FlowPF(Tracker):
         small = frame[::k, ::k]
         feats = self.cue.prepare(small, (0, 0, small.shape[1], small.shape[0]))
         value_only = self._grey and p.grey_value_only
+        templates = np.stack(self._templates())
 
         def score(centres: np.ndarray) -> np.ndarray:
             hist, npx = self._histograms(feats, self._boxes(centres) / k)
             if p.distance == "emd":  # the particles' distance, compiled for the many boxes
-                d = min_emd_hsv(hist, np.stack(self._templates()), value_only=value_only)
+                d = min_emd_hsv(hist, templates, value_only=value_only)
             else:
                 d = self._colour_energy(hist)[1]
             d[npx <= 0] = np.inf
@@ -360,7 +361,7 @@ class FlowPF(Tracker):
         best = frame_candidate(score, scan_centres(fw, fh, w, h, step), (w, h), step)
         gated = None
         if (best is not None and best.distance <= p.lost_search_distance and best.distance < self._d_est
-                and best.distance <= p.lost_search_ratio * best.runner_up):
+                and best.unique(p.lost_search_ratio)):
             gated = best.centre
         if not self._persist.offer(gated):
             return

@@ -120,6 +120,10 @@ class Candidate:
     distance: float
     runner_up: float
 
+    def unique(self, ratio: float, gap: float = 0.0) -> bool:
+        """The uniqueness test: the best distance at most ``ratio`` times the runner-up's and ``gap`` below it."""
+        return self.distance <= ratio * self.runner_up and self.runner_up - self.distance >= gap
+
 
 def frame_candidate(score: Callable[[np.ndarray], np.ndarray], centres: np.ndarray, size: tuple[float, float],
                     step: float) -> Candidate | None:

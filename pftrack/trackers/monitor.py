@@ -164,6 +164,7 @@ class LossMonitor:
         self._sqrt_q: np.ndarray | None = None
         self._half: tuple[float, float] = (1.0, 1.0)
         self._since_bg = 0
+        self._searched = False  # find() ran the cue's per-frame preparation on the frame check() is given next
 
     def start(self, frame: np.ndarray, box: Box) -> None:
         self.cue.adapt_to(frame)
@@ -206,9 +207,11 @@ class LossMonitor:
     def find(self, frame: np.ndarray, persist: Persistence, last: Box | None = None) -> Box | None:
         """While lost (``search="frame"``): the whole frame's best ellipse of the target's size, when the test would
         end the loss on it, it is unique in the frame and ``persist`` has seen it in one place long enough; its box,
-        else None. The test's state does not change (the box is then checked as any reported box)."""
+        else None. The test's state does not change; :meth:`check` must follow on the same frame (the box it reports
+        is checked as any other), and does not prepare the cue again."""
         p = self.params
         self.cue.new_frame(frame)
+        self._searched = True  # check() follows on this frame: its preparation is done
         h, w = frame.shape[:2]
         hx, hy = self._half
         step = 0.25 * (hx + hy)  # a quarter of the window (the mean of the box's sides)
@@ -225,8 +228,7 @@ class LossMonitor:
             centres = centres[exit_band(centres, side, w, h, 2 * hx, 2 * hy)]
         best = frame_candidate(score, centres, (2 * hx, 2 * hy), step) if len(centres) else None
         gated = None
-        if (best is not None and best.distance <= p.search_ratio * best.runner_up
-                and best.runner_up - best.distance >= p.search_gap):
+        if best is not None and best.unique(p.search_ratio, p.search_gap):
             rho = 1.0 - best.distance
             ell = np.array([best.centre[0], best.centre[1], hx, hy])
             s_in: float | list[float] = rho
@@ -243,7 +245,9 @@ class LossMonitor:
         """``(lost, score, rho)`` of the box reported on this frame (the test's state advances)."""
         if self.q is None:
             raise RuntimeError("LossMonitor: call start(frame, box) first")
-        self.cue.new_frame(frame)
+        if not self._searched:
+            self.cue.new_frame(frame)
+        self._searched = False
         ell = box_to_ellipse(box)
         e = neighbourhood(ell, self.params.shift, self.params.scale)
         h, w = frame.shape[:2]
@@ -300,7 +304,7 @@ class Monitored(Tracker):
         self.stochastic = inner.stochastic
         self.state_names = getattr(inner, "state_names", ())
         self.monitor = LossMonitor(self.params)
-        self._persist = Persistence(self.params.search_frames, 1.0)
+        self._persist: Persistence | None = None  # made at init, with the first box's size
         self._lost = False
         self._last_box: Box | None = None
 
