@@ -1,4 +1,4 @@
-"""The whole-frame search while lost of ``flow-pf`` and ``cotrain-pf`` (``lost_search``,
+"""The whole-frame search while lost of ``flow-pf``, ``cotrain-pf`` and the monitor (``lost_search``,
 :mod:`pftrack.trackers.frame_search`)."""
 
 from __future__ import annotations
@@ -274,3 +274,72 @@ def test_a_target_that_left_by_an_edge_is_looked_for_there(name, params):
     off = {"lost_search_exit": False} if name == "cotrain-pf" else {"monitor_search_exit": False}
     _, far_any = run(**off)
     assert far_any.any()  # the negative control: searched over the whole frame, the lone look-alike is taken
+
+
+def _resident_frame(bg, tex, t, rng, lookalike_dx: float = 0.0):
+    """The target of :func:`_exit_box` out through the right edge and back, and a look-alike in view all along
+    (standing, or walking right at ``lookalike_dx`` px a frame), far from that edge."""
+    f = bg.copy()
+    box = _exit_box(t)
+    if box is not None:
+        x, y, w, h = (int(round(v)) for v in box)
+        f[y:y + h, max(x, 0):min(x + w, W)] = tex[:, : max(min(x + w, W) - max(x, 0), 0)]
+    lx = int(60 + lookalike_dx * t)
+    f[120:120 + SIZE[1], lx:lx + SIZE[0]] = tex
+    return np.clip(f + rng.normal(0.0, 2.0, f.shape), 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("name, on, off", [
+    ("cotrain-pf", {"lost_search_resident": 15}, {"lost_search_resident": 0}),
+    ("template", {"monitor_search": "frame", "monitor_search_resident": 15},
+     {"monitor_search": "frame", "monitor_search_resident": 0})])
+@pytest.mark.parametrize("dx", [0.0, 0.5])
+def test_a_look_alike_in_view_all_along_is_not_taken_for_the_target_back(name, on, off, dx):
+    """The resident veto: the look-alike in view while the target is out is refused and passed over, so the target
+    walking back in is unique and found; without it, the look-alike is taken (the negative control)."""
+
+    def run(params):
+        rng = np.random.default_rng(11)
+        bg, tex = _scene(rng)
+        tracker = pftrack.create_tracker(name, seed=0, **params)
+        tracker.init(_resident_frame(bg, tex, 0, rng, dx), _exit_box(0))
+        states = [tracker.update(_resident_frame(bg, tex, t, rng, dx)) for t in range(1, 90)]
+        lost = np.array([s.lost for s in states])
+        on_lookalike = np.array([abs(s.box[1] + s.box[3] / 2 - 134) < 15 and not s.lost for s in states])
+        back = np.array([abs(s.box[1] + s.box[3] / 2 - 94) < 15 and not s.lost for s in states[59:]])
+        return lost, on_lookalike, back
+
+    lost, on_lookalike, back = run(on)
+    assert lost[25:43].mean() > 0.9 and not on_lookalike.any()
+    assert back.mean() > 0.9  # the target, back through the edge, is found
+    _, on_lookalike_off, back_off = run(off)
+    assert on_lookalike_off.any() and back_off.mean() < 0.5
+
+
+def test_residents_trace_and_follow():
+    """Residents: a box that stayed inside the view through the kept frames is resident, one that came in through
+    an edge is not; a refused resident is followed to the next frame and its neighbourhood passed over."""
+    from pftrack.trackers.frame_search import Residents
+
+    rng = np.random.default_rng(5)
+    bg = np.clip(rng.normal(110, 25, (H, W)), 0, 255)
+    patch = np.clip(rng.normal(128, 60, (28, 20)), 0, 255)
+
+    def frame(x_in, x_out):
+        f = bg.copy()
+        f[100:128, x_in:x_in + 20] = patch  # walks right inside the view
+        f[20:48, max(x_out, 0):x_out + 20] = patch[:, max(-x_out, 0):]  # walks in through the left edge
+        return f.astype(np.uint8)
+
+    r = Residents(5)
+    for t in range(6):
+        r.keep(t, frame(50 + 2 * t, -14 + 3 * t))
+    assert len(r) == 5
+    assert not r.resident((-14 + 15, 20, 20, 28))  # its trace reaches the edge
+    assert r.resident((60, 100, 20, 28)) and len(r.vetoed) == 1
+    r.keep(6, frame(62, 4))
+    assert abs(r.vetoed[0][0] - 62) <= 1  # followed
+    near = r.near(np.array([[72.0, 114.0], [20.0, 34.0]]), 20, 28)
+    assert near.tolist() == [True, False]
+    r.keep(8, frame(66, 10))  # a gap: everything forgotten
+    assert len(r) == 1 and not r.vetoed

@@ -10,15 +10,25 @@ subspace, the frame read at every k-th pixel, :func:`sample_step`; ``cotrain-pf`
 on a finer grid about it so that neither gains from where the coarse grid happened to fall.  The tracker takes the
 best when it is near enough its models and at most a fraction of the runner-up's distance (among several look-alikes
 none is taken), and :class:`Persistence` asks it to stay in one place for a few frames.
+
+After the target left the view, a look-alike that stayed in view all the while is unique in the frame as soon as the
+target is gone.  :class:`Residents` (an option of each search) keeps the grey frames of the search and refuses a
+candidate whose box, traced back through them, stays inside the view on every one (as ``fusion-pf``'s
+``reenter_resident``, :mod:`pftrack.trackers.vetoes`): a target coming back entered through an edge since it left.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 from typing import Callable
 
+import cv2
 import numpy as np
+
+from ..cues.template import patch_shift, trace_back
+from ..geometry import in_frame_fraction
 
 #: the whole-frame search reads every k-th pixel of every k-th row, k chosen so that the box's shorter side keeps
 #: at least this many samples (the colours stay the frame's own: no interpolation mixes them)
@@ -169,3 +179,95 @@ class Persistence:
             self.reset()
             return True
         return False
+
+
+#: :class:`Residents`: the share of a candidate's box inside the view on every frame of its trace that makes it an
+#: object that stayed in view (``fusion-pf``'s :data:`pftrack.trackers.vetoes.RESIDENT_IN_FRAME`)
+RESIDENT_IN_FRAME = 0.9
+
+#: :class:`Residents`: the share of the box's half-sides traced (its central part, mostly the object rather than the
+#: still scene around it)
+RESIDENT_CORE = 0.5
+
+
+def resident_radius(w: float, h: float) -> int:
+    """The trace's search radius for a ``w`` x ``h`` box, in px a frame: half its shorter side, at least 8."""
+    return max(8, int(math.ceil(0.5 * min(w, h))))
+
+
+class Residents:
+    """The resident veto of a whole-frame search after an exit: the grey frames of the last ``frames`` consecutive
+    search frames; :meth:`resident`, which traces a candidate's box back through them; and the boxes of the refused
+    residents, followed from frame to frame (:meth:`keep`), which the search passes over (:meth:`near`), so that the
+    target coming back is unique in the frame again."""
+
+    def __init__(self, frames: int):
+        self.frames = int(frames)
+        self._grays: deque[tuple[int, np.ndarray]] = deque(maxlen=max(1, self.frames))
+        self.vetoed: list[np.ndarray] = []
+
+    def reset(self) -> None:
+        self._grays.clear()
+        self.vetoed = []
+
+    def __len__(self) -> int:
+        return len(self._grays)
+
+    def keep(self, index: int, frame: np.ndarray) -> np.ndarray:
+        """Keep frame number ``index``'s grey image (the kept ones and the refused residents are forgotten unless it
+        follows the last kept) and follow each refused resident's box to it (dropped when its trace is lost or it
+        reaches an edge); returns the grey image."""
+        gray = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        if self._grays and self._grays[-1][0] != index - 1:
+            self.reset()
+        if self._grays and self.vetoed:
+            prev = self._grays[-1][1]
+            fh, fw = gray.shape[:2]
+            kept = []
+            for b in self.vetoed:
+                d = patch_shift(gray, prev, _core(b), resident_radius(b[2], b[3]))
+                if d is not None:  # the box on the previous frame, moved by what its core did since
+                    b = b.copy()
+                    b[:2] -= d
+                    if in_frame_fraction(tuple(b), fw, fh) >= RESIDENT_IN_FRAME:
+                        kept.append(b)
+            self.vetoed = kept
+        self._grays.append((int(index), gray))
+        return gray
+
+    def resident(self, box) -> bool:
+        """Was the candidate ``box`` (x, y, w, h on the newest kept frame) inside the view all along?  Its central
+        part (:data:`RESIDENT_CORE`) is followed back frame by frame by normalised correlation
+        (:func:`pftrack.cues.template.trace_back`, within :func:`resident_radius`); True when its box stays at least
+        :data:`RESIDENT_IN_FRAME` inside the view on the newest frame and on every earlier kept one.  A trace that
+        is lost (a flat patch, no match) or reaches an edge refuses nothing, nor does a store of one frame.  A
+        resident is remembered (:attr:`vetoed`)."""
+        if len(self._grays) < 2:
+            return False
+        gray = self._grays[-1][1]
+        fh, fw = gray.shape[:2]
+        b0 = np.array([float(v) for v in box])
+        if in_frame_fraction(tuple(b0), fw, fh) < RESIDENT_IN_FRAME:
+            return False
+        earlier = (g for _, g in list(self._grays)[-2::-1])
+        for b in trace_back(earlier, gray, b0, _core(b0), resident_radius(b0[2], b0[3])):
+            if b is None or in_frame_fraction(tuple(b), fw, fh) < RESIDENT_IN_FRAME:
+                return False
+        self.vetoed.append(b0)
+        return True
+
+    def near(self, centres: np.ndarray, w: float, h: float) -> np.ndarray:
+        """``(M,)`` bool: the centres of ``w`` x ``h`` boxes less than a box from a refused resident's centre along
+        both x and y (the search passes over them)."""
+        out = np.zeros(len(centres), dtype=bool)
+        for b in self.vetoed:
+            cx, cy = b[0] + b[2] / 2.0, b[1] + b[3] / 2.0
+            out |= (np.abs(centres[:, 0] - cx) < w) & (np.abs(centres[:, 1] - cy) < h)
+        return out
+
+
+def _core(box: np.ndarray) -> np.ndarray:
+    """The central part of ``box`` (x, y, w, h): :data:`RESIDENT_CORE` of its sides."""
+    x, y, w, h = (float(v) for v in box)
+    cw, ch = RESIDENT_CORE * w, RESIDENT_CORE * h
+    return np.array([x + 0.5 * (w - cw), y + 0.5 * (h - ch), cw, ch])

@@ -61,7 +61,7 @@ from ..filtering.loss import FusedLoss, LossDetector, confidence
 from ..geometry import Box, background_grid, box_to_ellipse, ellipse_to_box
 from ..params import Params, param
 from .base import Tracker, TrackState
-from .frame_search import Persistence, exit_band, exit_side, frame_candidate, scan_centres
+from .frame_search import Persistence, Residents, exit_band, exit_side, frame_candidate, scan_centres
 from .structure_check import ANCHOR_GATE, RATE, StructureCheck, fused_test
 
 __all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions", "wrapper_options"]
@@ -125,6 +125,11 @@ class MonitorParams(Params):
         "template's re-acquisitions 8 against 9 of 22; docs/evaluation.md)."))
     search_frames: int = param(2, ge=1, le=100, doc=(
         "Consecutive frames the search's best candidate must pass in one place (within half a window)."))
+    search_resident: int = param(0, ge=0, le=1000, doc=(
+        "When the tracker's last box before the loss lay within half its size of an edge of the frame, the grey "
+        "frames of the last search_resident search frames are kept, and a candidate is refused when its box, "
+        "traced back through them, stayed inside the view on every one (another object, in view all the while the "
+        "target was out; pftrack.trackers.frame_search.Residents); the search then passes over it. 0: off."))
     structure_features: Literal["ncc", "hog-on-grey"] = param("hog-on-grey", doc=(
         "With cues='fused', what the structural score correlates: 'ncc' grey patches (the better of the grey "
         "levels' and their self-quotient image's NCC) on every input; 'hog-on-grey' histograms of oriented "
@@ -204,11 +209,13 @@ class LossMonitor:
                 self.loss.set_background(np.column_stack([np.where(tot > 0, rho, np.nan),
                                                           self.structure.scores(frame, grid)]))
 
-    def find(self, frame: np.ndarray, persist: Persistence, last: Box | None = None) -> Box | None:
+    def find(self, frame: np.ndarray, persist: Persistence, last: Box | None = None,
+             residents: Residents | None = None, index: int = 0) -> Box | None:
         """While lost (``search="frame"``): the whole frame's best ellipse of the target's size, when the test would
         end the loss on it, it is unique in the frame and ``persist`` has seen it in one place long enough; its box,
         else None. The test's state does not change; :meth:`check` must follow on the same frame (the box it reports
-        is checked as any other), and does not prepare the cue again."""
+        is checked as any other), and does not prepare the cue again. With ``residents`` (``search_resident``) and a
+        ``last`` box at an edge, frame number ``index`` is kept and a resident candidate refused."""
         p = self.params
         self.cue.new_frame(frame)
         self._searched = True  # check() follows on this frame: its preparation is done
@@ -217,13 +224,21 @@ class LossMonitor:
         step = 0.25 * (hx + hy)  # a quarter of the window (the mean of the box's sides)
         feats = self.cue.prepare(frame, (0, 0, w, h), self.cue.step_for(np.array([[0.0, 0.0, hx, hy]])))
 
+        exited = exit_side(last, w, h) if ((p.search_exit or residents is not None) and last is not None) else None
+        residents = residents if exited is not None else None
+        if residents is not None:
+            residents.keep(index, frame)
+
         def score(c: np.ndarray) -> np.ndarray:
             e = np.column_stack([c, np.full(len(c), hx), np.full(len(c), hy)])
             rho, tot = self.cue.rho(feats, e, self._sqrt_q, reuse=False)
-            return np.where(tot > 0, 1.0 - rho, np.inf)
+            d = np.where(tot > 0, 1.0 - rho, np.inf)
+            if residents is not None and residents.vetoed:  # the refused residents passed over
+                d[residents.near(c, 2 * hx, 2 * hy)] = np.inf
+            return d
 
         centres = scan_centres(w, h, 2 * hx, 2 * hy, step)
-        side = exit_side(last, w, h) if (p.search_exit and last is not None) else None
+        side = exited if p.search_exit else None
         if side is not None:  # the target left through that edge: the band along it
             centres = centres[exit_band(centres, side, w, h, 2 * hx, 2 * hy)]
         best = frame_candidate(score, centres, (2 * hx, 2 * hy), step) if len(centres) else None
@@ -239,7 +254,10 @@ class LossMonitor:
                 gated = best.centre
         if not persist.offer(gated):
             return None
-        return tuple(float(v) for v in ellipse_to_box(np.array([gated[0], gated[1], hx, hy])).reshape(4))
+        box = tuple(float(v) for v in ellipse_to_box(np.array([gated[0], gated[1], hx, hy])).reshape(4))
+        if residents is not None and residents.resident(box):
+            return None  # another object, in view all the while the target was out
+        return box
 
     def check(self, frame: np.ndarray, box: Box) -> tuple[bool, float, float]:
         """``(lost, score, rho)`` of the box reported on this frame (the test's state advances)."""
@@ -305,6 +323,7 @@ class Monitored(Tracker):
         self.state_names = getattr(inner, "state_names", ())
         self.monitor = LossMonitor(self.params)
         self._persist: Persistence | None = None  # made at init, with the first box's size
+        self._residents: Residents | None = None  # search_resident: made at init
         self._lost = False
         self._last_box: Box | None = None
 
@@ -312,6 +331,7 @@ class Monitored(Tracker):
         st = self.inner.init(frame, box)
         self.monitor.start(frame, box)
         self._persist = Persistence(self.params.search_frames, 0.25 * (box[2] + box[3]))
+        self._residents = Residents(self.params.search_resident) if self.params.search_resident else None
         self._lost = False
         self._last_box = box
         return replace(st, info={**st.info, "tracker_score": st.score, "tracker_lost": st.lost})
@@ -319,7 +339,7 @@ class Monitored(Tracker):
     def _update(self, frame: np.ndarray) -> TrackState:
         found = None
         if self.params.search == "frame" and self._lost:
-            found = self.monitor.find(frame, self._persist, self._last_box)
+            found = self.monitor.find(frame, self._persist, self._last_box, self._residents, self.frame_index)
         if found is not None:  # the tracker starts again on the found box (its own state is that of a first frame)
             st = self.inner.init(frame, found)
         else:
@@ -329,6 +349,8 @@ class Monitored(Tracker):
         self._lost = bool(st.lost or lost)
         if not self._lost:
             self._persist.reset()
+            if self._residents is not None:
+                self._residents.reset()
             self._last_box = box  # the last box before a loss: the edge a target that left went through
         return replace(st, lost=self._lost, score=score,
                        info={**st.info, "tracker_score": st.score, "tracker_lost": st.lost, "monitor_rho": rho,
@@ -357,6 +379,9 @@ class WrapperOptions(Params):
     monitor_search_exit: bool = param(False, doc=(
         "With monitor_search=frame, a target whose last box lay at an edge of the frame is looked for in the band "
         "along that edge (MonitorParams.search_exit)."))
+    monitor_search_resident: int = param(0, ge=0, le=1000, doc=(
+        "With monitor_search=frame, after an exit through an edge a candidate that stayed in view through the last "
+        "this many search frames is refused and passed over (MonitorParams.search_resident). 0: off."))
     grey_restart: int = param(0, ge=0, le=1000, doc=(
         "Input that turns grey mid-sequence: after this many grey frames in a row, a tracker that started on colour "
         "frames is started again on the grey copy of the last frame where its target was seen, so that it chooses "
@@ -368,7 +393,7 @@ class WrapperOptions(Params):
         """The loss monitor's parameters these options set."""
         return MonitorParams(cues=self.monitor_cues, structure_features=self.monitor_structure,
                              grey_histogram=self.monitor_grey_histogram, search=self.monitor_search,
-                             search_exit=self.monitor_search_exit)
+                             search_exit=self.monitor_search_exit, search_resident=self.monitor_search_resident)
 
 
 def wrapper_options(*sources: Mapping[str, Any] | None) -> WrapperOptions:
