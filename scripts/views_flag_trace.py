@@ -151,7 +151,7 @@ def main() -> None:
                 boxes, lost = [seq.init_box], [False]
                 tr.init(frames[0], seq.init_box)
                 for t, f in enumerate(frames[1:], start=1):
-                    strip = tr._exit_strip() is not None
+                    strip = getattr(tr, "_exit_strip", lambda: None)() is not None  # the colour PFs only
                     st = tr.update(f)
                     est = st.info.get("box_full", st.box)  # the whole estimate (st.box is its part in the frame)
                     boxes.append(est)
