@@ -129,7 +129,8 @@ class MonitorParams(Params):
         "When the tracker's last box before the loss lay within half its size of an edge of the frame, the grey "
         "frames of the last search_resident search frames are kept, and a candidate is refused when its box, "
         "traced back through them, stayed inside the view on every one (another object, in view all the while the "
-        "target was out; pftrack.trackers.frame_search.Residents); the search then passes over it. 0: off."))
+        "target was out; pftrack.trackers.frame_search.Residents); the search then passes over it. 0: off (on the "
+        "tune views 15 raised the pooled lost recall and the false alarms; docs/evaluation.md)."))
     structure_features: Literal["ncc", "hog-on-grey"] = param("hog-on-grey", doc=(
         "With cues='fused', what the structural score correlates: 'ncc' grey patches (the better of the grey "
         "levels' and their self-quotient image's NCC) on every input; 'hog-on-grey' histograms of oriented "
