@@ -65,6 +65,15 @@ def emd_general(p: np.ndarray, q: np.ndarray, *, circular: bool = False) -> floa
     return float(dist)
 
 
+def emd_hsv(hist: np.ndarray, template: np.ndarray, *, value_only: bool = False) -> np.ndarray:
+    """``(N,)`` the mean over H, S, V of the closed-form EMD of ``hist`` ``(N, 3, n)`` to ``template`` ``(3, n)``:
+    circular on H, linear on S and V; V's alone with ``value_only`` (``flow-pf``'s colour distance, Eq. 9)."""
+    dv = emd_linear(hist[:, 2], template[2])
+    if value_only:
+        return dv
+    return (emd_circular(hist[:, 0], template[0]) + emd_linear(hist[:, 1], template[1]) + dv) / 3.0
+
+
 def min_emd_hsv(hist: np.ndarray, templates: np.ndarray, *, value_only: bool = False) -> np.ndarray:
     """``(N,)`` the smallest over the ``k`` templates of the mean over H, S, V of the closed-form EMD (circular on H,
     linear on S and V; V's alone with ``value_only``): ``hist`` ``(N, 3, n)``, ``templates`` ``(k, 3, n)``.
@@ -77,11 +86,7 @@ def min_emd_hsv(hist: np.ndarray, templates: np.ndarray, *, value_only: bool = F
         out = np.empty(h.shape[0])
         _min_emd_hsv(h, t, bool(value_only), out)
         return out
-    d = []
-    for tk in t:
-        dv = emd_linear(h[:, 2], tk[2])
-        d.append(dv if value_only else (emd_circular(h[:, 0], tk[0]) + emd_linear(h[:, 1], tk[1]) + dv) / 3.0)
-    return np.min(np.stack(d), axis=0)
+    return np.min(np.stack([emd_hsv(h, tk, value_only=value_only) for tk in t]), axis=0)
 
 
 @njit

@@ -54,7 +54,7 @@ from typing import Callable, Sequence
 import cv2
 import numpy as np
 
-from ..cues.emd import emd_circular, emd_linear, min_emd_hsv
+from ..cues.emd import emd_hsv, min_emd_hsv
 from ..cues.hsv import HSVHistogramCue
 from ..cues.intensity import is_gray
 from ..cues.motion import to_gray
@@ -120,12 +120,7 @@ class FlowPF(Tracker):
         the Bhattacharyya distance lies in [0, 1]."""
         v_only = self._grey and self.params.grey_value_only
         if self.params.distance == "emd":
-            dv = emd_linear(hist[:, 2], template[2])
-            if v_only:
-                return dv
-            dh = emd_circular(hist[:, 0], template[0])
-            ds = emd_linear(hist[:, 1], template[1])
-            return (dh + ds + dv) / 3.0
+            return emd_hsv(hist, template, value_only=v_only)
         rho = np.sqrt(np.clip(hist, 0, None) * np.clip(template, 0, None)[None]).sum(axis=-1)
         d = np.sqrt(np.clip(1.0 - rho, 0.0, 1.0))
         return d[:, 2] if v_only else d.mean(axis=-1)
