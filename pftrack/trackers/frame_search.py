@@ -29,6 +29,7 @@ import numpy as np
 
 from ..cues.template import patch_shift, trace_back
 from ..geometry import in_frame_fraction
+from .vetoes import RESIDENT_CORE, RESIDENT_IN_FRAME  # fusion-pf's reenter_resident's: the same trace
 
 #: the whole-frame search reads every k-th pixel of every k-th row, k chosen so that the box's shorter side keeps
 #: at least this many samples (the colours stay the frame's own: no interpolation mixes them)
@@ -179,15 +180,6 @@ class Persistence:
             self.reset()
             return True
         return False
-
-
-#: :class:`Residents`: the share of a candidate's box inside the view on every frame of its trace that makes it an
-#: object that stayed in view (``fusion-pf``'s :data:`pftrack.trackers.vetoes.RESIDENT_IN_FRAME`)
-RESIDENT_IN_FRAME = 0.9
-
-#: :class:`Residents`: the share of the box's half-sides traced (its central part, mostly the object rather than the
-#: still scene around it)
-RESIDENT_CORE = 0.5
 
 
 def resident_radius(w: float, h: float) -> int:
