@@ -208,6 +208,49 @@ def test_wide_proposal_widens_the_position_steps_of_a_random_share_only():
     assert 0.03 < far.mean() < 0.06 and (np.abs(before[:, 0]) > 3.5).mean() < 0.002
 
 
+def test_two_model_proposal_scales_a_random_share_of_the_steps_by_the_second_models_noise():
+    from pftrack.filtering.dynamics import mix_noise
+
+    noise = np.random.default_rng(1).standard_normal((20000, 7))
+    before = noise.copy()
+    factors = np.array([2 / 3, 2 / 3, 4.0, 4.0, 1.0, 1.0, 1.0])
+    mix_noise(noise, np.random.default_rng(2), 0.3, factors)
+    changed = np.any(noise != before, axis=1)
+    assert 0.28 < changed.mean() < 0.32  # about the share asked for, drawn at random
+    np.testing.assert_allclose(noise[changed], before[changed] * factors)  # every component by its own factor
+    np.testing.assert_array_equal(noise[~changed], before[~changed])
+    # the velocity steps' spread: sqrt(0.7 + 0.3 * 16) = 2.35 standard deviations of the first model
+    assert 2.25 < noise[:, 2].std() < 2.45 and 0.9 < noise[:, 4].std() < 1.1
+
+
+def test_two_model_proposal_off_draws_as_before_and_follows_a_turn_on():
+    """Off, the same random stream gives the same samples. On, some samples' velocities follow a target that
+    turned: after a reversal of 3 px a frame, more of the set moves the new way than with the first model alone."""
+    states = np.zeros((2000, 7))
+    states[:, 2] = 3.0  # moving right at 3 px a frame
+    states[:, 4:6] = 10.0
+    std = np.array([2.0, 2.0, 0.25, 0.25, 0.0, 0.0, 0.0])  # a slow velocity noise, as fusion-pf's
+    plain, off, on = states.copy(), states.copy(), states.copy()
+    ConstantVelocityScale().propagate(plain, std, np.random.default_rng(5))
+    ConstantVelocityScale(mix_fraction=0.0, mix_factors=np.full(7, 4.0)).propagate(off, std, np.random.default_rng(5))
+    np.testing.assert_array_equal(plain, off)
+    factors = np.array([1.0, 1.0, 8.0, 8.0, 1.0, 1.0, 1.0])
+    ConstantVelocityScale(mix_fraction=0.3, mix_factors=factors).propagate(on, std, np.random.default_rng(5))
+    turned_plain = (plain[:, 2] < 0).mean()
+    turned_on = (on[:, 2] < 0).mean()
+    # velocity noise 0.25 cannot reverse 3 px a frame in one step; 2.0 does so for one sample in 15 (P(z < -1.5)),
+    # so about 0.3 / 15 = 2 % of the set
+    assert turned_plain < 0.001 and 0.012 < turned_on < 0.03
+
+
+def test_color_pf_params_give_the_second_models_noise_over_the_first():
+    import pftrack
+
+    t = pftrack.create_tracker("fusion-pf", mix_fraction=0.3)  # fusion-pf's (0.3, 0.025) and the second (0.2, 0.1)
+    np.testing.assert_allclose(t.dynamics.mix_factors, [2 / 3, 2 / 3, 4.0, 4.0, 1.0, 1.0, 1.0])
+    assert pftrack.create_tracker("fusion-pf").dynamics.mix_factors is None
+
+
 def test_wide_proposal_off_draws_as_before_and_on_spreads_the_set():
     states = np.zeros((400, 7))
     states[:, 4:6] = 10.0

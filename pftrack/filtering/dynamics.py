@@ -47,14 +47,21 @@ class ConstantVelocityScale:
     With ``wide_fraction > 0`` the position part of ``w`` is heavy-tailed: each call a random
     ``wide_fraction`` of the samples take ``wide_factor`` times its standard deviation
     (:func:`widen_position_noise`), for targets that jump between frames. Off by default.
+
+    With ``mix_fraction > 0`` each call a random ``mix_fraction`` of the samples take their step from a second
+    model: ``mix_factors`` (shape ``(7,)``) times ``noise_std`` (:func:`mix_noise`), e.g. a faster velocity for
+    targets that swing past look-alikes. Off by default.
     """
 
     dim = 7
     state_names = STATE_NAMES_7
 
     def __init__(self, *, min_half_axis: float = 2.0, max_half_axis: float = 1e5, max_scale_rate: float = 0.1,
-                 scale_damping: float = 1.0, wide_fraction: float = 0.0, wide_factor: float = 1.0):
+                 scale_damping: float = 1.0, wide_fraction: float = 0.0, wide_factor: float = 1.0,
+                 mix_fraction: float = 0.0, mix_factors: np.ndarray | None = None):
         self.scale_damping = float(scale_damping)
+        self.mix_fraction = float(mix_fraction)
+        self.mix_factors = None if mix_factors is None else np.asarray(mix_factors, dtype=np.float64).reshape(7)
         self.wide_fraction = float(wide_fraction)
         self.wide_factor = float(wide_factor)
         self.min_half_axis = float(min_half_axis)
@@ -86,6 +93,8 @@ class ConstantVelocityScale:
         rng.standard_normal(out=self._noise)
         if self.wide_fraction > 0.0 and self.wide_factor != 1.0:
             widen_position_noise(self._noise, rng, self.wide_fraction, self.wide_factor)
+        if self.mix_fraction > 0.0 and self.mix_factors is not None:
+            mix_noise(self._noise, rng, self.mix_fraction, self.mix_factors)
         w, h = frame_size if frame_size is not None else (0.0, 0.0)
         return propagate_cv_scale(states, self._noise, noise_std, damping=self.scale_damping,
                                   min_half_axis=self.min_half_axis, max_half_axis=self.max_half_axis,
@@ -111,6 +120,15 @@ def widen_position_noise(noise: np.ndarray, rng: np.random.Generator, fraction: 
     wide = rng.random(noise.shape[0]) < fraction
     noise[wide, X] *= factor
     noise[wide, Y] *= factor
+    return noise
+
+
+def mix_noise(noise: np.ndarray, rng: np.random.Generator, fraction: float, factors: np.ndarray) -> np.ndarray:
+    """A two-model proposal: multiply the rows of a random ``fraction`` of the rows of standard-normal ``noise``
+    by ``factors`` (``(7,)``, per state component), in place: those samples step with the second model's noise
+    standard deviations, each sample's model drawn afresh each frame; returns ``noise``."""
+    rows = rng.random(noise.shape[0]) < fraction
+    noise[rows] *= factors
     return noise
 
 

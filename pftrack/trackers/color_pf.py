@@ -434,7 +434,19 @@ class ColorPF(CameraMotionMixin, ColorParticleFilter):
         p = self.params
         self.dynamics = ConstantVelocityScale(min_half_axis=p.min_half_axis, max_scale_rate=p.max_scale_rate,
                                               scale_damping=p.scale_damping, wide_fraction=p.wide_fraction,
-                                              wide_factor=p.wide_factor)
+                                              wide_factor=p.wide_factor, mix_fraction=p.mix_fraction,
+                                              mix_factors=self._mix_factors())
+
+    def _mix_factors(self) -> np.ndarray | None:
+        """``mix_fraction``: the second model's noise over the first's, per state component (position and velocity;
+        1 for the size); None when off."""
+        p = self.params
+        if p.mix_fraction <= 0:
+            return None
+        f = np.ones(self.dim)
+        f[[X, Y]] = p.mix_position_noise / p.position_noise if p.position_noise > 0 else 1.0
+        f[[VX, VY]] = p.mix_velocity_noise / p.velocity_noise if p.velocity_noise > 0 else 1.0
+        return f
 
     def _noise_std(self, hx: float, hy: float) -> np.ndarray:
         p = self.params

@@ -176,6 +176,15 @@ class ColorPFParams(ColorModelParams):
         "off, the paper's Gaussian; 0.1 and 0.2 failed docs/rules/wide_proposal_rule.txt (docs/robustness.md)."))
     wide_factor: float = param(3.0, ge=1, le=20, doc=(
         "With wide_fraction > 0: the factor on the position noise of the wide samples."))
+    mix_fraction: float = param(0.0, ge=0, le=1, doc=(
+        "A two-model proposal for targets that swing past look-alikes: each frame this share of the samples, drawn "
+        "at random, steps with mix_position_noise and mix_velocity_noise instead of position_noise and "
+        "velocity_noise (Eq. 9's noise, the same units), so some particles' velocities follow a quick change of "
+        "direction while the rest keep the steady model (pftrack.filtering.dynamics.mix_noise). 0 (default): off."))
+    mix_position_noise: float = param(0.2, ge=0, le=10, doc=(
+        "With mix_fraction > 0: the second model's position noise, a fraction of the mean half-axis."))
+    mix_velocity_noise: float = param(0.1, ge=0, le=10, doc=(
+        "With mix_fraction > 0: the second model's velocity noise per frame, a fraction of the mean half-axis."))
     camera_motion: bool = param(False, doc=(
         "Move every sample by the camera's translation since the last frame before the dynamics (Eq. 9) spread "
         "them, read from the two frames' integral projections (pftrack.cues.camera_shift): for a hand-held camera "
