@@ -180,7 +180,9 @@ class ColorPFParams(ColorModelParams):
         "A two-model proposal for targets that swing past look-alikes: each frame this share of the samples, drawn "
         "at random, steps with mix_position_noise and mix_velocity_noise instead of position_noise and "
         "velocity_noise (Eq. 9's noise, the same units), so some particles' velocities follow a quick change of "
-        "direction while the rest keep the steady model (pftrack.filtering.dynamics.mix_noise). 0 (default): off."))
+        "direction while the rest keep the steady model (pftrack.filtering.dynamics.mix_noise). 0 (default): off; "
+        "for fusion-pf 0.3 and 0.5 failed docs/rules/mix_dynamics_rule.txt: they gained look-alike crossings and "
+        "lost the PETS walkers (docs/fusion-pf-selection.md, stage 11)."))
     mix_position_noise: float = param(0.2, ge=0, le=10, doc=(
         "With mix_fraction > 0: the second model's position noise, a fraction of the mean half-axis."))
     mix_velocity_noise: float = param(0.1, ge=0, le=10, doc=(
