@@ -6,7 +6,8 @@ candidate that would end the loss can still be refused, as another object of the
 - ``reenter_outward``: after the target left the view, a candidate of the exit strip moving out through that
   edge (:meth:`VetoMixin._leaving`);
 - ``reenter_resident``: after the target left the view, a candidate that was inside the view all the while the
-  target was out (:meth:`VetoMixin._resident`);
+  target was out (:meth:`VetoMixin._resident`); with ``resident_anywhere``, after a loss inside the view too, when
+  the candidate stood away from where the target was lost (and, once refused, it is followed and refused again);
 - ``reenter_min_llr``: while the search is confined to the exit strip, a candidate whose ratio is below it
   (:meth:`VetoMixin._weak_reentry`);
 - the raw-colour check and the grey structure check (:mod:`.raw_check`, :mod:`.structure_check`): their own
@@ -154,12 +155,36 @@ class VetoMixin:
         p = self.params
         grays = self._search_grays
         if (self.mode == "searching" and (p.reenter_outward > 0 or p.reenter_resident > 0)
-                and self._exit_strip() is not None):
+                and (self._exit_strip() is not None or (p.resident_anywhere > 0 and p.reenter_resident > 0))):
             if grays and grays[-1][0] != self.frame_index - 1:
                 grays.clear()
-            grays.append((self.frame_index, self._frame_gray(frame)))
+                self._residents = []
+            gray = self._frame_gray(frame)
+            if grays and self._residents:
+                self._follow_residents(grays[-1][1], gray)
+            grays.append((self.frame_index, gray))
         else:
             grays.clear()
+            self._residents = []
+
+    def _follow_residents(self, prev: np.ndarray, gray: np.ndarray) -> None:
+        """``resident_anywhere``: move the boxes of the residents refused before this frame to it (their central
+        part found again by normalised correlation); one that is lost or leaves the view is forgotten."""
+        fh, fw = self._shape
+        kept = []
+        for t, b in self._residents:
+            if t < self.frame_index:
+                c = 0.5 * (1.0 - RESIDENT_CORE)
+                core = np.array([b[0] + c * b[2], b[1] + c * b[3], RESIDENT_CORE * b[2], RESIDENT_CORE * b[3]])
+                d = patch_shift(gray, prev, core, max(8, math.ceil(3.0 * self._exit_speed())))
+                if d is None:
+                    continue
+                b = b.copy()
+                b[:2] -= d  # the content found on this frame (patch_shift gives its offset back to prev)
+                t = self.frame_index
+            if in_frame_fraction(tuple(b), fw, fh) >= RESIDENT_IN_FRAME:
+                kept.append((t, b))
+        self._residents = kept
 
     def _resident(self, frame: np.ndarray, ell: np.ndarray) -> bool:
         """``reenter_resident``: was a candidate (ellipse ``ell``) inside the view all the while the target was
@@ -171,20 +196,39 @@ class VetoMixin:
         so its trace reaches the border; a candidate whose box stays at least :data:`RESIDENT_IN_FRAME` inside the
         view on every frame back to the oldest kept is another object. A trace that is lost (a flat patch, no
         match) refuses nothing."""
+        p = self.params
         grays = self._search_grays
-        strip = self._exit_strip() if self.params.reenter_resident > 0 and grays else None
-        if strip is None or grays[-1][0] != self.frame_index - 1:
+        if p.reenter_resident <= 0 or not grays or grays[-1][0] != self.frame_index - 1:
+            return False
+        strip = self._exit_strip()
+        if strip is None and (p.resident_anywhere <= 0 or self._lost_at is None):
             return False
         fh, fw = self._shape
         box = ellipse_to_box(ell)
         if in_frame_fraction(tuple(box), fw, fh) < RESIDENT_IN_FRAME:
             return False
+        if strip is None:
+            if any(np.all(np.abs(box[:2] - b[:2]) < b[2:4]) for _, b in self._residents):
+                return True  # a resident refused before, followed since
+            if grays[0][0] > self._search_since:
+                return False  # resident_anywhere traces the whole loss: a longer one is not judged
         core = ellipse_to_box(np.array([*ell[:2], *(RESIDENT_CORE * np.asarray(ell[2:4]))]))
-        radius = max(8, math.ceil(3.0 * self._exit_speed()), math.ceil(self.params.reenter_resident_reach * ell[2]))
+        radius = max(8, math.ceil(3.0 * self._exit_speed()), math.ceil(p.reenter_resident_reach * ell[2]))
+        oldest = box
         for b in trace_back((g for _, g in reversed(grays)), self._frame_gray(frame), box, core, radius):
             if b is None or in_frame_fraction(tuple(b), fw, fh) < RESIDENT_IN_FRAME:
                 return False
-        return True
+            oldest = b
+        if strip is not None:
+            return True
+        # resident_anywhere: another object only if it stood away from where the target was last seen clearly
+        x, y = self._lost_at[1]
+        hx, hy = (max(float(v), 1.0) for v in self._confident_size)
+        away = max(abs(oldest[0] + oldest[2] / 2 - x) / (2 * hx), abs(oldest[1] + oldest[3] / 2 - y) / (2 * hy))
+        if away > p.resident_anywhere:
+            self._residents.append((self.frame_index, np.asarray(box, dtype=np.float64).copy()))
+            return True
+        return False
 
     def _weak_reentry(self, llr: float) -> bool:
         """``reenter_min_llr``: is a candidate of the exit strip, with acquisition ratio ``llr``, too weak?"""
