@@ -324,7 +324,8 @@ class ColorModelParams(ColorFeatureParams):
         "reenter_resident frames: a longer loss is not judged), stayed at least 90 % inside the view on every one "
         "and stood, on the first, more than this many box sizes (along x or y) from where the target was last seen "
         "clearly, is another object that stayed in view while the target was lost: not acquired. A target lost in "
-        "place traces back to where it was lost. 0: off."))
+        "place traces back to where it was lost. 0: off; 1 failed docs/rules/resident_anywhere_rule.txt on the tune "
+        "views (the walkers' trace is lost at 7 fps; docs/robustness-exits.md)."))
     reenter_min_llr: float = param(0.0, ge=0, le=1000, doc=(
         "With reenter_border: while the search is confined to the exit strip, a candidate is acquired only when its "
         "fused log-likelihood ratio (the acquisition test's, log prior included) is at least this; a weaker one is "
