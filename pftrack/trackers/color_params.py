@@ -326,6 +326,10 @@ class ColorModelParams(ColorFeatureParams):
         "clearly, is another object that stayed in view while the target was lost: not acquired. A target lost in "
         "place traces back to where it was lost. 0: off; 1 failed docs/rules/resident_anywhere_rule.txt on the tune "
         "views (the walkers' trace is lost at 7 fps; docs/robustness-exits.md)."))
+    resident_trace: Literal["ncc", "colour"] = param("ncc", doc=(
+        "With resident_anywhere, how a candidate is followed back: 'ncc' the normalised correlation of its central "
+        "part (as reenter_resident), 'colour' its central colour histogram (pftrack.cues.colour_trace), which "
+        "follows a walker whose limbs change between frames at a low frame rate."))
     reenter_min_llr: float = param(0.0, ge=0, le=1000, doc=(
         "With reenter_border: while the search is confined to the exit strip, a candidate is acquired only when its "
         "fused log-likelihood ratio (the acquisition test's, log prior included) is at least this; a weaker one is "

@@ -42,6 +42,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..cues.colour_trace import best_shift, core_hist, trace_back_colour
 from ..cues.template import patch_shift, trace_back
 from ..filtering.dynamics import HX, HY, X, Y
 from ..geometry import clip_box, ellipse_to_box, in_frame_fraction, iou
@@ -53,6 +54,8 @@ __all__ = ["RESIDENT_CORE", "RESIDENT_IN_FRAME", "Acquisition", "VetoMixin", "ne
 RESIDENT_IN_FRAME = 0.9
 #: ``reenter_resident``: the share of the candidate's half-axes that is traced (its central part)
 RESIDENT_CORE = 0.5
+#: ``resident_trace = "colour"``: the Bhattacharyya coefficient of the central histograms below which a trace is lost
+COLOUR_TRACE_RHO = 0.8
 #: ``acquire_unique_refine``: the offsets, in half-axes, at which a rival's neighbourhood is scored again, coarse
 #: then fine around the best coarse one (the search's samples are about a half-axis apart, and its likelihood peak
 #: is narrower than the target)
@@ -158,13 +161,18 @@ class VetoMixin:
                 and (self._exit_strip() is not None or (p.resident_anywhere > 0 and p.reenter_resident > 0))):
             if grays and grays[-1][0] != self.frame_index - 1:
                 grays.clear()
+                self._search_frames.clear()
                 self._residents = []
             gray = self._frame_gray(frame)
+            colour = p.resident_anywhere > 0 and p.resident_trace == "colour"
             if grays and self._residents:
-                self._follow_residents(grays[-1][1], gray)
+                self._follow_residents(self._search_frames[-1] if colour else grays[-1][1], frame if colour else gray)
             grays.append((self.frame_index, gray))
+            if colour:
+                self._search_frames.append(frame.copy())  # a source may reuse its frame buffer
         else:
             grays.clear()
+            self._search_frames.clear()
             self._residents = []
 
     def _follow_residents(self, prev: np.ndarray, gray: np.ndarray) -> None:
@@ -172,11 +180,17 @@ class VetoMixin:
         part found again by normalised correlation); one that is lost or leaves the view is forgotten."""
         fh, fw = self._shape
         kept = []
+        colour = self.params.resident_trace == "colour"
         for t, b in self._residents:
             if t < self.frame_index:
-                c = 0.5 * (1.0 - RESIDENT_CORE)
-                core = np.array([b[0] + c * b[2], b[1] + c * b[3], RESIDENT_CORE * b[2], RESIDENT_CORE * b[3]])
-                d = patch_shift(gray, prev, core, max(8, math.ceil(3.0 * self._exit_speed())))
+                if colour:  # prev and gray are the colour frames
+                    ref = core_hist(prev, b, RESIDENT_CORE)
+                    shift, rho = (None, 0.0) if ref is None else best_shift(gray, b, ref, self._anywhere_radius(b))
+                    d = None if rho < COLOUR_TRACE_RHO else -shift
+                else:
+                    c = 0.5 * (1.0 - RESIDENT_CORE)
+                    core = np.array([b[0] + c * b[2], b[1] + c * b[3], RESIDENT_CORE * b[2], RESIDENT_CORE * b[3]])
+                    d = patch_shift(gray, prev, core, max(8, math.ceil(3.0 * self._exit_speed())))
                 if d is None:
                     continue
                 b = b.copy()
@@ -215,7 +229,12 @@ class VetoMixin:
         core = ellipse_to_box(np.array([*ell[:2], *(RESIDENT_CORE * np.asarray(ell[2:4]))]))
         radius = max(8, math.ceil(3.0 * self._exit_speed()), math.ceil(p.reenter_resident_reach * ell[2]))
         oldest = box
-        for b in trace_back((g for _, g in reversed(grays)), self._frame_gray(frame), box, core, radius):
+        if strip is None and p.resident_trace == "colour":
+            trace = trace_back_colour(reversed(self._search_frames), frame, box, self._anywhere_radius(box),
+                                      min_rho=COLOUR_TRACE_RHO)
+        else:
+            trace = trace_back((g for _, g in reversed(grays)), self._frame_gray(frame), box, core, radius)
+        for b in trace:
             if b is None or in_frame_fraction(tuple(b), fw, fh) < RESIDENT_IN_FRAME:
                 return False
             oldest = b
@@ -229,6 +248,11 @@ class VetoMixin:
             self._residents.append((self.frame_index, np.asarray(box, dtype=np.float64).copy()))
             return True
         return False
+
+    def _anywhere_radius(self, box) -> int:
+        """``resident_trace = "colour"``: the trace's search radius a frame for ``box`` (x, y, w, h): three exit
+        speeds, at least 8 px and half the box's width (the walker taken need not move at the lost target's speed)."""
+        return max(8, math.ceil(3.0 * self._exit_speed()), math.ceil(0.5 * float(box[2])))
 
     def _weak_reentry(self, llr: float) -> bool:
         """``reenter_min_llr``: is a candidate of the exit strip, with acquisition ratio ``llr``, too weak?"""
