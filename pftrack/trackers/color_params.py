@@ -329,7 +329,8 @@ class ColorModelParams(ColorFeatureParams):
     resident_trace: Literal["ncc", "colour"] = param("ncc", doc=(
         "With resident_anywhere, how a candidate is followed back: 'ncc' the normalised correlation of its central "
         "part (as reenter_resident), 'colour' its central colour histogram (pftrack.cues.colour_trace), which "
-        "follows a walker whose limbs change between frames at a low frame rate."))
+        "follows a walker whose limbs change between frames at a low frame rate (it failed "
+        "docs/rules/resident_colour_rule.txt: a target that jumped is refused; docs/robustness-exits.md)."))
     reenter_min_llr: float = param(0.0, ge=0, le=1000, doc=(
         "With reenter_border: while the search is confined to the exit strip, a candidate is acquired only when its "
         "fused log-likelihood ratio (the acquisition test's, log prior included) is at least this; a weaker one is "
