@@ -318,19 +318,6 @@ class ColorModelParams(ColorFeatureParams):
         "With reenter_resident: the trace back searches at least this many of the candidate's half-widths around "
         "it (besides three exit speeds, at least 8 px), so that a walker faster than the target left is followed; "
         "0: off (docs/rules/resident_reach_rule.txt)."))
-    resident_anywhere: float = param(0.0, ge=0, le=100, doc=(
-        "With reenter_resident: after any loss, not only an exit, the grey frames of the search are kept, and a "
-        "candidate outside an exit strip whose box, traced back over every frame of the loss (one of at most "
-        "reenter_resident frames: a longer loss is not judged), stayed at least 90 % inside the view on every one "
-        "and stood, on the first, more than this many box sizes (along x or y) from where the target was last seen "
-        "clearly, is another object that stayed in view while the target was lost: not acquired. A target lost in "
-        "place traces back to where it was lost. 0: off; 1 failed docs/rules/resident_anywhere_rule.txt on the tune "
-        "views (the walkers' trace is lost at 7 fps; docs/robustness-exits.md)."))
-    resident_trace: Literal["ncc", "colour"] = param("ncc", doc=(
-        "With resident_anywhere, how a candidate is followed back: 'ncc' the normalised correlation of its central "
-        "part (as reenter_resident), 'colour' its central colour histogram (pftrack.cues.colour_trace), which "
-        "follows a walker whose limbs change between frames at a low frame rate (it failed "
-        "docs/rules/resident_colour_rule.txt: a target that jumped is refused; docs/robustness-exits.md)."))
     reenter_min_llr: float = param(0.0, ge=0, le=1000, doc=(
         "With reenter_border: while the search is confined to the exit strip, a candidate is acquired only when its "
         "fused log-likelihood ratio (the acquisition test's, log prior included) is at least this; a weaker one is "

@@ -159,10 +159,8 @@ class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, Sea
         self._last_search: TrackState | None = None  # its latest result (re-reported between searches)
         # (frame index, grey frame) of the last frames while searching an exit strip (.vetoes)
         self._search_grays: deque = deque(maxlen=max(1, int(self.params.reenter_resident)))
-        self._search_frames: deque = deque(maxlen=max(1, int(self.params.reenter_resident)))  # resident_trace
         self._gray_now: tuple | None = None  # (frame index, grey image, frame): this frame's grey image, once converted
         self._vetoed: list = []  # (frame index, centre, shift) of the candidates reenter_outward refused lately
-        self._residents: list = []  # (frame index, box) of the residents resident_anywhere refused, followed
         self._edge_seen: deque = deque(maxlen=max(1, self.params.reenter_memory))  # (frame, cx, cy) mostly outside
         self._ambiguous_until = -1  # acquire_unique_hold: no acquisition up to this frame
         self._sliver: tuple | None = None  # acquire_sliver_frames: (frame index, streak, box in the frame)

@@ -6,8 +6,7 @@ candidate that would end the loss can still be refused, as another object of the
 - ``reenter_outward``: after the target left the view, a candidate of the exit strip moving out through that
   edge (:meth:`VetoMixin._leaving`);
 - ``reenter_resident``: after the target left the view, a candidate that was inside the view all the while the
-  target was out (:meth:`VetoMixin._resident`); with ``resident_anywhere``, after a loss inside the view too, when
-  the candidate stood away from where the target was lost (and, once refused, it is followed and refused again);
+  target was out (:meth:`VetoMixin._resident`);
 - ``reenter_min_llr``: while the search is confined to the exit strip, a candidate whose ratio is below it
   (:meth:`VetoMixin._weak_reentry`);
 - the raw-colour check and the grey structure check (:mod:`.raw_check`, :mod:`.structure_check`): their own
@@ -42,7 +41,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..cues.colour_trace import best_shift, core_hist, trace_back_colour
 from ..cues.template import patch_shift, trace_back
 from ..filtering.dynamics import HX, HY, X, Y
 from ..geometry import clip_box, ellipse_to_box, in_frame_fraction, iou
@@ -54,8 +52,6 @@ __all__ = ["RESIDENT_CORE", "RESIDENT_IN_FRAME", "Acquisition", "VetoMixin", "ne
 RESIDENT_IN_FRAME = 0.9
 #: ``reenter_resident``: the share of the candidate's half-axes that is traced (its central part)
 RESIDENT_CORE = 0.5
-#: ``resident_trace = "colour"``: the Bhattacharyya coefficient of the central histograms below which a trace is lost
-COLOUR_TRACE_RHO = 0.8
 #: ``acquire_unique_refine``: the offsets, in half-axes, at which a rival's neighbourhood is scored again, coarse
 #: then fine around the best coarse one (the search's samples are about a half-axis apart, and its likelihood peak
 #: is narrower than the target)
@@ -158,47 +154,12 @@ class VetoMixin:
         p = self.params
         grays = self._search_grays
         if (self.mode == "searching" and (p.reenter_outward > 0 or p.reenter_resident > 0)
-                and (self._exit_strip() is not None or (p.resident_anywhere > 0 and p.reenter_resident > 0))):
+                and self._exit_strip() is not None):
             if grays and grays[-1][0] != self.frame_index - 1:
                 grays.clear()
-                self._search_frames.clear()
-                self._residents = []
-            gray = self._frame_gray(frame)
-            colour = p.resident_anywhere > 0 and p.resident_trace == "colour"
-            if grays and self._residents:
-                self._follow_residents(self._search_frames[-1] if colour else grays[-1][1], frame if colour else gray)
-            grays.append((self.frame_index, gray))
-            if colour:
-                self._search_frames.append(frame.copy())  # a source may reuse its frame buffer
+            grays.append((self.frame_index, self._frame_gray(frame)))
         else:
             grays.clear()
-            self._search_frames.clear()
-            self._residents = []
-
-    def _follow_residents(self, prev: np.ndarray, gray: np.ndarray) -> None:
-        """``resident_anywhere``: move the boxes of the residents refused before this frame to it (their central
-        part found again by normalised correlation); one that is lost or leaves the view is forgotten."""
-        fh, fw = self._shape
-        kept = []
-        colour = self.params.resident_trace == "colour"
-        for t, b in self._residents:
-            if t < self.frame_index:
-                if colour:  # prev and gray are the colour frames
-                    ref = core_hist(prev, b, RESIDENT_CORE)
-                    shift, rho = (None, 0.0) if ref is None else best_shift(gray, b, ref, self._anywhere_radius(b))
-                    d = None if rho < COLOUR_TRACE_RHO else -shift
-                else:
-                    c = 0.5 * (1.0 - RESIDENT_CORE)
-                    core = np.array([b[0] + c * b[2], b[1] + c * b[3], RESIDENT_CORE * b[2], RESIDENT_CORE * b[3]])
-                    d = patch_shift(gray, prev, core, max(8, math.ceil(3.0 * self._exit_speed())))
-                if d is None:
-                    continue
-                b = b.copy()
-                b[:2] -= d  # the content found on this frame (patch_shift gives its offset back to prev)
-                t = self.frame_index
-            if in_frame_fraction(tuple(b), fw, fh) >= RESIDENT_IN_FRAME:
-                kept.append((t, b))
-        self._residents = kept
 
     def _resident(self, frame: np.ndarray, ell: np.ndarray) -> bool:
         """``reenter_resident``: was a candidate (ellipse ``ell``) inside the view all the while the target was
@@ -210,49 +171,20 @@ class VetoMixin:
         so its trace reaches the border; a candidate whose box stays at least :data:`RESIDENT_IN_FRAME` inside the
         view on every frame back to the oldest kept is another object. A trace that is lost (a flat patch, no
         match) refuses nothing."""
-        p = self.params
         grays = self._search_grays
-        if p.reenter_resident <= 0 or not grays or grays[-1][0] != self.frame_index - 1:
-            return False
-        strip = self._exit_strip()
-        if strip is None and (p.resident_anywhere <= 0 or self._lost_at is None):
+        strip = self._exit_strip() if self.params.reenter_resident > 0 and grays else None
+        if strip is None or grays[-1][0] != self.frame_index - 1:
             return False
         fh, fw = self._shape
         box = ellipse_to_box(ell)
         if in_frame_fraction(tuple(box), fw, fh) < RESIDENT_IN_FRAME:
             return False
-        if strip is None:
-            if any(np.all(np.abs(box[:2] - b[:2]) < b[2:4]) for _, b in self._residents):
-                return True  # a resident refused before, followed since
-            if grays[0][0] > self._search_since:
-                return False  # resident_anywhere traces the whole loss: a longer one is not judged
         core = ellipse_to_box(np.array([*ell[:2], *(RESIDENT_CORE * np.asarray(ell[2:4]))]))
-        radius = max(8, math.ceil(3.0 * self._exit_speed()), math.ceil(p.reenter_resident_reach * ell[2]))
-        oldest = box
-        if strip is None and p.resident_trace == "colour":
-            trace = trace_back_colour(reversed(self._search_frames), frame, box, self._anywhere_radius(box),
-                                      min_rho=COLOUR_TRACE_RHO)
-        else:
-            trace = trace_back((g for _, g in reversed(grays)), self._frame_gray(frame), box, core, radius)
-        for b in trace:
+        radius = max(8, math.ceil(3.0 * self._exit_speed()), math.ceil(self.params.reenter_resident_reach * ell[2]))
+        for b in trace_back((g for _, g in reversed(grays)), self._frame_gray(frame), box, core, radius):
             if b is None or in_frame_fraction(tuple(b), fw, fh) < RESIDENT_IN_FRAME:
                 return False
-            oldest = b
-        if strip is not None:
-            return True
-        # resident_anywhere: another object only if it stood away from where the target was last seen clearly
-        x, y = self._lost_at[1]
-        hx, hy = (max(float(v), 1.0) for v in self._confident_size)
-        away = max(abs(oldest[0] + oldest[2] / 2 - x) / (2 * hx), abs(oldest[1] + oldest[3] / 2 - y) / (2 * hy))
-        if away > p.resident_anywhere:
-            self._residents.append((self.frame_index, np.asarray(box, dtype=np.float64).copy()))
-            return True
-        return False
-
-    def _anywhere_radius(self, box) -> int:
-        """``resident_trace = "colour"``: the trace's search radius a frame for ``box`` (x, y, w, h): three exit
-        speeds, at least 8 px and half the box's width (the walker taken need not move at the lost target's speed)."""
-        return max(8, math.ceil(3.0 * self._exit_speed()), math.ceil(0.5 * float(box[2])))
+        return True
 
     def _weak_reentry(self, llr: float) -> bool:
         """``reenter_min_llr``: is a candidate of the exit strip, with acquisition ratio ``llr``, too weak?"""
