@@ -12,9 +12,10 @@ best when it is near enough its models and at most a fraction of the runner-up's
 none is taken), and :class:`Persistence` asks it to stay in one place for a few frames.
 
 After the target left the view, a look-alike that stayed in view all the while is unique in the frame as soon as the
-target is gone.  :class:`Residents` (an option of each search) keeps the grey frames of the search and refuses a
-candidate whose box, traced back through them, stays inside the view on every one (as ``fusion-pf``'s
-``reenter_resident``, :mod:`pftrack.trackers.vetoes`): a target coming back entered through an edge since it left.
+target is gone.  :class:`Residents` (an option of ``cotrain-pf``'s search and of the monitor's) keeps the grey frames
+of the search and refuses a candidate whose box, traced back through them, stays inside the view on every one (as
+``fusion-pf``'s ``reenter_resident``, :mod:`pftrack.trackers.vetoes`): a target coming back entered through an edge
+since it left.
 """
 
 from __future__ import annotations
