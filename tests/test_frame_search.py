@@ -343,3 +343,17 @@ def test_residents_trace_and_follow():
     assert near.tolist() == [True, False]
     r.keep(8, frame(66, 10))  # a gap: everything forgotten
     assert len(r) == 1 and not r.vetoed
+
+
+def test_exit_scan_keeps_the_band_and_the_store_only_after_an_exit():
+    from pftrack.trackers.frame_search import Residents, exit_scan, scan_centres
+
+    frame = np.zeros((180, 240, 3), np.uint8)
+    every = scan_centres(240, 180, 20, 28, 6.0)
+    store = Residents(5)
+    centres, active = exit_scan(frame, (20, 28), 6.0, (100, 80, 20, 28), True, store, 3)  # mid-view: no exit
+    assert active is None and len(store) == 0 and len(centres) == len(every)
+    centres, active = exit_scan(frame, (20, 28), 6.0, (225, 80, 20, 28), True, store, 4)  # at the right edge
+    assert active is store and len(store) == 1 and (centres[:, 0] >= 210).all() and len(centres) < len(every)
+    centres, active = exit_scan(frame, (20, 28), 6.0, (225, 80, 20, 28), False, None, 5)  # no band, no store
+    assert active is None and len(centres) == len(every)

@@ -50,7 +50,7 @@ from ..geometry import Box, box_to_ellipse
 from .base import Tracker, TrackState
 from .color_params import ColorModelParams
 from .cotrain_params import CoTrainPFParams
-from .frame_search import Persistence, Residents, exit_band, exit_side, frame_candidate, scan_centres
+from .frame_search import Persistence, Residents, exit_scan, frame_candidate
 
 __all__ = ["CoTrainPF", "CoTrainPFParams"]
 
@@ -278,28 +278,19 @@ class CoTrainPF(Tracker):
         fh, fw = frame.shape[:2]
         w, h = self.box[2], self.box[3]
         step = p.lost_search_step * 0.5 * (w + h)
-        centres = scan_centres(fw, fh, w, h, step)
-        exited = exit_side(self.box, fw, fh) if (p.lost_search_exit or p.lost_search_resident) else None
-        side = exited if p.lost_search_exit else None
-        if exited is not None and p.lost_search_resident:
-            self._residents.keep(self.frame_index, frame)
-        if side is not None:  # it left through that edge: the band along it
-            centres = centres[exit_band(centres, side, fw, fh, w, h)]
-            if not len(centres):
-                self._persist.offer(None)
-                return
+        centres, residents = exit_scan(frame, (w, h), step, self.box, p.lost_search_exit,
+                                       self._residents if p.lost_search_resident else None, self.frame_index)
+        if not len(centres):
+            self._persist.offer(None)
+            return
         feats = self.ccue.prepare(frame, (0, 0, fw, fh), self.ccue.step_for(np.array([[0.0, 0.0, w / 2, h / 2]])))
 
         def distance(c: np.ndarray) -> np.ndarray:
             e = np.column_stack([c, np.full(len(c), w / 2), np.full(len(c), h / 2)])
             return 1.0 - self.ccue.rho(feats, e, self._sqrt_q, reuse=False)[0]
 
-        def score(c: np.ndarray) -> np.ndarray:  # the refused residents passed over
-            d = distance(c)
-            return np.where(self._residents.near(c, w, h), np.inf, d) if self._residents.vetoed else d
-
         d_here = float(distance(self.mu[None])[0])
-        best = frame_candidate(score, centres, (w, h), step)
+        best = frame_candidate(self._residents.passing_over(distance, w, h), centres, (w, h), step)
         gated = None
         if (best is not None and best.distance <= p.lost_search_distance and best.distance < d_here
                 and best.unique(p.lost_search_ratio)):
@@ -307,7 +298,7 @@ class CoTrainPF(Tracker):
         if not self._persist.offer(gated):
             return
         box = (float(gated[0] - w / 2), float(gated[1] - h / 2), float(w), float(h))
-        if exited is not None and p.lost_search_resident and self._residents.resident(box):
+        if residents is not None and residents.resident(box):
             return  # another object, in view all the while the target was out
         self.mu = gated.copy()
         self.particles[:, :2] = gated

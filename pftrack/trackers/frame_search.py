@@ -97,6 +97,25 @@ def exit_band(centres: np.ndarray, side: int, width: float, height: float, w: fl
     return centres[:, 1] >= height - depth * h
 
 
+def exit_scan(frame: np.ndarray, size: tuple[float, float], step: float, last, band: bool,
+              residents: "Residents | None", index: int) -> tuple[np.ndarray, "Residents | None"]:
+    """The coarse centres of a whole-frame search for boxes of ``size`` = (w, h) on ``frame`` (:func:`scan_centres`),
+    and the resident store that applies to this frame.  When the last sure box ``last`` lay at an edge
+    (:func:`exit_side`), with ``band`` the centres keep to the band along it (:func:`exit_band`), and ``residents``
+    keeps this frame (number ``index``) and is returned; otherwise the store returned is None."""
+    fh, fw = frame.shape[:2]
+    w, h = size
+    centres = scan_centres(fw, fh, w, h, step)
+    side = exit_side(last, fw, fh) if last is not None and (band or residents is not None) else None
+    if side is None:
+        return centres, None
+    if residents is not None:
+        residents.keep(index, frame)
+    if band:  # the target left through that edge: the band along it
+        centres = centres[exit_band(centres, side, fw, fh, w, h)]
+    return centres, residents
+
+
 def local_grid(centre: np.ndarray, step: float, n: int = 2) -> np.ndarray:
     """``((2n + 1)^2, 2)`` centres spaced ``step / (2n)`` about ``centre``, out to half a coarse ``step`` each way:
     the finer grid that refines a coarse grid's cell."""
@@ -248,6 +267,14 @@ class Residents:
                 return False
         self.vetoed.append(b0)
         return True
+
+    def passing_over(self, score: Callable[[np.ndarray], np.ndarray], w: float,
+                     h: float) -> Callable[[np.ndarray], np.ndarray]:
+        """``score`` (centres -> distances) with the centres :meth:`near` a refused resident at inf."""
+        def wrapped(centres: np.ndarray) -> np.ndarray:
+            d = score(centres)
+            return np.where(self.near(centres, w, h), np.inf, d) if self.vetoed else d
+        return wrapped
 
     def near(self, centres: np.ndarray, w: float, h: float) -> np.ndarray:
         """``(M,)`` bool: the centres of ``w`` x ``h`` boxes less than a box from a refused resident's centre along

@@ -61,7 +61,7 @@ from ..filtering.loss import FusedLoss, LossDetector, confidence
 from ..geometry import Box, background_grid, box_to_ellipse, ellipse_to_box
 from ..params import Params, param
 from .base import Tracker, TrackState
-from .frame_search import Persistence, Residents, exit_band, exit_side, frame_candidate, scan_centres
+from .frame_search import Persistence, Residents, exit_scan, frame_candidate
 from .structure_check import ANCHOR_GATE, RATE, StructureCheck, fused_test
 
 __all__ = ["LossMonitor", "MonitorParams", "Monitored", "WrapperOptions", "wrapper_options"]
@@ -225,23 +225,14 @@ class LossMonitor:
         step = 0.25 * (hx + hy)  # a quarter of the window (the mean of the box's sides)
         feats = self.cue.prepare(frame, (0, 0, w, h), self.cue.step_for(np.array([[0.0, 0.0, hx, hy]])))
 
-        exited = exit_side(last, w, h) if ((p.search_exit or residents is not None) and last is not None) else None
-        residents = residents if exited is not None else None
-        if residents is not None:
-            residents.keep(index, frame)
+        centres, residents = exit_scan(frame, (2 * hx, 2 * hy), step, last, p.search_exit, residents, index)
 
-        def score(c: np.ndarray) -> np.ndarray:
+        def distance(c: np.ndarray) -> np.ndarray:
             e = np.column_stack([c, np.full(len(c), hx), np.full(len(c), hy)])
             rho, tot = self.cue.rho(feats, e, self._sqrt_q, reuse=False)
-            d = np.where(tot > 0, 1.0 - rho, np.inf)
-            if residents is not None and residents.vetoed:  # the refused residents passed over
-                d[residents.near(c, 2 * hx, 2 * hy)] = np.inf
-            return d
+            return np.where(tot > 0, 1.0 - rho, np.inf)
 
-        centres = scan_centres(w, h, 2 * hx, 2 * hy, step)
-        side = exited if p.search_exit else None
-        if side is not None:  # the target left through that edge: the band along it
-            centres = centres[exit_band(centres, side, w, h, 2 * hx, 2 * hy)]
+        score = distance if residents is None else residents.passing_over(distance, 2 * hx, 2 * hy)
         best = frame_candidate(score, centres, (2 * hx, 2 * hy), step) if len(centres) else None
         gated = None
         if best is not None and best.unique(p.search_ratio, p.search_gap):
