@@ -292,8 +292,7 @@ class CoTrainPF(Tracker):
         d_here = float(distance(self.mu[None])[0])
         best = frame_candidate(self._residents.passing_over(distance, w, h), centres, (w, h), step)
         gated = None
-        if (best is not None and best.distance <= p.lost_search_distance and best.distance < d_here
-                and best.unique(p.lost_search_ratio)):
+        if best is not None and best.taken(p.lost_search_distance, d_here, p.lost_search_ratio):
             gated = best.centre
         if not self._persist.offer(gated):
             return

@@ -355,8 +355,7 @@ class FlowPF(Tracker):
 
         best = frame_candidate(score, scan_centres(fw, fh, w, h, step), (w, h), step)
         gated = None
-        if (best is not None and best.distance <= p.lost_search_distance and best.distance < self._d_est
-                and best.unique(p.lost_search_ratio)):
+        if best is not None and best.taken(p.lost_search_distance, self._d_est, p.lost_search_ratio):
             gated = best.centre
         if not self._persist.offer(gated):
             return

@@ -155,6 +155,11 @@ class Candidate:
         """The uniqueness test: the best distance at most ``ratio`` times the runner-up's and ``gap`` below it."""
         return self.distance <= ratio * self.runner_up and self.runner_up - self.distance >= gap
 
+    def taken(self, max_distance: float, here: float, ratio: float) -> bool:
+        """The gates of a tracker's own search: within ``max_distance`` of the model, nearer it than the estimate
+        (``here``), and :meth:`unique` with ``ratio``."""
+        return self.distance <= max_distance and self.distance < here and self.unique(ratio)
+
 
 def frame_candidate(score: Callable[[np.ndarray], np.ndarray], centres: np.ndarray, size: tuple[float, float],
                     step: float) -> Candidate | None:
