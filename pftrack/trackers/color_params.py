@@ -153,6 +153,12 @@ class ColorModelParams(ColorFeatureParams):
         "found again unchanged for the background test (and the persistence's still test) to call it the scene's; "
         "4 (default): every one. A railing whose top quarter walkers pass over is the scene's by three of them "
         "(docs/rules/static_quarters_rule.txt)."))
+    static_leave_refresh: int = param(0, ge=0, le=1000, doc=(
+        "With static_ncc: the frame kept for the background test is also replaced as soon as the target's box has "
+        "left the one it had on that frame (overlapping it by 10 % of its area or less), at least this many frames "
+        "after it, not only every 30 confident frames; the estimate is tested before, as then. Early in a track "
+        "the first frame is otherwise the only one kept, and the place the target started from, its background "
+        "the first model saw, cannot be tested there. 0 (default): every 30 frames only."))
     probation_llr: float = param(0.0, ge=0, le=50, doc=(
         "Probation after a weak re-acquisition (pftrack.trackers.probation): an acquisition whose loss-test "
         "ratio is below this starts a probation, during which the tracker follows the candidate without "

@@ -118,7 +118,7 @@ class ColorParticleFilter(NoiseGateMixin, InputSwitchMixin, LikelihoodMixin, Sea
         # look-alikes met during a loss
         self._distractors = DistractorMemory(p.distractor_frames, p.lost_frames, p.distractor_follow)
         # a confident frame: the scene's look-alikes (static_ncc)
-        self._scene = SceneReference(p.static_ncc, p.static_quarters)
+        self._scene = SceneReference(p.static_ncc, p.static_quarters, p.static_leave_refresh)
         warmup()
         self._reset()
 

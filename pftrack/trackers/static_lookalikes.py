@@ -175,11 +175,12 @@ class SceneReference:
     """The grey frame of a recent confident frame and the target's box on it; :meth:`is_scene` tests a
     candidate against it.  ``threshold`` <= 0: off (nothing is kept, nothing is the scene)."""
 
-    __slots__ = ("_noise", "_previous", "box", "frame_index", "gray", "quarters", "threshold")
+    __slots__ = ("_noise", "_previous", "box", "frame_index", "gray", "leave_refresh", "quarters", "threshold")
 
-    def __init__(self, threshold: float, quarters: int = 4):
+    def __init__(self, threshold: float, quarters: int = 4, leave_refresh: int = 0):
         self.threshold = float(threshold)
         self.quarters = int(quarters)
+        self.leave_refresh = int(leave_refresh)
         self.clear()
 
     def clear(self) -> None:
@@ -195,7 +196,7 @@ class SceneReference:
         ``frame -> grey image`` (not modified later), instead of converting here."""
         if self.threshold <= 0:
             return
-        if frame_index - self.frame_index >= REFRESH:
+        if self.due(box, frame_index):
             prev = self._previous
             # the one before is kept while the target has not left the outgoing reference's box, and had left it
             stayed = prev is not None and overlaps(box, self.box) and not overlaps(box, prev[1])
@@ -209,6 +210,18 @@ class SceneReference:
         elif self._noise is None and frame_index == self.frame_index + 1 and self.gray.shape == frame.shape[:2]:
             k = noise_grid(self.gray.shape)
             self._noise = noise_sd(self.gray[::k, ::k], gray_of(np.ascontiguousarray(frame[::k, ::k])))
+
+    def due(self, box, frame_index: int) -> bool:
+        """Is a new reference due on a confident frame with the target at ``box``: ``REFRESH`` frames after the
+        newest, or with ``leave_refresh`` > 0 as soon as the target has left the newest's box (it overlaps it by
+        ``OVERLAP`` of its area or less), ``leave_refresh`` frames or more after it? Early in a track the newest
+        reference is then no longer the first frame, on which the target covered the place it started from: a
+        look-alike there (the start's background, which the first model saw) can be tested once the target has
+        moved on."""
+        age = frame_index - self.frame_index
+        if age >= REFRESH:
+            return True
+        return 0 < self.leave_refresh <= age and self.box is not None and not overlaps(box, self.box)
 
     @property
     def noise(self) -> float:
@@ -277,8 +290,8 @@ class SceneTestMixin:
         """While tracking: is the estimate's ``box`` a piece of the scene, unchanged since the reference, where the
         target was not? Then what is tracked is not the target (it went behind something and the estimate stayed on
         its occluder, or slid onto clutter that looks like it). Tested on every ``CHECK_EVERY``-th frame after the
-        reference, and on a frame that would replace it (``keep``: the caller's confidence, ``REFRESH`` frames or
-        more after the reference), against the outgoing one: a reference is never taken of the estimate on the
+        reference, and on a frame that would replace it (``keep``: the caller's confidence, when a new reference is
+        due, :meth:`SceneReference.due`), against the outgoing one: a reference is never taken of the estimate on the
         scene without the estimate being tested first. Not tested within half the box's size of the frame's edge: an
         estimate left behind there by a target that walked out is where it comes back (``min_in_frame``,
         ``reenter_border``)."""
@@ -290,7 +303,7 @@ class SceneTestMixin:
         if x < 0.5 * w or y < 0.5 * h or x + 1.5 * w > fw or y + 1.5 * h > fh:
             return False
         age = self.frame_index - sc.frame_index
-        if age % CHECK_EVERY and not (keep and age >= REFRESH):
+        if age % CHECK_EVERY and not (keep and sc.due(box, self.frame_index)):
             return False
         return sc.is_scene(self._structure_frame(frame), box)
 
