@@ -49,6 +49,32 @@ def test_multinomial_binary_search_matches_paper():
     assert _search(c, np.array([0.0, 0.1, 0.1000001, 0.3, 0.6, 0.99, 1.0])).tolist() == [0, 0, 1, 1, 2, 3, 3]
 
 
+def test_compiled_multinomial_draws_the_indices_of_the_numpy_path():
+    """The compiled multinomial resampler: the indices and the generator's state of the cumulative sums and the
+    binary search, for weights with runs of zeros, unnormalised and near-degenerate ones; bad weights still raise."""
+    from pftrack._numba import numba_enabled
+    from pftrack.filtering import resampling
+
+    if not numba_enabled():
+        pytest.skip("Numba is off: the NumPy path is the only one")
+    rng = np.random.default_rng(0)
+    for trial in range(300):
+        n = int(rng.integers(1, 300))
+        w = rng.random(n) ** rng.uniform(0.5, 20.0)
+        if trial % 3 == 0:
+            w[rng.integers(0, n, n // 2)] = 0.0
+        w[0] += 1e-300
+        a_rng, b_rng = np.random.default_rng(trial), np.random.default_rng(trial)
+        a = resampling.multinomial(w, a_rng)
+        c = resampling._cumulative(w)
+        b = resampling._search(c, b_rng.random(c.size))
+        assert np.array_equal(a, b) and a.dtype == b.dtype
+        assert a_rng.random() == b_rng.random()
+    for bad in (np.zeros(4), np.array([1.0, np.nan]), np.array([np.inf, 1.0])):
+        with pytest.raises(ValueError):
+            resampling.multinomial(bad, rng)
+
+
 def test_weighted_choice_draws_what_numpy_choice_draws():
     """The search's second layer draws with ``weighted_choice`` instead of ``Generator.choice(p=...)``: the same
     indices and the same generator state afterwards, on weights with zeros, a single mass and ties."""

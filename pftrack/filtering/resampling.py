@@ -21,6 +21,8 @@ from typing import Callable
 
 import numpy as np
 
+from .._numba import njit, numba_enabled
+
 Resampler = Callable[[np.ndarray, np.random.Generator], np.ndarray]
 
 
@@ -54,7 +56,44 @@ def weighted_choice(p: np.ndarray, m: int, rng: np.random.Generator) -> np.ndarr
     return cdf.searchsorted(rng.random(m), side="right")
 
 
+@njit(cache=True)
+def _multinomial_numba(w, r, out):  # pragma: no cover - compiled
+    """:func:`_cumulative` and :func:`_search` in one call, the same numbers (the sums in order, each divided by the
+    total, the last set to 1, the smallest ``j`` with ``c[j] >= r`` by bisection); False when the total is not a
+    finite positive number."""
+    n = w.shape[0]
+    c = np.empty(n)
+    s = 0.0
+    for i in range(n):
+        s += w[i]
+        c[i] = s
+    total = c[n - 1]
+    if not (math.isfinite(total) and total > 0):
+        return False
+    for i in range(n):
+        c[i] /= total
+    c[n - 1] = 1.0
+    for k in range(r.shape[0]):
+        x = r[k]
+        lo, hi = 0, n
+        while lo < hi:
+            mid = (lo + hi) >> 1
+            if c[mid] < x:
+                lo = mid + 1
+            else:
+                hi = mid
+        out[k] = min(lo, n - 1)
+    return True
+
+
 def multinomial(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    w = weights
+    if numba_enabled() and isinstance(w, np.ndarray) and w.dtype == np.float64 and w.ndim == 1 and w.size:
+        r = rng.random(w.size)
+        out = np.empty(w.size, np.intp)
+        if _multinomial_numba(w, r, out):
+            return out
+        _cumulative(w)  # raises: the total is not a finite positive number
     c = _cumulative(weights)
     return _search(c, rng.random(c.size))
 
