@@ -286,6 +286,16 @@ def test_lasot_and_got10k_folders(tmp_path):
         read_sequence(got)
 
 
+def test_rows_of_no_extent_are_absent_frames(tmp_path):
+    """A ground-truth row of zero width or height (``0,0,0,0``) is a frame without the target, as a NaN row is: the
+    lost flag is scored there, and the frame is not scored for overlap."""
+    seq = tmp_path / "zeros"
+    write_frames(seq / "img", 5, start=1, ext=".jpg")
+    (seq / "groundtruth_rect.txt").write_text("1,2,10,12\n0,0,0,0\nnan,nan,nan,nan\n5,6,0,12\n3,4,10,12\n")
+    s = read_sequence(seq)
+    assert s.absent.tolist() == [False, True, True, True, False]
+
+
 def test_temple_color_128_folder(tmp_path):
     """Temple Color 128: img/ + FOLDER_gt.txt, and FOLDER_frames.txt naming the annotated stretch of the images."""
     seq = tmp_path / "Airport_ce"

@@ -149,12 +149,15 @@ def read_meta(path: Path) -> dict:
 
 
 def _absent_rows(boxes: np.ndarray, n: int, meta: dict, path: Path) -> np.ndarray:
-    """Absent frames of ``n``: the NaN rows of the ground truth (out of view, the TLD convention) and ``meta.json``'s
-    ``hidden`` frames (fully occluded); its ``unannotated`` frames have no box but show the target (a MOT track cut
-    short at the border), so they are neither absent nor scored."""
+    """Absent frames of ``n``: the NaN rows of the ground truth (out of view, the TLD convention), its rows of no
+    extent (a width or height of 0 or less, as ``0,0,0,0``, another way datasets write a frame without the target),
+    and ``meta.json``'s ``hidden`` frames (fully occluded); its ``unannotated`` frames have no box but show the target
+    (a MOT track cut short at the border), so they are neither absent nor scored."""
     absent = np.zeros(n, dtype=bool)
     m = min(n, boxes.shape[0])
-    absent[:m] = ~np.all(np.isfinite(boxes[:m]), axis=1)
+    rows = boxes[:m]
+    finite = np.all(np.isfinite(rows), axis=1)
+    absent[:m] = ~finite | (finite & ((rows[:, 2] <= 0) | (rows[:, 3] <= 0)))
     for key, value in (("hidden", True), ("unannotated", False)):
         for number in _frame_numbers(meta, key, path):
             if 1 <= number <= n:
