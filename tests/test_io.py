@@ -286,6 +286,19 @@ def test_lasot_and_got10k_folders(tmp_path):
         read_sequence(got)
 
 
+def test_a_dataset_grouped_in_folders_gives_the_sequences_one_level_further(tmp_path):
+    """LaSOT keeps its sequences in category folders (airplane/airplane-1); a folder with no sequence among its
+    subfolders gives those of the level below, in order, and a folder with neither is still an error."""
+    for group, name in (("bird", "bird-2"), ("airplane", "airplane-10"), ("airplane", "airplane-1")):
+        seq = tmp_path / "lasot" / group / name
+        write_frames(seq / "img", 3, start=1, ext=".jpg")
+        (seq / "groundtruth.txt").write_text("1,2,10,12\n" * 3)
+    assert [s.name for s in discover_sequences(tmp_path / "lasot")] == ["airplane-1", "airplane-10", "bird-2"]
+    (tmp_path / "empty" / "a" / "b").mkdir(parents=True)
+    with pytest.raises(SourceError, match="no OTB"):
+        discover_sequences(tmp_path / "empty")
+
+
 def test_rows_of_no_extent_are_absent_frames(tmp_path):
     """A ground-truth row of zero width or height (``0,0,0,0``) is a frame without the target, as a NaN row is: the
     lost flag is scored there, and the frame is not scored for overlap."""

@@ -82,7 +82,9 @@ def read_sequence(path: str | Path) -> Sequence:
 
 
 def discover_sequences(path: str | Path) -> list[Sequence]:
-    """A sequence folder gives itself; a dataset folder gives its sequence subfolders (sorted)."""
+    """A sequence folder gives itself; a dataset folder gives its sequence subfolders (sorted), or, when none of
+    them is one, the sequence folders one level further (a dataset grouped in folders: LaSOT's categories,
+    ``pftrack synth``'s kinds)."""
     path = Path(path)
     if not path.exists():
         raise SourceError(f"{path}: no such file or folder")
@@ -92,6 +94,9 @@ def discover_sequences(path: str | Path) -> list[Sequence]:
         return _targets_of(path)
     subs = sorted((p for p in path.iterdir() if p.is_dir()), key=_natural_key)
     seqs = [s for p in subs if _annotated(p) for s in _targets_of(p)]
+    if not seqs:  # grouped: the subfolders' own subfolders
+        seqs = [s for p in subs for q in sorted((q for q in p.iterdir() if q.is_dir()), key=_natural_key)
+                if _annotated(q) for s in _targets_of(q)]
     if not seqs:
         raise SourceError(f"{path}: no OTB, VOT or MOTChallenge sequences or annotated videos found")
     return seqs
