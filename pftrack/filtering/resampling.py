@@ -87,13 +87,12 @@ def _multinomial_numba(w, r, out):  # pragma: no cover - compiled
 
 
 def multinomial(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    w = weights
-    if numba_enabled() and isinstance(w, np.ndarray) and w.dtype == np.float64 and w.ndim == 1 and w.size:
-        r = rng.random(w.size)
-        out = np.empty(w.size, np.intp)
-        if _multinomial_numba(w, r, out):
+    if (numba_enabled() and isinstance(weights, np.ndarray) and weights.dtype == np.float64 and weights.ndim == 1
+            and weights.size):
+        out = np.empty(weights.size, np.intp)
+        if _multinomial_numba(weights, rng.random(weights.size), out):
             return out
-        _cumulative(w)  # raises: the total is not a finite positive number
+        _cumulative(weights)  # raises: the total is not a finite positive number
     c = _cumulative(weights)
     return _search(c, rng.random(c.size))
 

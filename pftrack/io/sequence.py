@@ -156,8 +156,7 @@ def _absent_rows(boxes: np.ndarray, n: int, meta: dict, path: Path) -> np.ndarra
     absent = np.zeros(n, dtype=bool)
     m = min(n, boxes.shape[0])
     rows = boxes[:m]
-    finite = np.all(np.isfinite(rows), axis=1)
-    absent[:m] = ~finite | (finite & ((rows[:, 2] <= 0) | (rows[:, 3] <= 0)))
+    absent[:m] = ~(np.all(np.isfinite(rows), axis=1) & (rows[:, 2] > 0) & (rows[:, 3] > 0))  # eval's valid_gt, negated
     for key, value in (("hidden", True), ("unannotated", False)):
         for number in _frame_numbers(meta, key, path):
             if 1 <= number <= n:
