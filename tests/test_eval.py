@@ -308,6 +308,32 @@ def test_sre_perturbations_follow_otb():
     assert perturbed_box((0.0, 0.0, 1.0, 1.0), 4, (200, 100)) == (0.0, 0.0, 1.0, 1.0)
 
 
+def test_tre_starts_follow_otb():
+    """OTB's TRE (splitSeqTRE): 20 starts spread over the frames a tracker may start on, the first frame first and
+    the last start leaving 20 frames; absent, invalid and mostly-outside boxes are never a start."""
+    from pftrack.eval.runner import TRE_SEGMENTS, tre_starts
+
+    n = 120
+    gt = np.tile([10.0, 10.0, 20.0, 20.0], (n, 1))
+    starts = tre_starts(gt)
+    assert len(starts) == TRE_SEGMENTS == 20 and starts[0] == 0 and starts[-1] == n - 20
+    assert np.all(np.diff(starts) > 0) and np.all(np.diff(starts) <= 6)
+    gt[[0, 1]] = np.nan  # no box: OPE starts on frame 2 (0-based), and so does TRE
+    absent = np.zeros(n, bool)
+    absent[50:70] = True
+    gt[30:40, 0] = -15.0  # a quarter of the box outside the frame
+    starts = tre_starts(gt, absent, (200, 100))
+    assert starts[0] == 2 and starts[-1] == n - 20
+    assert not set(starts.tolist()) & (set(range(30, 40)) | set(range(50, 70)))
+    assert np.all(np.diff(starts) >= 0)
+    short = tre_starts(np.tile([10.0, 10.0, 20.0, 20.0], (12, 1)))  # shorter than 20 frames: the first frame
+    assert short.tolist() == [0] * 20
+    wide = np.tile([-5.0, 10.0, 20.0, 20.0], (40, 1))  # never 90 % inside: any present frame may start
+    assert tre_starts(wide, None, (200, 100))[-1] == 20
+    with pytest.raises(pftrack.FormatError):
+        tre_starts(np.full((30, 4), np.nan))
+
+
 @pytest.mark.shared_data
 def test_csrt_auc_agrees_with_independent_scorer_on_dev_sequence():
     seq_path = shared_sequence("otb_crossing")

@@ -147,6 +147,34 @@ def test_sre_protocol_runs_every_tracker_from_each_perturbed_box(dataset, tmp_pa
     assert (tmp_path / "r" / "success.png").is_file()
 
 
+def test_tre_protocol_runs_every_tracker_from_each_start_frame(tmp_path, capsys):
+    """TRE: 20 runs per tracker whatever --seeds says, run k starting on its start frame with that frame's box and
+    scored on the frames from there (none before it is decoded or boxed)."""
+    from pftrack.cli import main
+    from pftrack.eval.runner import tre_starts
+    from pftrack.io import discover_sequences
+
+    write_otb(tmp_path / "ds" / "seqL", 3, n=60)
+    seqs = discover_sequences(tmp_path / "ds")
+    jobs = build_jobs(seqs, parse_tracker_list("meanshift,color-pf[n_particles=30]"), seeds=3, protocol="tre")
+    assert len(jobs) == 2 * 20
+    gt = read_sequence(tmp_path / "ds" / "seqL").groundtruth
+    starts = tre_starts(gt)
+    assert starts[0] == 0 and starts[-1] == 40
+    job = next(j for j in jobs if j.tracker.name == "meanshift" and j.seed == 13)
+    rec = run_job(job)
+    s = int(starts[13])
+    assert rec["start_frame"] == s + 1 and rec["protocol"] == "tre"
+    boxes = np.array([np.nan if v is None else v for v in rec["boxes"]], float).reshape(-1, 4)
+    assert np.all(np.isnan(boxes[:s])) and boxes[s] == pytest.approx(gt[s]) and np.all(np.isfinite(boxes[s:]))
+    assert rec["updates"] == 60 - s - 1
+    assert rec["auc"] == pytest.approx(ope_scores(boxes[s:], gt[s:], bounds=(320, 240)).auc)
+    rc = main(["eval", str(tmp_path / "ds"), "--trackers", "meanshift", "--protocol", "tre", "--workers", "1",
+               "--quiet", "--report", str(tmp_path / "r")])
+    out = capsys.readouterr().out
+    assert rc == 0 and "TRE (OTB's temporal robustness evaluation)" in out and "| `meanshift` |" in out
+
+
 def _failing_meanshift(monkeypatch, at: int):
     """`meanshift` raises on its ``at``-th update (counted per tracker)."""
     from pftrack.trackers.meanshift import MeanShift

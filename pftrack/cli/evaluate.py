@@ -19,9 +19,11 @@ def add_eval(sub) -> None:
     p.add_argument("--trackers", required=True,
                    help="comma-separated tracker specs: NAME or NAME[key=value;...]; 'all', 'ours', 'baselines', "
                         "'opencv' expand to registered families; with --protocol mot: multi-pf[...]")
-    p.add_argument("--protocol", choices=["ope", "sre", "vot", "mot"], default="ope",
+    p.add_argument("--protocol", choices=["ope", "sre", "tre", "vot", "mot"], default="ope",
                    help="OTB one-pass (default); OTB spatial robustness (sre: every tracker from 12 perturbed first "
-                        "boxes, --seeds ignored); VOT reset; or MOTChallenge multi-object (trackers: multi-pf[...])")
+                        "boxes, --seeds ignored); OTB temporal robustness (tre: every tracker from 20 start frames "
+                        "spread over the sequence, --seeds ignored); VOT reset; or MOTChallenge multi-object "
+                        "(trackers: multi-pf[...])")
     p.add_argument("--people", type=int, nargs="?", const=30, metavar="MIN_FRAMES", help=(
         "single-object protocols: cut each MOTChallenge folder into one sequence per person with at least MIN_FRAMES "
         "annotated frames (default 30), from the person's first box to the folder's end; the frames after they "

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FormatError, ParameterError
+from ..geometry import in_frame_fraction
 from .metrics import lost_detection, ope_scores, valid_gt, within_frame
 
 RESULT_VERSION = 4  # 2: lost-flag detection metrics; 3: identification rate (MOT); 4: IoU within the frame
@@ -34,8 +35,15 @@ RESULT_VERSION = 4  # 2: lost-flag detection metrics; 3: identification rate (MO
 SRE_PERTURBATIONS = ((-0.1, 0.0, 1.0), (0.1, 0.0, 1.0), (0.0, -0.1, 1.0), (0.0, 0.1, 1.0),
                      (-0.1, -0.1, 1.0), (0.1, -0.1, 1.0), (-0.1, 0.1, 1.0), (0.1, 0.1, 1.0),
                      (0.0, 0.0, 0.8), (0.0, 0.0, 0.9), (0.0, 0.0, 1.1), (0.0, 0.0, 1.2))
+#: OTB's temporal robustness evaluation (Wu, Lim & Yang, CVPR 2013, §4.2): every tracker starts once from each
+#: of this many frames spread over the sequence, with that frame's ground-truth box, and runs to the end
+TRE_SEGMENTS = 20
+#: TRE: the last start leaves at least this many frames (OTB's ``minNum``)
+TRE_MIN_FRAMES = 20
+#: TRE: a start frame's box lies at least this much inside the frame (OTB starts on boxes whose corner is inside)
+TRE_MIN_IN_FRAME = 0.9
 #: protocols that run one pass from a first box and are scored by the OTB curves
-ONE_PASS = ("ope", "sre")
+ONE_PASS = ("ope", "sre", "tre")
 
 
 def perturbed_box(box, k: int, frame_size: tuple[int, int] | None = None) -> tuple[float, float, float, float]:
@@ -60,6 +68,34 @@ def perturb(box, shift_scale: tuple[float, float, float], frame_size: tuple[int,
     return x0, y0, x1 - x0, y1 - y0
 
 
+def tre_starts(gt, absent=None, frame_size: tuple[int, int] | None = None, *, segments: int = TRE_SEGMENTS,
+               min_frames: int = TRE_MIN_FRAMES) -> np.ndarray:
+    """The ``segments`` start frames (0-based, ascending, repeated on short sequences) of OTB's TRE on a sequence
+    with ground truth ``gt`` ``(n, 4)``, as OTB's ``splitSeqTRE`` chooses them: the frames a tracker may start on
+    are those with a valid box, the target present (not ``absent``) and the box at least
+    :data:`TRE_MIN_IN_FRAME` inside the frame (any present frame when none is); the last of them that leaves at
+    least ``min_frames`` frames (or the first, on a shorter sequence) ends the range, and the starts are spread
+    evenly over the candidates up to it, the first candidate first. Start ``0`` is OPE's first frame whenever that
+    frame is a candidate."""
+    gt = np.asarray(gt, dtype=np.float64).reshape(-1, 4)
+    n = len(gt)
+    ok = valid_gt(gt)
+    if absent is not None:
+        ok &= ~np.asarray(absent, dtype=bool).ravel()[:n]
+    cand = np.flatnonzero(ok)
+    if frame_size is not None and cand.size:
+        w, h = float(frame_size[0]), float(frame_size[1])
+        inside = np.array([in_frame_fraction(gt[i], w, h) >= TRE_MIN_IN_FRAME for i in cand])
+        if inside.any():
+            cand = cand[inside]
+    if cand.size == 0:
+        raise FormatError("no frame with a ground-truth box to start a TRE run from")
+    room = np.flatnonzero(n - cand >= min_frames)
+    last = int(room[-1]) if room.size else 0
+    idx = np.floor(np.arange(segments) * (last / max(segments - 1, 1))).astype(int)
+    idx[-1] = last
+    return cand[np.minimum(idx, last)]
+
 
 # ---------------------------------------------------------------------------------------------- a run
 
@@ -80,7 +116,7 @@ class Job:
     sequence: str  # path
     sequence_name: str
     seed: int
-    protocol: str  # "ope" | "sre" | "vot" | "mot"
+    protocol: str  # "ope" | "sre" | "tre" | "vot" | "mot"
     threads: int = 1
     extra: tuple[tuple[str, Any], ...] = ()
     #: which annotated target of an OTB folder with several, or which person of a MOTChallenge folder cut into
@@ -182,10 +218,11 @@ def run_job(job: Job) -> dict:
         pass
     tracker = create_tracker(job.tracker.name, seed=job.seed, params=job.tracker.param_dict)
 
-    def frames():
+    def frames(first: int = 0):
         from ..frames import as_bgr_uint8
 
-        for i, path in enumerate(seq.frames):
+        for i in range(first, len(seq.frames)):
+            path = seq.frames[i]
             img = read_image(path)
             if img is None:
                 raise FormatError(f"{path}: frame {i + 1} cannot be decoded")
@@ -198,16 +235,18 @@ def run_job(job: Job) -> dict:
     if job.protocol in ONE_PASS:
         start = seq.init_index
         first = seq.init_box
+        if job.protocol == "tre":  # the seed is the segment: its start frame, with that frame's box
+            start = int(tre_starts(gt, seq.absent, _frame_size(seq, read_image))[job.seed % TRE_SEGMENTS])
+            first = tuple(float(v) for v in gt[start])
+            rec["start_frame"] = start + 1
         boxes = np.full((len(seq.frames), 4), np.nan)
         lost_flags = np.zeros(len(seq.frames), dtype=bool)
         upd_s = 0.0
         times = []
         end = len(seq.frames)  # the frames the tracker answered (all but after a failure)
         bounds = None  # the frame's (width, height): boxes are scored within it (metrics.ope_scores)
-        for t, frame in enumerate(frames()):
+        for t, frame in enumerate(frames(start), start=start):  # the frames before the start are not decoded
             bounds = bounds or (frame.shape[1], frame.shape[0])
-            if t < start:
-                continue
             try:
                 if t == start:
                     if job.protocol == "sre":
@@ -262,6 +301,16 @@ def run_job(job: Job) -> dict:
         if isinstance(v, float) and not math.isfinite(v):
             rec[k] = None
     return rec
+
+
+def _frame_size(seq, read_image) -> tuple[int, int]:
+    """A sequence's frame ``(width, height)``: as its layout states it, or read from its first frame."""
+    if seq.size is not None:
+        return int(seq.size[0]), int(seq.size[1])
+    img = read_image(seq.frames[0])
+    if img is None:
+        raise FormatError(f"{seq.frames[0]}: frame 1 cannot be decoded")
+    return int(img.shape[1]), int(img.shape[0])
 
 
 def _run_mot_job(job: Job, seq) -> dict:

@@ -28,7 +28,7 @@ from typing import Iterable
 import numpy as np
 
 from ..io.sinks import prepare_output
-from .jobs import ONE_PASS, failed
+from .jobs import ONE_PASS, TRE_SEGMENTS, failed
 from .notes import (_num, _ratio, lost_notes, sequence_speed_ratios, speed_notes,  # noqa: F401
                     speed_peer, strict_speed_ratios)
 from .paired import paired_html, paired_markdown, paired_reference
@@ -139,7 +139,7 @@ def _mot_markdown(records: list[dict], agg: dict, lines: list[str]) -> str:
 
 
 def _one_pass(protocols) -> bool:
-    """Are any of these protocols scored by the OTB curves (one pass from a first box: OPE, SRE)?"""
+    """Are any of these protocols scored by the OTB curves (one pass from a first box: OPE, SRE, TRE)?"""
     return any(p in ONE_PASS for p in protocols)
 
 
@@ -171,6 +171,7 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         lines += [f"Protocol: mot. Sequences: {seqs}. Seeds: {', '.join(map(str, seeds))}.", ""]
         return _mot_markdown(records, agg, lines)
     runs = ("Runs: one per perturbed first box (the seed is its index)" if protocols == ["sre"] else
+            "Runs: one per start frame (the seed is its index)" if protocols == ["tre"] else
             f"Seeds: {', '.join(map(str, seeds))} (deterministic trackers run once)")
     lines += [f"Protocol: {', '.join(protocols)}. {runs}. fps = update calls per second on one core, decode "
               "excluded; per sequence the median over seeds, overall the median over sequences.", ""]
@@ -178,6 +179,11 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         lines += ["SRE (OTB's spatial robustness evaluation): every tracker runs once from each of 12 perturbed first "
                   "boxes (shifted by 10 % of the size in 8 directions, scaled by 0.8, 0.9, 1.1, 1.2); the seed is the "
                   "perturbation, and the figures are means over the 12 runs, scored against the ground truth.", ""]
+    if "tre" in protocols:
+        lines += [f"TRE (OTB's temporal robustness evaluation): every tracker runs once from each of {TRE_SEGMENTS} "
+                  "frames spread evenly over the sequence (the first is OPE's), with that frame's ground-truth box, "
+                  "to the end; the seed is the start, and the figures are means over the runs, each scored on its "
+                  "own frames.", ""]
     if _one_pass(protocols) or "vot" in protocols:
         lines += ["Single-object boxes are scored within the frame (both cut to the image, as the VOT toolkit does).",
                   ""]

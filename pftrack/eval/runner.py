@@ -34,8 +34,8 @@ from typing import Any, Callable, Iterable
 
 from ..errors import ParameterError
 # one run lives in .jobs; these names are re-exported here, where callers have always found them
-from .jobs import (ONE_PASS, RESULT_VERSION, SRE_PERTURBATIONS, Job, TrackerConfig, failed, perturb,  # noqa: F401
-                   perturbed_box, run_job)
+from .jobs import (ONE_PASS, RESULT_VERSION, SRE_PERTURBATIONS, TRE_SEGMENTS, Job, TrackerConfig,  # noqa: F401
+                   failed, perturb, perturbed_box, run_job, tre_starts)
 
 
 # ---------------------------------------------------------------------------------------------- specs
@@ -131,6 +131,8 @@ def build_jobs(sequences: Iterable, trackers: list[TrackerConfig], *, seeds: int
         for cfg in trackers:
             if protocol == "sre":  # every tracker once from each perturbed first box
                 runs = len(SRE_PERTURBATIONS)
+            elif protocol == "tre":  # every tracker once from each start frame
+                runs = TRE_SEGMENTS
             else:
                 stochastic = True if protocol == "mot" else get_spec(cfg.name).cls.stochastic
                 runs = seeds if stochastic else 1

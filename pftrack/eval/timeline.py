@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .jobs import ONE_PASS
 from .metrics import per_frame_iou
 
 __all__ = ["timelines"]
@@ -32,7 +33,7 @@ def timelines(records: list[dict], sequences: dict, out: Path) -> dict[str, str]
 
     from ..io.datasets import Sequence, read_sequence
 
-    runs = [r for r in records if r.get("protocol") in ("ope", "sre") and r.get("boxes") and r.get("lost")]
+    runs = [r for r in records if r.get("protocol") in ONE_PASS and r.get("boxes") and r.get("lost")]
     trackers = list(dict.fromkeys(r["tracker"] for r in runs))
     made: dict[str, str] = {}
     if not runs:
