@@ -42,6 +42,16 @@ class FusionPFParams(ColorPFParams):
         "See ColorModelParams.light_jump. Off for fusion-pf (0.18 for color-pf), not judged: its still view's gain "
         "(color_normalize='still') reads lamps switched on or off (synthetic vanish scenes with the light times 1.3 "
         "or 0.7: mean IoU 0.517 and 0.521 against 0.515 as rendered; docs/rules/sot_light_jump_rule.txt)."))
+    camera_motion: bool = param(True, doc=(
+        "See ColorPFParams.camera_motion (off for color-pf). On for fusion-pf, chosen on the tune data under a rule "
+        "stated before the runs (docs/rules/motion_proposal_tre_rule.txt, docs/robustness-cameras.md): the tune "
+        "real sequences from 20 starts each (TRE) 0.624 against 0.609 mean AUC; tune split 0.708 against 0.705 "
+        "(real 0.599 against 0.582, grey 0.591 against 0.573, grey + light 0.496 against 0.483, PETS and synthetic "
+        "scenes the same), lost recall and re-acquisitions the same; tune stride copies 0.403 against 0.395; windows "
+        "and views the same; 0.96x the update rate (0.92x on the real sequences). color-pf lost 12 of the windows' "
+        "45 returns and 9 % of its rate: off. Report data, run once after the choice: split 0.717 against 0.713 "
+        "(real 0.580 against 0.590, grey 0.538 against 0.507, grey + light 0.498 against 0.443), windows 24 against "
+        "26 of 36 returns, TRE 0.623 against 0.629, stride copies 0.536 against 0.506."))
     acquire_early_frames: int = param(0, ge=0, doc=(
         "See ColorModelParams.acquire_early_frames. Off for fusion-pf (10 for color-pf): on the tune data it took "
         "12 more of the windows' 60 returns, but the PETS tune views' pooled lost recall fell to 0.511 against "
