@@ -63,6 +63,19 @@ def test_compiled_costs_equal_one_serial_sum_per_shift_to_the_bit():
         assert cs._shift_costs(da, db, m).tolist() == ref
 
 
+def test_a_featureless_view_of_noise_alone_gives_hardly_any_shift():
+    """Profiles of noise alone give one of some seventy costs below no shift's by chance (about one axis in ten);
+    the shift must also be below 0.8 of the median cost, which noise hardly reaches."""
+    rng = np.random.default_rng(0)
+    for h, w in ((240, 320), (480, 854)):
+        step = cs.lattice_step(h, w)
+        frames = [np.clip(128 + rng.normal(0, 3, (h, w, 3)), 0, 255).astype(np.uint8) for _ in range(41)]
+        prof = [cs.frame_profiles(f, step) for f in frames]
+        moved = sum((dx != 0) + (dy != 0) for dx, dy in (
+            cs.camera_shift(a, b, max_shift=(0.15 * w, 0.15 * h), step=step) for a, b in zip(prof, prof[1:])))
+        assert moved <= 4, moved  # of 80 axes
+
+
 def test_shift_of_a_moved_view_is_found_within_a_pixel():
     scene = disc_scene(1, (560, 720))
     rng = np.random.default_rng(4)

@@ -84,7 +84,9 @@ def profile_shift(a: np.ndarray, b: np.ndarray, max_shift: int, *, min_gain: flo
 
     The two profiles' derivatives, each scaled to unit spread, are compared by their mean absolute difference over
     their overlap (at least half of them). The best integer shift is refined by a parabola through its neighbours'
-    costs. It is taken only when its cost is below ``min_gain`` times the cost of no shift: a flat or changing
+    costs. It is taken only when its cost is below ``min_gain`` times the cost of no shift, and below ``min_gain``
+    times the median cost of all the shifts tried (profiles of noise alone, on a featureless view, give one of
+    some seventy costs that dips below no shift's by chance, but hardly below their median): a flat or changing
     scene (light, a large moving object) gives no clear minimum, and the samples are then left where they are.
     """
     a = np.asarray(a, dtype=np.float64)
@@ -105,6 +107,8 @@ def _refine(costs: np.ndarray, m: int, min_gain: float) -> float:
     times the cost of no shift."""
     best = int(np.argmin(costs))
     if not costs[best] < min_gain * costs[m]:
+        return 0.0
+    if not costs[best] < min_gain * np.median(costs):  # a dip among noisy costs, not a match: no shift
         return 0.0
     shift = float(best - m)
     if 0 < best < 2 * m:
