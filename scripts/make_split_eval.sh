@@ -14,7 +14,8 @@
 #           in another, the same copies of each split's synthetic vanish and leave scenes;
 #           in a run of their own, the scenes cut from photographs (photo-vanish, photo-leave, photo-exit; a family
 #           that shares no drawing with the synthetic scenes above): seeds 1000-1019 for tune, 0-19 for report
-#           (docs/rules/photo_scenes_rule.txt)
+#           (docs/rules/photo_scenes_rule.txt);
+#           in a run of their own, each split's real sequences from 20 starts each (--protocol tre)
 #
 # Usage: bash scripts/make_split_eval.sh [DATA_DIR] [WORK_DIR]   (defaults ../shared/data, reports/split)
 # Writes WORK_DIR/{tune,report}/ (results.csv, summary.md, index.html) and prints both summaries.
@@ -72,6 +73,9 @@ for split in tune report; do
   "$PFTRACK" eval "$WORK/${split}_views40" "$WORK/${split}_views70" --trackers "$TRACKERS" --seeds "$SEEDS" \
     --workers 2 --quiet --report "$WORK/${split}_views_more_eval" \
     --title "pftrack: $split split, PETS views of 40 % and 70 %" > "$WORK/${split}_views_more.md"
+  # the real sequences from 20 starts each (OTB's temporal robustness evaluation; docs/evaluation.md)
+  "$PFTRACK" eval "$WORK/${split}_real" --protocol tre --trackers "$TRACKERS" --workers 2 --quiet \
+    --report "$WORK/${split}_tre_eval" --title "pftrack: $split split, TRE of the real sequences" > "$WORK/${split}_tre.md"
   # exits of one target: the real sequences of the split through the same windows
   "$PFTRACK" eval "$WORK/${split}_exits" --trackers "$TRACKERS" --seeds "$SEEDS" --workers 2 --quiet \
     --report "$WORK/${split}_exits_eval" --title "pftrack: $split split, windows of the real sequences" \
