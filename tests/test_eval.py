@@ -72,6 +72,22 @@ def test_ope_agrees_with_an_independent_scorer(rng):
     assert res.auc == pytest.approx(auc, abs=1e-12) and res.precision == pytest.approx(prec, abs=1e-12)
 
 
+def test_normalised_precision_follows_lasot():
+    """LaSOT / TrackingNet: centre errors in units of the ground truth's width and height, the share within t for
+    t = 0, 0.01, ..., 0.5, averaged; a missing box is never within; frames without ground truth are skipped."""
+    gt = np.array([[0, 0, 100, 50], [0, 0, 100, 50], [0, 0, 10, 10], [0, 0, 10, 10], [np.nan] * 4], float)
+    pred = np.array([[10.5, 0, 100, 50],  # 0.105 of the width off: within from t = 0.11 (40 thresholds)
+                     [0, 20.75, 100, 50],  # 0.415 of the height off: from 0.42 (9)
+                     [2.5, 3.2, 10, 10],  # (0.25, 0.32): 0.406, from 0.41 (10)
+                     [np.nan] * 4,  # missing: never
+                     [0, 0, 5, 5]], float)
+    res = ope_scores(pred, gt)
+    d = np.array([0.105, 0.415, np.hypot(0.25, 0.32), np.inf])
+    assert res.norm_precision == pytest.approx(np.mean([(d <= x).mean() for x in np.linspace(0, 0.5, 51)]))
+    assert res.norm_precision == pytest.approx((40 + 9 + 10) / (51 * 4), abs=1e-12)
+    assert ope_scores(gt[:4], gt[:4]).norm_precision == 1.0
+
+
 # ------------------------------------------------------------------ VOT protocol
 
 

@@ -273,7 +273,8 @@ def run_job(job: Job) -> dict:
         absent = absent | (valid_gt(gt) & ~valid_gt(within_frame(gt, bounds)))  # a box wholly outside the frame
         ld = lost_detection(lost_flags[start + 1:end], boxes[start + 1:end], gt[start + 1:end],
                             absent[start + 1:end], bounds=bounds)
-        rec.update(auc=scores.auc, precision=scores.precision, mean_iou=scores.mean_iou, failures=None,
+        rec.update(auc=scores.auc, precision=scores.precision, norm_precision=scores.norm_precision,
+                   mean_iou=scores.mean_iou, failures=None,
                    accuracy=None, lost_frames=int(lost_flags.sum()), lost_recall=ld.recall,
                    false_lost=ld.false_rate, absent_frames=ld.absent_frames, covered_frames=ld.covered_frames,
                    reappearances=ld.reappearances, reacquired=ld.reacquired,

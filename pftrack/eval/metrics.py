@@ -5,7 +5,11 @@ OTB one-pass evaluation (Wu, Lim & Yang):
 * per frame, the IoU of the predicted and ground-truth boxes;
 * the **success curve**: the fraction of frames with IoU > t for the 21
   thresholds t = 0, 0.05, ..., 1; its mean is the **AUC**;
-* the **precision**: the fraction of frames whose centre error is <= 20 px.
+* the **precision**: the fraction of frames whose centre error is <= 20 px;
+* the **normalised precision** of LaSOT and TrackingNet (Fan et al., CVPR 2019; Müller et al., ECCV 2018): the
+  centre error measured in units of the ground-truth box's width and height, the fraction of frames within t for
+  the 51 thresholds t = 0, 0.01, ..., 0.5, and the mean of that curve (its AUC), so that a large target is not
+  judged by the pixels of a small one.
 
 Frames whose ground truth is missing (NaN) or has zero size are skipped.
 
@@ -25,6 +29,7 @@ from ..geometry import center_error, clip_box, iou
 
 THRESHOLDS = np.linspace(0.0, 1.0, 21)
 PRECISION_THRESHOLDS = np.arange(0, 51, dtype=np.float64)
+NORM_PRECISION_THRESHOLDS = np.linspace(0.0, 0.5, 51)
 
 
 def valid_gt(gt: np.ndarray) -> np.ndarray:
@@ -76,6 +81,20 @@ def frame_center_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     return err
 
 
+def frame_norm_center_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
+    """Per valid frame, the centre error in units of the ground-truth box: ``||((cx_p - cx_g) / w_g,
+    (cy_p - cy_g) / h_g)||`` (LaSOT's and TrackingNet's normalised distance); infinite for a missing prediction."""
+    pred, gt = _align(pred, gt)
+    ok = valid_gt(gt)
+    p, g = np.asarray(pred, dtype=np.float64)[ok], gt[ok]
+    q = _clean_pred(p)
+    dx = (q[:, 0] + q[:, 2] / 2 - g[:, 0] - g[:, 2] / 2) / g[:, 2]
+    dy = (q[:, 1] + q[:, 3] / 2 - g[:, 1] - g[:, 3] / 2) / g[:, 3]
+    err = np.hypot(dx, dy)
+    err[~np.all(np.isfinite(p), axis=1)] = np.inf
+    return err
+
+
 def _align(pred, gt):
     pred = np.asarray(pred, dtype=np.float64).reshape(-1, 4)
     gt = np.asarray(gt, dtype=np.float64).reshape(-1, 4)
@@ -110,6 +129,7 @@ class OPEResult:
     success: np.ndarray
     precision_curve: np.ndarray
     n_frames: int
+    norm_precision: float = float("nan")  # the mean of the normalised precision curve (LaSOT, TrackingNet)
 
 
 def ope_scores(pred: np.ndarray, gt: np.ndarray, *, bounds: tuple[float, float] | None = None) -> OPEResult:
@@ -118,6 +138,7 @@ def ope_scores(pred: np.ndarray, gt: np.ndarray, *, bounds: tuple[float, float] 
     pred, gt = within_frame(pred, bounds), within_frame(gt, bounds)
     ious = frame_ious(pred, gt)
     errs = frame_center_errors(pred, gt)
+    nerrs = frame_norm_center_errors(pred, gt)
     succ = success_curve(ious)
     prec = precision_curve(errs)
     return OPEResult(
@@ -127,6 +148,8 @@ def ope_scores(pred: np.ndarray, gt: np.ndarray, *, bounds: tuple[float, float] 
         success=succ,
         precision_curve=prec,
         n_frames=int(ious.size),
+        norm_precision=(float((nerrs[None, :] <= NORM_PRECISION_THRESHOLDS[:, None]).mean())
+                        if nerrs.size else float("nan")),
     )
 
 

@@ -3,7 +3,7 @@
 Everything is written inside the report folder the user named:
 
 * ``results.csv`` — one row per run: ``tracker,sequence,seed,protocol,auc,precision,
-  mean_iou,failures,accuracy,fps,frames,lost_frames``;
+  mean_iou,failures,accuracy,fps,frames,lost_frames`` and the columns of :data:`CSV_COLUMNS` after them;
 * ``summary.md`` — per-tracker means and per-sequence tables (Markdown);
 * ``success.png``, ``precision.png`` (OPE) and ``auc_per_sequence.png`` /
   ``failures_per_sequence.png`` (Matplotlib, Agg backend);
@@ -38,7 +38,7 @@ CSV_COLUMNS = ["tracker", "sequence", "seed", "protocol", "auc", "precision", "m
                "fps", "frames", "lost_frames", "lost_recall", "false_lost", "absent_frames", "reappearances",
                "reacquired", "mota", "motp", "idf1", "id_rate", "num_switches", "num_fragmentations",
                "mostly_tracked", "mostly_lost", "num_false_positives", "num_misses", "e2e_fps", "covered_frames",
-               "error"]
+               "norm_precision", "start_frame", "error"]
 MOT_FIELDS = ["mota", "motp", "idf1", "id_rate", "num_switches", "num_fragmentations", "mostly_tracked", "mostly_lost",
               "num_false_positives", "num_misses", "e2e_fps"]
 
@@ -78,6 +78,7 @@ def aggregate(records: list[dict]) -> dict:
         cell[(t, s)] = {
             "auc": _mean(_num(r.get("auc")) for r in rs),
             "precision": _mean(_num(r.get("precision")) for r in rs),
+            "norm_precision": _mean(_num(r.get("norm_precision")) for r in rs),
             "mean_iou": _mean(_num(r.get("mean_iou")) for r in rs),
             "failures": _mean(_num(r.get("failures")) for r in rs),
             "accuracy": _mean(_num(r.get("accuracy")) for r in rs),
@@ -95,6 +96,7 @@ def aggregate(records: list[dict]) -> dict:
         overall[t] = {
             "auc": _mean(c["auc"] for c in cells),
             "precision": _mean(c["precision"] for c in cells),
+            "norm_precision": _mean(c["norm_precision"] for c in cells),
             "mean_iou": _mean(c["mean_iou"] for c in cells),
             "failures": float(np.nansum([c["failures"] for c in cells])) if any(
                 math.isfinite(c["failures"]) for c in cells) else float("nan"),
@@ -196,7 +198,7 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
     vot = "vot" in protocols
     head = ["tracker"]
     if ope:
-        head += ["mean AUC", "precision@20", "lost recall", "false-lost rate", "re-acquired"]
+        head += ["mean AUC", "precision@20", "norm. precision", "lost recall", "false-lost rate", "re-acquired"]
     if vot:
         head += ["failures (sum)", "accuracy"]
     head += ["median fps"]
@@ -210,8 +212,8 @@ def summary_markdown(records: list[dict], *, command: str | None = None, title: 
         o = agg["overall"][t]
         row = [f"`{t}`"]
         if ope:
-            row += [_fmt(o["auc"]), _fmt(o["precision"]), _fmt(o["lost_recall"]), _fmt(o["false_lost"]),
-                    _reacq(o)]
+            row += [_fmt(o["auc"]), _fmt(o["precision"]), _fmt(o["norm_precision"]), _fmt(o["lost_recall"]),
+                    _fmt(o["false_lost"]), _reacq(o)]
         if vot:
             row += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
         row += [_fmt(o["fps"], 0)]
@@ -385,8 +387,8 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
         o = agg["overall"][t]
         cells = [e(t)]
         if ope:
-            cells += [_fmt(o["auc"]), _fmt(o["precision"]), _fmt(o["lost_recall"]), _fmt(o["false_lost"]),
-                      _reacq(o)]
+            cells += [_fmt(o["auc"]), _fmt(o["precision"]), _fmt(o["norm_precision"]), _fmt(o["lost_recall"]),
+                      _fmt(o["false_lost"]), _reacq(o)]
         if "vot" in protocols:
             cells += [_fmt(o["failures"], 1), _fmt(o["accuracy"])]
         cells += [_fmt(o["fps"], 0)]
@@ -400,7 +402,8 @@ def _html(records, out: Path, plots: Iterable[str], frames: dict[str, list[str]]
             cells = [e(t)] + [_fmt(o[k], n) for k, n in (("mota", 3), ("motp", 3), ("idf1", 3), ("num_switches", 1),
                                                          ("num_fragmentations", 1), ("fps", 0), ("e2e_fps", 0))]
             rows.append("<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>")
-    head = ["tracker"] + (["mean AUC", "precision@20", "lost recall", "false-lost rate", "re-acquired"] if ope
+    head = ["tracker"] + (["mean AUC", "precision@20", "norm. precision", "lost recall", "false-lost rate",
+                           "re-acquired"] if ope
                           else []) + \
         (["failures", "accuracy"] if "vot" in protocols else []) + \
         (["MOTA", "MOTP", "IDF1", "ID switches", "fragmentations", "fps", "fps end to end"] if "mot" in protocols
