@@ -26,7 +26,8 @@ from ..errors import FormatError, ParameterError
 from ..geometry import in_frame_fraction
 from .metrics import lost_detection, ope_scores, valid_gt, within_frame
 
-RESULT_VERSION = 4  # 2: lost-flag detection metrics; 3: identification rate (MOT); 4: IoU within the frame
+#: 2: lost-flag detection metrics; 3: identification rate (MOT); 4: IoU within the frame; 5: normalised precision
+RESULT_VERSION = 5
 
 #: OTB's spatial robustness evaluation (Wu, Lim & Yang, CVPR 2013, §4.2): the first box shifted by 10 % of its
 #: size in 8 directions (4 centre shifts, 4 corner shifts) and scaled by 0.8, 0.9, 1.1 and 1.2 about its centre;
