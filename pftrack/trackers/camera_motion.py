@@ -44,9 +44,21 @@ class CameraMotionMixin:
         self._camera_prev, self._camera_move = cur, move
 
     def _camera_apply(self, states: np.ndarray) -> None:
-        """Move the samples' centres by this frame's shift (in place)."""
+        """Move the samples' centres by this frame's shift (in place); with ``camera_share`` < 1 only that share of
+        them, spread evenly over the set (no random draw: a still camera leaves the generator's stream as it was)."""
         dx, dy = self._camera_move
+        if not (dx or dy):
+            return
+        share = self.params.camera_share
+        rows = slice(None) if share >= 1.0 else camera_rows(len(states), share)
         if dx:
-            states[:, X] += dx
+            states[rows, X] += dx
         if dy:
-            states[:, Y] += dy
+            states[rows, Y] += dy
+
+
+def camera_rows(n: int, share: float) -> np.ndarray:
+    """The indices of ``share`` of ``n`` samples spread evenly: ``k`` is taken when ``floor((k + 1) share)``
+    exceeds ``floor(k share)`` (every other one at 0.5)."""
+    k = np.arange(n)
+    return np.flatnonzero(np.floor((k + 1) * share) > np.floor(k * share))

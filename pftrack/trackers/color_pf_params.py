@@ -195,6 +195,11 @@ class ColorPFParams(ColorModelParams):
         "(docs/robustness-cameras.md). True for fusion-pf (motion_proposal_tre_rule.txt). A camera that pans to keep "
         "the target in view moves the background, not the target: the samples are then moved off it, and the "
         "likelihood brings them back (DAVIS report sequences: 0.02-0.03 lower)."))
+    camera_share: float = param(1.0, gt=0, le=1, doc=(
+        "With camera_motion: the share of the samples moved by the camera's shift, spread evenly over the set (every "
+        "other one at 0.5); the others are left where they were. A camera that pans to keep the target in view moves "
+        "the background and not the target, and a hand-held camera moves both: with both kinds of sample in the set "
+        "the likelihood picks the one that holds. 1 (default): every sample."))
     camera_max_shift: float = param(0.15, gt=0, le=0.5, doc=(
         "With camera_motion: the largest shift searched, as a fraction of the frame's width (along x) and height "
         "(along y)."))
