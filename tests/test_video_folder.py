@@ -131,3 +131,21 @@ def test_a_malformed_ground_truth_beside_a_video_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "groundtruth_rect.txt:1: expected 4 values" in err[0]
     assert main(["eval", str(folder), "--trackers", "color-pf", "--quiet"]) == 2
+
+
+def test_a_tre_run_on_a_video_starts_on_the_frame_it_names(tmp_path):
+    """TRE starts a run mid-sequence: on a video the frames before the start are decoded in order and dropped, so
+    the run sees the very frames an image folder of the video's decode would give (no seek by frame number)."""
+    from pftrack.eval.runner import Job, TrackerConfig, run_job
+
+    folder, boxes = _video_folder(tmp_path / "v")
+    images = tmp_path / "i"
+    (images / "img").mkdir(parents=True)
+    for k, f in enumerate(_decoded(folder / "clip.avi")):
+        cv2.imwrite(str(images / "img" / f"{k + 1:04d}.png"), f)
+    write_groundtruth(images / "groundtruth_rect.txt", boxes)
+    cfg = TrackerConfig("meanshift", "meanshift")
+    a = run_job(Job(cfg, str(folder), "v", 11, "tre"))
+    b = run_job(Job(cfg, str(images), "i", 11, "tre"))
+    assert a["start_frame"] == b["start_frame"] > 1
+    assert a["boxes"] == b["boxes"] and a["auc"] == b["auc"]

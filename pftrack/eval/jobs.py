@@ -82,7 +82,8 @@ def tre_starts(gt, absent=None, frame_size: tuple[int, int] | None = None, *, se
     n = len(gt)
     ok = valid_gt(gt)
     if absent is not None:
-        ok &= ~np.asarray(absent, dtype=bool).ravel()[:n]
+        a = np.asarray(absent, dtype=bool).ravel()[:n]
+        ok[: a.size] &= ~a
     cand = np.flatnonzero(ok)
     if frame_size is not None and cand.size:
         w, h = float(frame_size[0]), float(frame_size[1])
@@ -220,14 +221,19 @@ def run_job(job: Job) -> dict:
     tracker = create_tracker(job.tracker.name, seed=job.seed, params=job.tracker.param_dict)
 
     def frames(first: int = 0):
+        """The frames from ``first`` on. Image files before it are not read; a video's are decoded in order and
+        dropped (seeking a video to a frame number is not exact with every codec)."""
         from ..frames import as_bgr_uint8
+        from ..io.video_frames import VideoFrame
 
-        for i in range(first, len(seq.frames)):
+        video = bool(seq.frames) and isinstance(seq.frames[0], VideoFrame)
+        for i in range(0 if video else first, len(seq.frames)):
             path = seq.frames[i]
             img = read_image(path)
             if img is None:
                 raise FormatError(f"{path}: frame {i + 1} cannot be decoded")
-            yield as_bgr_uint8(img, where=str(path))
+            if i >= first:
+                yield as_bgr_uint8(img, where=str(path))
 
     gt = seq.groundtruth
     rec: dict[str, Any] = {"version": RESULT_VERSION, "tracker": job.tracker.label, "name": job.tracker.name,
