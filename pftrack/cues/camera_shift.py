@@ -166,6 +166,14 @@ def _shift_costs_numpy(da: np.ndarray, db: np.ndarray, m: int) -> np.ndarray:
 
 
 @njit(cache=True)
+def _abs_sum(da, db, s, lo, hi, acc):  # pragma: no cover - compiled
+    """``acc`` plus ``|da[i] - db[i + s]|`` for ``i`` from ``lo`` to ``hi`` (exclusive), in order."""
+    for i in range(lo, hi):
+        acc += abs(da[i] - db[i + s])
+    return acc
+
+
+@njit(cache=True)
 def _shift_costs(da, db, m):  # pragma: no cover - compiled; :func:`_shift_costs_numpy` is the reference
     """Each shift's sum runs over ``i`` in ascending order, as one loop per shift would (the same costs to the last
     bit); four shifts are summed side by side over their common range, so that four additions are in flight."""
@@ -179,42 +187,26 @@ def _shift_costs(da, db, m):  # pragma: no cover - compiled; :func:`_shift_costs
         hi0, hi1, hi2, hi3 = min(n, n - s0), min(n, n - s0 - 1), min(n, n - s0 - 2), min(n, n - s0 - 3)
         lo = max(max(lo0, lo1), max(lo2, lo3))
         hi = min(min(hi0, hi1), min(hi2, hi3))
-        a0 = a1 = a2 = a3 = 0.0
-        for i in range(lo0, lo):  # each shift's own head
-            a0 += abs(da[i] - db[i + s0])
-        for i in range(lo1, lo):
-            a1 += abs(da[i] - db[i + s0 + 1])
-        for i in range(lo2, lo):
-            a2 += abs(da[i] - db[i + s0 + 2])
-        for i in range(lo3, lo):
-            a3 += abs(da[i] - db[i + s0 + 3])
-        for i in range(lo, hi):  # the common range, the four side by side
+        # each shift's own head, the common range with the four side by side, each shift's own tail
+        a0 = _abs_sum(da, db, s0, lo0, lo, 0.0)
+        a1 = _abs_sum(da, db, s0 + 1, lo1, lo, 0.0)
+        a2 = _abs_sum(da, db, s0 + 2, lo2, lo, 0.0)
+        a3 = _abs_sum(da, db, s0 + 3, lo3, lo, 0.0)
+        for i in range(lo, hi):
             x = da[i]
             a0 += abs(x - db[i + s0])
             a1 += abs(x - db[i + s0 + 1])
             a2 += abs(x - db[i + s0 + 2])
             a3 += abs(x - db[i + s0 + 3])
-        for i in range(hi, hi0):  # each shift's own tail
-            a0 += abs(da[i] - db[i + s0])
-        for i in range(hi, hi1):
-            a1 += abs(da[i] - db[i + s0 + 1])
-        for i in range(hi, hi2):
-            a2 += abs(da[i] - db[i + s0 + 2])
-        for i in range(hi, hi3):
-            a3 += abs(da[i] - db[i + s0 + 3])
-        costs[k0] = a0 / (hi0 - lo0)
-        costs[k0 + 1] = a1 / (hi1 - lo1)
-        costs[k0 + 2] = a2 / (hi2 - lo2)
-        costs[k0 + 3] = a3 / (hi3 - lo3)
+        costs[k0] = _abs_sum(da, db, s0, hi, hi0, a0) / (hi0 - lo0)
+        costs[k0 + 1] = _abs_sum(da, db, s0 + 1, hi, hi1, a1) / (hi1 - lo1)
+        costs[k0 + 2] = _abs_sum(da, db, s0 + 2, hi, hi2, a2) / (hi2 - lo2)
+        costs[k0 + 3] = _abs_sum(da, db, s0 + 3, hi, hi3, a3) / (hi3 - lo3)
         k0 += 4
     for k in range(k0, nk):
         s = k - m
-        lo = 0 if s >= 0 else -s
-        hi = n - s if s >= 0 else n
-        acc = 0.0
-        for i in range(lo, hi):
-            acc += abs(da[i] - db[i + s])
-        costs[k] = acc / (hi - lo)
+        lo, hi = max(0, -s), min(n, n - s)
+        costs[k] = _abs_sum(da, db, s, lo, hi, 0.0) / (hi - lo)
     return costs
 
 

@@ -23,7 +23,6 @@ from typing import Any
 import numpy as np
 
 from ..errors import FormatError, ParameterError
-from ..geometry import in_frame_fraction
 from .metrics import lost_detection, ope_scores, valid_gt, within_frame
 
 #: 2: lost-flag detection metrics; 3: identification rate (MOT); 4: IoU within the frame; 5: normalised precision
@@ -86,8 +85,8 @@ def tre_starts(gt, absent=None, frame_size: tuple[int, int] | None = None, *, se
         ok[: a.size] &= ~a
     cand = np.flatnonzero(ok)
     if frame_size is not None and cand.size:
-        w, h = float(frame_size[0]), float(frame_size[1])
-        inside = np.array([in_frame_fraction(gt[i], w, h) >= TRE_MIN_IN_FRAME for i in cand])
+        boxes, cut = gt[cand], within_frame(gt[cand], frame_size)
+        inside = cut[:, 2] * cut[:, 3] >= TRE_MIN_IN_FRAME * boxes[:, 2] * boxes[:, 3]
         if inside.any():
             cand = cand[inside]
     if cand.size == 0:

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import center_error, clip_box, iou
+from ..geometry import box_center, center_error, clip_box, iou
 
 THRESHOLDS = np.linspace(0.0, 1.0, 21)
 PRECISION_THRESHOLDS = np.arange(0, 51, dtype=np.float64)
@@ -72,25 +72,18 @@ def per_frame_iou(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
     return out
 
 
-def frame_center_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
-    pred, gt = _align(pred, gt)
-    ok = valid_gt(gt)
-    p = np.asarray(pred, dtype=np.float64)[ok]
-    err = center_error(_clean_pred(p), gt[ok])
-    err[~np.all(np.isfinite(p), axis=1)] = np.inf
-    return err
-
-
-def frame_norm_center_errors(pred: np.ndarray, gt: np.ndarray) -> np.ndarray:
-    """Per valid frame, the centre error in units of the ground-truth box: ``||((cx_p - cx_g) / w_g,
-    (cy_p - cy_g) / h_g)||`` (LaSOT's and TrackingNet's normalised distance); infinite for a missing prediction."""
+def frame_center_errors(pred: np.ndarray, gt: np.ndarray, *, normalised: bool = False) -> np.ndarray:
+    """Per valid frame, the distance of the box centres in pixels, or with ``normalised`` in units of the ground
+    truth's width and height, ``||((cx_p - cx_g) / w_g, (cy_p - cy_g) / h_g)||`` (LaSOT's and TrackingNet's
+    normalised distance); infinite for a missing prediction."""
     pred, gt = _align(pred, gt)
     ok = valid_gt(gt)
     p, g = np.asarray(pred, dtype=np.float64)[ok], gt[ok]
-    q = _clean_pred(p)
-    dx = (q[:, 0] + q[:, 2] / 2 - g[:, 0] - g[:, 2] / 2) / g[:, 2]
-    dy = (q[:, 1] + q[:, 3] / 2 - g[:, 1] - g[:, 3] / 2) / g[:, 3]
-    err = np.hypot(dx, dy)
+    if normalised:
+        d = (box_center(_clean_pred(p)) - box_center(g)) / g[:, 2:]
+        err = np.hypot(d[:, 0], d[:, 1])
+    else:
+        err = center_error(_clean_pred(p), g)
     err[~np.all(np.isfinite(p), axis=1)] = np.inf
     return err
 
@@ -138,7 +131,7 @@ def ope_scores(pred: np.ndarray, gt: np.ndarray, *, bounds: tuple[float, float] 
     pred, gt = within_frame(pred, bounds), within_frame(gt, bounds)
     ious = frame_ious(pred, gt)
     errs = frame_center_errors(pred, gt)
-    nerrs = frame_norm_center_errors(pred, gt)
+    nerrs = frame_center_errors(pred, gt, normalised=True)
     succ = success_curve(ious)
     prec = precision_curve(errs)
     return OPEResult(
