@@ -28,7 +28,7 @@ class CameraMotionMixin:
 
     def _camera_profiles(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         h, w = frame.shape[:2]
-        return frame_profiles(frame, lattice_step(h, w))
+        return frame_profiles(frame, lattice_step(h, w, self.params.camera_samples))
 
     def _camera_frame(self, frame: np.ndarray) -> None:
         """Read this frame's shift from the last frame's projections (every frame, so that the shift is always
@@ -40,7 +40,8 @@ class CameraMotionMixin:
         if self._camera_prev is not None:
             h, w = frame.shape[:2]
             f = self.params.camera_max_shift
-            move = camera_shift(self._camera_prev, cur, max_shift=(f * w, f * h), step=lattice_step(h, w))
+            step = lattice_step(h, w, self.params.camera_samples)
+            move = camera_shift(self._camera_prev, cur, max_shift=(f * w, f * h), step=step)
         self._camera_prev, self._camera_move = cur, move
 
     def _camera_apply(self, states: np.ndarray) -> None:

@@ -200,6 +200,11 @@ class ColorPFParams(ColorModelParams):
         "other one at 0.5); the others are left where they were. A camera that pans to keep the target in view moves "
         "the background and not the target, and a hand-held camera moves both: with both kinds of sample in the set "
         "the likelihood picks the one that holds. 1 (default): every sample."))
+    camera_samples: int = param(256, ge=32, le=4096, doc=(
+        "With camera_motion: the integral projections are read on a lattice of every k-th row and column, k the "
+        "least that leaves at most this many samples along the frame's longer side (pftrack.cues.camera_shift."
+        "lattice_step). Fewer samples read less of the frame (the pass is bound by memory) and give a coarser shift "
+        "before its sub-sample refinement. 256 (default)."))
     camera_max_shift: float = param(0.15, gt=0, le=0.5, doc=(
         "With camera_motion: the largest shift searched, as a fraction of the frame's width (along x) and height "
         "(along y)."))
