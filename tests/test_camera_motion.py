@@ -148,3 +148,19 @@ def test_a_static_camera_moves_no_sample():
     np.testing.assert_array_equal(boxes, track("fusion-pf", frames, gt, camera_motion=False)[1])
     assert pftrack.create_tracker("color-pf").params.camera_motion is False
     assert pftrack.create_tracker("fusion-pf").params.camera_motion is True  # motion_proposal_tre_rule.txt
+
+
+def test_the_lattice_follows_camera_samples():
+    """``camera_samples`` bounds the samples along the longer side (fusion-pf 176: every 5th pixel of 854 x 480, as
+    chosen by docs/rules/camera_samples_rule.txt), and a coarser lattice still reads the shake."""
+    assert pftrack.create_tracker("fusion-pf").params.camera_samples == 176
+    assert pftrack.create_tracker("color-pf").params.camera_samples == 256
+    frame = np.zeros((480, 854, 3), np.uint8)
+    for samples, rows, cols in ((256, 120, 214), (176, 96, 171), (128, 69, 122)):
+        t = pftrack.create_tracker("fusion-pf", seed=0, camera_samples=samples)
+        t.init(frame, (400, 200, 40, 60))
+        assert (t._camera_prev[0].size, t._camera_prev[1].size) == (rows, cols)
+    frames, gt = shaky_scene(1)
+    for samples in (64, 256):
+        moved = np.nanmean(per_frame_iou(track("fusion-pf", frames, gt, camera_samples=samples)[1], gt))
+        assert moved > 0.8, (samples, moved)

@@ -48,27 +48,34 @@ def frame_profiles(frame: np.ndarray, step: int = 2) -> tuple[np.ndarray, np.nda
 
 @njit(cache=True)
 def _profiles_numba(f, step):  # pragma: no cover - compiled
+    """The sums are integers, kept in integer accumulators (exact, as the float sums were: the same means to the
+    bit) and divided once at the end."""
     h, w, c = f.shape
     nh = (h + step - 1) // step
     nw = (w + step - 1) // step
-    rows = np.zeros(nh)
-    cols = np.zeros(nw)
+    rows = np.empty(nh)
+    icols = np.zeros(nw, np.int64)
     for i in range(nh):
         y = i * step
         acc = 0
-        for j in range(nw):
-            x = j * step
-            if c == 3:
+        if c == 3:
+            for j in range(nw):
+                x = j * step
                 v = np.int64(f[y, x, 0]) + np.int64(f[y, x, 1]) + np.int64(f[y, x, 2])
-            else:
+                acc += v
+                icols[j] += v
+        else:
+            for j in range(nw):
+                x = j * step
                 v = np.int64(0)
                 for k in range(c):
                     v += np.int64(f[y, x, k])
-            acc += v
-            cols[j] += v
+                acc += v
+                icols[j] += v
         rows[i] = acc / nw
+    cols = np.empty(nw)
     for j in range(nw):
-        cols[j] /= nh
+        cols[j] = icols[j] / nh
     return rows, cols
 
 

@@ -204,7 +204,7 @@ class ColorPFParams(ColorModelParams):
         "With camera_motion: the integral projections are read on a lattice of every k-th row and column, k the "
         "least that leaves at most this many samples along the frame's longer side (pftrack.cues.camera_shift."
         "lattice_step). Fewer samples read less of the frame (the pass is bound by memory) and give a coarser shift "
-        "before its sub-sample refinement. 256 (default)."))
+        "before its sub-sample refinement. 256 (default; 176 for fusion-pf, docs/rules/camera_samples_rule.txt)."))
     camera_max_shift: float = param(0.15, gt=0, le=0.5, doc=(
         "With camera_motion: the largest shift searched, as a fraction of the frame's width (along x) and height "
         "(along y)."))
