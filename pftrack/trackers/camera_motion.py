@@ -21,10 +21,15 @@ class CameraMotionMixin:
     _camera_prev: tuple[np.ndarray, np.ndarray] | None = None
     _camera_move: tuple[float, float] = (0.0, 0.0)
 
+    _camera_rows: np.ndarray | None = None  # the samples moved on the last frame (camera_adapt)
+    _camera_level: float = 1.0  # the share of the samples moved (camera_adapt: learnt)
+
     def _camera_start(self, frame: np.ndarray) -> None:
         """Take the first frame's projections (on ``init``)."""
         self._camera_move = (0.0, 0.0)
         self._camera_prev = self._camera_profiles(frame) if self.params.camera_motion else None
+        self._camera_rows = None
+        self._camera_level = float(self.params.camera_share)
 
     def _camera_profiles(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         h, w = frame.shape[:2]
@@ -35,6 +40,8 @@ class CameraMotionMixin:
         that of one frame); it is applied only when the samples are propagated."""
         if not self.params.camera_motion:
             return
+        if self._camera_rows is not None:
+            self._camera_learn()
         cur = self._camera_profiles(frame)
         move = (0.0, 0.0)
         if self._camera_prev is not None:
@@ -50,12 +57,26 @@ class CameraMotionMixin:
         dx, dy = self._camera_move
         if not (dx or dy):
             return
-        share = self.params.camera_share
+        share = self._camera_level if self.params.camera_adapt > 0 else self.params.camera_share
         rows = slice(None) if share >= 1.0 else camera_rows(len(states), share)
+        if self.params.camera_adapt > 0 and share < 1.0:
+            self._camera_rows = rows
         if dx:
             states[rows, X] += dx
         if dy:
             states[rows, Y] += dy
+
+    def _camera_learn(self) -> None:
+        """``camera_adapt``: move the share of moved samples toward the weight the last frame's moved samples took
+        (the likelihood's verdict on "the target moved with the view" against "it stayed in the image")."""
+        rows, self._camera_rows = self._camera_rows, None
+        ps = getattr(self, "ps", None)
+        if ps is None or self.mode != "tracking" or rows.size == 0 or rows[-1] >= len(ps.w):
+            return
+        p = self.params
+        mass = float(ps.w[rows].sum())
+        level = (1.0 - p.camera_adapt) * self._camera_level + p.camera_adapt * mass
+        self._camera_level = min(max(level, p.camera_share_min), p.camera_share)
 
 
 def camera_rows(n: int, share: float) -> np.ndarray:

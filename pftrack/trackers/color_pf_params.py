@@ -200,6 +200,13 @@ class ColorPFParams(ColorModelParams):
         "other one at 0.5); the others are left where they were. A camera that pans to keep the target in view moves "
         "the background and not the target, and a hand-held camera moves both: with both kinds of sample in the set "
         "the likelihood picks the one that holds. 1 (default): every sample."))
+    camera_adapt: float = param(0.0, ge=0, le=1, doc=(
+        "With camera_motion and camera_share < 1: each frame the share of the samples moved by the camera's shift "
+        "moves toward the weight those samples took on the frame before, at this rate, between camera_share_min "
+        "and camera_share: a hand-held camera over a still target raises it, a camera that pans to keep the target "
+        "in view lowers it. 0 (default): the share is camera_share."))
+    camera_share_min: float = param(0.2, gt=0, le=1, doc=(
+        "With camera_adapt > 0: the least share of the samples moved by the camera's shift."))
     camera_samples: int = param(256, ge=32, le=4096, doc=(
         "With camera_motion: the integral projections are read on a lattice of every k-th row and column, k the "
         "least that leaves at most this many samples along the frame's longer side (pftrack.cues.camera_shift."
