@@ -50,3 +50,37 @@ def test_a_still_camera_gives_the_same_track_whatever_the_share():
         t = pftrack.create_tracker("fusion-pf", seed=0, camera_share=share)
         boxes.append([t.init(frames[0], tuple(gt[0])).box] + [t.update(f).box for f in frames[1:]])
     assert boxes[0] == boxes[1]
+
+
+def _levels(frames, gt, **params):
+    t = pftrack.create_tracker("fusion-pf", seed=0, **params)
+    t.init(frames[0], tuple(gt[0]))
+    levels = []
+    for f in frames[1:]:
+        t.update(f)
+        levels.append(t._camera_level)
+    return np.array(levels)
+
+
+def test_the_learnt_share_falls_when_the_camera_follows_the_target_and_stays_when_it_shakes():
+    """``camera_adapt``: on a pan that keeps the target in view the samples left in place take the weight, and the
+    share of moved samples falls to its floor; on a hand-held camera over a still target the moved ones do, and it
+    stays at its top."""
+    from .test_camera_motion import shaky_scene
+
+    pp = load_script("pan_probe")
+    scene = Scene(pp.pan_scene(0, 12.0))
+    pan = _levels(scene.frames(), scene.groundtruth(0), camera_share=0.9, camera_adapt=0.2)
+    frames, gt = shaky_scene(0)
+    shake = _levels(frames, gt, camera_share=0.9, camera_adapt=0.2)
+    assert pan[0] == pytest.approx(0.9) and np.median(pan[20:]) < 0.4, pan
+    assert np.median(shake[20:]) > 0.75, shake
+    assert pan.min() >= 0.2 - 1e-12 and shake.max() <= 0.9 + 1e-12
+
+
+def test_a_still_camera_learns_nothing():
+    from pftrack.synth.scenes import simple_scene
+
+    scene = Scene(simple_scene(4, n_frames=30))
+    frames, gt = scene.frames(), scene.groundtruth(0)
+    assert np.all(_levels(frames, gt, camera_share=0.9, camera_adapt=0.2) == 0.9)
