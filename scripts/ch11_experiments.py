@@ -3,6 +3,8 @@
     python scripts/ch11_experiments.py [--data ../shared/data] [--repeats 10] [--json reports/ch11.json]
     python scripts/ch11_experiments.py --seeds 300-309 [--response strong]   # a fresh draw of colour responses
     python scripts/ch11_experiments.py --oracle ...   # also the scene's true colour response as the BTF ('true')
+    python scripts/ch11_experiments.py --histogram joint --features positional   # joint colour histograms
+    python scripts/ch11_experiments.py --tune-seeds 3-9 ...   # more colour seeds on the tune frames (1-200)
 
 Scenes (`pftrack synth twocam`): camera A sees the left part of the PETS frames, camera B the
 right part through a seeded nonlinear colour response; the strip between them is blind.
@@ -26,7 +28,6 @@ import numpy as np
 
 from pftrack.multicam.appearance import FEATURES, similarity_matrix
 from pftrack.multicam.btf import (
-    apply_btf_hist,
     btf_from_hists,
     btf_subspace_loglik,
     fit_btf_subspace,
@@ -38,6 +39,7 @@ from pftrack.multicam.handover import (
     fit_transit,
     link_tracks,
     new_threshold,
+    similarities,
 )
 from pftrack.synth.twocam import twocam_scene
 
@@ -51,7 +53,20 @@ def foreground(frames: dict) -> dict:
     return {n: cv2.morphologyEx((bgs.apply(f) == 255).astype(np.uint8), cv2.MORPH_OPEN, k) for n, f in frames.items()}
 
 
-def scene_scores(sc, repeats: int, seed: int, oracle: bool = False) -> dict:
+def _rank1_hit(app_a, app_b, ex_a, ex_b, lut, a, b) -> bool:
+    """Whether the test hand-over (a, b)'s probe (the later track) is most similar to its partner among the other
+    camera's tracks that ended before it (training tracks excluded)."""
+    if app_a[a].last < app_b[b].first:   # b is the probe, A tracks that ended before it
+        cands = {k: app_a[k] for k in app_a if k not in ex_a and app_a[k].last < app_b[b].first}
+        ka, _, s = similarities(cands, {b: app_b[b]}, lut)
+        return ka[int(np.argmax(s[:, 0]))] == a
+    cands = {k: app_b[k] for k in app_b if k not in ex_b and app_b[k].last < app_a[a].first}
+    _, kb, s = similarities({a: app_a[a]}, cands, lut)
+    return kb[int(np.argmax(s[0]))] == b
+
+
+def scene_scores(sc, repeats: int, seed: int, oracle: bool = False, features=FEATURES,
+                 histogram: str = "marginal") -> dict:
     """Links, rank-1 and link counts per appearance and method in one scene; with ``oracle`` also the scene's own
     colour response used as the BTF (method ``true``: what a perfect estimate of the response would give)."""
     lo, hi = sc.numbers
@@ -63,9 +78,9 @@ def scene_scores(sc, repeats: int, seed: int, oracle: bool = False) -> dict:
     out: dict = {}
     if len(persons) < 2:
         return out
-    for feat in FEATURES:
-        app_a = describe_tracks(FA.get, sc.tracks_a, feat, fg=fa.get)
-        app_b = describe_tracks(FB.get, sc.tracks_b, feat, fg=fb.get)
+    for feat in features:
+        app_a = describe_tracks(FA.get, sc.tracks_a, feat, fg=fa.get, histogram=histogram)
+        app_b = describe_tracks(FB.get, sc.tracks_b, feat, fg=fb.get, histogram=histogram)
         rng = np.random.default_rng(seed)
         for _ in range(repeats):
             perm = rng.permutation(persons)
@@ -76,7 +91,7 @@ def scene_scores(sc, repeats: int, seed: int, oracle: bool = False) -> dict:
             if not test:
                 continue
             ex_a, ex_b = [a for a, _ in pairs], [b for _, b in pairs]
-            if feat == FEATURES[0] and len(pairs) >= 2:
+            if feat == FEATURES[0] and len(pairs) >= 2 and histogram == "marginal":
                 # the BTF-subspace extension (Javed et al.): rank-1 by the PPCA likelihood of the BTF between
                 # the probe and each candidate (whole-foreground raw histograms, so once per scene and split)
                 model = fit_btf_subspace(np.stack([btf_from_hists(app_a[a].raw, app_b[b].raw) for a, b in pairs]))
@@ -116,18 +131,7 @@ def scene_scores(sc, repeats: int, seed: int, oracle: bool = False) -> dict:
                     acc_p[2] += len(test)
                     acc_p[3] += len(links_p)
                 # rank-1: each test probe against the earlier tracks of the other camera (not training ones)
-                r1 = 0
-                for a, b in test:
-                    if app_a[a].last < app_b[b].first:   # b is the probe, A tracks that ended before it
-                        cands = [k for k in app_a if k not in ex_a and app_a[k].last < app_b[b].first]
-                        s = similarity_matrix(np.stack([apply_btf_hist(app_a[k].hist, lut) for k in cands]),
-                                              app_b[b].hist[None])[:, 0]
-                        r1 += cands[int(np.argmax(s))] == a
-                    else:                                  # a is the probe
-                        cands = [k for k in app_b if k not in ex_b and app_b[k].last < app_a[a].first]
-                        s = similarity_matrix(apply_btf_hist(app_a[a].hist, lut)[None],
-                                              np.stack([app_b[k].hist for k in cands]))[0]
-                        r1 += cands[int(np.argmax(s))] == b
+                r1 = sum(_rank1_hit(app_a, app_b, ex_a, ex_b, lut, a, b) for a, b in test)
                 acc = out.setdefault(f"{feat} {method}", [0, 0, 0, 0])
                 acc[0] += ok
                 acc[1] += r1
@@ -176,13 +180,14 @@ def intra_camera(data: Path, numbers, repeats: int, seed: int = 0) -> dict:
     return {"people": len(ids), "rank1": out}
 
 
-def run(data: Path, numbers, seeds, repeats: int, response: str = "mild", oracle: bool = False) -> dict:
+def run(data: Path, numbers, seeds, repeats: int, response: str = "mild", oracle: bool = False, features=FEATURES,
+        histogram: str = "marginal") -> dict:
     per_scene: dict = {}
     total: dict = {}
     for sd in seeds:
         for sp in SPLITS:
             sc = twocam_scene(data / "pets09_s2l1_dev", sd, numbers=numbers, split=sp, response=response)
-            sc_scores = scene_scores(sc, repeats, sd, oracle)
+            sc_scores = scene_scores(sc, repeats, sd, oracle, features, histogram)
             for k, (ok, r1, n, nl) in sc_scores.items():
                 per_scene.setdefault(k, []).append(ok / n)
                 t = total.setdefault(k, [0, 0, 0, 0])
@@ -204,6 +209,11 @@ def main() -> None:
     ap.add_argument("--split", choices=["tune", "report", "both"], default="both")
     ap.add_argument("--seeds", default=None, help="colour seeds A-B or A,B,... of a fresh draw on the report frames "
                     "(201-400), instead of the splits' own (run once, after every choice)")
+    ap.add_argument("--tune-seeds", default=None, help="colour seeds A-B or A,B,... on the tune frames (1-200), "
+                    "instead of the splits' own")
+    ap.add_argument("--features", default=",".join(FEATURES), help="appearances, comma-separated (default all)")
+    ap.add_argument("--histogram", choices=["marginal", "joint"], default="marginal",
+                    help="compare the channels' histograms one by one (the chapter's) or joint colours")
     ap.add_argument("--intra", action="store_true", help="only E11.1 (intra-camera rank-1 per extraction method)")
     ap.add_argument("--response", choices=["mild", "strong"], default="mild",
                     help="camera B's colour response (pftrack.synth.twocam.RESPONSES); 'strong' is a stress test")
@@ -218,17 +228,26 @@ def main() -> None:
                   ", ".join(f"{k} {v:.3f}" for k, v in r["rank1"].items()), flush=True)
         return
     res = {}
+    feats = [f for f in args.features.split(",") if f]
+    if any(f not in FEATURES for f in feats):
+        ap.error(f"--features: each of {', '.join(FEATURES)}")
+    opts = dict(response=args.response, oracle=args.oracle, features=feats, histogram=args.histogram)
+
+    def seed_list(text):
+        lo, _, hi = text.partition("-")
+        return list(range(int(lo), int(hi) + 1)) if hi else [int(v) for v in text.split(",")]
+
     if args.seeds:
-        lo, _, hi = args.seeds.partition("-")
-        seeds = list(range(int(lo), int(hi) + 1)) if hi else [int(v) for v in args.seeds.split(",")]
-        res[f"fresh: report frames 201-400, seeds {args.seeds}"] = run(data, (201, 400), seeds, args.repeats,
-                                                                     args.response, args.oracle)
+        res[f"fresh: report frames 201-400, seeds {args.seeds}"] = run(data, (201, 400), seed_list(args.seeds),
+                                                                     args.repeats, **opts)
+    elif args.tune_seeds:
+        res[f"tune frames 1-200, seeds {args.tune_seeds}"] = run(data, (1, 200), seed_list(args.tune_seeds),
+                                                                args.repeats, **opts)
     elif args.split in ("tune", "both"):
-        res["tune frames 1-200, seeds 0-2"] = run(data, (1, 200), [0, 1, 2], args.repeats, args.response,
-                                                   args.oracle)
-    if args.split in ("report", "both") and not args.seeds:
+        res["tune frames 1-200, seeds 0-2"] = run(data, (1, 200), [0, 1, 2], args.repeats, **opts)
+    if args.split in ("report", "both") and not args.seeds and not args.tune_seeds:
         res["report frames 201-400, seeds 100-104"] = run(data, (201, 400), [100, 101, 102, 103, 104], args.repeats,
-                                                               args.response, args.oracle)
+                                                          **opts)
     for name, table in res.items():
         print(name)
         for k, v in sorted(table.items()):

@@ -25,6 +25,9 @@ def add_handover(sub) -> None:
                         "cbtf-pixels pools raw pixel counts)")
     p.add_argument("--features", choices=["whole", "ellipse1", "ellipse2", "positional"], default="positional",
                    help="appearance: whole box, one or two ellipses, or 2 rings x 4 sectors (default positional)")
+    p.add_argument("--histogram", choices=["marginal", "joint"], default="marginal",
+                   help="compare each region's three channels one by one (default, as the chapter), or its joint "
+                        "(R, G, B) colours, carried through the BTF cell by cell (docs/handover.md)")
     p.add_argument("--foreground", choices=["mog2", "none"], default="mog2",
                    help="count only foreground pixels of each box (MOG2 over each camera), or all of them")
     p.add_argument("--new-threshold", default="auto",
@@ -127,7 +130,7 @@ def cmd_handover(args) -> int:
             fwd = _Forward(source, args.foreground == "mog2")
             bar = progress(None, f"appearance {cam}", args.quiet)
             apps.append(describe_tracks(fwd.frame, rows, args.features,
-                                        fg=fwd.fg if args.foreground == "mog2" else None))
+                                        fg=fwd.fg if args.foreground == "mog2" else None, histogram=args.histogram))
             bar.close()
         finally:
             source.close()
@@ -153,6 +156,7 @@ def cmd_handover(args) -> int:
         out._write("track_a,track_b,similarity")
         for a, b, s in links:
             out._write(f"{a},{b},{s:.5f}")
-    print(f"{counted(len(links), 'link')} ({args.btf}, {args.features}, new below {tau:.3f}) -> {args.out}",
+    print(f"{counted(len(links), 'link')} ({args.btf}, {args.features}, {args.histogram}, new below {tau:.3f}) -> "
+          f"{args.out}",
           file=sys.stderr)
     return 0

@@ -25,11 +25,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .appearance import region_histograms, similarity_matrix
+from .appearance import region_histograms, region_labels, similarity_matrix
 from .btf import apply_btf_hist, cbtf, identity_btf, mbtf
+from .joint import joint_histogram, joint_similarity_matrix, mean_sparse, push_joint
 
-__all__ = ["TrackAppearance", "cooccur_threshold", "describe_tracks", "fit_btf", "fit_transit", "link_tracks",
-           "new_threshold"]
+__all__ = ["HISTOGRAMS", "TrackAppearance", "cooccur_threshold", "describe_tracks", "fit_btf", "fit_transit",
+           "link_tracks", "new_threshold", "similarities"]
+
+#: How a track's colours are compared: the chapter's three channels one by one, or joint (R, G, B) cells
+#: (:mod:`.joint`)
+HISTOGRAMS = ("marginal", "joint")
 
 
 @dataclass
@@ -40,14 +45,23 @@ class TrackAppearance:
     hist: np.ndarray                      # (regions, 3, 256) mean normalised histogram
     raw: np.ndarray                       # (3, 256) whole-foreground pixel counts
     samples: int = 0
+    joint: tuple[np.ndarray, np.ndarray] | None = None  # histogram="joint": sparse mean (cells, masses), .joint
+    regions: int = 1
     _acc: list = field(default_factory=list, repr=False)
 
 
 def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray, feature: str, *,
                     fg: Callable[[int], np.ndarray | None] | None = None, every: int = 2,
-                    numbers: list[int] | None = None) -> dict[int, TrackAppearance]:
+                    numbers: list[int] | None = None, histogram: str = "marginal") -> dict[int, TrackAppearance]:
     """Appearances of every track of MOT rows ``frame,id,x,y,w,h,...``; ``frames(n)`` gives frame n
-    (``fg(n)`` its foreground mask); every ``every``-th frame of a track is sampled."""
+    (``fg(n)`` its foreground mask); every ``every``-th frame of a track is sampled. With ``histogram="joint"``
+    each appearance also keeps the mean joint histogram of its regions (:mod:`.joint`), which the links then
+    compare instead of the channels' histograms."""
+    if histogram not in HISTOGRAMS:
+        raise ValueError(f"histogram must be one of {', '.join(HISTOGRAMS)}")
+    joint = histogram == "joint"
+    joints: dict[int, list] = {}
+    n_regions = region_labels(4, 4, feature)[1]
     rows = np.asarray(rows, dtype=np.float64)
     out: dict[int, TrackAppearance] = {}
     by_frame: dict[int, list] = {}
@@ -70,9 +84,15 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
             a._acc.append(region_histograms(img, box, feature, fg=mask))
             a.raw += region_histograms(img, box, "whole", fg=mask, raw=True)[0]
             a.samples += 1
-    for a in out.values():
+            if joint:
+                cells, masses, _ = joint_histogram(img, box, feature, fg=mask)
+                if len(cells):
+                    joints.setdefault(tid, []).append((cells, masses))
+    for tid, a in out.items():
         a.hist = np.mean(a._acc, axis=0) if a._acc else np.full((1, 3, 256), 1.0 / 256)
         a._acc = []
+        if joint:
+            a.joint, a.regions = mean_sparse(joints.get(tid, []), a.samples), n_regions  # empty frames count
     return out
 
 
@@ -93,8 +113,16 @@ def fit_btf(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppearance]
     raise ValueError("btf must be none, mbtf, cbtf or cbtf-pixels")
 
 
-def _similarities(app_a, app_b, lut) -> tuple[list[int], list[int], np.ndarray]:
+def similarities(app_a, app_b, lut) -> tuple[list[int], list[int], np.ndarray]:
+    """The track ids of each camera, sorted, and the similarities ``(len(A), len(B))`` of camera A's appearances
+    carried through ``lut`` with camera B's: joint histograms where both cameras' appearances have them, else the
+    channels' histograms (Eqs. 23–26)."""
     ka, kb = sorted(app_a), sorted(app_b)
+    if ka and kb and all(app_a[k].joint is not None for k in ka) and all(app_b[k].joint is not None for k in kb):
+        ident = identity_btf()
+        A = np.stack([push_joint(*app_a[k].joint, app_a[k].regions, lut) for k in ka])
+        B = np.stack([push_joint(*app_b[k].joint, app_b[k].regions, ident) for k in kb])
+        return ka, kb, joint_similarity_matrix(A, B)
     A = np.stack([apply_btf_hist(app_a[k].hist, lut) for k in ka]) if ka else np.zeros((0, 1, 3, 256))
     B = np.stack([app_b[k].hist for k in kb]) if kb else np.zeros((0, 1, 3, 256))
     S = similarity_matrix(A, B) if len(A) and len(B) else np.zeros((len(ka), len(kb)))
@@ -114,7 +142,7 @@ def cooccur_threshold(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackA
     """
     if not 0.0 <= quantile <= 1.0:
         raise ValueError("quantile must be in [0, 1]")
-    ka, kb, S = _similarities(app_a, app_b, lut)
+    ka, kb, S = similarities(app_a, app_b, lut)
     if not ka or not kb:
         return None
     fa = np.array([app_a[k].first for k in ka])[:, None]
@@ -141,13 +169,13 @@ def new_threshold(app_a, app_b, pairs, method: str) -> float:
     a_ids = sorted({a for a, _ in pairs})
     b_ids = sorted({b for _, b in pairs})
     lut = fit_btf(app_a, app_b, pairs, method)
-    ka, kb, S = _similarities({a: app_a[a] for a in a_ids}, {b: app_b[b] for b in b_ids}, lut)
+    ka, kb, S = similarities({a: app_a[a] for a in a_ids}, {b: app_b[b] for b in b_ids}, lut)
     same = set(pairs)
     genuine = []
     for a, b in pairs:
         rest = [(x, y) for x, y in pairs if x != a and y != b]
         lut_k = fit_btf(app_a, app_b, rest, method) if rest else identity_btf()
-        _, _, s_k = _similarities({a: app_a[a]}, {b: app_b[b]}, lut_k)
+        _, _, s_k = similarities({a: app_a[a]}, {b: app_b[b]}, lut_k)
         genuine.append(float(s_k[0, 0]))
     partners = {a: {y for x, y in same if x == a} for a in a_ids}
     impostor = []
@@ -195,7 +223,7 @@ def link_tracks(app_a: dict[int, TrackAppearance], app_b: dict[int, TrackAppeara
     """
     a_ids = {k: v for k, v in app_a.items() if k not in set(exclude_a)}
     b_ids = {k: v for k, v in app_b.items() if k not in set(exclude_b)}
-    ka, kb, S = _similarities(a_ids, b_ids, lut)
+    ka, kb, S = similarities(a_ids, b_ids, lut)
     if not ka or not kb:
         return []
     tracks = [("a", k) for k in ka] + [("b", k) for k in kb]
