@@ -3,7 +3,7 @@
     python scripts/ch11_experiments.py [--data ../shared/data] [--repeats 10] [--json reports/ch11.json]
     python scripts/ch11_experiments.py --seeds 300-309 [--response strong]   # a fresh draw of colour responses
     python scripts/ch11_experiments.py --oracle ...   # also the scene's true colour response as the BTF ('true')
-    python scripts/ch11_experiments.py --histogram joint --features positional   # joint colour histograms
+    python scripts/ch11_experiments.py --histogram marginal ...   # the chapter's histograms, channel by channel
     python scripts/ch11_experiments.py --tune-seeds 3-9 ...   # more colour seeds on the tune frames (1-200)
 
 Scenes (`pftrack synth twocam`): camera A sees the left part of the PETS frames, camera B the
@@ -66,7 +66,7 @@ def _rank1_hit(app_a, app_b, ex_a, ex_b, lut, a, b) -> bool:
 
 
 def scene_scores(sc, repeats: int, seed: int, oracle: bool = False, features=FEATURES,
-                 histogram: str = "marginal") -> dict:
+                 histogram: str = "joint") -> dict:
     """Links, rank-1 and link counts per appearance and method in one scene; with ``oracle`` also the scene's own
     colour response used as the BTF (method ``true``: what a perfect estimate of the response would give)."""
     lo, hi = sc.numbers
@@ -91,7 +91,7 @@ def scene_scores(sc, repeats: int, seed: int, oracle: bool = False, features=FEA
             if not test:
                 continue
             ex_a, ex_b = [a for a, _ in pairs], [b for _, b in pairs]
-            if feat == FEATURES[0] and len(pairs) >= 2 and histogram == "marginal":
+            if feat == FEATURES[0] and len(pairs) >= 2:
                 # the BTF-subspace extension (Javed et al.): rank-1 by the PPCA likelihood of the BTF between
                 # the probe and each candidate (whole-foreground raw histograms, so once per scene and split)
                 model = fit_btf_subspace(np.stack([btf_from_hists(app_a[a].raw, app_b[b].raw) for a, b in pairs]))
@@ -181,7 +181,7 @@ def intra_camera(data: Path, numbers, repeats: int, seed: int = 0) -> dict:
 
 
 def run(data: Path, numbers, seeds, repeats: int, response: str = "mild", oracle: bool = False, features=FEATURES,
-        histogram: str = "marginal") -> dict:
+        histogram: str = "joint") -> dict:
     per_scene: dict = {}
     total: dict = {}
     for sd in seeds:
@@ -212,8 +212,9 @@ def main() -> None:
     ap.add_argument("--tune-seeds", default=None, help="colour seeds A-B or A,B,... on the tune frames (1-200), "
                     "instead of the splits' own")
     ap.add_argument("--features", default=",".join(FEATURES), help="appearances, comma-separated (default all)")
-    ap.add_argument("--histogram", choices=["marginal", "joint"], default="marginal",
-                    help="compare the channels' histograms one by one (the chapter's) or joint colours")
+    ap.add_argument("--histogram", choices=["marginal", "joint"], default="joint",
+                    help="compare joint colours (default since round 128) or the channels' histograms one by one "
+                         "(the chapter's)")
     ap.add_argument("--intra", action="store_true", help="only E11.1 (intra-camera rank-1 per extraction method)")
     ap.add_argument("--response", choices=["mild", "strong"], default="mild",
                     help="camera B's colour response (pftrack.synth.twocam.RESPONSES); 'strong' is a stress test")

@@ -25,9 +25,9 @@ def add_handover(sub) -> None:
                         "cbtf-pixels pools raw pixel counts)")
     p.add_argument("--features", choices=["whole", "ellipse1", "ellipse2", "positional"], default="positional",
                    help="appearance: whole box, one or two ellipses, or 2 rings x 4 sectors (default positional)")
-    p.add_argument("--histogram", choices=["marginal", "joint"], default="marginal",
-                   help="compare each region's three channels one by one (default, as the chapter), or its joint "
-                        "(R, G, B) colours, carried through the BTF cell by cell (docs/handover.md)")
+    p.add_argument("--histogram", choices=["marginal", "joint"], default="joint",
+                   help="compare each region's joint (R, G, B) colours, carried through the BTF cell by cell "
+                        "(default), or its three channels one by one, as the chapter does (docs/handover.md)")
     p.add_argument("--foreground", choices=["mog2", "none"], default="mog2",
                    help="count only foreground pixels of each box (MOG2 over each camera), or all of them")
     p.add_argument("--new-threshold", default="auto",

@@ -52,11 +52,12 @@ class TrackAppearance:
 
 def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray, feature: str, *,
                     fg: Callable[[int], np.ndarray | None] | None = None, every: int = 2,
-                    numbers: list[int] | None = None, histogram: str = "marginal") -> dict[int, TrackAppearance]:
+                    numbers: list[int] | None = None, histogram: str = "joint") -> dict[int, TrackAppearance]:
     """Appearances of every track of MOT rows ``frame,id,x,y,w,h,...``; ``frames(n)`` gives frame n
     (``fg(n)`` its foreground mask); every ``every``-th frame of a track is sampled. With ``histogram="joint"``
-    each appearance also keeps the mean joint histogram of its regions (:mod:`.joint`), which the links then
-    compare instead of the channels' histograms."""
+    (default, chosen on the tune scenes under docs/rules/handover_joint_rule.txt) each appearance also keeps the
+    mean joint histogram of its regions (:mod:`.joint`), which the links then compare instead of the channels'
+    histograms; ``"marginal"`` compares the channels one by one, as the chapter does."""
     if histogram not in HISTOGRAMS:
         raise ValueError(f"histogram must be one of {', '.join(HISTOGRAMS)}")
     joint = histogram == "joint"
