@@ -5,7 +5,8 @@
 Runs a tracker over single-object sequences and, at every acquisition (the lost flag going down), compares the
 acquired box with the target's appearance before the loss, by the book's ch. 11 appearances
 (:mod:`pftrack.multicam.appearance`: whole box, two ellipses, positional rings x sectors; RGB histograms of
-``--bins`` bins per channel, similarity ``1 - D_B``):
+``--bins`` bins per channel, similarity ``1 - D_B``; with ``--histogram joint`` the hand-over's joint colour
+histograms instead, :mod:`pftrack.multicam.joint`, compared at 8 levels a channel):
 
 * ``gallery``: the mean histogram of the last 50 frames tracked with the flag down before the loss;
 * ``first``: the first frame's box;
@@ -45,6 +46,8 @@ from pftrack.eval.runner import parse_tracker_list
 from pftrack.geometry import in_frame_fraction, iou
 from pftrack.io.datasets import read_sequence
 from pftrack.multicam.appearance import region_histograms, similarity_matrix
+from pftrack.multicam.btf import identity_btf
+from pftrack.multicam.joint import joint_histogram, joint_similarity_matrix, push_joint
 from pftrack.trackers import create_tracker
 
 FEATURES = ("whole", "ellipse2", "positional")
@@ -55,12 +58,18 @@ MIN_SCORES = (0.5, 0.8)
 
 
 def histograms(frame: np.ndarray, box, feature: str, bins: int) -> np.ndarray:
-    """``(regions, 3, bins)`` normalised RGB histograms of ``box``'s regions (ch. 11's appearance, coarser bins)."""
+    """``(regions, 3, bins)`` normalised RGB histograms of ``box``'s regions (ch. 11's appearance, coarser bins);
+    ``bins == 0``: the joint colour histogram ``(regions * 512,)`` (8 levels a channel) instead."""
+    if bins == 0:
+        cells, masses, n = joint_histogram(frame, box, feature)
+        return push_joint(cells, masses, n, identity_btf())
     h = region_histograms(frame, box, feature)
     return h.reshape(h.shape[0], 3, bins, 256 // bins).sum(axis=-1)
 
 
 def sim(a: np.ndarray, b: np.ndarray) -> float:
+    if a.ndim == 1:  # joint colour histograms
+        return float(joint_similarity_matrix(a[None], b[None])[0, 0])
     return float(similarity_matrix(a[None], b[None])[0, 0])
 
 
@@ -193,8 +202,11 @@ def main() -> None:
     ap.add_argument("--tracker", default="fusion-pf", help="a tracker, with parameters as NAME[key=value;...]")
     ap.add_argument("--seeds", default="0,1")
     ap.add_argument("--bins", type=int, default=32, help="histogram bins per channel (a divisor of 256)")
+    ap.add_argument("--histogram", choices=["marginal", "joint"], default="marginal",
+                    help="the channels' histograms (of --bins bins) or joint colour histograms")
     ap.add_argument("--json", type=Path, help="also write every acquisition's scores here")
     args = ap.parse_args()
+    bins = 0 if args.histogram == "joint" else args.bins
     config = parse_tracker_list(args.tracker)[0]  # NAME or NAME[key=value;...], as pftrack eval
     records = []
     for folder in sequence_folders(args.sequences):
@@ -203,7 +215,7 @@ def main() -> None:
         truth = np.asarray(seq.groundtruth, dtype=np.float64)[seq.init_index:]
         for seed in (int(s) for s in args.seeds.split(",")):
             tracker = create_tracker(config.name, seed=seed, **config.param_dict)
-            for rec in acquisitions(frames, truth, seq.init_box, tracker, args.bins):
+            for rec in acquisitions(frames, truth, seq.init_box, tracker, bins):
                 records.append({"sequence": folder.name, "seed": seed, **rec})
     if args.json:
         args.json.write_text(json.dumps(records) + "\n", encoding="utf-8")

@@ -46,6 +46,16 @@ def test_histograms_are_coarse_normalised_region_histograms(mod, feature, region
     assert mod.sim(h, h) == pytest.approx(1.0)
 
 
+@pytest.mark.parametrize("feature,regions", [("whole", 1), ("positional", 8)])
+def test_joint_histograms_when_asked(mod, feature, regions):
+    rng = np.random.default_rng(1)
+    frame = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+    h = mod.histograms(frame, (10, 5, 30, 50), feature, 0)
+    assert h.shape == (regions * 512,) and h.sum() == pytest.approx(1.0)
+    assert mod.sim(h, h) == pytest.approx(1.0)
+    assert mod.sim(h, mod.histograms(frame[::-1].copy(), (10, 5, 30, 50), feature, 0)) < 1.0
+
+
 def test_a_twin_taken_after_the_exit_is_a_wrong_acquisition_that_colour_cannot_tell(mod):
     """The target walks out through the right edge; its twin (the same colours) stands inside. Without the exit
     strip the search takes the twin: a wrong acquisition, whose whole-box colours match the target's, and which
