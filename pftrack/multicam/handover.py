@@ -1,13 +1,13 @@
 """Hand-over of people between two cameras with disjoint views (book ch. 11, Sect. 5–6).
 
 1. Every track of each camera gets an appearance: the mean of its per-frame region
-   histograms (:mod:`.appearance`), and the raw counts of its whole-foreground histogram
-   (for the BTF).
+   histograms (:mod:`.appearance`; by default also joint colour histograms, :mod:`.joint`), and
+   the raw counts of its whole-foreground histogram (for the BTF).
 2. A BTF from camera A to camera B is fitted on known correspondences (``pairs``): MBTF
    (mean of the per-pair BTFs, Eq. 21) or CBTF (BTF of the accumulated histograms, Eq. 22),
    or none.
 3. Camera A's appearances are brought into camera B's colours (push-forward, Eqs. 25–26)
-   and compared with camera B's (Eqs. 23–24).  Eq. 2 under the one-to-one constraint is a
+   and compared with camera B's (Eqs. 23–24; joint histograms cell by cell, one ``1 − D_B``).  Eq. 2 under the one-to-one constraint is a
    linear assignment (``scipy.optimize.linear_sum_assignment``) on −log similarity, with a
    "new person" option of cost −log τ_new per track (proposed; the text gives no rule).  τ_new is
    the lower quartile of the similarities of track pairs seen at the same time in the two
