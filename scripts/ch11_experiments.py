@@ -65,13 +65,20 @@ def _rank1_hit(app_a, app_b, ex_a, ex_b, lut, a, b) -> bool:
     return kb[int(np.argmax(s[0]))] == b
 
 
+def _grey(frame: np.ndarray) -> np.ndarray:
+    """A BGR frame as a grey camera gives it: three equal channels."""
+    return cv2.cvtColor(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
+
+
 def scene_scores(sc, repeats: int, seed: int, oracle: bool = False, features=FEATURES,
-                 histogram: str = "joint") -> dict:
+                 histogram: str = "joint", grey: bool = False) -> dict:
     """Links, rank-1 and link counts per appearance and method in one scene; with ``oracle`` also the scene's own
     colour response used as the BTF (method ``true``: what a perfect estimate of the response would give)."""
     lo, hi = sc.numbers
     FA = {n: sc.frame_a(n) for n in range(lo, hi + 1)}
     FB = {n: sc.frame_b(n) for n in range(lo, hi + 1)}
+    if grey:  # two grey cameras (camera B's colour response applied first)
+        FA, FB = {n: _grey(f) for n, f in FA.items()}, {n: _grey(f) for n, f in FB.items()}
     fa, fb = foreground(FA), foreground(FB)
     ho = sc.handovers()
     persons = sorted({sc.identity[("a", a)] for a, _ in ho})
@@ -181,13 +188,13 @@ def intra_camera(data: Path, numbers, repeats: int, seed: int = 0) -> dict:
 
 
 def run(data: Path, numbers, seeds, repeats: int, response: str = "mild", oracle: bool = False, features=FEATURES,
-        histogram: str = "joint") -> dict:
+        histogram: str = "joint", grey: bool = False) -> dict:
     per_scene: dict = {}
     total: dict = {}
     for sd in seeds:
         for sp in SPLITS:
             sc = twocam_scene(data / "pets09_s2l1_dev", sd, numbers=numbers, split=sp, response=response)
-            sc_scores = scene_scores(sc, repeats, sd, oracle, features, histogram)
+            sc_scores = scene_scores(sc, repeats, sd, oracle, features, histogram, grey)
             for k, (ok, r1, n, nl) in sc_scores.items():
                 per_scene.setdefault(k, []).append(ok / n)
                 t = total.setdefault(k, [0, 0, 0, 0])
@@ -215,6 +222,7 @@ def main() -> None:
     ap.add_argument("--histogram", choices=["marginal", "joint"], default="joint",
                     help="compare joint colours (default since round 128) or the channels' histograms one by one "
                          "(the chapter's)")
+    ap.add_argument("--grey", action="store_true", help="both cameras grey (three equal channels)")
     ap.add_argument("--intra", action="store_true", help="only E11.1 (intra-camera rank-1 per extraction method)")
     ap.add_argument("--response", choices=["mild", "strong"], default="mild",
                     help="camera B's colour response (pftrack.synth.twocam.RESPONSES); 'strong' is a stress test")
@@ -232,7 +240,7 @@ def main() -> None:
     feats = [f for f in args.features.split(",") if f]
     if any(f not in FEATURES for f in feats):
         ap.error(f"--features: each of {', '.join(FEATURES)}")
-    opts = dict(response=args.response, oracle=args.oracle, features=feats, histogram=args.histogram)
+    opts = dict(response=args.response, oracle=args.oracle, features=feats, histogram=args.histogram, grey=args.grey)
 
     def seed_list(text):
         lo, _, hi = text.partition("-")

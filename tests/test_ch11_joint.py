@@ -134,3 +134,21 @@ def test_handover_cli_with_joint_histograms(tmp_path):
     with pytest.raises(SystemExit) as bad:
         main(args[:-1] + ["rgb"])
     assert bad.value.code == 2
+
+
+def test_a_grey_camera_keeps_the_channels_histograms():
+    """On grey frames the joint cells would cut the grey diagonal into 8 levels: a grey camera's appearances keep
+    no joint histogram, so its links compare the channels' histograms (256 levels)."""
+    rng = np.random.default_rng(6)
+    colour = rng.integers(0, 256, (40, 20, 3)).astype(np.uint8)
+    grey = np.repeat(colour[..., :1], 3, axis=2)
+    rows = np.array([[1, 1, 0, 0, 20, 40], [2, 1, 0, 0, 20, 40], [3, 1, 0, 0, 20, 40]], dtype=float)
+    mostly_grey = {1: grey, 2: grey, 3: colour}
+    assert describe_tracks(mostly_grey.get, rows, "positional", every=1)[1].joint is None
+    mostly_colour = {1: colour, 2: colour, 3: grey}
+    assert describe_tracks(mostly_colour.get, rows, "positional", every=1)[1].joint is not None
+    a = describe_tracks({1: grey}.get, rows[:1], "positional", every=1)
+    b = describe_tracks({5: colour}.get, np.array([[5, 9, 0, 0, 20, 40]], float), "positional", every=1)
+    assert a[1].joint is None and b[9].joint is not None
+    _, _, S = similarities(a, b, identity_btf())   # one grey camera: both compared by their channels
+    assert S.shape == (1, 1) and 0.0 < S[0, 0] < 1.0

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from ..cues.intensity import is_gray
 from .appearance import region_histograms, region_labels, similarity_matrix
 from .btf import apply_btf_hist, cbtf, identity_btf, mbtf
 from .joint import joint_histogram, joint_similarity_matrix, mean_sparse, push_joint
@@ -57,12 +58,15 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
     (``fg(n)`` its foreground mask); every ``every``-th frame of a track is sampled. With ``histogram="joint"``
     (default, chosen on the tune scenes under docs/rules/handover_joint_rule.txt) each appearance also keeps the
     mean joint histogram of its regions (:mod:`.joint`), which the links then compare instead of the channels'
-    histograms; ``"marginal"`` compares the channels one by one, as the chapter does."""
+    histograms; ``"marginal"`` compares the channels one by one, as the chapter does. A grey camera (most of the
+    frames read without colour) keeps no joint histograms: its colours lie on the grey diagonal, which the joint
+    cells cut into 8 levels where a channel histogram has 256, so its links compare the channels' histograms."""
     if histogram not in HISTOGRAMS:
         raise ValueError(f"histogram must be one of {', '.join(HISTOGRAMS)}")
     joint = histogram == "joint"
     joints: dict[int, list] = {}
     n_regions = region_labels(4, 4, feature)[1]
+    frames_read = grey_frames = 0
     rows = np.asarray(rows, dtype=np.float64)
     out: dict[int, TrackAppearance] = {}
     by_frame: dict[int, list] = {}
@@ -78,6 +82,8 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
         if img is None:
             continue
         mask = fg(n) if fg is not None else None
+        frames_read += 1
+        grey_frames += bool(joint and is_gray(img))
         for tid, box in by_frame[n]:
             if box[2] < 4 or box[3] < 4:
                 continue
@@ -89,6 +95,7 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
                 cells, masses, _ = joint_histogram(img, box, feature, fg=mask)
                 if len(cells):
                     joints.setdefault(tid, []).append((cells, masses))
+    joint = joint and 2 * grey_frames <= frames_read  # a grey camera: the channels' histograms
     for tid, a in out.items():
         a.hist = np.mean(a._acc, axis=0) if a._acc else np.full((1, 3, 256), 1.0 / 256)
         a._acc = []
