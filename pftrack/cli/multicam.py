@@ -27,7 +27,8 @@ def add_handover(sub) -> None:
                    help="appearance: whole box, one or two ellipses, or 2 rings x 4 sectors (default positional)")
     p.add_argument("--histogram", choices=["marginal", "joint"], default="joint",
                    help="compare each region's joint (R, G, B) colours, carried through the BTF cell by cell "
-                        "(default), or its three channels one by one, as the chapter does (docs/handover.md)")
+                        "(default; a grey camera's tracks are compared channel by channel), or its three channels "
+                        "one by one, as the chapter does (docs/handover.md)")
     p.add_argument("--foreground", choices=["mog2", "none"], default="mog2",
                    help="count only foreground pixels of each box (MOG2 over each camera), or all of them")
     p.add_argument("--new-threshold", default="auto",
