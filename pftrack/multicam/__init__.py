@@ -15,9 +15,7 @@ from .handover import (
 )
 from .joint import joint_histogram, joint_similarity_matrix, push_joint
 
-__all__ = ["FEATURES", "HISTOGRAMS", "TrackAppearance", "apply_btf_hist", "apply_btf_image", "btf_from_hists", "cbtf",
-           "cooccur_threshold", "describe_tracks", "fit_btf", "joint_histogram", "joint_similarity_matrix", "link_tracks",
-           "mbtf", "new_threshold", "push_joint", "similarities",
-           "region_histograms",
-           "similarity",
+__all__ = ["FEATURES", "HISTOGRAMS", "TrackAppearance", "apply_btf_hist", "apply_btf_image", "btf_from_hists",
+           "cbtf", "cooccur_threshold", "describe_tracks", "fit_btf", "joint_histogram", "joint_similarity_matrix",
+           "link_tracks", "mbtf", "new_threshold", "push_joint", "region_histograms", "similarities", "similarity",
            "similarity_matrix"]

@@ -21,7 +21,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["FEATURES", "region_histograms", "region_labels", "similarity", "similarity_matrix"]
+__all__ = ["FEATURES", "box_regions", "region_histograms", "region_labels", "similarity", "similarity_matrix"]
 
 FEATURES = ("whole", "ellipse1", "ellipse2", "positional")
 
@@ -57,10 +57,10 @@ def region_labels(h: int, w: int, feature: str, *, n_rings: int = 2, n_sectors: 
     raise ValueError(f"feature must be one of {', '.join(FEATURES)}")
 
 
-def region_histograms(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None, raw: bool = False,
-                      **kw) -> np.ndarray:
-    """``(regions, 3, 256)`` RGB histograms of the box's regions (foreground pixels only when ``fg``
-    is given); normalised per channel over all regions unless ``raw`` (pixel counts, for CBTF)."""
+def box_regions(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None,
+                **kw) -> tuple[np.ndarray, np.ndarray, int]:
+    """``(patch, labels, regions)``: the box's pixels (cut to the frame), their region map (:func:`region_labels`;
+    −1 outside every region, and for background pixels when ``fg`` is given) and the number of regions."""
     H, W = frame.shape[:2]
     x, y, w, h = (float(v) for v in box)
     x0, y0 = max(0, int(round(x))), max(0, int(round(y)))
@@ -69,6 +69,14 @@ def region_histograms(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | 
     lab, n = region_labels(patch.shape[0], patch.shape[1], feature, **kw)
     if fg is not None:
         lab = np.where(fg[y0:y1, x0:x1] > 0, lab, -1)
+    return patch, lab, n
+
+
+def region_histograms(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None, raw: bool = False,
+                      **kw) -> np.ndarray:
+    """``(regions, 3, 256)`` RGB histograms of the box's regions (foreground pixels only when ``fg``
+    is given); normalised per channel over all regions unless ``raw`` (pixel counts, for CBTF)."""
+    patch, lab, n = box_regions(frame, box, feature, fg=fg, **kw)
     ok = lab >= 0
     out = np.zeros((n, 3, 256))
     if ok.any():

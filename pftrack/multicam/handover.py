@@ -7,8 +7,8 @@
    (mean of the per-pair BTFs, Eq. 21) or CBTF (BTF of the accumulated histograms, Eq. 22),
    or none.
 3. Camera A's appearances are brought into camera B's colours (push-forward, Eqs. 25–26)
-   and compared with camera B's (Eqs. 23–24; joint histograms cell by cell, one ``1 − D_B``).  Eq. 2 under the one-to-one constraint is a
-   linear assignment (``scipy.optimize.linear_sum_assignment``) on −log similarity, with a
+   and compared with camera B's (Eqs. 23–24; joint histograms cell by cell, one ``1 − D_B``).
+   Eq. 2 under the one-to-one constraint is a linear assignment (``scipy.optimize.linear_sum_assignment``) on −log similarity, with a
    "new person" option of cost −log τ_new per track (proposed; the text gives no rule).  τ_new is
    the lower quartile of the similarities of track pairs seen at the same time in the two
    cameras, which are different people because the views are disjoint
@@ -28,7 +28,7 @@ from scipy.optimize import linear_sum_assignment
 from ..cues.intensity import is_gray
 from .appearance import region_histograms, region_labels, similarity_matrix
 from .btf import apply_btf_hist, cbtf, identity_btf, mbtf
-from .joint import joint_histogram, joint_similarity_matrix, mean_sparse, push_joint
+from .joint import joint_histogram, joint_similarity_matrix, mean_sparse, push_joint, transfer_matrices
 
 __all__ = ["HISTOGRAMS", "TrackAppearance", "cooccur_threshold", "describe_tracks", "fit_btf", "fit_transit",
            "link_tracks", "new_threshold", "similarities"]
@@ -48,6 +48,7 @@ class TrackAppearance:
     samples: int = 0
     joint: tuple[np.ndarray, np.ndarray] | None = None  # histogram="joint": sparse mean (cells, masses), .joint
     regions: int = 1
+    joint_plain: np.ndarray | None = None  # that histogram as compared, through no BTF (camera B's side)
     _acc: list = field(default_factory=list, repr=False)
 
 
@@ -101,6 +102,7 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
         a._acc = []
         if joint:
             a.joint, a.regions = mean_sparse(joints.get(tid, []), a.samples), n_regions  # empty frames count
+            a.joint_plain = push_joint(*a.joint, a.regions, identity_btf())
     return out
 
 
@@ -127,9 +129,9 @@ def similarities(app_a, app_b, lut) -> tuple[list[int], list[int], np.ndarray]:
     channels' histograms (Eqs. 23–26)."""
     ka, kb = sorted(app_a), sorted(app_b)
     if ka and kb and all(app_a[k].joint is not None for k in ka) and all(app_b[k].joint is not None for k in kb):
-        ident = identity_btf()
-        A = np.stack([push_joint(*app_a[k].joint, app_a[k].regions, lut) for k in ka])
-        B = np.stack([push_joint(*app_b[k].joint, app_b[k].regions, ident) for k in kb])
+        T = transfer_matrices(lut)
+        A = np.stack([push_joint(*app_a[k].joint, app_a[k].regions, lut, transfer=T) for k in ka])
+        B = np.stack([app_b[k].joint_plain for k in kb])
         return ka, kb, joint_similarity_matrix(A, B)
     A = np.stack([apply_btf_hist(app_a[k].hist, lut) for k in ka]) if ka else np.zeros((0, 1, 3, 256))
     B = np.stack([app_b[k].hist for k in kb]) if kb else np.zeros((0, 1, 3, 256))

@@ -19,7 +19,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from .appearance import region_labels
+from .appearance import box_regions
 
 __all__ = ["COMPARE_LEVELS", "JOINT_LEVELS", "joint_histogram", "joint_similarity_matrix", "mean_sparse",
            "push_joint", "transfer_matrices"]
@@ -30,18 +30,11 @@ COMPARE_LEVELS = 8   # levels a channel as compared (bins of 32 grey levels)
 
 def joint_histogram(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None,
                     levels: int = JOINT_LEVELS) -> tuple[np.ndarray, np.ndarray, int]:
-    """``(cells, masses, regions)``: the sparse joint RGB histogram of the box's regions (:func:`region_labels`),
+    """``(cells, masses, regions)``: the sparse joint RGB histogram of the box's regions (:func:`box_regions`),
     foreground pixels only when ``fg`` is given; the masses sum to 1 (none when no pixel counts)."""
     if 256 % levels:
         raise ValueError("levels must divide 256")
-    H, W = frame.shape[:2]
-    x, y, w, h = (float(v) for v in box)
-    x0, y0 = max(0, int(round(x))), max(0, int(round(y)))
-    x1, y1 = min(W, int(round(x + w))), min(H, int(round(y + h)))
-    patch = frame[y0:y1, x0:x1]
-    lab, n = region_labels(patch.shape[0], patch.shape[1], feature)
-    if fg is not None:
-        lab = np.where(fg[y0:y1, x0:x1] > 0, lab, -1)
+    patch, lab, n = box_regions(frame, box, feature, fg=fg)
     ok = lab >= 0
     if not ok.any():
         return np.zeros(0, np.int64), np.zeros(0), n
@@ -78,10 +71,12 @@ def transfer_matrices(lut: np.ndarray, levels_in: int = JOINT_LEVELS,
 
 
 def push_joint(cells: np.ndarray, masses: np.ndarray, regions: int, lut: np.ndarray, *,
-               levels_in: int = JOINT_LEVELS, levels_out: int = COMPARE_LEVELS) -> np.ndarray:
+               levels_in: int = JOINT_LEVELS, levels_out: int = COMPARE_LEVELS,
+               transfer: np.ndarray | None = None) -> np.ndarray:
     """The dense ``(regions * levels_out³,)`` histogram of a sparse joint histogram carried through ``lut``
-    (:func:`transfer_matrices`); its mass is the input's."""
-    T = transfer_matrices(lut, levels_in, levels_out)
+    (:func:`transfer_matrices`, or ``transfer`` when given: those of ``lut``, computed once for many histograms);
+    its mass is the input's."""
+    T = transfer_matrices(lut, levels_in, levels_out) if transfer is None else transfer
     dense = np.zeros(regions * levels_in ** 3)
     np.add.at(dense, np.asarray(cells, dtype=np.int64), np.asarray(masses, dtype=np.float64))
     d = dense.reshape(regions, levels_in, levels_in, levels_in)  # region, r, g, b

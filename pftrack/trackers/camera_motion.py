@@ -27,13 +27,14 @@ class CameraMotionMixin:
     def _camera_start(self, frame: np.ndarray) -> None:
         """Take the first frame's projections (on ``init``)."""
         self._camera_move = (0.0, 0.0)
-        self._camera_prev = self._camera_profiles(frame) if self.params.camera_motion else None
+        self._camera_prev = frame_profiles(frame, self._camera_step(frame)) if self.params.camera_motion else None
         self._camera_rows = None
         self._camera_level = float(self.params.camera_share)
 
-    def _camera_profiles(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _camera_step(self, frame: np.ndarray) -> int:
+        """The lattice step of the projections (``camera_samples``)."""
         h, w = frame.shape[:2]
-        return frame_profiles(frame, lattice_step(h, w, self.params.camera_samples))
+        return lattice_step(h, w, self.params.camera_samples)
 
     def _camera_frame(self, frame: np.ndarray) -> None:
         """Read this frame's shift from the last frame's projections (every frame, so that the shift is always
@@ -42,12 +43,12 @@ class CameraMotionMixin:
             return
         if self._camera_rows is not None:
             self._camera_learn()
-        cur = self._camera_profiles(frame)
+        step = self._camera_step(frame)
+        cur = frame_profiles(frame, step)
         move = (0.0, 0.0)
         if self._camera_prev is not None:
             h, w = frame.shape[:2]
             f = self.params.camera_max_shift
-            step = lattice_step(h, w, self.params.camera_samples)
             move = camera_shift(self._camera_prev, cur, max_shift=(f * w, f * h), step=step)
         self._camera_prev, self._camera_move = cur, move
 
