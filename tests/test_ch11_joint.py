@@ -152,3 +152,23 @@ def test_a_grey_camera_keeps_the_channels_histograms():
     assert a[1].joint is None and b[9].joint is not None
     _, _, S = similarities(a, b, identity_btf())   # one grey camera: both compared by their channels
     assert S.shape == (1, 1) and 0.0 < S[0, 0] < 1.0
+
+
+def test_a_grey_camera_stops_counting_joint_cells_once_most_of_its_frames_are_grey(monkeypatch):
+    """Once more than half of the frames to read are grey the camera is grey whatever the rest, and its joint
+    histograms would be dropped: none is computed from then on (the appearances are the same)."""
+    import pftrack.multicam.handover as handover
+
+    rng = np.random.default_rng(7)
+    colour = rng.integers(0, 256, (40, 20, 3)).astype(np.uint8)
+    grey = np.repeat(colour[..., :1], 3, axis=2)
+    rows = np.array([[n, 1, 0, 0, 20, 40] for n in (1, 2, 3)], dtype=float)
+    frames = {1: grey, 2: grey, 3: colour}
+    before = describe_tracks(frames.get, rows, "positional", every=1)[1]
+    calls = []
+    real = handover.joint_histogram
+    monkeypatch.setattr(handover, "joint_histogram", lambda *a, **k: calls.append(1) or real(*a, **k))
+    after = describe_tracks(frames.get, rows, "positional", every=1)[1]
+    assert len(calls) == 1  # frame 1 only: after frame 2, two of the three frames are grey
+    assert after.joint is None and before.joint is None
+    assert np.array_equal(after.hist, before.hist) and np.array_equal(after.raw, before.raw)

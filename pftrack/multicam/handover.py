@@ -78,13 +78,16 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
         for k, row in enumerate(r):
             if k % every == 0 or k == len(r) - 1:
                 by_frame.setdefault(int(row[0]), []).append((int(tid), row[2:6]))
-    for n in sorted(by_frame) if numbers is None else [n for n in numbers if n in by_frame]:
+    order = sorted(by_frame) if numbers is None else [n for n in numbers if n in by_frame]
+    for n in order:
         img = frames(n)
         if img is None:
             continue
         mask = fg(n) if fg is not None else None
         frames_read += 1
         grey_frames += bool(joint and is_gray(img))
+        # once most of the frames to read are grey, the camera is grey whatever the rest: no more joint cells
+        joint = joint and 2 * grey_frames <= len(order)
         for tid, box in by_frame[n]:
             if box[2] < 4 or box[3] < 4:
                 continue
