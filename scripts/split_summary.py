@@ -9,6 +9,12 @@ measure, read from the ``runs/`` records beside results.csv).  With ``--scenes D
 scenes were written to by ``pftrack synth``), a third table splits the re-acquisitions by the scenes' drawn
 nuisance ``gray`` (``meta.json``): grey scenes, colour scenes, and the rest (real and PETS sequences); a fourth by
 the scenes' light as well: no change, a drift of the whole frame's light, or a drift on the objects alone.
+
+Synthetic scenes of the other kinds of ``pftrack synth`` (simple, crossing, face, photo-vanish, ...: a name
+``kind-NNN``) make the column ``othersynth``, not ``real``. ``--by-kind`` adds a table of the mean AUC per scene kind
+(the name without its seed; the other sequences by their group), and with ``--scenes`` the size of the boxes: the
+median over the runs of each run's median of sqrt(box area / true area) over the second half of its frames where
+both boxes are defined (a box that shrinks or grows on a target of constant size).
 """
 
 from __future__ import annotations
@@ -16,16 +22,25 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import re
 from pathlib import Path
 from collections import defaultdict
 
-GROUPS = ["real", "pets", "gray", "graylight", "varied", "vanish", "leave", "exit", "camouflage", "teleport"]
+import numpy as np
+
+GROUPS = ["real", "pets", "gray", "graylight", "varied", "vanish", "leave", "exit", "camouflage", "teleport",
+          "othersynth"]
+SPLIT_KINDS = ("vanish", "leave", "exit", "varied", "camouflage", "teleport")
+#: a synthetic scene's name: its kind (lower-case words joined by hyphens) and its seed
+SCENE_NAME = re.compile(r"^([a-z]+(?:-[a-z]+)*)-(\d+)$")
 
 
 def group_of(sequence: str) -> str:
-    for g in ("vanish", "leave", "exit", "varied", "camouflage", "teleport"):
+    for g in SPLIT_KINDS:
         if sequence.startswith(g + "-"):
             return g
+    if SCENE_NAME.match(sequence):
+        return "othersynth"  # a scene of another kind of pftrack synth (simple, face, photo-vanish, ...)
     if sequence.startswith("pets"):
         return "pets"  # single people of PETS 2009 S2.L1 (scripts/make_mot_sot.py)
     if sequence.endswith("-gray-light"):
@@ -89,7 +104,67 @@ def reacquired_by_colour(rows: list[dict], kinds: dict[str, str]) -> None:
     reacquired_by(rows, kinds, ["grey", "colour", "other"], "by the scenes' colour")
 
 
-def main(path: str, scenes: list[str] | None = None) -> None:
+def kind_of(sequence: str) -> str:
+    """A synthetic scene's kind (its name without the seed); another sequence's group (:func:`group_of`)."""
+    m = SCENE_NAME.match(sequence)
+    return m.group(1) if m else group_of(sequence)
+
+
+def _truths(roots: list[str]) -> dict[str, Path]:
+    """``sequence -> folder`` of the synthetic scenes under ``roots`` (the folders of their ``meta.json``)."""
+    return {meta.parent.name: meta.parent for root in roots for meta in sorted(Path(root).glob("**/meta.json"))}
+
+
+def size_ratio(boxes: np.ndarray, truth: np.ndarray) -> float:
+    """The median of sqrt(box area / true area) over the second half of the frames where both are defined (NaN
+    when fewer than 5)."""
+    n = min(len(boxes), len(truth))
+    b, t = boxes[:n], truth[:n]
+    ok = np.isfinite(b).all(axis=1) & np.isfinite(t).all(axis=1) & (t[:, 2] * t[:, 3] > 0)
+    ok &= np.arange(n) >= n // 2
+    if ok.sum() < 5:
+        return float("nan")
+    return float(np.median(np.sqrt(np.abs(b[ok, 2] * b[ok, 3]) / (t[ok, 2] * t[ok, 3]))))
+
+
+def by_kind(rows: list[dict], runs: Path, scenes: list[str] | None) -> None:
+    """Mean AUC per tracker and scene kind; with ``scenes``, the boxes' size against the truth's (:func:`size_ratio`,
+    the median over the runs of a kind)."""
+    auc: dict[tuple[str, str], list[float]] = defaultdict(list)
+    for r in rows:
+        if r.get("auc") not in ("", None):
+            auc[(r["tracker"], kind_of(r["sequence"]))].append(float(r["auc"]))
+    sizes: dict[tuple[str, str], list[float]] = defaultdict(list)
+    if scenes and runs.is_dir():
+        from pftrack.io import discover_sequences
+
+        folders = _truths(scenes)
+        truth: dict[str, np.ndarray] = {}
+        for f in sorted(runs.glob("ope__*.json")):
+            rec = json.loads(f.read_text())
+            seq = rec["sequence"]
+            if seq not in folders or not rec.get("boxes"):
+                continue
+            if seq not in truth:
+                truth[seq] = discover_sequences(folders[seq])[0].groundtruth
+            boxes = np.array([np.nan if v is None else v for v in rec["boxes"]], dtype=np.float64).reshape(-1, 4)
+            v = size_ratio(boxes, truth[seq])
+            if v == v:
+                sizes[(rec["tracker"], kind_of(seq))].append(v)
+    trackers = sorted({t for t, _ in auc})
+    kinds = sorted({k for _, k in auc})
+    print("\nmean AUC by kind" + (" (box size against the truth's, sqrt of the areas, second half)" if sizes else ""))
+    print(f"{'kind':16s} " + " ".join(f"{t[:24]:>24s}" for t in trackers))
+    for k in kinds:
+        cells = []
+        for t in trackers:
+            a = _mean(auc.get((t, k), []))
+            z = sizes.get((t, k))
+            cells.append(f"{a:.3f}" + (f" ({np.median(z):.2f})" if z else ""))
+        print(f"{k:16s} " + " ".join(f"{c:>24s}" for c in cells))
+
+
+def main(path: str, scenes: list[str] | None = None, kinds: bool = False) -> None:
     with open(path, encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     cells: dict[tuple[str, str], dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
@@ -129,11 +204,14 @@ def main(path: str, scenes: list[str] | None = None) -> None:
         reacquired_by_colour(rows, scene_colours(scenes, nuisances))
         lights = [f"{c} {li}" for c in ("colour", "grey") for li in ("none", "frame", "objects")]
         reacquired_by(rows, scene_lights(scenes, nuisances), lights, "by the scenes' colour and light")
+    if kinds:
+        by_kind(rows, runs, scenes)
 
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", help="a pftrack eval results.csv")
     ap.add_argument("--scenes", nargs="+", help="folders of the synthetic scenes (their meta.json)")
+    ap.add_argument("--by-kind", action="store_true", help="mean AUC (and with --scenes the boxes' size) by scene kind")
     a = ap.parse_args()
-    main(a.results, a.scenes)
+    main(a.results, a.scenes, a.by_kind)

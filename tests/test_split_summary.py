@@ -71,3 +71,60 @@ def test_reacquisitions_are_split_by_scene_light(tmp_path):
     # colour none 1 of 1, colour frame 0 of 1, grey objects 1 of 1, the rest empty
     assert line.split()[1:] == ["1", "/", "1", "0", "/", "1", "0", "/", "0", "0", "/", "0", "0", "/", "0", "1", "/",
                                 "1"]
+
+
+def _results(path: Path, rows: list[tuple]) -> None:
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(FIELDS)
+        for tracker, seq, auc in rows:
+            w.writerow([tracker, seq, 0, auc, "", "", 100, "", ""])
+
+
+def test_scenes_of_other_kinds_are_not_counted_as_real_sequences(tmp_path):
+    results = tmp_path / "results.csv"
+    _results(results, [("color-pf", "otb_couple", 0.4), ("color-pf", "simple-7800", 0.9),
+                       ("color-pf", "photo-vanish-3", 0.7), ("color-pf", "vanish-001", 0.6)])
+    out = subprocess.run([sys.executable, str(SCRIPT), str(results)], capture_output=True, text=True,
+                         check=True).stdout
+    header, line = out.splitlines()[:2]
+    cells = dict(zip(header.split()[1:12], line.split()[1:12]))
+    assert cells["real"] == "0.400" and cells["vanish"] == "0.600" and cells["othersynth"] == "0.800"
+
+
+def test_by_kind_gives_the_mean_auc_and_the_boxes_size_per_scene_kind(tmp_path):
+    import cv2
+    import numpy as np
+
+    scenes = tmp_path / "synth"
+    for name in ("simple-001", "simple-002"):
+        d = scenes / "simple" / name
+        (d / "img").mkdir(parents=True)
+        for k in range(1, 13):
+            cv2.imwrite(str(d / "img" / f"{k:04d}.png"), np.zeros((60, 80, 3), np.uint8))
+        (d / "groundtruth_rect.txt").write_text("\n".join(["10,10,20,40"] * 12) + "\n")
+        (d / "meta.json").write_text(json.dumps({"kind": "", "nuisances": {}}))
+    results = tmp_path / "report" / "results.csv"
+    (tmp_path / "report" / "runs").mkdir(parents=True)
+    _results(results, [("fusion-pf", "simple-001", 0.8), ("fusion-pf", "simple-002", 0.6),
+                       ("fusion-pf", "tld_pedestrian2", 0.5)])
+    # simple-001: the box at half the true area over the second half (sqrt 0.707); simple-002: the true box, and a
+    # frame without a box (5 of its second half's 6 frames count)
+    half = [10, 10, 10, 40]
+    for name, late in (("simple-001", half), ("simple-002", [10, 10, 20, 40])):
+        boxes = [[10, 10, 20, 40]] * 6 + [late] * 6
+        flat = [v for b in boxes for v in b]
+        if name == "simple-002":
+            flat[-4:] = [None] * 4
+        rec = {"tracker": "fusion-pf", "sequence": name, "boxes": flat}
+        (tmp_path / "report" / "runs" / f"ope__{name}__fusion-pf__s0__x.json").write_text(json.dumps(rec))
+    out = subprocess.run([sys.executable, str(SCRIPT), str(results), "--scenes", str(scenes), "--by-kind"],
+                         capture_output=True, text=True, check=True).stdout
+    table = out.split("mean AUC by kind")[1].splitlines()
+    simple = next(ln for ln in table if ln.startswith("simple"))
+    real = next(ln for ln in table if ln.startswith("real"))
+    # the mean AUC 0.7; the size the median of the two runs' medians (0.707 and 1.0)
+    assert simple.split()[1:] == ["0.700", "(0.85)"]
+    assert real.split()[1:] == ["0.500"]
+    assert "mean AUC by kind" not in subprocess.run([sys.executable, str(SCRIPT), str(results)], capture_output=True,
+                                                    text=True, check=True).stdout
