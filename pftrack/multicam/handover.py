@@ -9,8 +9,8 @@
 3. Camera A's appearances are brought into camera B's colours (push-forward, Eqs. 25–26)
    and compared with camera B's (Eqs. 23–24; joint histograms cell by cell, one ``1 − D_B``).
    Eq. 2 under the one-to-one constraint is a linear assignment (``scipy.optimize.linear_sum_assignment``) on
-   −log similarity, with a "new person" option of cost −log τ_new per track (proposed; the text gives no rule).  τ_new is
-   the lower quartile of the similarities of track pairs seen at the same time in the two
+   −log similarity, with a "new person" option of cost −log τ_new per track (proposed; the text gives no rule).
+   τ_new is the lower quartile of the similarities of track pairs seen at the same time in the two
    cameras, which are different people because the views are disjoint
    (:func:`cooccur_threshold`); :func:`new_threshold`, the threshold that best separates the
    training set's genuine and impostor pairs, is the alternative.  Only pairs whose tracks
