@@ -33,6 +33,7 @@ from ..cues.contrast import (
     probability_integral,
 )
 from ..cues.intensity import gain_maps, is_gray, light_levels
+from ..cues.mass_size import mass_factor, object_area
 from ..cues.grey_patch import grey_patch
 from ..cues.motion import LocalMotionCue, local_motion
 from ..cues.scale_search import aspect_factor, best_shape_score, size_factor
@@ -76,6 +77,7 @@ class FusionPF(ColorPF):
         self.v_ref = None
         self._ref_levels: np.ndarray | None = None
         self._levels: tuple[int, np.ndarray] | None = None
+        self._mass_ref: tuple[float, float] | None = None  # mass_size: the first reading's (area, size)
 
     @property
     def _fused(self) -> bool:
@@ -118,6 +120,7 @@ class FusionPF(ColorPF):
         """As :meth:`ColorPF.init_auto`; a known histogram gives no reference patch, so the structural cue
         stays off (no evidence) for this target."""
         self.structure = self._structure_cue(None)
+        self._mass_ref = None
         return super().init_auto(frame, histogram, size, regions=regions)
 
     def _init(self, frame, box):
@@ -133,6 +136,7 @@ class FusionPF(ColorPF):
                                               pitch=pitch)
             self._lut = foreground_lut(self._obj, self._sur).astype(np.float64)  # exact: the integral's type
         self.v_ref = None
+        self._mass_ref = None
         self._prev_gray = grey_patch(frame) if p.motion else None
         # the background statistics reduced this frame for the structural cue: the next frame must not reuse it
         self.structure.new_frame()
@@ -258,12 +262,30 @@ class FusionPF(ColorPF):
         p = self.params
         if p.scale_search > 0 and p.scale_search_rate > 0 and p.structure and self.structure.ready:
             self._search_scale(frame, estimate)
+        if p.mass_size > 0 and p.contrast:
+            self._mass_scale(estimate)
         if not p.motion or self._flow is None:
             return
         v_obs, defined = local_motion(self._flow, estimate[_ELL_COLS].reshape(1, 4))
         if defined[0]:
             self.v_ref = (v_obs[0].copy() if self.v_ref is None
                           else self.motion_cue.adapt(self.v_ref, estimate[[VX, VY]], v_obs[0]))
+
+    def _mass_scale(self, estimate):
+        """``mass_size``: move the estimate's and the particles' size (in place) toward the size the object's area
+        on this frame's foreground-probability map implies (:mod:`pftrack.cues.mass_size`)."""
+        if self._ii_of is None or self._ii_of[0] != self.frame_index:
+            return  # no map of this frame
+        feats = self._ii_of[1]
+        ell = estimate[_ELL_COLS]
+        read = object_area(self._ii, feats.x0, feats.y0, feats.pitch, ell, gate=self.params.mass_gate)
+        if read is None:
+            return
+        size = float(np.sqrt(ell[2] * ell[3]))
+        if self._mass_ref is None:
+            self._mass_ref = (read[0], size)
+            return
+        self._scale_size(estimate, mass_factor(self._mass_ref, read[0], size, self.params.mass_size))
 
     def _search_scale(self, frame, estimate):
         """``scale_search``: move the estimate's and the particles' size (in place) toward the size whose grey

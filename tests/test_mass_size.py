@@ -1,0 +1,98 @@
+"""fusion-pf's mass_size: the object's size from the mass of the foreground-probability map (cues.mass_size)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pftrack import create_tracker
+from pftrack.cues.mass_size import INNER, MAX_RATIO, mass_factor, object_area, window_mass
+from pftrack.synth.scenes import Scene, SceneSpec, Target, _wander
+
+
+def _integral(p: np.ndarray) -> np.ndarray:
+    ii = np.zeros((p.shape[0] + 1, p.shape[1] + 1))
+    ii[1:, 1:] = p.cumsum(0).cumsum(1)
+    return ii
+
+
+def _ellipse_map(h=200, w=240, cx=120.0, cy=100.0, hx=15.0, hy=30.0, p_obj=0.95, p_bg=0.1, seed=0):
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:h, 0:w] + 0.5
+    inside = ((x - cx) / hx) ** 2 + ((y - cy) / hy) ** 2 <= 1.0
+    p = np.where(inside, p_obj, p_bg) + rng.uniform(-0.05, 0.05, (h, w))
+    return np.clip(p, 0.0, 1.0), int(inside.sum())
+
+
+def test_window_mass_sums_the_lattice_samples_inside_the_rectangle():
+    p = np.arange(12.0).reshape(3, 4)
+    ii = _integral(p)
+    assert window_mass(ii, 0, 0, 1, (1, 0, 3, 2)) == (p[0:2, 1:3].sum(), 4)
+    # a lattice of pitch 2 starting at frame pixel (10, 20): the rectangle in frame pixels, clipped to the lattice
+    assert window_mass(ii, 10, 20, 2, (12, 20, 100, 100)) == (p[:, 1:].sum(), 9)
+    assert window_mass(ii, 0, 0, 1, (5, 5, 9, 9)) == (0.0, 0)
+
+
+def test_the_area_of_an_elliptic_object_is_its_pixel_count_whatever_the_box():
+    p, n = _ellipse_map()
+    ii = _integral(p)
+    for f in (0.7, 0.85, 1.0, 1.2):  # the estimate's box smaller or larger than the object's
+        area, sep = object_area(ii, 0, 0, 1, (120.0, 100.0, 15.0 * f, 30.0 * f))
+        assert sep == pytest.approx(0.85, abs=0.03)
+        assert area == pytest.approx(n, rel=0.06)
+    # so the area tells the size: a box shrunk to 0.8 is moved back toward 1
+    ref = object_area(ii, 0, 0, 1, (120.0, 100.0, 15.0, 30.0))[0], math.sqrt(15.0 * 30.0)
+    small = object_area(ii, 0, 0, 1, (120.0, 100.0, 12.0, 24.0))[0]
+    k = mass_factor(ref, small, math.sqrt(12.0 * 24.0), 1.0)
+    assert k == pytest.approx(1.25, rel=0.05)
+
+
+def test_no_reading_where_the_map_does_not_separate_the_object_or_the_window_is_cut():
+    p, _ = _ellipse_map(p_obj=0.6, p_bg=0.2)
+    assert object_area(_integral(p), 0, 0, 1, (120.0, 100.0, 15.0, 30.0)) is None  # separation 0.4 < 0.8
+    assert object_area(_integral(p), 0, 0, 1, (120.0, 100.0, 15.0, 30.0), gate=0.3) is not None
+    p, _ = _ellipse_map(cx=20.0)  # the window (twice the box) runs past the map's left edge
+    assert INNER * 15.0 > 20.0
+    assert object_area(_integral(p), 0, 0, 1, (20.0, 100.0, 15.0, 30.0)) is None
+    p, _ = _ellipse_map(cx=31.0)  # the window inside the map
+    assert object_area(_integral(p), 0, 0, 1, (31.0, 100.0, 15.0, 30.0)) is not None
+
+
+def test_mass_factor_moves_by_a_share_of_the_ratio_in_log_scale_clipped():
+    assert mass_factor((400.0, 20.0), 400.0, 20.0, 0.25) == 1.0
+    assert mass_factor((400.0, 20.0), 400.0 * 1.1 ** 2, 20.0, 0.5) == pytest.approx(1.1 ** 0.5)
+    assert mass_factor((400.0, 20.0), 4000.0, 20.0, 1.0) == pytest.approx(MAX_RATIO)
+    assert mass_factor((400.0, 20.0), 4.0, 20.0, 0.5) == pytest.approx(MAX_RATIO ** -0.5)
+
+
+def _sizes(tracker, scene: Scene) -> float:
+    """The median of sqrt(box area / true area) over the second half of the frames."""
+    frames, gt = scene.frames(), scene.groundtruth()
+    tracker.init(frames[0], tuple(gt[0]))
+    boxes = np.array([gt[0]] + [tracker.update(f).box for f in frames[1:]])
+    late = slice(len(gt) // 2, None)
+    return float(np.median(np.sqrt(boxes[late, 2] * boxes[late, 3] / (gt[late, 2] * gt[late, 3]))))
+
+
+@pytest.mark.parametrize("seed", [7860, 7866])
+def test_fusion_pf_keeps_an_elliptic_targets_size_with_mass_size(seed):
+    """A two-coloured elliptic target of little texture wandering over a textured background (the simple scene's
+    kind, seeds of neither split): its box shrinks without mass_size and keeps its size with it."""
+    rng = np.random.default_rng(seed)
+    tgt = Target(path=_wander(rng, 80, 320, 240, (30, 60), speed=2.0), size=(30, 60), texture=4.0)
+    scene = Scene(SceneSpec(n_frames=80, seed=seed, targets=(tgt,)))
+    plain = _sizes(create_tracker("fusion-pf", seed=0), scene)
+    mass = create_tracker("fusion-pf", seed=0, mass_size=0.25)
+    with_mass = _sizes(mass, scene)
+    assert plain < 0.8 and with_mass > 0.95
+    assert mass._mass_ref is not None
+
+
+def test_mass_size_off_reads_nothing():
+    tgt = Target(path=((0, 100.0, 100.0), (19, 140.0, 100.0)), size=(30, 60))
+    scene = Scene(SceneSpec(n_frames=20, seed=1, targets=(tgt,)))
+    t = create_tracker("fusion-pf", seed=0)
+    _sizes(t, scene)
+    assert t.params.mass_size == 0 and t._mass_ref is None
