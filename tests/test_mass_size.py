@@ -83,7 +83,7 @@ def test_fusion_pf_keeps_an_elliptic_targets_size_with_mass_size(seed):
     rng = np.random.default_rng(seed)
     tgt = Target(path=_wander(rng, 80, 320, 240, (30, 60), speed=2.0), size=(30, 60), texture=4.0)
     scene = Scene(SceneSpec(n_frames=80, seed=seed, targets=(tgt,)))
-    plain = _sizes(create_tracker("fusion-pf", seed=0), scene)
+    plain = _sizes(create_tracker("fusion-pf", seed=0, mass_size=0), scene)
     mass = create_tracker("fusion-pf", seed=0, mass_size=0.25)
     with_mass = _sizes(mass, scene)
     assert plain < 0.8 and with_mass > 0.95
@@ -93,6 +93,23 @@ def test_fusion_pf_keeps_an_elliptic_targets_size_with_mass_size(seed):
 def test_mass_size_off_reads_nothing():
     tgt = Target(path=((0, 100.0, 100.0), (19, 140.0, 100.0)), size=(30, 60))
     scene = Scene(SceneSpec(n_frames=20, seed=1, targets=(tgt,)))
-    t = create_tracker("fusion-pf", seed=0)
+    t = create_tracker("fusion-pf", seed=0, mass_size=0)
     _sizes(t, scene)
-    assert t.params.mass_size == 0 and t._mass_ref is None
+    assert t._mass_ref is None
+
+
+def test_the_mass_is_read_only_on_frames_the_models_learn_from(monkeypatch):
+    """Not while the target is lost, nor on a frame the loss test doubts: a box off the target would read another
+    area (the reading's frames are those whose state is confident, never a lost one)."""
+    import pftrack.trackers.fusion_pf as fusion
+
+    target = Target(path=((0, 80.0, 120.0), (59, 260.0, 120.0)), size=(26.0, 52.0), disappear=30)
+    scene = Scene(SceneSpec(n_frames=60, seed=3, targets=(target,), kind="vanish"))
+    frames, gt = scene.frames(), scene.groundtruth()
+    read: list[int] = []
+    real = fusion.object_area
+    t = create_tracker("fusion-pf", seed=0, mass_size=0.25)
+    monkeypatch.setattr(fusion, "object_area", lambda *a, **k: read.append(t.frame_index) or real(*a, **k))
+    t.init(frames[0], tuple(gt[0]))
+    lost = {t.frame_index for f in frames[1:] if t.update(f).lost}
+    assert read and lost and not lost & set(read)

@@ -163,14 +163,14 @@ class FusionPFParams(ColorPFParams):
         "failed its rule on the tune data (docs/rules/scale_anchor_rule.txt, docs/fusion-pf-selection.md: PETS "
         "people 0.407 against 0.427, split mean AUC 0.703 against 0.705)."))
     mass_size: float = param(0.0, ge=0, le=1, doc=(
-        "r > 0: after each tracked frame's estimate (and the size search), the object's area is read from the mass "
-        "of the contrast cue's foreground-probability map around its box, CamShift's zeroth moment "
+        "r > 0: on each frame the models learn from (the loss test confident), the object's area is read from the "
+        "mass of the contrast cue's foreground-probability map around the estimate's box, CamShift's zeroth moment "
         "(cues.mass_size: the mass of a window twice the box above the level of the ring around it, counted in "
-        "object pixels), and the estimate and every particle move toward the size that area implies against the "
-        "first reading, by r of the ratio in log scale (clipped to 0.8-1.25). Only where the map separates the "
-        "object from its surround by mass_gate and the window lies in the quantised region. The box contrast and "
-        "the NCC prefer a box inside an elliptic target of little texture, whose box then shrinks "
-        "(docs/robustness-cameras.md). 0: off."))
+        "object pixels), and once the models took the estimate's box, it and every particle move toward the size "
+        "that area implies against the first reading, by r of the ratio in log scale (clipped to 0.8-1.25). Only "
+        "where the map separates the object from its surround by mass_gate and the window lies in the quantised "
+        "region. The box contrast and the NCC prefer a box inside an elliptic target of little texture, whose box "
+        "then shrinks (docs/robustness-cameras.md). 0: off."))
     mass_gate: float = param(0.8, ge=0, le=1, doc=(
         "The least separation (the mean foreground probability of the box's core minus that of the ring around "
         "the window) at which mass_size reads the map."))

@@ -262,8 +262,6 @@ class FusionPF(ColorPF):
         p = self.params
         if p.scale_search > 0 and p.scale_search_rate > 0 and p.structure and self.structure.ready:
             self._search_scale(frame, estimate)
-        if p.mass_size > 0 and p.contrast:
-            self._mass_scale(estimate)
         if not p.motion or self._flow is None:
             return
         v_obs, defined = local_motion(self._flow, estimate[_ELL_COLS].reshape(1, 4))
@@ -271,21 +269,21 @@ class FusionPF(ColorPF):
             self.v_ref = (v_obs[0].copy() if self.v_ref is None
                           else self.motion_cue.adapt(self.v_ref, estimate[[VX, VY]], v_obs[0]))
 
-    def _mass_scale(self, estimate):
-        """``mass_size``: move the estimate's and the particles' size (in place) toward the size the object's area
-        on this frame's foreground-probability map implies (:mod:`pftrack.cues.mass_size`)."""
+    def _mass_factor(self, estimate) -> float:
+        """``mass_size``: the factor toward the size the object's area on this frame's foreground-probability map
+        implies (:mod:`pftrack.cues.mass_size`; 1 without a reading). The first reading is the reference."""
         if self._ii_of is None or self._ii_of[0] != self.frame_index:
-            return  # no map of this frame
+            return 1.0  # no map of this frame
         feats = self._ii_of[1]
         ell = estimate[_ELL_COLS]
         read = object_area(self._ii, feats.x0, feats.y0, feats.pitch, ell, gate=self.params.mass_gate)
         if read is None:
-            return
+            return 1.0
         size = float(np.sqrt(ell[2] * ell[3]))
         if self._mass_ref is None:
             self._mass_ref = (read[0], size)
-            return
-        self._scale_size(estimate, mass_factor(self._mass_ref, read[0], size, self.params.mass_size))
+            return 1.0
+        return mass_factor(self._mass_ref, read[0], size, self.params.mass_size)
 
     def _search_scale(self, frame, estimate):
         """``scale_search``: move the estimate's and the particles' size (in place) toward the size whose grey
@@ -303,18 +301,22 @@ class FusionPF(ColorPF):
                 self.ps.scale_columns(HY, HY + 1, 1.0 / f)
 
     def _update_models(self, frame, estimate, feats, rho_e):
+        """On the frames the models learn from (the loss test confident): the structural reference, the contrast
+        counts, and with ``mass_size`` the size, read before the counts change the map and applied to the estimate
+        and the particles after the models took the estimate's box."""
         p = self.params
+        k = self._mass_factor(estimate) if p.mass_size > 0 and p.contrast else 1.0
         if p.structure:
             self.structure.update(frame, estimate[_ELL_COLS], p.structure_rate, p.structure_anchor_gate)
-        if not p.contrast or p.contrast_alpha <= 0:
-            return
-        obj, sur = box_counts(feats.bins, feats.x0, feats.y0, ellipse_box(*estimate[_ELL_COLS].tolist()),
-                              self.cue.feature_bins, ring=p.ring, pitch=feats.pitch)
-        # counts are compared as distributions scaled to the reference areas
-        blended = blend_counts(self._obj, obj, self._sur, sur, p.contrast_alpha)
-        if blended is not None:
-            self._obj, self._sur, self._lut = blended
-            self._ii_of = None  # an integral image of this frame was taken with the former table
+        if p.contrast and p.contrast_alpha > 0:
+            obj, sur = box_counts(feats.bins, feats.x0, feats.y0, ellipse_box(*estimate[_ELL_COLS].tolist()),
+                                  self.cue.feature_bins, ring=p.ring, pitch=feats.pitch)
+            # counts are compared as distributions scaled to the reference areas
+            blended = blend_counts(self._obj, obj, self._sur, sur, p.contrast_alpha)
+            if blended is not None:
+                self._obj, self._sur, self._lut = blended
+                self._ii_of = None  # an integral image of this frame was taken with the former table
+        self._scale_size(estimate, k)
 
     def _on_frame(self, frame):
         self.structure.new_frame()
