@@ -152,8 +152,10 @@ def test_fusion_pf_reacquires_after_a_weak_wrong_acquisition_with_probation(kind
     from .conftest import lost_flag_run
 
     spec = {"vanish": vanish_scene, "teleport": teleport_scene}[kind](seed)
-    # the settings the scenes were picked with (color_normalize="none": before the still view's gain)
-    then = {"static_ncc": 0.0, "structure_features": "ncc", "acquire_shape_step": 0.0, "color_normalize": "none"}
+    # the settings the scenes were picked with (color_normalize="none": before the still view's gain; mass_size 0:
+    # before the size read from the map's mass)
+    then = {"static_ncc": 0.0, "structure_features": "ncc", "acquire_shape_step": 0.0, "color_normalize": "none",
+            "mass_size": 0.0}
     off = lost_flag_run(spec, "fusion-pf", probation_llr=0.0, **then)
     on = lost_flag_run(spec, "fusion-pf", **then)
     assert off.reappearances == on.reappearances == 1

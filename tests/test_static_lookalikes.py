@@ -262,11 +262,11 @@ def test_a_search_frame_without_a_candidate_to_test_still_counts_unseen():
 
 
 @pytest.mark.parametrize("tracker, make, seed, gray, params", [
-    ("fusion-pf", "teleport", 502, True, {}),
+    ("fusion-pf", "teleport", 502, True, {"mass_size": 0.0}),  # the size as then (no reading of the map's mass)
     ("color-pf", "teleport", 502, True, {"grey_search_refine": None}),  # found when the refined search runs
     # the colour bins as they were when the scene was found: the still view's gain (fusion-pf's default since) undoes
     # this scene's light drift, and the estimate no longer stays on the scene without the test
-    ("fusion-pf", "vanish", 517, False, {"color_normalize": "none"}),
+    ("fusion-pf", "vanish", 517, False, {"color_normalize": "none", "mass_size": 0.0}),
 ])
 def test_an_estimate_left_on_the_scene_raises_the_flag_and_the_search_finds_the_target(tracker, make, seed, gray,
                                                                                           params, monkeypatch):
@@ -316,8 +316,10 @@ def test_the_reference_before_catches_an_estimate_left_where_the_target_last_sto
 
     spec = {"teleport": teleport_scene, "leave": leave_scene}[make](seed)
     # edge_share off, as when these scenes were found: with it, the estimate's sliver at the edge raises the flag on
-    # its own in the leave scene, and both runs re-acquire; the colour bins as then (no still view's gain)
-    on = lost_flag_run(spec, "fusion-pf", edge_share=0.0, color_normalize="none")
+    # its own in the leave scene, and both runs re-acquire; the colour bins as then (no still view's gain), and the
+    # size too (mass_size, the default since: with it the estimate leaves the place and both runs re-acquire)
+    then = {"edge_share": 0.0, "color_normalize": "none", "mass_size": 0.0}
+    on = lost_flag_run(spec, "fusion-pf", **then)
     refresh = SceneReference.refresh
 
     def newest_only(self, *args, **kwargs):
@@ -325,7 +327,7 @@ def test_the_reference_before_catches_an_estimate_left_where_the_target_last_sto
         self._previous = None
 
     monkeypatch.setattr(SceneReference, "refresh", newest_only)
-    off = lost_flag_run(spec, "fusion-pf", edge_share=0.0, color_normalize="none")
+    off = lost_flag_run(spec, "fusion-pf", **then)
     assert off.reappearances == on.reappearances == 1
     assert off.reacquired == 0 and on.reacquired == 1
     assert on.recall > off.recall
