@@ -129,3 +129,22 @@ def test_the_mass_alone_follows_a_growing_target(seed):
     box = [t.update(f) for f in frames[1:]][-1].box
     size, true = math.sqrt(box[2] * box[3]), math.sqrt(gt[-1, 2] * gt[-1, 3])
     assert 0.85 * true < size < 1.05 * true
+
+
+def test_the_compiled_reading_gives_the_reference_numbers():
+    from pftrack._numba import set_numba_enabled
+
+    rng = np.random.default_rng(5)
+    p, _ = _ellipse_map()
+    ii = _integral(p)
+    cases = [(120.0, 100.0, 15.0, 30.0), (20.0, 100.0, 15.0, 30.0), (120.0, 100.0, 0.0, 30.0)]
+    cases += [tuple(v) for v in np.c_[rng.uniform(0, 240, 60), rng.uniform(0, 200, 60), rng.uniform(3, 40, (60, 2))]]
+    for x0, y0, pitch, gate in ((0, 0, 1, 0.8), (7, 3, 2, 0.3), (0, 0, 3, 0.0)):
+        compiled = [object_area(ii, x0, y0, pitch, e, gate=gate) for e in cases]
+        previous = set_numba_enabled(False)
+        try:
+            reference = [object_area(ii, x0, y0, pitch, e, gate=gate) for e in cases]
+        finally:
+            set_numba_enabled(previous)
+        assert compiled == reference
+        assert any(r is not None for r in reference) and any(r is None for r in reference)
