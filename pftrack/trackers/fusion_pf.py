@@ -33,8 +33,8 @@ from ..cues.contrast import (
     probability_integral,
 )
 from ..cues.intensity import gain_maps, is_gray, light_levels
-from ..cues.mass_size import mass_factor, object_area
 from ..cues.grey_patch import grey_patch
+from ..cues.mass_size import mass_factor, object_area
 from ..cues.motion import LocalMotionCue, local_motion
 from ..cues.scale_search import aspect_factor, best_shape_score, size_factor
 from ..cues.structure import StructureCue
