@@ -73,10 +73,11 @@ def box_regions(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None =
 
 
 def region_histograms(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None, raw: bool = False,
-                      **kw) -> np.ndarray:
+                      parts: tuple[np.ndarray, np.ndarray, int] | None = None, **kw) -> np.ndarray:
     """``(regions, 3, 256)`` RGB histograms of the box's regions (foreground pixels only when ``fg``
-    is given); normalised per channel over all regions unless ``raw`` (pixel counts, for CBTF)."""
-    patch, lab, n = box_regions(frame, box, feature, fg=fg, **kw)
+    is given); normalised per channel over all regions unless ``raw`` (pixel counts, for CBTF). ``parts``: the
+    box's :func:`box_regions` of these arguments, when already computed."""
+    patch, lab, n = parts if parts is not None else box_regions(frame, box, feature, fg=fg, **kw)
     ok = lab >= 0
     out = np.zeros((n, 3, 256))
     if ok.any():

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ..cues.intensity import is_gray
-from .appearance import region_histograms, region_labels, similarity_matrix
+from .appearance import box_regions, region_histograms, region_labels, similarity_matrix
 from .btf import apply_btf_hist, cbtf, identity_btf, mbtf
 from .joint import joint_histogram, joint_similarity_matrix, mean_sparse, push_joint, transfer_matrices
 
@@ -92,11 +92,12 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
             if box[2] < 4 or box[3] < 4:
                 continue
             a = out[tid]
-            a._acc.append(region_histograms(img, box, feature, fg=mask))
+            parts = box_regions(img, box, feature, fg=mask)  # the region map, once for both histograms
+            a._acc.append(region_histograms(img, box, feature, fg=mask, parts=parts))
             a.raw += region_histograms(img, box, "whole", fg=mask, raw=True)[0]
             a.samples += 1
             if joint:
-                cells, masses, _ = joint_histogram(img, box, feature, fg=mask)
+                cells, masses, _ = joint_histogram(img, box, feature, fg=mask, parts=parts)
                 if len(cells):
                     joints.setdefault(tid, []).append((cells, masses))
     joint = joint and 2 * grey_frames <= frames_read  # a grey camera: the channels' histograms

@@ -29,12 +29,14 @@ COMPARE_LEVELS = 8   # levels a channel as compared (bins of 32 grey levels)
 
 
 def joint_histogram(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None,
-                    levels: int = JOINT_LEVELS) -> tuple[np.ndarray, np.ndarray, int]:
-    """``(cells, masses, regions)``: the sparse joint RGB histogram of the box's regions (:func:`box_regions`),
-    foreground pixels only when ``fg`` is given; the masses sum to 1 (none when no pixel counts)."""
+                    levels: int = JOINT_LEVELS, parts: tuple[np.ndarray, np.ndarray, int] | None = None
+                    ) -> tuple[np.ndarray, np.ndarray, int]:
+    """``(cells, masses, regions)``: the sparse joint RGB histogram of the box's regions (:func:`box_regions`;
+    ``parts``: that of these arguments, when already computed), foreground pixels only when ``fg`` is given; the
+    masses sum to 1 (none when no pixel counts)."""
     if 256 % levels:
         raise ValueError("levels must divide 256")
-    patch, lab, n = box_regions(frame, box, feature, fg=fg)
+    patch, lab, n = parts if parts is not None else box_regions(frame, box, feature, fg=fg)
     ok = lab >= 0
     if not ok.any():
         return np.zeros(0, np.int64), np.zeros(0), n
