@@ -288,3 +288,36 @@ def test_wide_proposal_off_draws_as_before_and_on_spreads_the_set():
     region = ConstantVelocityScale(wide_fraction=0.25, wide_factor=4.0).propagate(on, std, np.random.default_rng(5))
     assert np.abs(on[:, 0]).max() > 2 * np.abs(plain[:, 0]).max()
     assert region[0] <= on[:, 0].min() - 10.0 + 1e-9  # the quantised region reaches the wide samples' ellipses
+
+
+def test_velocity_step_off_draws_as_before_and_on_keeps_the_step():
+    """Off, the same samples as Eq. 9. At 1 each velocity is the sample's whole displacement (the second-order
+    autoregressive model); at 0.25 a quarter of the way from Eq. 9's velocity to it. So after a step, a sample's
+    velocity and its position noise are correlated: those that the noise moved right move right faster."""
+    from pftrack.filtering.dynamics import step_velocity
+
+    states = np.zeros((3000, 7))
+    states[:, 2] = 3.0
+    states[:, 4:6] = 10.0
+    std = np.array([2.0, 2.0, 0.25, 0.25, 0.0, 0.0, 0.0])
+    plain, off, full, part = states.copy(), states.copy(), states.copy(), states.copy()
+    ConstantVelocityScale().propagate(plain, std, np.random.default_rng(5))
+    ConstantVelocityScale(velocity_step=0.0).propagate(off, std, np.random.default_rng(5))
+    np.testing.assert_array_equal(plain, off)
+    ConstantVelocityScale(velocity_step=1.0).propagate(full, std, np.random.default_rng(5))
+    ConstantVelocityScale(velocity_step=0.25).propagate(part, std, np.random.default_rng(5))
+    np.testing.assert_array_equal(full[:, :2], plain[:, :2])  # the positions move as before
+    np.testing.assert_allclose(full[:, 2:4], plain[:, :2] - states[:, :2])
+    np.testing.assert_allclose(part[:, 2:4], 0.75 * plain[:, 2:4] + 0.25 * (plain[:, :2] - states[:, :2]))
+    assert np.corrcoef(full[:, 0], full[:, 2])[0, 1] > 0.99
+    assert abs(np.corrcoef(plain[:, 0], plain[:, 2])[0, 1]) < 0.1
+    one = np.array([[5.0, 7.0, 1.0, -1.0, 3.0, 3.0, 0.0]])
+    step_velocity(one, np.array([[2.0, 9.0]]), 0.5)
+    np.testing.assert_allclose(one[0, 2:4], [0.5 * 1.0 + 0.5 * 3.0, 0.5 * -1.0 + 0.5 * -2.0])
+
+
+def test_velocity_step_reaches_the_trackers_dynamics():
+    import pftrack
+
+    assert pftrack.create_tracker("fusion-pf", velocity_step=0.25).dynamics.velocity_step == 0.25
+    assert pftrack.create_tracker("color-pf").dynamics.velocity_step == 0.0

@@ -51,6 +51,10 @@ class ConstantVelocityScale:
     With ``mix_fraction > 0`` each call a random ``mix_fraction`` of the samples take their step from a second
     model: ``mix_factors`` (shape ``(7,)``) times ``noise_std`` (:func:`mix_noise`), e.g. a faster velocity for
     targets that swing past look-alikes. Off by default.
+
+    With ``velocity_step = b > 0`` each sample's velocity after the step keeps the share ``b`` of its whole
+    displacement, noise included (:func:`step_velocity`): ``b = 1`` is the second-order autoregressive model of
+    Isard & Blake's CONDENSATION, whose velocity is the last displacement. Off (0) by default: Eq. 9 as written.
     """
 
     dim = 7
@@ -58,8 +62,9 @@ class ConstantVelocityScale:
 
     def __init__(self, *, min_half_axis: float = 2.0, max_half_axis: float = 1e5, max_scale_rate: float = 0.1,
                  scale_damping: float = 1.0, wide_fraction: float = 0.0, wide_factor: float = 1.0,
-                 mix_fraction: float = 0.0, mix_factors: np.ndarray | None = None):
+                 mix_fraction: float = 0.0, mix_factors: np.ndarray | None = None, velocity_step: float = 0.0):
         self.scale_damping = float(scale_damping)
+        self.velocity_step = float(velocity_step)
         self.mix_fraction = float(mix_fraction)
         self.mix_factors = None if mix_factors is None else np.asarray(mix_factors, dtype=np.float64).reshape(7)
         self.wide_fraction = float(wide_fraction)
@@ -96,9 +101,13 @@ class ConstantVelocityScale:
         if self.mix_fraction > 0.0 and self.mix_factors is not None:
             mix_noise(self._noise, rng, self.mix_fraction, self.mix_factors)
         w, h = frame_size if frame_size is not None else (0.0, 0.0)
-        return propagate_cv_scale(states, self._noise, noise_std, damping=self.scale_damping,
-                                  min_half_axis=self.min_half_axis, max_half_axis=self.max_half_axis,
-                                  max_scale_rate=self.max_scale_rate, width=w, height=h)
+        before = states[:, X:Y + 1].copy() if self.velocity_step > 0.0 else None
+        region = propagate_cv_scale(states, self._noise, noise_std, damping=self.scale_damping,
+                                    min_half_axis=self.min_half_axis, max_half_axis=self.max_half_axis,
+                                    max_scale_rate=self.max_scale_rate, width=w, height=h)
+        if before is not None:
+            step_velocity(states, before, self.velocity_step)
+        return region
 
     def clip(self, states: np.ndarray) -> None:
         np.clip(states[:, HX], self.min_half_axis, self.max_half_axis, out=states[:, HX])
@@ -111,6 +120,16 @@ class ConstantVelocityScale:
         a = np.eye(7)
         a[X, VX] = a[Y, VY] = 1.0
         return a
+
+
+def step_velocity(states: np.ndarray, before: np.ndarray, share: float) -> np.ndarray:
+    """``v <- (1 - share) v + share (x - x_before)`` in place on the velocity columns of ``(N, 7)`` ``states``
+    whose centres moved from ``before`` (``(N, 2)``); returns ``states``. ``share = 1``: the velocity is the last
+    displacement (a second-order autoregressive model); 0: unchanged."""
+    v = states[:, VX:VY + 1]
+    v *= 1.0 - share
+    v += share * (states[:, X:Y + 1] - before)
+    return states
 
 
 def widen_position_noise(noise: np.ndarray, rng: np.random.Generator, fraction: float, factor: float) -> np.ndarray:

@@ -435,7 +435,7 @@ class ColorPF(CameraMotionMixin, ColorParticleFilter):
         self.dynamics = ConstantVelocityScale(min_half_axis=p.min_half_axis, max_scale_rate=p.max_scale_rate,
                                               scale_damping=p.scale_damping, wide_fraction=p.wide_fraction,
                                               wide_factor=p.wide_factor, mix_fraction=p.mix_fraction,
-                                              mix_factors=self._mix_factors())
+                                              mix_factors=self._mix_factors(), velocity_step=p.velocity_step)
 
     def _mix_factors(self) -> np.ndarray | None:
         """``mix_fraction``: the second model's noise over the first's, per state component (position and velocity;

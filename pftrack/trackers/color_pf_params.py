@@ -169,6 +169,11 @@ class ColorPFParams(ColorModelParams):
         "(scale-invariant). The paper leaves it open."))
     velocity_noise: float = param(0.1, ge=0, le=10, doc=(
         "Std of the noise on the velocity (vx, vy) per frame, as a fraction of the mean half-axis."))
+    velocity_step: float = param(0.0, ge=0, le=1, doc=(
+        "The share of each sample's whole step (velocity plus position noise) that its velocity keeps after the "
+        "dynamics of Eq. 9: v <- (1 - b) v' + b (x_t - x_(t-1)). 1 is the second-order autoregressive model of "
+        "Isard & Blake's CONDENSATION (each sample's velocity its last displacement), so a sample whose noise "
+        "moved it with the target keeps that motion when it is resampled. 0 (default): Eq. 9 as written."))
     wide_fraction: float = param(0.0, ge=0, le=1, doc=(
         "A heavy-tailed proposal for abrupt motion (a jerky camera, a low frame rate): each frame this share of "
         "the samples, drawn at random, takes wide_factor times the position noise of Eq. 9, so the set reaches a "
