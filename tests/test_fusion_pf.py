@@ -163,3 +163,44 @@ def test_contrast_shape_is_an_option_of_fusion_pf():
     assert t.params.contrast_shape == "ellipse" and pftrack.create_tracker("fusion-pf").params.contrast_shape == "box"
     with pytest.raises(pftrack.ParameterError):
         pftrack.create_tracker("fusion-pf", contrast_shape="circle")
+
+
+def _grey(frames):
+    import cv2
+
+    return [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
+
+
+def test_velocity_step_carries_the_samples_past_a_look_alike():
+    """Two identical targets swing past each other, the one in front hiding the other (the waving scene): with
+    velocity_step the samples keep the target's motion through each crossing instead of following the look-alike."""
+    from pftrack.synth import waving_scene
+
+    plain, stepped = [], []
+    for seed in range(3):
+        spec = waving_scene(seed)
+        gt, boxes, _ = run("fusion-pf", spec)
+        plain.append(iou(boxes, gt).mean())
+        gt, boxes, _ = run("fusion-pf", spec, velocity_step=0.25, velocity_noise=0.0)
+        stepped.append(iou(boxes, gt).mean())
+    assert min(stepped) > 0.7 and max(plain) < 0.5
+
+
+def test_grey_velocity_settings_keep_grey_input_on_the_former_dynamics():
+    """grey_velocity_step and grey_velocity_noise apply on grey input only: with them at fusion-pf's former values,
+    grey frames give the default's boxes, colour frames the option's."""
+    spec = simple_scene(2)
+    scene, frames, _ = render_scene(spec)
+    gt = scene.groundtruth(0)
+    opts = dict(velocity_step=0.25, velocity_noise=0.0)
+    keep = dict(opts, grey_velocity_step=0.0, grey_velocity_noise=0.025)
+
+    def boxes(fr, **params):
+        tr = pftrack.create_tracker("fusion-pf", seed=0, **params)
+        return np.array([tr.init(fr[0], gt[0]).box] + [tr.update(f).box for f in fr[1:]])
+
+    grey = _grey(frames)
+    np.testing.assert_array_equal(boxes(grey, **keep), boxes(grey))
+    assert not np.array_equal(boxes(grey, **opts), boxes(grey))
+    np.testing.assert_array_equal(boxes(frames, **keep), boxes(frames, **opts))
+    assert not np.array_equal(boxes(frames, **opts), boxes(frames))

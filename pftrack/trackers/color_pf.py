@@ -455,8 +455,11 @@ class ColorPF(CameraMotionMixin, ColorParticleFilter):
         pos = max(p.position_noise * hbar, p.min_noise_px)
         vel = p.velocity_noise * hbar
         rate = p.scale_rate_noise
-        if p.grey_scale_rate_noise is not None and self.cue.color_space == "gray":
-            rate = p.grey_scale_rate_noise
+        if self.cue.color_space == "gray":
+            if p.grey_scale_rate_noise is not None:
+                rate = p.grey_scale_rate_noise
+            if p.grey_velocity_noise is not None:
+                vel = p.grey_velocity_noise * hbar
         return np.array([pos, pos, vel, vel, p.size_noise * hx, p.size_noise * hy, rate])
 
     def _step_std(self, est: np.ndarray) -> np.ndarray:
@@ -475,8 +478,11 @@ class ColorPF(CameraMotionMixin, ColorParticleFilter):
     def _propagate(self, states: np.ndarray) -> tuple[float, float, float, float]:
         est = self.estimate
         fh, fw = self._shape
-        if self.params.camera_motion:
+        p = self.params
+        if p.camera_motion:
             self._camera_apply(states)
+        if p.grey_velocity_step is not None:
+            self.dynamics.velocity_step = p.grey_velocity_step if self.cue.color_space == "gray" else p.velocity_step
         return self.dynamics.propagate(states, self._noise_std(est[HX], est[HY]), self.rng, frame_size=(fw, fh))
 
     def _clip_states(self, states: np.ndarray) -> None:

@@ -229,6 +229,11 @@ class ColorPFParams(ColorModelParams):
     grey_scale_rate_noise: float | None = param(None, ge=0, le=1, doc=(
         "scale_rate_noise on grey input (the cue's colour space 'gray'), where the histogram observes the size "
         "more weakly still; None (default): scale_rate_noise."))
+    grey_velocity_noise: float | None = param(None, ge=0, le=10, doc=(
+        "velocity_noise on grey input (the cue's colour space 'gray'); None (default): velocity_noise."))
+    grey_velocity_step: float | None = param(None, ge=0, le=1, doc=(
+        "velocity_step on grey input (the cue's colour space 'gray'), whose weaker likelihood lets a velocity "
+        "learnt from the noise run further; None (default): velocity_step."))
     scale_damping: float = param(0.0, ge=0, le=1, doc=(
         "Factor kappa on the scale-change rate (adot_t = kappa adot_{t-1} + w). 1 is the paper's literal "
         "constant scale change; colour histograms observe scale weakly, so a persistent rate drifts the "
