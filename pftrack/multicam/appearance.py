@@ -21,7 +21,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["FEATURES", "box_regions", "region_histograms", "region_labels", "similarity", "similarity_matrix"]
+__all__ = ["FEATURES", "box_regions", "region_histograms", "region_labels", "rgb_patch", "similarity", "similarity_matrix"]
 
 FEATURES = ("whole", "ellipse1", "ellipse2", "positional")
 
@@ -72,16 +72,23 @@ def box_regions(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None =
     return patch, lab, n
 
 
+def rgb_patch(patch: np.ndarray) -> np.ndarray:
+    """A BGR patch's pixels in RGB order (the histograms' channels)."""
+    return cv2.cvtColor(patch, cv2.COLOR_BGR2RGB)
+
+
 def region_histograms(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None, raw: bool = False,
-                      parts: tuple[np.ndarray, np.ndarray, int] | None = None, **kw) -> np.ndarray:
+                      parts: tuple[np.ndarray, np.ndarray, int] | None = None, rgb: np.ndarray | None = None,
+                      **kw) -> np.ndarray:
     """``(regions, 3, 256)`` RGB histograms of the box's regions (foreground pixels only when ``fg``
     is given); normalised per channel over all regions unless ``raw`` (pixel counts, for CBTF). ``parts``: the
-    box's :func:`box_regions` of these arguments, when already computed."""
+    box's :func:`box_regions` of these arguments, when already computed; ``rgb``: its patch in RGB (:func:`rgb_patch`),
+    when already converted."""
     patch, lab, n = parts if parts is not None else box_regions(frame, box, feature, fg=fg, **kw)
     ok = lab >= 0
     out = np.zeros((n, 3, 256))
     if ok.any():
-        rgb = cv2.cvtColor(patch, cv2.COLOR_BGR2RGB)[ok].astype(np.int64)
+        rgb = (rgb_patch(patch) if rgb is None else rgb)[ok].astype(np.int64)
         reg = lab[ok].astype(np.int64)
         for c in range(3):
             out[:, c, :] = np.bincount(reg * 256 + rgb[:, c], minlength=n * 256).reshape(n, 256)

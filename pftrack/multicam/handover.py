@@ -26,7 +26,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ..cues.intensity import is_gray
-from .appearance import box_regions, region_histograms, region_labels, similarity_matrix
+from .appearance import box_regions, region_histograms, region_labels, rgb_patch, similarity_matrix
 from .btf import apply_btf_hist, cbtf, identity_btf, mbtf
 from .joint import joint_histogram, joint_similarity_matrix, mean_sparse, push_joint, transfer_matrices
 
@@ -93,11 +93,12 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
                 continue
             a = out[tid]
             parts = box_regions(img, box, feature, fg=mask)  # the region map, once for both histograms
-            a._acc.append(region_histograms(img, box, feature, fg=mask, parts=parts))
-            a.raw += region_histograms(img, box, "whole", fg=mask, raw=True)[0]
+            rgb = rgb_patch(parts[0])  # and the patch in RGB, once for the three
+            a._acc.append(region_histograms(img, box, feature, fg=mask, parts=parts, rgb=rgb))
+            a.raw += region_histograms(img, box, "whole", fg=mask, raw=True, rgb=rgb)[0]
             a.samples += 1
             if joint:
-                cells, masses, _ = joint_histogram(img, box, feature, fg=mask, parts=parts)
+                cells, masses, _ = joint_histogram(img, box, feature, fg=mask, parts=parts, rgb=rgb)
                 if len(cells):
                     joints.setdefault(tid, []).append((cells, masses))
     joint = joint and 2 * grey_frames <= frames_read  # a grey camera: the channels' histograms

@@ -16,10 +16,9 @@ and their masses, summing to 1 over the box.
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 
-from .appearance import box_regions
+from .appearance import box_regions, rgb_patch
 
 __all__ = ["COMPARE_LEVELS", "JOINT_LEVELS", "joint_histogram", "joint_similarity_matrix", "mean_sparse",
            "push_joint", "transfer_matrices"]
@@ -29,18 +28,18 @@ COMPARE_LEVELS = 8   # levels a channel as compared (bins of 32 grey levels)
 
 
 def joint_histogram(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None,
-                    levels: int = JOINT_LEVELS, parts: tuple[np.ndarray, np.ndarray, int] | None = None
-                    ) -> tuple[np.ndarray, np.ndarray, int]:
+                    levels: int = JOINT_LEVELS, parts: tuple[np.ndarray, np.ndarray, int] | None = None,
+                    rgb: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int]:
     """``(cells, masses, regions)``: the sparse joint RGB histogram of the box's regions (:func:`box_regions`;
-    ``parts``: that of these arguments, when already computed), foreground pixels only when ``fg`` is given; the
-    masses sum to 1 (none when no pixel counts)."""
+    ``parts``: that of these arguments, when already computed; ``rgb``: its patch in RGB, when already converted),
+    foreground pixels only when ``fg`` is given; the masses sum to 1 (none when no pixel counts)."""
     if 256 % levels:
         raise ValueError("levels must divide 256")
     patch, lab, n = parts if parts is not None else box_regions(frame, box, feature, fg=fg)
     ok = lab >= 0
     if not ok.any():
         return np.zeros(0, np.int64), np.zeros(0), n
-    rgb = cv2.cvtColor(patch, cv2.COLOR_BGR2RGB)[ok].astype(np.int64) // (256 // levels)
+    rgb = (rgb_patch(patch) if rgb is None else rgb)[ok].astype(np.int64) // (256 // levels)
     flat = lab[ok].astype(np.int64) * levels ** 3 + (rgb[:, 0] * levels + rgb[:, 1]) * levels + rgb[:, 2]
     cells, counts = np.unique(flat, return_counts=True)
     return cells, counts / counts.sum(), n
