@@ -21,7 +21,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["FEATURES", "box_regions", "region_histograms", "region_labels", "rgb_patch", "similarity", "similarity_matrix"]
+__all__ = ["FEATURES", "box_regions", "region_histograms", "region_labels", "rgb_patch", "similarity",
+           "similarity_matrix"]
 
 FEATURES = ("whole", "ellipse1", "ellipse2", "positional")
 
