@@ -60,6 +60,30 @@ def test_no_reading_where_the_map_does_not_separate_the_object_or_the_window_is_
     assert object_area(_integral(p), 0, 0, 1, (31.0, 100.0, 15.0, 30.0)) is not None
 
 
+def test_with_the_frame_only_the_windows_part_inside_it_must_be_covered():
+    """mass_frame: the map is the whole frame; an object near its bottom edge, whose window (twice the box) runs
+    past the edge, is read with the frame given (its pixel count within 6 %, from boxes 0.8-1.1 of it), and not
+    without; a window cut by the quantised region's edge inside the frame is still refused."""
+    p, n = _ellipse_map(h=160, cy=125.0)  # the box's bottom at 155, the window's at 185, the frame's at 160
+    ii = _integral(p)
+    assert object_area(ii, 0, 0, 1, (120.0, 125.0, 15.0, 30.0)) is None
+    for f in (0.8, 1.0, 1.1):
+        area, _ = object_area(ii, 0, 0, 1, (120.0, 125.0, 15.0 * f, 30.0 * f), frame=(240, 160))
+        assert area == pytest.approx(n, rel=0.06)
+    # the same map as a region quantised inside a larger frame: its edge is not the frame's
+    assert object_area(ii, 0, 0, 1, (120.0, 125.0, 15.0, 30.0), frame=(240, 300)) is None
+    # the compiled path and the reference agree
+    from pftrack._numba import set_numba_enabled
+
+    on = object_area(ii, 0, 0, 1, (120.0, 125.0, 15.0, 30.0), frame=(240, 160))
+    before = set_numba_enabled(False)
+    try:
+        off = object_area(ii, 0, 0, 1, (120.0, 125.0, 15.0, 30.0), frame=(240, 160))
+    finally:
+        set_numba_enabled(before)
+    assert off == pytest.approx(on, rel=1e-12)
+
+
 def test_mass_factor_moves_by_a_share_of_the_ratio_in_log_scale_clipped():
     assert mass_factor((400.0, 20.0), 400.0, 20.0, 0.25) == 1.0
     assert mass_factor((400.0, 20.0), 400.0 * 1.1 ** 2, 20.0, 0.5) == pytest.approx(1.1 ** 0.5)

@@ -68,7 +68,7 @@ def _mass_numba(ii, x0, y0, pitch, X0, Y0, X1, Y1):  # pragma: no cover - compil
 
 
 @njit(cache=True)
-def _area_numba(ii, x0, y0, pitch, cx, cy, hx, hy, gate, core, inner, outer):  # pragma: no cover - compiled
+def _area_numba(ii, x0, y0, pitch, cx, cy, hx, hy, gate, core, inner, outer, fw, fh):  # pragma: no cover - compiled
     """:func:`object_area` in one call: ``(A, separation)``, or NaNs where it gives None (the same operations)."""
     nan = (math.nan, math.nan)
     if not (hx > 0 and hy > 0):
@@ -76,6 +76,10 @@ def _area_numba(ii, x0, y0, pitch, cx, cy, hx, hy, gate, core, inner, outer):  #
     mc, nc = _mass_numba(ii, x0, y0, pitch, cx - core * hx, cy - core * hy, cx + core * hx, cy + core * hy)
     X0, Y0, X1, Y1 = cx - inner * hx, cy - inner * hy, cx + inner * hx, cy + inner * hy
     mass, n = _mass_numba(ii, x0, y0, pitch, X0, Y0, X1, Y1)
+    if fw > 0:  # the window's part inside the frame is what must be covered
+        X0, Y0, X1, Y1 = max(X0, 0.0), max(Y0, 0.0), min(X1, fw), min(Y1, fh)
+        if X1 <= X0 or Y1 <= Y0:
+            return nan
     mo, no = _mass_numba(ii, x0, y0, pitch, cx - outer * hx, cy - outer * hy, cx + outer * hx, cy + outer * hy)
     if nc == 0 or n < 0.95 * ((X1 - X0) * (Y1 - Y0) / (pitch * pitch)) or no - n < 4:
         return nan
@@ -96,22 +100,30 @@ def _cells(pitch: int, rect: tuple[float, float, float, float]) -> float:
     return (rect[2] - rect[0]) * (rect[3] - rect[1]) / (pitch * pitch)
 
 
-def object_area(ii: np.ndarray, x0: float, y0: float, pitch: int, ellipse, *, gate: float = 0.8
-                ) -> tuple[float, float] | None:
+def object_area(ii: np.ndarray, x0: float, y0: float, pitch: int, ellipse, *, gate: float = 0.8,
+                frame: tuple[int, int] | None = None) -> tuple[float, float] | None:
     """``(A, p_t - p_b)``: the object's area in pixels around the box of ``ellipse`` ``(cx, cy, hx, hy)`` and the
     map's separation (module docstring), or None when the map does not separate the object (below ``gate``), the
     window is cut by the lattice's edge (less than 95 % of it inside), the ring holds fewer than 4 samples, or the
-    area is not positive."""
+    area is not positive. With ``frame = (width, height)`` only the window's part inside the frame must be covered:
+    beyond the frame's edge there is nothing to count (the visible area is read, as single-object benchmarks box a
+    target at the edge), so a target near the edge of a small frame is read too."""
     cx, cy, hx, hy = (float(v) for v in ellipse)
+    fw, fh = (float(frame[0]), float(frame[1])) if frame is not None else (0.0, 0.0)
     if numba_enabled() and ii.dtype == np.float64 and ii.ndim == 2:
         area, sep = _area_numba(ii, float(x0), float(y0), int(pitch), cx, cy, hx, hy, float(gate), CORE, INNER,
-                                OUTER)
+                                OUTER, fw, fh)
         return None if area != area else (area, sep)
     if not (hx > 0 and hy > 0):
         return None
     core = window_mass(ii, x0, y0, pitch, _rect(cx, cy, hx, hy, CORE))
     inner_rect = _rect(cx, cy, hx, hy, INNER)
     mass, n = window_mass(ii, x0, y0, pitch, inner_rect)
+    if fw > 0:
+        inner_rect = (max(inner_rect[0], 0.0), max(inner_rect[1], 0.0), min(inner_rect[2], fw),
+                      min(inner_rect[3], fh))
+        if inner_rect[2] <= inner_rect[0] or inner_rect[3] <= inner_rect[1]:
+            return None
     outer, n_outer = window_mass(ii, x0, y0, pitch, _rect(cx, cy, hx, hy, OUTER))
     if core[1] == 0 or n < 0.95 * _cells(pitch, inner_rect) or n_outer - n < 4:
         return None

@@ -179,6 +179,10 @@ class FusionPFParams(ColorPFParams):
     mass_gate: float = param(0.8, ge=0, le=1, doc=(
         "The least separation (the mean foreground probability of the box's core minus that of the ring around "
         "the window) at which mass_size reads the map."))
+    mass_frame: bool = param(False, doc=(
+        "With mass_size: the window whose mass is read must lie in the quantised region only where it is inside "
+        "the frame; beyond the frame's edge there is nothing to count. False (default): the whole window (twice "
+        "the box), so a target within a box's height of the edge of a small frame is not read."))
     aspect_search: float = param(0.0, ge=0, le=0.5, doc=(
         "a > 0: after the size search, the estimate's box at the shapes (hx/(1+a), hy(1+a)), (hx, hy) and "
         "(hx(1+a), hy/(1+a)) (the same area) is compared with the structural cue's references by NCC, and the "

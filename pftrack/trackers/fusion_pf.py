@@ -276,7 +276,8 @@ class FusionPF(ColorPF):
             return 1.0  # no map of this frame
         feats = self._ii_of[1]
         ell = estimate[_ELL_COLS]
-        read = object_area(self._ii, feats.x0, feats.y0, feats.pitch, ell, gate=self.params.mass_gate)
+        frame = (self._shape[1], self._shape[0]) if self.params.mass_frame else None
+        read = object_area(self._ii, feats.x0, feats.y0, feats.pitch, ell, gate=self.params.mass_gate, frame=frame)
         if read is None:
             return 1.0
         size = float(np.sqrt(ell[2] * ell[3]))
