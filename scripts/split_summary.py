@@ -127,6 +127,14 @@ def size_ratio(boxes: np.ndarray, truth: np.ndarray) -> float:
     return float(np.median(np.sqrt(np.abs(b[ok, 2] * b[ok, 3]) / (t[ok, 2] * t[ok, 3]))))
 
 
+def column_labels(names: list[str], width: int = 24) -> list[str]:
+    """The names as column headings when each fits ``width`` characters; otherwise the letters A, B, ... (the
+    table then prints which tracker each letter is), so that no two columns read alike."""
+    if all(len(n) <= width for n in names):
+        return list(names)
+    return [chr(ord("A") + i) if i < 26 else f"T{i}" for i in range(len(names))]
+
+
 def by_kind(rows: list[dict], runs: Path, scenes: list[str] | None) -> None:
     """Mean AUC per tracker and scene kind; with ``scenes``, the boxes' size against the truth's (:func:`size_ratio`,
     the median over the runs of a kind)."""
@@ -154,7 +162,11 @@ def by_kind(rows: list[dict], runs: Path, scenes: list[str] | None) -> None:
     trackers = sorted({t for t, _ in auc})
     kinds = sorted({k for _, k in auc})
     print("\nmean AUC by kind" + (" (box size against the truth's, sqrt of the areas, second half)" if sizes else ""))
-    print(f"{'kind':16s} " + " ".join(f"{t[:24]:>24s}" for t in trackers))
+    labels = column_labels(trackers)
+    for label, t in zip(labels, trackers):
+        if label != t:
+            print(f"  {label}: {t}")
+    print(f"{'kind':16s} " + " ".join(f"{t:>24s}" for t in labels))
     for k in kinds:
         cells = []
         for t in trackers:

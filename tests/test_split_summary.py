@@ -128,3 +128,14 @@ def test_by_kind_gives_the_mean_auc_and_the_boxes_size_per_scene_kind(tmp_path):
     assert real.split()[1:] == ["0.500"]
     assert "mean AUC by kind" not in subprocess.run([sys.executable, str(SCRIPT), str(results)], capture_output=True,
                                                     text=True, check=True).stdout
+
+
+def test_by_kind_columns_of_long_tracker_names_are_lettered():
+    sys.path.insert(0, str(SCRIPT.parent))
+    try:
+        from split_summary import column_labels
+    finally:
+        sys.path.pop(0)
+    assert column_labels(["color-pf", "fusion-pf"]) == ["color-pf", "fusion-pf"]
+    long = ["fusion-pf", "fusion-pf[velocity_step=0.25;velocity_noise=0]", "fusion-pf[velocity_step=0.25]"]
+    assert column_labels(long) == ["A", "B", "C"]
