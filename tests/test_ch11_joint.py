@@ -105,6 +105,15 @@ def test_a_track_keeps_its_mean_joint_histogram_and_empty_frames_count():
         describe_tracks(frames.get, rows, "positional", histogram="lab")
 
 
+def test_a_box_beyond_the_frame_counts_as_an_empty_sample():
+    """A ground-truth box that lies wholly outside the frame (MOTChallenge boxes may) gives no pixels: the track
+    keeps the sample as empty, as before the patch's colour conversion was shared, and nothing fails."""
+    img = _image(4, (100, 100))
+    rows = np.array([[1, 7, 0, 0, 40, 40], [2, 7, 120, 10, 30, 40]], dtype=float)
+    app = describe_tracks({1: img, 2: img}.get, rows, "positional", every=1, histogram="joint")[7]
+    assert app.samples == 2
+    assert app.joint[1].sum() == pytest.approx(1 / 2)
+
 def test_links_compare_joint_histograms_when_both_cameras_have_them():
     rng = np.random.default_rng(5)
     imgs = [rng.integers(0, 256, (40, 20, 3)).astype(np.uint8) for _ in range(2)]
