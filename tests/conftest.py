@@ -89,6 +89,13 @@ def render_scene(spec):
     return _render(spec)
 
 
+def grey_frames(frames):
+    """BGR frames as a grey camera gives them: three equal channels (OpenCV's grey levels)."""
+    import cv2
+
+    return [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

@@ -9,7 +9,7 @@ from pftrack.cues.contrast import box_counts, contrast_scores, foreground_lut, p
 from pftrack.geometry import iou
 from pftrack.synth import SceneSpec, Target, occlusion_scene, simple_scene
 
-from .conftest import render_scene
+from .conftest import grey_frames, render_scene
 
 
 def test_foreground_lut():
@@ -165,12 +165,6 @@ def test_contrast_shape_is_an_option_of_fusion_pf():
         pftrack.create_tracker("fusion-pf", contrast_shape="circle")
 
 
-def _grey(frames):
-    import cv2
-
-    return [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
-
-
 def test_velocity_step_carries_the_samples_past_a_look_alike():
     """Two identical targets swing past each other, the one in front hiding the other (the waving scene): with
     velocity_step the samples keep the target's motion through each crossing instead of following the look-alike."""
@@ -199,7 +193,7 @@ def test_grey_velocity_settings_keep_grey_input_on_the_former_dynamics():
         tr = pftrack.create_tracker("fusion-pf", seed=0, **params)
         return np.array([tr.init(fr[0], gt[0]).box] + [tr.update(f).box for f in fr[1:]])
 
-    grey = _grey(frames)
+    grey = grey_frames(frames)
     np.testing.assert_array_equal(boxes(grey, **keep), boxes(grey))
     assert not np.array_equal(boxes(grey, **opts), boxes(grey))
     np.testing.assert_array_equal(boxes(frames, **keep), boxes(frames, **opts))

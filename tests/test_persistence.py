@@ -8,7 +8,7 @@ import pftrack
 from pftrack.filtering.loss import FusedLoss, LossDetector
 from pftrack.trackers.persistence import START_RADIUS, plausible, streak_step
 
-from .conftest import shared_sequence
+from .conftest import grey_frames, shared_sequence
 
 
 def _fused(mu_t=(0.95, 0.88), sd_t=(0.03, 0.06), background=(0.85, 0.55)):
@@ -48,10 +48,6 @@ def test_a_streak_follows_one_place_near_the_loss():
     assert streak_step(None, (100.0, 100.0), size, None, True) is None  # nowhere to start from
 
 
-def _grey(frames):
-    return [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
-
-
 @pytest.mark.shared_data
 @pytest.mark.parametrize("seed", [0, 1])
 def test_a_changed_target_in_grey_video_is_taken_again(seed):
@@ -61,7 +57,7 @@ def test_a_changed_target_in_grey_video_is_taken_again(seed):
     baby, and the search shrinks to less than half of that. Measured with the grey-patch structural cue; the
     gradient cue (the default on grey input) loses the turning baby on far fewer frames, with or without it."""
     path = shared_sequence("otb_dragonbaby")
-    frames = _grey(list(pftrack.open_source(str(path))))
+    frames = grey_frames(list(pftrack.open_source(str(path))))
     gt = np.array(pftrack.io.datasets.read_sequence(path).groundtruth, dtype=np.float64)
 
     def lost_frames(**params):

@@ -74,8 +74,9 @@ def box_regions(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None =
 
 
 def rgb_patch(patch: np.ndarray) -> np.ndarray:
-    """A BGR patch's pixels in RGB order (the histograms' channels)."""
-    return cv2.cvtColor(patch, cv2.COLOR_BGR2RGB)
+    """A BGR patch's pixels in RGB order (the histograms' channels); an empty patch (a box beyond the frame) stays
+    empty."""
+    return cv2.cvtColor(patch, cv2.COLOR_BGR2RGB) if patch.size else patch[..., ::-1]
 
 
 def region_histograms(frame: np.ndarray, box, feature: str, *, fg: np.ndarray | None = None, raw: bool = False,

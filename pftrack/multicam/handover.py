@@ -93,7 +93,7 @@ def describe_tracks(frames: Callable[[int], np.ndarray | None], rows: np.ndarray
                 continue
             a = out[tid]
             parts = box_regions(img, box, feature, fg=mask)  # the region map, once for both histograms
-            rgb = rgb_patch(parts[0]) if parts[0].size else None  # and the patch in RGB, once for the three
+            rgb = rgb_patch(parts[0])  # and the patch in RGB, once for the three
             a._acc.append(region_histograms(img, box, feature, fg=mask, parts=parts, rgb=rgb))
             a.raw += region_histograms(img, box, "whole", fg=mask, raw=True, rgb=rgb)[0]
             a.samples += 1

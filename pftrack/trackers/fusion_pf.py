@@ -23,6 +23,8 @@ documented parameter with an ablation in ``docs/fusion-pf.md``:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..cues.contrast import (
@@ -280,7 +282,7 @@ class FusionPF(ColorPF):
         read = object_area(self._ii, feats.x0, feats.y0, feats.pitch, ell, gate=self.params.mass_gate, frame=frame)
         if read is None:
             return 1.0
-        size = float(np.sqrt(ell[2] * ell[3]))
+        size = math.sqrt(float(ell[2]) * float(ell[3]))
         if self._mass_ref is None:
             self._mass_ref = (read[0], size)
             return 1.0
