@@ -1,7 +1,7 @@
 """Does the tracked box's appearance break when the tracker switches between look-alikes? (a diagnosis)
 
     python scripts/switch_appearance.py VIEWS --tracker fusion-pf --seeds 0,1 --out trace.npz
-    python scripts/switch_appearance.py VIEWS SEQS ... --load trace.npz          # the tables again, no tracking
+    python scripts/switch_appearance.py VIEWS SEQS ... --load trace.npz   # these folders' tables again, no tracking
 
 Each sequence is tracked once per seed. On every frame the box's appearance is book ch. 11's two-ellipse layout
 (torso and legs) as the hand-over's joint colour histogram (:mod:`pftrack.multicam.joint`, 8 levels a channel).
@@ -11,11 +11,11 @@ before, and its *break* the lag's z-score against the lags of up to ``BASE`` fra
 (``scripts/make_pets_views.py``) a *switch* is the first frame on another annotated walker (``views_flag_trace``'s
 ``walker_on``) while the overlap with the person is under 0.3, within 10 frames of an overlap of 0.5 or more.
 
-Printed: the lowest break within ``[-8, +5]`` frames of each switch, against the share of the frames on the target
-(IoU >= 0.5) whose break falls below it, per folder given; and a *doubt flag* simulated on the recorded tracks
-(the tracker's path unchanged): a break below ``z`` raises the flag for at most ``T`` frames, and it falls again as
-soon as the box's histogram is back within ``c`` spreads of the lag's mean against the mean histogram before the
-break. Diagnosis only: it chooses nothing.
+Printed per folder given: the breaks that the lowest break within ``[-8, +5]`` frames of a quarter and of half of
+the switches reach, with the share of the frames on the target (IoU >= 0.5) below each; and a *doubt flag* simulated
+on the recorded tracks (the tracker's path unchanged): a break below ``z`` raises the flag for at most ``T`` frames,
+and it falls again as soon as the box's histogram is back within ``c`` spreads of the lag's mean against the mean
+histogram before the break. Diagnosis only: it chooses nothing.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from views_flag_trace import view_walkers, walker_on  # noqa: E402
 from pftrack.geometry import iou  # noqa: E402
 from pftrack.io.datasets import read_sequence  # noqa: E402
 from pftrack.multicam.btf import identity_btf  # noqa: E402
-from pftrack.multicam.joint import joint_histogram, push_joint  # noqa: E402
+from pftrack.multicam.joint import joint_histogram, joint_similarity_matrix, push_joint  # noqa: E402
 from pftrack.trackers import create_tracker  # noqa: E402
 
 LAG_NEAR, LAG_FAR = 5, 15   # the lag's reference: the box's histograms 15 to 6 frames before
@@ -51,8 +51,7 @@ def descriptor(frame: np.ndarray, box) -> np.ndarray:
 
 def similarity(h: np.ndarray, ref: np.ndarray) -> float:
     """``1 - D_B`` of two histograms (Eq. 24 on one joint histogram)."""
-    bc = float(np.sqrt(np.asarray(h, np.float64)) @ np.sqrt(np.asarray(ref, np.float64)))
-    return 1.0 - float(np.sqrt(min(max(1.0 - bc, 0.0), 1.0)))
+    return float(joint_similarity_matrix(np.asarray(h)[None], np.asarray(ref)[None])[0, 0])
 
 
 def lag_similarities(desc: np.ndarray, first: np.ndarray) -> np.ndarray:
@@ -189,8 +188,10 @@ def main() -> None:
     runs: list[tuple[str, dict]] = []
     if args.load:
         data = np.load(args.load, allow_pickle=False)
-        for key in sorted({k.rsplit("/", 1)[0] for k in data.files}):
+        for key in dict.fromkeys(k.rsplit("/", 1)[0] for k in data.files):  # the runs in the order traced
             group = key.split("|", 1)[0]
+            if group not in {f.name for f in args.folders}:  # the folders asked for, of those saved
+                continue
             runs.append((group, {f: data[f"{key}/{f}"] for f in ("tiou", "walker", "lost", "desc", "first")}))
     else:
         pets = None
