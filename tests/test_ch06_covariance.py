@@ -9,6 +9,8 @@ from scipy.linalg import expm, logm
 from pftrack.cues import covariance as cv
 from pftrack.cues import covariance_search as cs
 
+from .conftest import grey_frames
+
 
 def _spd(rng, d=9, n=None):
     shape = (d, d) if n is None else (n, d, d)
@@ -228,8 +230,6 @@ def test_compiled_le_mean_equals_the_numpy_form():
 def test_covariance_tracker_follows_a_grey_target_by_refining_around_the_last_box():
     """On grey input (one intensity channel) the coarse level's ranking missed the target on every frame of these
     scenes (AUC 0.02); refining around the last box as well keeps it (``refine_last``, the default)."""
-    import cv2
-
     import pftrack
     from pftrack.eval.metrics import ope_scores
     from pftrack.synth import Scene, simple_scene
@@ -237,7 +237,7 @@ def test_covariance_tracker_follows_a_grey_target_by_refining_around_the_last_bo
     for seed in (0, 2):
         sc = Scene(simple_scene(seed, n_frames=25))
         frames, gt = sc.frames(), sc.groundtruth(0)
-        grey = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
+        grey = grey_frames(frames)
         auc = {}
         for refine_last in (True, False):
             t = pftrack.create_tracker("covariance", refine_last=refine_last)

@@ -17,6 +17,8 @@ from pftrack.events.scoring import bhattacharyya_distance, patch_similarity, ssd
 from pftrack.events.tripwire import TrackerlessTripwire, TripwireParams, estimate_radius
 from pftrack.synth.traffic import export_traffic, traffic_scene
 
+from .conftest import grey_frames
+
 WIRE = np.array([[100.0, 200.0], [300.0, 200.0]])
 
 def test_patches_of_a_straight_wire():
@@ -420,11 +422,9 @@ def test_trackerless_tripwire_counts_through_a_jump_of_the_white_balance(warm, o
     times 1.3; also seen by a grey camera), from frame 15, 25 or 40: with the jump undone (cast_jump, light_jump,
     light_jump_grey, the defaults) the two crossings are found once each at their frames; without, the jump's frame
     gives a false event or puts a crossing off its frame (measured: all three, each)."""
-    import cv2
-
     wire, frames = _two_movers()
     if grey:
-        frames = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
+        frames = grey_frames(frames)
 
     def crossings(at, **kw):
         cast = [np.clip(np.rint(f * warm), 0, 255).astype(np.uint8) if k >= at else f for k, f in enumerate(frames)]

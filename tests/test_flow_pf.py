@@ -10,7 +10,7 @@ from pftrack.geometry import iou
 from pftrack.synth import simple_scene
 from pftrack.trackers.flow_pf import FlowPFGroup, FlowPFParams, _untracked_share
 
-from .conftest import render_scene
+from .conftest import grey_frames, render_scene
 
 
 def test_closed_form_emd_is_exact_against_the_general_solver(rng):
@@ -169,8 +169,6 @@ def test_subspace_update_is_gated_by_distance():
 def test_on_grey_input_the_colour_distance_is_the_value_channels():
     """Hue and saturation are 0 in every box of a grey frame: their zero distances flattened the likelihood
     threefold (``grey_value_only``, default on, keeps V's alone); colour frames are unchanged."""
-    import cv2
-
     from pftrack.eval.metrics import ope_scores
     from pftrack.synth import Scene
 
@@ -178,7 +176,7 @@ def test_on_grey_input_the_colour_distance_is_the_value_channels():
     for seed in (1, 2):
         sc = Scene(simple_scene(seed, n_frames=40))
         frames, gt = sc.frames(), sc.groundtruth(0)
-        grey = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
+        grey = grey_frames(frames)
         for v_only in (True, False):
             t = pftrack.create_tracker("flow-pf", seed=0, grey_value_only=v_only)
             t.init(grey[0], tuple(gt[0]))

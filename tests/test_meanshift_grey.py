@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import pytest
 
 import pftrack
 from pftrack.eval.metrics import ope_scores
 from pftrack.synth import Scene, simple_scene
+
+from .conftest import grey_frames
 
 
 def _auc(name, frames, gt, **params):
@@ -26,7 +27,7 @@ def test_mean_shift_follows_a_grey_target_with_grey_features(name):
     for seed in (0, 3):
         sc = Scene(simple_scene(seed, n_frames=40))
         frames, gt = sc.frames(), sc.groundtruth(0)
-        grey = [cv2.cvtColor(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for f in frames]
+        grey = grey_frames(frames)
         auto.append(_auc(name, grey, gt))
         rgb.append(_auc(name, grey, gt, color_space="rgb"))
         # colour frames: "auto" is RGB, the same boxes as before
