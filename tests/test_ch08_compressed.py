@@ -389,3 +389,23 @@ def test_detections_found_on_the_decoding_thread_equal_those_found_on_call(tmp_p
         assert (f1 is None) == (f2 is None)
         if f1 is not None:
             np.testing.assert_array_equal(f1[0], f2[0])
+
+
+def test_mpeg7_marks_each_run_of_high_activity_once(tmp_path):
+    import xml.etree.ElementTree as ET
+
+    from pftrack.io.mpeg7 import write_mpeg7
+
+    activity = [(1, 1), (2, 4), (3, 5), (4, 2), (5, 4), (6, 4)]  # two runs at level >= 4: frames 2-3 and 5-6 (the end)
+    path = write_mpeg7({3: [(2, 10.0, 20.0), (1, 5.0, 6.0)], 7: []}, activity, tmp_path / "a.xml", fps=25)
+    root = ET.parse(path).getroot()
+    ns = "{urn:mpeg:mpeg7:schema:2001}"
+    videos = root.findall(f".//{ns}Video")
+    assert [v.get("id") for v in videos] == ["object3"]  # a label without points has no description
+    keys = videos[0].find(f".//{ns}CoordKeyPoints")
+    assert [t.text for t in keys.findall(f"{ns}MediaTimePoint")] == ["T00:00:00:0F25", "T00:00:00:1F25"]
+    assert keys.find(f"{ns}KeyValue[@dim='x']").text == "5.0 10.0"
+    assert keys.find(f"{ns}KeyValue[@dim='y']").text == "6.0 20.0"
+    segs = [(s.find(f".//{ns}MediaTimePoint").text, s.find(f".//{ns}MediaIncrDuration").text,
+             s.find(f".//{ns}Intensity").text) for s in root.findall(f".//{ns}VideoSegment")]
+    assert segs == [("T00:00:00:1F25", "2", "5"), ("T00:00:00:4F25", "2", "4")]

@@ -24,6 +24,8 @@ from pftrack.calibration.scene import (
     Scene,
     ceiling_camera,
     default_scene,
+    load_scene,
+    random_scene,
     scene_from_dict,
 )
 from pftrack.cli import main
@@ -218,3 +220,27 @@ def test_calibrate_sim_cli(tmp_path, capsys):
     assert main(["calibrate-sim", "--scene", str(bad)]) == 2
     assert main(["calibrate-sim", "--scene", str(tmp_path / "missing.json")]) == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_calibrate_sim_cli_prints_each_sensor_and_guards_its_inputs(tmp_path, capsys):
+    scene = default_scene().to_dict()
+    scene["robot"]["duration_s"] = 60
+    sp = tmp_path / "scene.json"
+    sp.write_text(json.dumps(scene))
+    assert main(["calibrate-sim", "--scene", str(sp)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert sum(line.startswith("lrf ") for line in lines) == len(scene["lrfs"]) == 3
+    assert sum(line.startswith("camera ") for line in lines) == len(scene["cameras"]) == 4
+    assert lines[-1].startswith("summary: LRF max") and "EKF position RMSE" in lines[-1]
+    # the scene a random seed draws is written and read back as the same scene, with nothing calibrated
+    drawn = tmp_path / "drawn.json"
+    assert main(["calibrate-sim", "--random-scene", "5", "--write-scene", str(drawn)]) == 0
+    assert capsys.readouterr().out == ""
+    assert load_scene(drawn).to_dict() == random_scene(5).to_dict()
+    assert main(["calibrate-sim", "--scene", str(sp), "--random-scene", "5"]) == 2
+    assert "not both" in capsys.readouterr().err
+    empty = dict(scene, lrfs=[], cameras=[])
+    ep = tmp_path / "empty.json"
+    ep.write_text(json.dumps(empty))
+    assert main(["calibrate-sim", "--scene", str(ep)]) == 2
+    assert "nothing to calibrate" in capsys.readouterr().err
