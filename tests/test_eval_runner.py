@@ -55,6 +55,27 @@ def test_tracker_spec_parsing():
     assert any(c.name == "opencv-csrt" for c in parse_tracker_list("opencv"))
 
 
+@pytest.mark.parametrize("text, message", [
+    ("color-pf[n_particles=30", "malformed tracker spec"),
+    ("color-pf[n_particles]", "expected key=value"),
+    ("color-pf,color-pf", "listed twice"),
+    (" , ", "no trackers given"),
+])
+def test_bad_tracker_lists_are_named_in_one_message(text, message):
+    with pytest.raises(pftrack.ParameterError, match=message):
+        parse_tracker_list(text)
+
+
+def test_multi_target_specs_for_the_mot_protocol():
+    cfgs = parse_tracker_list("multi-pf, multi-pf[n_particles=40;occlusion=false]", protocol="mot")
+    assert [c.name for c in cfgs] == ["multi-pf", "multi-pf"]
+    assert cfgs[1].param_dict == {"n_particles": "40", "occlusion": "false"}
+    for text, message in [("color-pf", "unknown multi-target tracker spec"), ("multi-pf[n_particles]", "key=value"),
+                          ("multi-pf[bogus=1]", "bogus"), ("", "no trackers given")]:
+        with pytest.raises(pftrack.ParameterError, match=message):
+            parse_tracker_list(text, protocol="mot")
+
+
 def test_runner_same_results_with_1_and_2_workers_and_dask(dataset):
     jobs = jobs_for(dataset)
     assert len(jobs) == 2 * (2 + 1)  # meanshift is deterministic: one seed
