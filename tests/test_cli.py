@@ -1,5 +1,7 @@
 """The command line: the happy path and every bad-input case exits with code 2 and one line."""
 
+import sys
+
 import cv2
 import numpy as np
 import pytest
@@ -241,3 +243,14 @@ def test_coordinates_may_start_with_a_minus_sign(clip, tmp_path, capsys):
                "--param", "n_particles=50"])
     assert rc == 0, capsys.readouterr().err
     assert read_track_csv(out).shape == (20, 7)
+
+
+def test_the_reproduce_command_leaves_out_the_output_options(monkeypatch):
+    from pftrack.cli.common import reproduce_command
+
+    monkeypatch.setattr(sys, "argv", ["/somewhere/bin/pftrack", "eval", "my data", "--doc", "out.md", "--seeds", "3",
+                                      "--doc=other.md", "--trackers", "color-pf[n_particles=50]"])
+    assert reproduce_command(drop=("--doc",)) == ("pftrack eval 'my data' --seeds 3 "
+                                                  "--trackers 'color-pf[n_particles=50]'")
+    monkeypatch.setattr(sys, "argv", ["python", "-m", "pftrack"])  # not the installed command: no line to give
+    assert reproduce_command() is None
