@@ -391,6 +391,32 @@ def test_mot_and_jsonl_sinks(tmp_path):
     assert json.loads((tmp_path / "r.jsonl").read_text()) == {"frame": 1, "box": [1.0, 2.0, 3.0, 4.0]}
 
 
+def test_jsonl_sink_takes_numpy_scalars_and_refuses_what_json_cannot_hold(tmp_path):
+    with JsonLinesSink(tmp_path / "r.jsonl") as j:
+        j.write({"frame": np.int64(2), "score": np.float32(0.5), "lost": np.bool_(True)})
+        with pytest.raises(TypeError, match="cannot serialise object"):
+            j.write({"frame": 3, "extra": object()})
+        with pytest.raises(ValueError):  # NaN is not JSON: a record with one is refused, not written as NaN
+            j.write({"frame": 4, "score": float("nan")})
+    assert [json.loads(line) for line in (tmp_path / "r.jsonl").read_text().splitlines()] == [
+        {"frame": 2, "score": 0.5, "lost": True}]
+    with pytest.raises(OutputError, match="sink is closed"):
+        j.write({"frame": 5})
+
+
+@pytest.mark.parametrize("text, message", [
+    ("", "expected header"),
+    ("frame,x,y,w,h\n1,2,3,4,5\n", "expected header"),
+    ("frame,x,y,w,h,score,lost\n1,2,3,4,5,0.9\n", r":2: expected 7 values, got 6"),
+    ("frame,x,y,w,h,score,lost\n1,2,3,4,5,0.9,0\n\n2,a,3,4,5,0.9,0\n", r":4: expected numbers"),
+])
+def test_reading_a_track_csv_names_the_bad_line(tmp_path, text, message):
+    path = tmp_path / "t.csv"
+    path.write_text(text)
+    with pytest.raises(FormatError, match=message):
+        read_track_csv(path)
+
+
 def test_video_sink(tmp_path):
     path = tmp_path / "v.mp4"
     with VideoSink(path, fps=10) as v:
