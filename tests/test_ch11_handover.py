@@ -222,6 +222,38 @@ def test_handover_cli_on_a_pets_two_camera_scene(tmp_path):
     assert main(args + ["--train-pairs", str(bad)]) == 2
 
 
+@pytest.mark.skipif(not DATA.is_dir(), reason="shared data absent")
+def test_handover_cli_options_and_its_bad_input(tmp_path, capsys):
+    from pftrack.synth.twocam import export_twocam, twocam_scene
+
+    sc = twocam_scene(DATA, 5, numbers=(201, 260))
+    export_twocam(sc, tmp_path / "tc")
+    cam_a, cam_b = tmp_path / "tc" / "cam_a", tmp_path / "tc" / "cam_b"
+    out = tmp_path / "links.csv"
+    args = ["handover", str(cam_a), str(cam_b), "--tracks-a", str(cam_a / "gt" / "gt.txt"), "--tracks-b",
+            str(cam_b / "gt" / "gt.txt"), "--out", str(out), "--quiet"]
+    links = {}
+    for tau in ("none", "0.99"):  # no probe judged new, against a bar few pairs pass
+        assert main(args + ["--new-threshold", tau]) == 0
+        assert out.read_text().splitlines()[0] == "track_a,track_b,similarity"
+        links[tau] = [float(r.split(",")[2]) for r in out.read_text().splitlines()[1:]]
+        assert f"new below {float(0 if tau == 'none' else tau):.3f}" in capsys.readouterr().err
+    assert all(v >= 0.99 for v in links["0.99"]) and len(links["0.99"]) <= len(links["none"])
+    bad = tmp_path / "pairs.csv"
+    for text, message in [(None, "no such file"), ("track_a,track_b\n1;x\n", ":2: expected track_a,track_b"),
+                          ("7\n", ":1: expected track_a,track_b")]:
+        if text is not None:
+            bad.write_text(text)
+        assert main(args + ["--train-pairs", str(bad)]) == 2
+        assert message in capsys.readouterr().err
+        bad.write_text("")
+        bad.unlink()
+    for extra, message in [(["--new-threshold", "high"], "--new-threshold must be a number"),
+                           (["--transit"], "--transit needs training pairs")]:
+        assert main(args + extra) == 2
+        assert message in capsys.readouterr().err
+
+
 def test_btf_subspace_loglik_matches_the_gaussian_and_ranks_in_family_btfs_higher():
     from scipy.stats import multivariate_normal
 

@@ -92,13 +92,26 @@ def read_pairs(path: str) -> list[tuple[int, int]]:
             continue
         parts = [v for v in line.replace(";", ",").split(",") if v.strip()]
         try:
-            a, b = (int(float(v)) for v in parts[:2])
+            a, b = (int(float(v)) for v in parts[:2])  # fewer than two values: ValueError too
         except ValueError:
             raise FormatError(f"{path}:{i}: expected track_a,track_b") from None
-        if len(parts) < 2:
-            raise FormatError(f"{path}:{i}: expected track_a,track_b")
         out.append((a, b))
     return out
+
+
+def _fixed_threshold(text: str) -> float | None:
+    """``--new-threshold``: its number (0 for ``none``), or None for ``auto`` and ``pairs``; ParameterError for
+    anything else."""
+    from ..errors import ParameterError
+
+    if text in ("auto", "pairs"):
+        return None
+    if text == "none":
+        return 0.0
+    try:
+        return float(text)
+    except ValueError:
+        raise ParameterError(f"--new-threshold must be a number, 'auto', 'pairs' or 'none', got {text!r}") from None
 
 
 def cmd_handover(args) -> int:
@@ -115,10 +128,13 @@ def cmd_handover(args) -> int:
         new_threshold,
     )
 
+    fixed_tau = _fixed_threshold(args.new_threshold)  # bad options are refused before the frames are read
     rows_a, rows_b = read_mot_txt(args.tracks_a), read_mot_txt(args.tracks_b)
     if len(rows_a) == 0 or len(rows_b) == 0:
         raise ParameterError("both cameras need at least one track")
     pairs = read_pairs(args.train_pairs) if args.train_pairs else []
+    if args.transit and not pairs:
+        raise ParameterError("--transit needs training pairs (--train-pairs) whose tracks follow each other in time")
     ids_a, ids_b = set(rows_a[:, 1].astype(int)), set(rows_b[:, 1].astype(int))
     for a, b in pairs:
         if a not in ids_a or b not in ids_b:
@@ -140,14 +156,8 @@ def cmd_handover(args) -> int:
     tau = cooccur_threshold(app_a, app_b, lut) if args.new_threshold == "auto" else None
     if args.new_threshold == "pairs" or (args.new_threshold == "auto" and tau is None):
         tau = new_threshold(app_a, app_b, pairs, args.btf)
-    elif args.new_threshold == "none":
-        tau = 0.0
-    elif args.new_threshold != "auto":
-        try:
-            tau = float(args.new_threshold)
-        except ValueError:
-            raise ParameterError("--new-threshold must be a number, 'auto', 'pairs' or 'none', "
-                                 f"got {args.new_threshold!r}") from None
+    elif fixed_tau is not None:
+        tau = fixed_tau
     transit = fit_transit(app_a, app_b, pairs) if args.transit else None
     if args.transit and transit is None:
         raise ParameterError("--transit needs training pairs (--train-pairs) whose tracks follow each other in time")
