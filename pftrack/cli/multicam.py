@@ -99,6 +99,9 @@ def read_pairs(path: str) -> list[tuple[int, int]]:
     return out
 
 
+_TRANSIT_NEEDS_PAIRS = "--transit needs training pairs (--train-pairs) whose tracks follow each other in time"
+
+
 def _fixed_threshold(text: str) -> float | None:
     """``--new-threshold``: its number (0 for ``none``), or None for ``auto`` and ``pairs``; ParameterError for
     anything else."""
@@ -134,7 +137,7 @@ def cmd_handover(args) -> int:
         raise ParameterError("both cameras need at least one track")
     pairs = read_pairs(args.train_pairs) if args.train_pairs else []
     if args.transit and not pairs:
-        raise ParameterError("--transit needs training pairs (--train-pairs) whose tracks follow each other in time")
+        raise ParameterError(_TRANSIT_NEEDS_PAIRS)
     ids_a, ids_b = set(rows_a[:, 1].astype(int)), set(rows_b[:, 1].astype(int))
     for a, b in pairs:
         if a not in ids_a or b not in ids_b:
@@ -160,7 +163,7 @@ def cmd_handover(args) -> int:
         tau = fixed_tau
     transit = fit_transit(app_a, app_b, pairs) if args.transit else None
     if args.transit and transit is None:
-        raise ParameterError("--transit needs training pairs (--train-pairs) whose tracks follow each other in time")
+        raise ParameterError(_TRANSIT_NEEDS_PAIRS)
     links = link_tracks(app_a, app_b, lut, tau_new=tau, exclude_a=[a for a, _ in pairs],
                         exclude_b=[b for _, b in pairs], transit=transit)
     with _TextSink(args.out) as out:
