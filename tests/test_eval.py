@@ -375,6 +375,28 @@ def test_bench_cli_writes_table_and_plot(tmp_path):
     assert main(["bench", "--trackers", "no-such-tracker", "--quiet", "--out", str(out)]) == 2
 
 
+def test_bench_dev_sequences_get_a_row_per_tracker_and_the_ratio_to_the_peer(tmp_path):
+    """`pftrack bench --dev`: update and end-to-end fps on real-sequence folders, and each tracker's median ratio to
+    the peer of the run (the last tracker listed when CSRT is not in it)."""
+    from pftrack.cli import main
+
+    assert main(["synth", "simple", "--seeds", "3,4", "--length", "25", "--out", str(tmp_path / "dev")]) == 0
+    out = tmp_path / "b"
+    assert main(["bench", "--trackers", "color-pf,opencv-kcf", "--particles", "50", "--targets", "25", "--frames",
+                 "320x240", "--rounds", "1", "--n-frames", "20", "--dev", str(tmp_path / "dev"), "--out", str(out),
+                 "--quiet"]) == 0
+    text = (out / "bench.md").read_text()
+    table = text.split("## Real sequences: update fps (end-to-end fps)")[1].strip().splitlines()
+    assert table[0] == "| tracker | simple-003 | simple-004 | median | × opencv-kcf |"
+    rows = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]] for line in table[2:4]}
+    assert set(rows) == {"`color-pf`", "`opencv-kcf`"}
+    ups = {t: [float(c.split(" (")[0]) for c in cells[:2]] for t, cells in rows.items()}
+    assert all(float(c.split(" (")[1].rstrip(")")) > 0 for cells in rows.values() for c in cells[:2])  # end to end
+    ratio = sorted(a / b for a, b in zip(ups["`color-pf`"], ups["`opencv-kcf`"]))
+    assert float(rows["`color-pf`"][3]) == pytest.approx(sum(ratio) / 2, abs=0.06 + 0.02 * sum(ratio))
+    assert rows["`opencv-kcf`"][3] == "1.0"
+
+
 def test_summary_gives_speed_ratios_to_the_opencv_peer_in_the_run():
     from pftrack.eval.report import aggregate, sequence_speed_ratios, speed_peer, strict_speed_ratios, summary_markdown
 
