@@ -237,6 +237,47 @@ def test_stereo_cli(tmp_path):
     assert main(["stereo", left, right, "--calib", calib, "--points=-4,10", "--out", str(out), "--quiet"]) == 2
 
 
+def test_points_cli_draws_each_frame_with_the_points_trails(tmp_path):
+    sc = occluder_scene(6, trajectory="line", vel=3.0)
+    export_point_scene(sc, tmp_path / "scene")
+    meta = json.loads((tmp_path / "scene" / "meta.json").read_text())
+    video = tmp_path / "p.mp4"
+    assert main(["points", str(tmp_path / "scene"), "--points", meta["points"], "--out", str(tmp_path / "p.csv"),
+                 "--video-out", str(video), "--quiet"]) == 0
+    cap = cv2.VideoCapture(str(video))
+    drawn = []
+    while (got := cap.read())[0]:
+        drawn.append(got[1])
+    cap.release()
+    assert len(drawn) == len(sc.frames)
+    plain = sc.frames[-1] if sc.frames[-1].ndim == 3 else cv2.cvtColor(sc.frames[-1], cv2.COLOR_GRAY2BGR)
+    diff = np.abs(drawn[-1].astype(int) - plain.astype(int)).max(axis=2)
+    assert (diff > 100).sum() > 20 * meta["points"].count(";")  # markers and trails drawn on the last frame
+
+
+def test_stereo_cli_refuses_bad_calibrations_and_unmatched_frames(tmp_path, capsys):
+    sc = stereo_rail_scene(1)
+    export_stereo_scene(sc, tmp_path / "st")
+    meta = json.loads((tmp_path / "st" / "meta.json").read_text())
+    left, right = (str(tmp_path / "st" / k) for k in ("left", "right"))
+    out = tmp_path / "s.csv"
+    bad = tmp_path / "bad.json"
+    for text, message in [("[1, 2]", "calibration lacks f, B, cx, cy"), ("{", "not a JSON calibration"),
+                          ('{"f": "x", "B": 0.1, "cx": 1, "cy": 2}', "must be numbers"),
+                          ('{"f": 300, "B": -0.1, "cx": 1, "cy": 2}', "f and B must be positive")]:
+        bad.write_text(text)
+        assert main(["stereo", left, right, "--calib", str(bad), "--points", meta["points"], "--out", str(out),
+                     "--quiet"]) == 2
+        assert message in capsys.readouterr().err
+    small = tmp_path / "small"
+    small.mkdir()
+    for f in sorted((tmp_path / "st" / "right").iterdir()):
+        cv2.imwrite(str(small / f.name), cv2.imread(str(f))[:-8])
+    assert main(["stereo", left, str(small), "--calib", str(tmp_path / "st" / "calib.json"), "--points",
+                 meta["points"], "--out", str(out), "--quiet"]) == 2
+    assert "right frames" in capsys.readouterr().err
+
+
 def test_lk_rls_box_tracker_through_the_bar():
     sc = occluder_scene(7, trajectory="line", vel=3.0, bar="textured", occlusion_frames=12, size=34)
     size = sc.meta["size"]
