@@ -87,6 +87,23 @@ def test_what_is_not_a_video_folder(tmp_path):
     assert detect_layout(imgs) == "frames"  # images beside the video: an image folder, as before
 
 
+def test_a_video_that_cannot_be_read_is_one_line(tmp_path, capsys):
+    from pftrack.cli import main
+    from pftrack.io.video_frames import read_video_folder, read_video_frame
+
+    folder, boxes = _video_folder(tmp_path / "broken")
+    (folder / "clip.avi").write_bytes(b"not a video at all" * 64)
+    assert count_frames(folder / "clip.avi") == 0 and count_frames(folder / "missing.avi") == 0
+    with pytest.raises(SourceError, match="cannot open as a video, or contains no readable frames"):
+        read_video_folder(folder)
+    assert read_video_frame(VideoFrame(folder / "clip.avi", 0)) is None
+    assert VideoFrame(folder / "clip.avi", 4).name == "clip.avi#5"
+    box = ",".join(f"{v:g}" for v in boxes[0])
+    assert main(["track", str(folder), "--box", box, "--out", str(tmp_path / "o.csv"), "--quiet"]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and "clip.avi" in err[0]
+
+
 def test_discovery_takes_annotated_video_folders_only(tmp_path):
     _video_folder(tmp_path / "data" / "b_video")
     _video_folder(tmp_path / "data" / "c_bare", gt=None)

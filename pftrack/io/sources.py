@@ -170,14 +170,15 @@ class VideoSource(FrameSource):
         self.target = target
         with quiet_opencv():  # OpenCV's own warnings on a failed open would precede our one-line error
             self.cap = cv2.VideoCapture(target)
+        where = target if isinstance(target, str) else name  # a folder's video is named by its own file
         if not self.cap.isOpened():
             self.cap.release()
             what = "camera" if isinstance(target, int) else "video"
-            raise SourceError(f"{name}: cannot open as a {what} (not a video, unsupported codec or device missing)")
+            raise SourceError(f"{where}: cannot open as a {what} (not a video, unsupported codec or device missing)")
         ok, first = self.cap.read()
         if not ok or first is None:
             self.cap.release()
-            raise SourceError(f"{name}: contains no readable frames")
+            raise SourceError(f"{where}: contains no readable frames")
         self._first: np.ndarray | None = first
         fps = self.cap.get(cv2.CAP_PROP_FPS)
         self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else None
