@@ -87,6 +87,15 @@ def test_cli_bad_input_exits_2(tmp_path, capsys):
     assert "4 numbers" in capsys.readouterr().err and not out.exists()
     assert main(["densitometry", str(tmp_path / "missing"), "--box", "1,1,5,5", "--line", "1,1,4,4",
                  "--out", str(out)]) == 2
+    capsys.readouterr()
+    args = ["densitometry", str(folder), "--box", "80,40,40,50", "--out", str(out)]
+    for extra, message in [(["--line", "88,65,a,65"], "4 numbers"), (["--line", "88,65,112,65", "--width", "0"],
+                                                                       "--width must be >= 1"),
+                           (["--line", "88,65,112,65", "--template-frame", "0"], "--template-frame must be >= 1"),
+                           (["--line", "88,65,112,65", "--template-frame", "5"], "no frame 5")]:
+        assert main(args + extra) == 2
+        err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+        assert len(err) == 1 and message in err[0] and not out.exists()
 
 
 def test_cli_template_frame_in_the_middle_tracks_backwards(tmp_path):
