@@ -375,6 +375,20 @@ def test_bench_cli_writes_table_and_plot(tmp_path):
     assert main(["bench", "--trackers", "no-such-tracker", "--quiet", "--out", str(out)]) == 2
 
 
+
+@pytest.mark.parametrize("argv, message", [
+    (["--particles", "50,x"], "comma-separated integers"), (["--targets", "0"], "positive integers"),
+    (["--frames", "640by480"], "frame sizes are WxH"), (["--frames", "32x32"], "too small (at least 64x64)"),
+    (["--rounds", "0"], "--rounds >= 1"), (["--n-frames", "5"], "--n-frames >= 20"),
+])
+def test_bench_bad_options_are_one_line(argv, message, tmp_path, capsys):
+    from pftrack.cli import main
+
+    assert main(["bench", "--trackers", "color-pf", *argv, "--quiet", "--out", str(tmp_path / "b")]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and message in err[0]
+
+
 def test_bench_dev_sequences_get_a_row_per_tracker_and_the_ratio_to_the_peer(tmp_path):
     """`pftrack bench --dev`: update and end-to-end fps on real-sequence folders, and each tracker's median ratio to
     the peer of the run (the last tracker listed when CSRT is not in it)."""
