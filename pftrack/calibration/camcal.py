@@ -43,9 +43,10 @@ class CameraEstimate:
                 "planar": self.planar, "centre_fixed": self.centre_fixed}
 
 
-#: A free fit whose principal point lies further than this share of the image's width (height) from the centre along
-#: x (y) is taken for a degenerate one and refitted with the centre fixed. Lenses put it within a few per cent of
-#: the centre; markers seen at two heights over part of the image let the fit trade it against the pose instead.
+#: A fit whose principal point lies further than this share of the image's width (height) from the centre along
+#: x (y) is taken for a degenerate one: OpenCV's is then replaced by the second start's, and where that one's lies as
+#: far, the second start is refitted with the centre fixed. Lenses put it within a few per cent of the centre;
+#: markers seen at two heights over part of the image let a fit trade it against the pose instead.
 CENTRE_SHARE = 0.2
 
 
