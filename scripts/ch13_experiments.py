@@ -5,8 +5,8 @@
 Synthetic deforming sheets (`pftrack synth deform`): smooth warps up to ~12 px, shading 0.6-1.3, noise 0.01.
 * select: lambda chosen on the tune seeds 0-4 (mean vertex RMSE);
 * t1: single-frame accuracy at displacements 2-25 px with 1-4 pyramid levels (report seeds 100-104);
-* t2: 60-frame sequences, report seeds 100-107: vertex RMSE and frame-coordinate RMSE (Fig. 5 metric) with
-  and without the photometric term;
+* t2: 60-frame sequences, report seeds 100-107 (``--seeds``: others, a fresh draw): vertex RMSE and
+  frame-coordinate RMSE (Fig. 5 metric) with and without the photometric term;
 * real: the same on textures cut from frames of the real dev sequences, JPEG quality 85 (what ch13.md §5.3
   proposes while no real deforming-surface clip is bundled);
 * lcurve: E_D and E_S over the chapter's lambda values (Fig. 7) on tune seed 0;
@@ -25,6 +25,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pftrack.cli.common import parse_seeds
 from pftrack.surfaces.render import frame_rmse
 from pftrack.surfaces.tracker import DeformableMesh, MeshParams, gray01
 from pftrack.synth.deform import deform_scene, render_frames
@@ -105,8 +106,12 @@ def _compare(scenes, label, out):
     out[label] = {"rows": rows, "vertex_rmse": [va, vb], "frame_rmse": [fa, fb], "median_fps": med}
 
 
-def part_t2(out):
-    _compare([(f"seed{s}", deform_scene(s)) for s in range(100, 108)], "t2", out)
+#: The sheets of t2: the report seeds unless ``--seeds`` draws fresh ones (of neither split).
+T2_SEEDS = tuple(range(100, 108))
+
+
+def part_t2(out, seeds=None):
+    _compare([(f"seed{s}", deform_scene(s)) for s in (seeds or T2_SEEDS)], "t2", out)
 
 
 def real_textures() -> list:
@@ -259,10 +264,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--part", default="select,t1,t2,real,lcurve,t4,t6,speed")
     ap.add_argument("--json")
+    ap.add_argument("--seeds", help="t2's sheets instead of the report seeds 100-107, e.g. 300-307 (a fresh draw)")
     a = ap.parse_args()
     out: dict = {}
-    parts = {"select": part_select, "t1": part_t1, "t2": part_t2, "real": part_real, "lcurve": part_lcurve,
-             "t4": part_t4, "t6": part_t6, "speed": part_speed}
+    seeds = parse_seeds(a.seeds) if a.seeds else None
+    parts = {"select": part_select, "t1": part_t1, "t2": lambda o: part_t2(o, seeds), "real": part_real,
+             "lcurve": part_lcurve, "t4": part_t4, "t6": part_t6, "speed": part_speed}
     for p in a.part.split(","):
         parts[p](out)
     if a.json:
