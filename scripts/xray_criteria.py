@@ -29,14 +29,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", default="../shared/data/xray_angio")
     ap.add_argument("--frames", default="15-37")
-    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--seeds", type=int, default=10, help="how many sequences")
+    ap.add_argument("--first", type=int, default=0, help="the first sequence's seed (300: a fresh draw, 10 seeds)")
     args = ap.parse_args()
     a, b = (int(v) for v in args.frames.split("-"))
     files = sorted((Path(args.data) / "img").glob("*.jpg"))[a - 1:b]
     for m in METRICS:
         warm_up("template", {"metric": m, "search_margin": 1.0})
     res = {m: {"err": [], "fail": 0, "frames": 0, "psr": [], "sec": 0.0} for m in METRICS}
-    for seed in range(args.seeds):
+    for seed in range(args.first, args.first + args.seeds):
         src = cv2.imread(str(files[seed % len(files)]), cv2.IMREAD_GRAYSCALE)
         frames, shifts = warped_sequence(src, seed, n_frames=40)
         box0 = structured_box(src)
