@@ -8,9 +8,9 @@ principal point cannot be estimated: it is fixed at the image centre and a plana
 
 OpenCV starts the pose of a non-planar fit from a DLT, which markers at two heights condition poorly; on an unseen
 room (``random_scene(307)``, camera 2) it settled in a pose 2.6 m wrong on the ground. A second start from SQPnP's
-global pose (:func:`_pnp_fit`) replaces the fit when it reprojects clearly better (:data:`STAGED_GAIN`) or when the
-first fit's principal point is implausibly far from the centre (:data:`CENTRE_SHARE`); where the second's is too,
-the centre is fixed.
+global pose (:func:`_pnp_start`, :func:`_pnp_refine`) replaces the fit when it reprojects clearly better
+(:data:`STAGED_GAIN`) or when the first fit's principal point is implausibly far from the centre
+(:data:`CENTRE_SHARE`); where the second's is too, the centre is fixed.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ class CameraEstimate:
     rms: float          # reprojection RMS (px)
     n: int
     planar: bool
-    centre_fixed: bool = False  # the principal point held at the image centre (planar, or a free fit implausible)
+    centre_fixed: bool = False  # the principal point held at the image centre (planar, or every fit implausible)
 
     def to_dict(self) -> dict:
         return {"rvec": self.rvec.ravel().tolist(), "tvec": self.tvec.ravel().tolist(),
@@ -114,34 +114,37 @@ def decompose(P: np.ndarray):
     return K / K[2, 2], R, t
 
 
-def _pnp_fit(X: np.ndarray, uv: np.ndarray, size: tuple[int, int], f0: float, *, estimate_k1: bool,
-             fix_centre: bool = False):
-    """``(rms, K, dist, rvec, tvec)`` of a calibration started from a global PnP solution: the focal length that
-    reprojects best with the centre fixed and no distortion (SQPnP's pose at each of 17 lengths from f0/2 to 2 f0),
-    then f, the principal point (unless ``fix_centre``), k1 (if ``estimate_k1``) and the pose refined together by
-    least squares on the reprojection. None where SQPnP finds no pose."""
+def _K(f: float, c) -> np.ndarray:
+    return np.array([[f, 0, c[0]], [0, f, c[1]], [0, 0, 1.0]])
+
+
+def _residuals(X: np.ndarray, uv: np.ndarray, f: float, c, k1: float, rvec, tvec) -> np.ndarray:
+    p, _ = cv2.projectPoints(X, rvec, tvec, _K(f, c), np.array([k1, 0.0, 0.0, 0.0, 0.0]))
+    return (p.reshape(-1, 2) - uv).ravel()
+
+
+def _pnp_start(X: np.ndarray, uv: np.ndarray, size: tuple[int, int], f0: float):
+    """``(f, rvec, tvec)``: the focal length that reprojects best with the centre fixed and no distortion, SQPnP's
+    global pose at each of 17 lengths from f0/2 to 2 f0; None where SQPnP finds no pose."""
+    c0 = ((size[0] - 1) / 2, (size[1] - 1) / 2)
+    best = None
+    for f in f0 * 2.0 ** (np.arange(-8, 9) / 8.0):
+        ok, rv, tv = cv2.solvePnP(X, uv, _K(f, c0), np.zeros(5), flags=cv2.SOLVEPNP_SQPNP)
+        if ok:
+            e = float(np.mean(_residuals(X, uv, f, c0, 0.0, rv, tv) ** 2))
+            if best is None or e < best[0]:
+                best = (e, f, rv.ravel(), tv.ravel())
+    return None if best is None else best[1:]
+
+
+def _pnp_refine(X: np.ndarray, uv: np.ndarray, size: tuple[int, int], start, *, estimate_k1: bool,
+                fix_centre: bool = False):
+    """``(rms, K, dist, rvec, tvec)``: f, the principal point (unless ``fix_centre``), k1 (if ``estimate_k1``) and
+    the pose refined together by least squares on the reprojection, from ``start`` (:func:`_pnp_start`)."""
     from scipy.optimize import least_squares
 
-    w, h = size
-    c0 = np.array([(w - 1) / 2, (h - 1) / 2])
-
-    def K_of(f, c):
-        return np.array([[f, 0, c[0]], [0, f, c[1]], [0, 0, 1.0]])
-
-    def reproject(f, c, k1, rvec, tvec):
-        p, _ = cv2.projectPoints(X, rvec, tvec, K_of(f, c), np.array([k1, 0.0, 0.0, 0.0, 0.0]))
-        return (p.reshape(-1, 2) - uv).ravel()
-
-    start = None
-    for f in f0 * 2.0 ** (np.arange(-8, 9) / 8.0):
-        ok, rv, tv = cv2.solvePnP(X, uv, K_of(f, c0), np.zeros(5), flags=cv2.SOLVEPNP_SQPNP)
-        if ok:
-            e = float(np.mean(reproject(f, c0, 0.0, rv, tv) ** 2))
-            if start is None or e < start[0]:
-                start = (e, f, rv.ravel(), tv.ravel())
-    if start is None:
-        return None
-    _, f, rv, tv = start
+    c0 = np.array([(size[0] - 1) / 2, (size[1] - 1) / 2])
+    f, rv, tv = start
     free_c, free_k = not fix_centre, estimate_k1
 
     def unpack(q):
@@ -150,10 +153,10 @@ def _pnp_fit(X: np.ndarray, uv: np.ndarray, size: tuple[int, int], f0: float, *,
         return q[0], c, k1, q[-6:-3], q[-3:]
 
     q0 = np.r_[f, c0 if free_c else [], [0.0] if free_k else [], rv, tv]
-    sol = least_squares(lambda q: reproject(*unpack(q)), q0, method="lm", xtol=1e-12, ftol=1e-12)
+    sol = least_squares(lambda q: _residuals(X, uv, *unpack(q)), q0, method="lm", xtol=1e-12, ftol=1e-12)
     f, c, k1, rvec, tvec = unpack(sol.x)
     rms = float(np.sqrt(np.mean(np.sum(sol.fun.reshape(-1, 2) ** 2, axis=1))))
-    return rms, K_of(f, c), np.array([k1, 0.0, 0.0, 0.0, 0.0]), np.asarray(rvec, float), np.asarray(tvec, float)
+    return rms, _K(f, c), np.array([k1, 0.0, 0.0, 0.0, 0.0]), np.asarray(rvec, float), np.asarray(tvec, float)
 
 
 def calibrate(X: np.ndarray, uv: np.ndarray, size: tuple[int, int], *, estimate_k1: bool = True) -> CameraEstimate:
@@ -180,11 +183,12 @@ def calibrate(X: np.ndarray, uv: np.ndarray, size: tuple[int, int], *, estimate_
         # OpenCV starts the pose from a DLT, which markers at two heights condition poorly: it can settle in a wrong
         # pose whose error the distortion absorbs. A second start from a global PnP solution (SQPnP) replaces the
         # fit when it reprojects clearly better, or when the first fit's principal point is implausible.
-        second = _pnp_fit(X, uv, size, f0, estimate_k1=estimate_k1)
+        start = _pnp_start(X, uv, size, f0)
+        second = None if start is None else _pnp_refine(X, uv, size, start, estimate_k1=estimate_k1)
         if second is not None and (second[0] < STAGED_GAIN * rms or not plausible_centre(K, size)):
             rms, K, dist, rvec, tvec = second
             if not plausible_centre(K, size):  # the point traded against the pose: again, with it at the centre
-                rms, K, dist, rvec, tvec = _pnp_fit(X, uv, size, f0, estimate_k1=estimate_k1, fix_centre=True)
+                rms, K, dist, rvec, tvec = _pnp_refine(X, uv, size, start, estimate_k1=estimate_k1, fix_centre=True)
                 centre_fixed = True
     else:
         h = zs[0]
