@@ -31,8 +31,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from views_flag_trace import view_walkers, walker_on  # noqa: E402
 
+from pftrack.cli.common import parse_seeds  # noqa: E402
+from pftrack.frames import as_bgr_uint8  # noqa: E402
 from pftrack.geometry import iou  # noqa: E402
 from pftrack.io.datasets import read_sequence  # noqa: E402
+from pftrack.io.sources import read_image  # noqa: E402
 from pftrack.multicam.btf import identity_btf  # noqa: E402
 from pftrack.multicam.joint import joint_histogram, joint_similarity_matrix, push_joint  # noqa: E402
 from pftrack.trackers import create_tracker  # noqa: E402
@@ -116,8 +119,7 @@ def trace(folder: Path, tracker: str, seed: int, pets) -> dict[str, np.ndarray]:
     """One run: per frame the IoU with the person, the other walker the box is on (-1: none; on the PETS views, with
     ``pets = (annotation, width, height)`` of the PETS frames), the flag and the box's histogram."""
     seq = read_sequence(folder)
-    frames = [cv2.imread(str(p)) for p in seq.frames]
-    frames = [f if f.ndim == 3 else cv2.cvtColor(f, cv2.COLOR_GRAY2BGR) for f in frames]
+    frames = [as_bgr_uint8(read_image(p)) for p in seq.frames]
     window, others = None, {}
     if pets is not None and re.search(r"_(left|right|top|bottom)\d*_f.*_id\d+$", folder.name):
         gt_all, width, height = pets
@@ -199,7 +201,7 @@ def main() -> None:
             ps = read_sequence(args.pets)
             height, width = cv2.imread(str(ps.frames[0])).shape[:2]
             pets = (ps.mot_gt, width, height)
-        seeds = [int(s) for s in args.seeds.split(",")]
+        seeds = parse_seeds(args.seeds)
         for root in args.folders:
             for folder in sorted(p for p in root.iterdir() if (p / "groundtruth_rect.txt").exists()):
                 for seed in seeds:
