@@ -5,13 +5,15 @@
 Synthetic deforming sheets (`pftrack synth deform`): smooth warps up to ~12 px, shading 0.6-1.3, noise 0.01.
 * select: lambda chosen on the tune seeds 0-4 (mean vertex RMSE);
 * t1: single-frame accuracy at displacements 2-25 px with 1-4 pyramid levels (report seeds 100-104);
-* t2: 60-frame sequences, report seeds 100-107 (``--seeds``: others, a fresh draw): vertex RMSE and
-  frame-coordinate RMSE (Fig. 5 metric) with and without the photometric term;
+* t2: 60-frame sequences, report seeds 100-107: vertex RMSE and frame-coordinate RMSE (Fig. 5 metric) with and
+  without the photometric term;
 * real: the same on textures cut from frames of the real dev sequences, JPEG quality 85 (what ch13.md §5.3
   proposes while no real deforming-surface clip is bundled);
 * lcurve: E_D and E_S over the chapter's lambda values (Fig. 7) on tune seed 0;
 * t4: 300 frames, analysis by synthesis against frame-to-frame chaining (report seeds 100-104);
-* t6: stabilised kymograms: camera jitter removed, a local vibration kept, over the mesh's stiffness;
+* t6: stabilised kymograms: camera jitter removed, a local vibration kept, over the mesh's stiffness (report seeds
+  100-104);
+``--seeds`` (e.g. 300-307) replaces the report seeds of t1, t2, t4 and t6 by others: a fresh draw of neither split.
 * speed: frames per second at 480x360 with a 7x7 mesh, and at 768x1024 with a 300x300 region and 20 px spacing.
 """
 
@@ -62,13 +64,17 @@ def part_select(out):
     out["select"] = res
 
 
-def part_t1(out):
+#: The report seeds of t1, t4 and t6 (t2: ``T2_SEEDS``) unless ``--seeds`` draws fresh ones.
+REPORT_SEEDS = tuple(range(100, 105))
+
+
+def part_t1(out, seeds=None):
     """One frame from the model: a global shift of A px in a random direction plus bumps of amplitude A/5."""
     rows = []
     for A in (2, 5, 10, 25):
         for levels in (1, 2, 3, 4):
             errs = []
-            for seed in range(100, 105):
+            for seed in seeds or REPORT_SEEDS:
                 sc = deform_scene(seed, n_frames=2, amplitude=A / 5.0, shading=False)
                 ang = np.random.default_rng(seed).uniform(0, 2 * np.pi)
                 sc.drift[1] = A * np.array([np.cos(ang), np.sin(ang)])
@@ -164,12 +170,12 @@ def part_lcurve(out):
     out["lcurve"] = {"rows": rows, "corner": rows[k]["lam"]}
 
 
-def part_t4(out):
+def part_t4(out, seeds=None):
     """ch13.md T4: 300 frames, analysis by synthesis (reference I_0) against frame-to-frame chaining (reference: the
     previous real frame in model coordinates). Mean vertex error at frames 10 and 300, and over frames 6-15 and
     291-300 (a single frame's error is noisy)."""
     rows = []
-    for seed in range(100, 105):
+    for seed in seeds or REPORT_SEEDS:
         sc = deform_scene(seed, n_frames=301)
         row = {"seed": seed}
         for ref in ("model", "previous"):
@@ -214,7 +220,7 @@ def kymo_measure(ks, roi=None, **kw):
     return kymo_scores(ks, transforms, roi)
 
 
-def part_t6(out):
+def part_t6(out, seeds=None):
     """ch13.md T6 (kymography-like stiffness): camera jitter of at most 5 px and a 3 px vibration in a 40 x 40 patch
     (`pftrack synth kymo`, report seeds 100-104, 100 frames). The region of the scene (240 x 180 px) with the default
     7 x 7 mesh, and a tight 80 x 80 region around the patch with a dense 16 x 16 mesh, over the stiffness."""
@@ -222,7 +228,7 @@ def part_t6(out):
 
     cases = [("scene region, 7x7", None, 7, lam) for lam in (0.005, 0.5)]
     cases += [("tight 80x80, 16x16", "tight", 16, lam) for lam in (0.005, 0.05, 0.5, 5.0)]
-    scenes = [kymo_scene(seed) for seed in range(100, 105)]
+    scenes = [kymo_scene(seed) for seed in seeds or REPORT_SEEDS]
     rows = []
     for label, roi, mesh, lam in cases:
         rs = []
@@ -264,12 +270,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--part", default="select,t1,t2,real,lcurve,t4,t6,speed")
     ap.add_argument("--json")
-    ap.add_argument("--seeds", help="t2's sheets instead of the report seeds 100-107, e.g. 300-307 (a fresh draw)")
+    ap.add_argument("--seeds", help="t1, t2, t4 and t6's scenes instead of the report seeds, e.g. 300-307 (a fresh "
+                                    "draw of neither split)")
     a = ap.parse_args()
     out: dict = {}
     seeds = parse_seeds(a.seeds) if a.seeds else None
-    parts = {"select": part_select, "t1": part_t1, "t2": lambda o: part_t2(o, seeds), "real": part_real,
-             "lcurve": part_lcurve, "t4": part_t4, "t6": part_t6, "speed": part_speed}
+    parts = {"select": part_select, "t1": lambda o: part_t1(o, seeds), "t2": lambda o: part_t2(o, seeds),
+             "real": part_real, "lcurve": part_lcurve, "t4": lambda o: part_t4(o, seeds),
+             "t6": lambda o: part_t6(o, seeds), "speed": part_speed}
     for p in a.part.split(","):
         parts[p](out)
     if a.json:

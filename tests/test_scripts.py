@@ -33,3 +33,18 @@ def test_a_script_imports_without_running_and_answers_help(name, monkeypatch, ca
         main(*([["--help"]] if "argv" in params else []))
     assert ended.value.code == 0
     assert "usage" in capsys.readouterr().out.lower()
+
+
+def test_ch13_seeds_reach_every_part_that_draws_report_scenes(monkeypatch):
+    """``ch13_experiments.py --seeds`` replaces the report seeds of t1, t2, t4 and t6 (a fresh draw of neither
+    split); without it each part keeps its report seeds."""
+    mod = load_script("ch13_experiments")
+    seen: dict = {}
+    for part in ("t1", "t2", "t4", "t6"):
+        monkeypatch.setattr(mod, f"part_{part}", lambda out, seeds=None, part=part: seen.__setitem__(part, seeds))
+    monkeypatch.setattr(sys, "argv", ["ch13_experiments.py", "--part", "t6,t1,t4,t2", "--seeds", "300-302"])
+    mod.main()
+    assert seen == {p: [300, 301, 302] for p in ("t1", "t2", "t4", "t6")}
+    monkeypatch.setattr(sys, "argv", ["ch13_experiments.py", "--part", "t6"])
+    mod.main()
+    assert seen["t6"] is None and list(mod.REPORT_SEEDS) == list(range(100, 105))
