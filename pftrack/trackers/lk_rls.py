@@ -11,6 +11,11 @@ replaced by fresh corners of the current box, with filters primed from the box's
 velocity history, so a long sequence does not run out of points.  ``lost`` is raised when
 most points have been carried by prediction for more than ``lost_after`` frames in a row
 (the target is behind something); ``score`` is the fraction of points on flow.
+
+With ``exit_share > 0`` (off by default) a box that has left the view is a lost target too: ``lost`` is raised
+while less than that share of the box's area lies inside the frame, and fresh corners are drawn from the box's
+part inside the frame only.  Without it, fresh corners of a box that reaches past the edge are clipped onto the
+frame's border, where they follow the still background, and the box is reported found after its target has left.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ from ..params import param
 from .base import Tracker, TrackState
 from .point_gate import FLOW, LOST, PointParams, PointTracker
 
-__all__ = ["LKRLS", "LKRLSFuzzy", "LKRLSParams", "box_points"]
+__all__ = ["LKRLS", "LKRLSFuzzy", "LKRLSParams", "box_points", "share_in_view"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -41,10 +46,16 @@ class LKRLSParams(PointParams):
     lost_after: int = param(3, ge=1, doc="frames in a row with most points on prediction before lost is raised")
     reseed: bool = param(True, doc="replace lost points and points that left the box with fresh corners")
     max_scale_step: float = param(0.1, ge=0, le=1, doc="largest relative scale change per frame")
+    exit_share: float = param(0.0, ge=0, lt=1, doc=(
+        "lost while less than this share of the box's area is inside the frame (the target left the view), and "
+        "fresh corners only from the box's part inside the frame; 0: off (corners of a box past the edge are "
+        "clipped onto the border)"))
 
 
-def box_points(gray: np.ndarray, box, n: int, *, block: int = 7) -> np.ndarray:
-    """Up to ``n`` corners inside ``box`` (inner 90 %), padded with a regular grid when too few."""
+def box_points(gray: np.ndarray, box, n: int, *, block: int = 7, in_view: bool = False) -> np.ndarray:
+    """Up to ``n`` corners inside ``box`` (inner 90 %), padded with a regular grid when too few.  The grid's points
+    outside the frame are clipped onto its border, or with ``in_view`` left out (then a box wholly outside the
+    frame gives none)."""
     x, y, w, h = (float(v) for v in box)
     H, W = gray.shape[:2]
     mx, my = 0.05 * w, 0.05 * h
@@ -61,8 +72,20 @@ def box_points(gray: np.ndarray, box, n: int, *, block: int = 7) -> np.ndarray:
         k = int(np.ceil(np.sqrt(n)))
         gx, gy = np.meshgrid(np.linspace(x + 0.2 * w, x + 0.8 * w, k), np.linspace(y + 0.2 * h, y + 0.8 * h, k))
         grid = np.stack([gx.ravel(), gy.ravel()], 1)
+        if in_view:
+            grid = grid[(grid[:, 0] >= 0) & (grid[:, 0] <= W - 1) & (grid[:, 1] >= 0) & (grid[:, 1] <= H - 1)]
         pts = np.vstack([pts, grid])[:n]
     return np.clip(pts, 0, [W - 1, H - 1])
+
+
+def share_in_view(box, width: int, height: int) -> float:
+    """The share of ``box``'s area ``(x, y, w, h)`` that lies inside a ``width`` x ``height`` frame."""
+    x, y, w, h = (float(v) for v in box)
+    if w <= 0 or h <= 0:
+        return 0.0
+    iw = max(0.0, min(x + w, width) - max(x, 0.0))
+    ih = max(0.0, min(y + h, height) - max(y, 0.0))
+    return iw * ih / (w * h)
 
 
 class LKRLS(Tracker):
@@ -80,7 +103,7 @@ class LKRLS(Tracker):
         p = self.params
         gray = gray_of(frame)
         self.box = np.asarray(box, dtype=np.float64)
-        pts = box_points(gray, self.box, p.n_points)
+        pts = box_points(gray, self.box, p.n_points, in_view=p.exit_share > 0)
         self.points = PointTracker(self._point_params())
         self.points.init(gray, pts)
         self.history: deque[np.ndarray] = deque(maxlen=max(p.n_init, 8))
@@ -111,6 +134,8 @@ class LKRLS(Tracker):
         frac_pred = 1.0 - flow.mean() if len(flow) else 1.0
         self.bad_run = self.bad_run + 1 if frac_pred > p.min_fraction else 0
         lost = self.bad_run > p.lost_after or not live.any()
+        if p.exit_share > 0 and share_in_view(self.box, gray.shape[1], gray.shape[0]) < p.exit_share:
+            lost = True   # the target left the view
         if p.reseed and not lost:
             self._reseed(gray)
         return self._state(step.source, lost=lost)
@@ -136,7 +161,7 @@ class LKRLS(Tracker):
         rows = np.flatnonzero(self.points.lost | out)
         if len(rows) == 0:
             return
-        fresh = box_points(gray, self.box, self.params.n_points)
+        fresh = box_points(gray, self.box, self.params.n_points, in_view=self.params.exit_share > 0)
         if len(fresh) == 0:
             return
         # prefer corners far from the points that are kept
