@@ -296,3 +296,35 @@ def test_lk_rls_box_tracker_through_the_bar():
         assert 0.0 <= min(b.score for b in s) <= max(b.score for b in s) <= 1.0
     assert pftrack.create_tracker("lk-rls").params.method == "rls"
     assert pftrack.create_tracker("lk-rls-fuzzy").params.method == "fuzzy"
+
+
+def test_lk_rls_calls_a_target_that_left_the_view_lost():
+    """Over leave and exit scenes of several seeds: a walker that leaves through an edge is flagged while out of
+    view. With exit_share=0 (the former default) fresh corners were clipped onto the border, followed the still
+    background, and the flag stayed down on whole scenes (docs/points.md, "Targets that leave the view")."""
+    from pftrack.synth import leave_scene
+    from pftrack.synth.varied import exit_scene
+
+    from .conftest import lost_flag_run
+
+    scenes = [make(seed) for make in (leave_scene, exit_scene) for seed in range(300, 304)]
+    now = [lost_flag_run(spec, "lk-rls") for spec in scenes]
+    before = [lost_flag_run(spec, "lk-rls", exit_share=0.0) for spec in scenes]
+    assert all(r.recall >= 0.9 for r in now if r.absent_frames)
+    assert all(not r.false_rate > 0.02 for r in now)   # NaN when no frame is covered
+    assert sum(r.recall < 0.1 for r in before if r.absent_frames) >= 2
+
+
+def test_lk_rls_share_in_view_and_corners_in_view():
+    from pftrack.trackers.lk_rls import box_points, share_in_view
+
+    assert share_in_view((10, 10, 20, 20), 100, 80) == 1.0
+    assert share_in_view((-15, 10, 20, 20), 100, 80) == pytest.approx(0.25)
+    assert share_in_view((90, 70, 20, 20), 100, 80) == pytest.approx(0.25)
+    assert share_in_view((-30, 10, 20, 20), 100, 80) == 0.0
+    flat = np.full((80, 100), 128, np.uint8)               # no corners: the grid pads
+    clipped = box_points(flat, (-15, 10, 20, 20), 16)
+    assert len(clipped) == 16 and (clipped[:, 0] == 0).sum() >= 8      # the former way: piled on the border
+    seen = box_points(flat, (-15, 10, 20, 20), 16, in_view=True)
+    assert len(seen) and (seen[:, 0] > 0).all()
+    assert len(box_points(flat, (-30, 10, 20, 20), 16, in_view=True)) == 0

@@ -12,10 +12,11 @@ velocity history, so a long sequence does not run out of points.  ``lost`` is ra
 most points have been carried by prediction for more than ``lost_after`` frames in a row
 (the target is behind something); ``score`` is the fraction of points on flow.
 
-With ``exit_share > 0`` (off by default) a box that has left the view is a lost target too: ``lost`` is raised
-while less than that share of the box's area lies inside the frame, and fresh corners are drawn from the box's
-part inside the frame only.  Without it, fresh corners of a box that reaches past the edge are clipped onto the
-frame's border, where they follow the still background, and the box is reported found after its target has left.
+A box that has left the view is a lost target too: ``lost`` is raised while less than ``exit_share`` (0.05) of
+the box's area lies inside the frame, and fresh corners are drawn from the box's part inside the frame only.  With
+``exit_share=0`` (the former default) fresh corners of a box that reaches past the edge are clipped onto the
+frame's border, where they follow the still background, and the box is reported found after its target has left
+(docs/points.md, "Targets that leave the view").
 """
 
 from __future__ import annotations
@@ -46,10 +47,11 @@ class LKRLSParams(PointParams):
     lost_after: int = param(3, ge=1, doc="frames in a row with most points on prediction before lost is raised")
     reseed: bool = param(True, doc="replace lost points and points that left the box with fresh corners")
     max_scale_step: float = param(0.1, ge=0, le=1, doc="largest relative scale change per frame")
-    exit_share: float = param(0.0, ge=0, lt=1, doc=(
+    exit_share: float = param(0.05, ge=0, lt=1, doc=(
         "lost while less than this share of the box's area is inside the frame (the target left the view), and "
-        "fresh corners only from the box's part inside the frame; 0: off (corners of a box past the edge are "
-        "clipped onto the border)"))
+        "fresh corners only from the box's part inside the frame; 0: off, the former default (corners of a box past "
+        "the edge are clipped onto the border). 0.05 chosen on the tune side under docs/rules/lkrls_exit_rule2.txt "
+        "(0.1 failed lkrls_exit_rule.txt)"))
 
 
 def box_points(gray: np.ndarray, box, n: int, *, block: int = 7, in_view: bool = False) -> np.ndarray:
