@@ -52,6 +52,12 @@ class LKRLSParams(PointParams):
         "fresh corners only from the box's part inside the frame; 0: off, the former default (corners of a box past "
         "the edge are clipped onto the border). 0.05 chosen on the tune side under docs/rules/lkrls_exit_rule2.txt "
         "(0.1 failed lkrls_exit_rule.txt)"))
+    reseed_lost: float = param(0.0, ge=0, le=1, doc=(
+        "while lost (but in view), when the box's grey patch matches the last patch seen while tracking (NCC of "
+        "16 x 16 samples at least this), replace the points that are lost -- carried by prediction beyond "
+        "max_predict frames, or failed -- with fresh corners of the box; the points still on prediction are kept. "
+        "0: off, nothing is replaced while lost, so a box whose points fell to prediction stays lost even on its "
+        "target"))
 
 
 def box_points(gray: np.ndarray, box, n: int, *, block: int = 7, in_view: bool = False) -> np.ndarray:
@@ -78,6 +84,29 @@ def box_points(gray: np.ndarray, box, n: int, *, block: int = 7, in_view: bool =
             grid = grid[(grid[:, 0] >= 0) & (grid[:, 0] <= W - 1) & (grid[:, 1] >= 0) & (grid[:, 1] <= H - 1)]
         pts = np.vstack([pts, grid])[:n]
     return np.clip(pts, 0, [W - 1, H - 1])
+
+
+#: Side of the grey patch that :func:`box_patch` samples from a box.
+PATCH = 16
+
+
+def box_patch(gray: np.ndarray, box) -> np.ndarray:
+    """``box``'s grey content sampled on a ``PATCH`` x ``PATCH`` grid (bilinear; beyond the frame, the border)."""
+    x, y, w, h = (float(v) for v in box)
+    t = (np.arange(PATCH) + 0.5) / PATCH
+    mx = (x + w * t).astype(np.float32)[None, :].repeat(PATCH, 0)
+    my = (y + h * t).astype(np.float32)[:, None].repeat(PATCH, 1)
+    return cv2.remap(gray, mx - 0.5, my - 0.5, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float64)
+
+
+def box_ncc(gray: np.ndarray, box, template: np.ndarray) -> float:
+    """Normalised cross-correlation of ``box``'s patch (:func:`box_patch`) with ``template`` (0 when either is
+    flat)."""
+    a = box_patch(gray, box).ravel()
+    b = np.asarray(template, dtype=np.float64).ravel()
+    a, b = a - a.mean(), b - b.mean()
+    den = float(np.sqrt((a @ a) * (b @ b)))
+    return float(a @ b / den) if den > 1e-9 else 0.0
 
 
 def share_in_view(box, width: int, height: int) -> float:
@@ -110,6 +139,8 @@ class LKRLS(Tracker):
         self.points.init(gray, pts)
         self.history: deque[np.ndarray] = deque(maxlen=max(p.n_init, 8))
         self.bad_run = 0
+        self.template = box_patch(gray, self.box)
+        self.last_ncc = float("nan")
         return self._state(np.full(len(pts), FLOW), lost=False)
 
     def _centre(self) -> np.ndarray:
@@ -136,10 +167,16 @@ class LKRLS(Tracker):
         frac_pred = 1.0 - flow.mean() if len(flow) else 1.0
         self.bad_run = self.bad_run + 1 if frac_pred > p.min_fraction else 0
         lost = self.bad_run > p.lost_after or not live.any()
-        if p.exit_share > 0 and share_in_view(self.box, gray.shape[1], gray.shape[0]) < p.exit_share:
-            lost = True   # the target left the view
+        out_of_view = p.exit_share > 0 and share_in_view(self.box, gray.shape[1], gray.shape[0]) < p.exit_share
+        lost = lost or out_of_view    # the target left the view
         if p.reseed and not lost:
             self._reseed(gray)
+        elif p.reseed and p.reseed_lost > 0 and not out_of_view:
+            self.last_ncc = box_ncc(gray, self.box, self.template)
+            if self.last_ncc >= p.reseed_lost:
+                self._reseed(gray, only_lost=True)
+        if p.reseed_lost > 0 and not lost:
+            self.template = box_patch(gray, self.box)
         return self._state(step.source, lost=lost)
 
     def _scale(self, a: np.ndarray, b: np.ndarray) -> float:
@@ -155,12 +192,12 @@ class LKRLS(Tracker):
         m = self.params.max_scale_step
         return float(np.clip(s, 1.0 - m, 1.0 + m))
 
-    def _reseed(self, gray: np.ndarray) -> None:
+    def _reseed(self, gray: np.ndarray, only_lost: bool = False) -> None:
         pos = self.points.pos
         x, y, w, h = self.box
         out = (pos[:, 0] < x - 0.25 * w) | (pos[:, 0] > x + 1.25 * w) | (pos[:, 1] < y - 0.25 * h) | \
               (pos[:, 1] > y + 1.25 * h)
-        rows = np.flatnonzero(self.points.lost | out)
+        rows = np.flatnonzero(self.points.lost if only_lost else self.points.lost | out)
         if len(rows) == 0:
             return
         fresh = box_points(gray, self.box, self.params.n_points, in_view=self.params.exit_share > 0)
