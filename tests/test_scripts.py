@@ -48,3 +48,18 @@ def test_ch13_seeds_reach_every_part_that_draws_report_scenes(monkeypatch):
     monkeypatch.setattr(sys, "argv", ["ch13_experiments.py", "--part", "t6"])
     mod.main()
     assert seen["t6"] is None and list(mod.REPORT_SEEDS) == list(range(100, 105))
+
+
+def test_ch03_seeds_draw_the_seir_scenes_afresh(monkeypatch, capsys):
+    """``ch03_experiments.py --part seir-synth --seeds`` runs other varied scenes than the report seeds 100-131."""
+    mod = load_script("ch03_experiments")
+    seen = []
+    one = {"ess": 0.5, "centre_error_mean_of_medians": 1.0, "centre_error_median_of_medians": 1.0, "auc": 0.5}
+    fake = {"runs": 2, "seir": one, "multinomial": one,
+            "centre_error_difference": {"mean": 0.0, "se": 0.0, "seir_lower": 0, "seir_higher": 0}}
+    monkeypatch.setattr(mod, "seir_synth_experiment", lambda scenes=range(100, 132): seen.append(list(scenes)) or fake)
+    for argv, expect in ((["--seeds", "300-302"], [300, 301, 302]), ([], list(range(100, 132)))):
+        monkeypatch.setattr(sys, "argv", ["ch03_experiments.py", "--part", "seir-synth", *argv])
+        mod.main()
+        assert seen[-1] == expect
+        assert f"seeds {expect[0]}-{expect[-1]}" in capsys.readouterr().out
