@@ -250,6 +250,9 @@ def seir_synth_experiment(scenes=range(100, 132), run_seeds=(0, 1)) -> dict:
                      "auc": float(np.mean([p[k]["auc"] for p in pairs]))}
     out["centre_error_difference"] = {"mean": float(d.mean()), "se": float(d.std(ddof=1) / np.sqrt(len(d))),
                                       "seir_lower": int(np.sum(d < -0.1)), "seir_higher": int(np.sum(d > 0.1))}
+    out["pairs"] = [{"scene": s, "run_seed": r, **{f"{k}_{name}": res[(s, r, name)][k] for name in ("seir", "multinomial")
+                                                 for k in ("centre_error", "auc", "failures")}}
+                    for s in scenes for r in run_seeds]
     return out
 
 
@@ -312,6 +315,11 @@ def main() -> None:
         print(f"\npaired difference (seir - multinomial): {dd['mean']:+.2f} +- {dd['se']:.2f} px "
               f"over {r['runs']} runs; "
               f"seir lower in {dd['seir_lower']}, higher in {dd['seir_higher']} (by more than 0.1 px)")
+        far = sorted(r.get("pairs", []), key=lambda x: -abs(x["centre_error_seir"] - x["centre_error_multinomial"]))
+        for x in far[:5]:
+            print(f"  scene {x['scene']} run {x['run_seed']}: seir {x['centre_error_seir']:.2f} px (AUC "
+                  f"{x['auc_seir']:.3f}), multinomial {x['centre_error_multinomial']:.2f} px "
+                  f"(AUC {x['auc_multinomial']:.3f})")
     if a.json:
         Path(a.json).parent.mkdir(parents=True, exist_ok=True)
         Path(a.json).write_text(json.dumps(out, indent=1))
