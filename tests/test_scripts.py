@@ -63,3 +63,19 @@ def test_ch03_seeds_draw_the_seir_scenes_afresh(monkeypatch, capsys):
         mod.main()
         assert seen[-1] == expect
         assert f"seeds {expect[0]}-{expect[-1]}" in capsys.readouterr().out
+
+
+def test_ssim_first_draws_the_scenes_afresh(monkeypatch):
+    """``ssim_experiments.py --first S`` builds the camouflage scenes S..S+2 and the fast movers from S."""
+    mod = load_script("ssim_experiments")
+    drawn = {"camouflage": [], "fig6": []}
+    monkeypatch.setattr(mod, "warm_up", lambda *a, **k: None)
+    monkeypatch.setattr(mod, "camouflage_scene", lambda seed, n_frames=120: drawn["camouflage"].append(seed) or seed)
+    monkeypatch.setattr(mod, "Scene", lambda spec: type("S", (), {"frames": lambda self: [],
+                                                                  "groundtruth": lambda self, i: None})())
+    monkeypatch.setattr(mod, "table5", lambda seqs, seeds: [])
+    monkeypatch.setattr(mod, "fig6", lambda seeds, first=100: drawn["fig6"].append(first) or [])
+    monkeypatch.setattr(mod, "batch_speed", lambda: [])
+    monkeypatch.setattr(sys, "argv", ["ssim_experiments.py", "--first", "300", "--real", ""])
+    mod.main()
+    assert drawn == {"camouflage": [300, 301, 302], "fig6": [300]}
