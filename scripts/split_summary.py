@@ -176,6 +176,38 @@ def by_kind(rows: list[dict], runs: Path, scenes: list[str] | None) -> None:
         print(f"{k:16s} " + " ".join(f"{c:>24s}" for c in cells))
 
 
+def flags_by_kind(rows: list[dict]) -> None:
+    """The lost flag per tracker and scene kind, pooled over the frames as ``pftrack eval`` pools them: lost recall
+    over the absent frames and false-lost rate over the frames with IoU >= 0.5 (each run's rate weighted by its
+    frames; "-" where a kind has no such frame)."""
+    sums: dict[tuple[str, str, str], list[float]] = defaultdict(lambda: [0.0, 0.0])
+    for r in rows:
+        for rate, frames in (("lost_recall", "absent_frames"), ("false_lost", "covered_frames")):
+            n = float(r.get(frames) or 0)
+            if n > 0 and r.get(rate) not in ("", None, "nan"):
+                cell = sums[(r["tracker"], kind_of(r["sequence"]), rate)]
+                cell[0] += float(r[rate]) * n
+                cell[1] += n
+    if not sums:
+        return
+    trackers = sorted({t for t, _, _ in sums})
+    kinds = sorted({k for _, k, _ in sums})
+
+    def rate(t: str, k: str, name: str) -> str:
+        v, n = sums.get((t, k, name), (0.0, 0.0))
+        return f"{v / n:.2f}" if n else "-"
+
+    print("\nlost recall / false-lost by kind, pooled over the frames")
+    labels = column_labels(trackers)
+    for label, t in zip(labels, trackers):
+        if label != t:
+            print(f"  {label}: {t}")
+    print(f"{'kind':16s} " + " ".join(f"{t:>24s}" for t in labels))
+    for k in kinds:
+        print(f"{k:16s} " + " ".join(f"{rate(t, k, 'lost_recall') + ' / ' + rate(t, k, 'false_lost'):>24s}"
+                                     for t in trackers))
+
+
 def main(path: str, scenes: list[str] | None = None, kinds: bool = False) -> None:
     with open(path, encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
@@ -218,12 +250,14 @@ def main(path: str, scenes: list[str] | None = None, kinds: bool = False) -> Non
         reacquired_by(rows, scene_lights(scenes, nuisances), lights, "by the scenes' colour and light")
     if kinds:
         by_kind(rows, runs, scenes)
+        flags_by_kind(rows)
 
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", help="a pftrack eval results.csv")
     ap.add_argument("--scenes", nargs="+", help="folders of the synthetic scenes (their meta.json)")
-    ap.add_argument("--by-kind", action="store_true", help="mean AUC (and with --scenes the boxes' size) by scene kind")
+    ap.add_argument("--by-kind", action="store_true", help="mean AUC (and with --scenes the boxes' size) and the "
+                                                          "pooled lost-flag rates by scene kind")
     a = ap.parse_args()
     main(a.results, a.scenes, a.by_kind)

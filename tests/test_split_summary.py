@@ -139,3 +139,23 @@ def test_by_kind_columns_of_long_tracker_names_are_lettered():
     assert column_labels(["color-pf", "fusion-pf"]) == ["color-pf", "fusion-pf"]
     long = ["fusion-pf", "fusion-pf[velocity_step=0.25;velocity_noise=0]", "fusion-pf[velocity_step=0.25]"]
     assert column_labels(long) == ["A", "B", "C"]
+
+
+def test_by_kind_pools_the_lost_flag_over_the_frames(tmp_path):
+    """--by-kind also prints lost recall / false-lost per kind, each run's rate weighted by its frames."""
+    results = tmp_path / "results.csv"
+    fields = ["tracker", "sequence", "seed", "auc", "lost_recall", "false_lost", "absent_frames", "covered_frames"]
+    rows = [("lk-rls", "leave-300", 0, 0.3, 1.0, 0.0, 30, 50),       # 30 of 30 absent frames flagged
+            ("lk-rls", "leave-301", 0, 0.4, 0.5, 0.1, 10, 100),      # 5 of 10; 10 of 100 covered frames
+            ("lk-rls", "simple-300", 0, 0.9, "", 0.0, 0, 80)]        # no absent frame: recall undefined
+    with open(results, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(fields)
+        w.writerows(rows)
+    out = subprocess.run([sys.executable, str(SCRIPT), str(results), "--by-kind"], capture_output=True, text=True,
+                         check=True).stdout
+    table = out.split("lost recall / false-lost by kind")[1].splitlines()
+    leave = next(ln for ln in table if ln.startswith("leave"))
+    simple = next(ln for ln in table if ln.startswith("simple"))
+    assert leave.split()[1:] == ["0.88", "/", "0.07"]     # 35 / 40 and 10 / 150
+    assert simple.split()[1:] == ["-", "/", "0.00"]
