@@ -5,7 +5,8 @@
 Writes each kind's scenes with ``pftrack synth KIND --seeds SEEDS`` (the generators' own share of grey scenes) to
 ``OUT/scenes/KIND``, runs all of them in one ``pftrack eval`` (``fusion-pf``, ``color-pf`` and OpenCV CSRT unless
 ``--trackers`` says otherwise; 2 run seeds) into ``OUT/eval``, and prints the mean AUC by kind with the boxes' size,
-and the lost flag's pooled rates by kind (``scripts/split_summary.py --by-kind``). The run's own summary is ``OUT/eval/summary.md``.
+and the lost flag's pooled rates by kind (``scripts/split_summary.py --by-kind``). The run's own summary is
+``OUT/eval/summary.md``.
 
 Seeds of the tune and report splits (GUIDE §8) are refused: the synthetic kinds' tune seeds 0-7 and report seeds
 100-107, the photo scenes' 1000-1019 and 0-19. A draw of neither split is one that no choice of a default has seen;
