@@ -299,17 +299,25 @@ def test_lk_rls_box_tracker_through_the_bar():
 
 
 def test_lk_rls_calls_a_target_that_left_the_view_lost():
-    """Over leave and exit scenes of several seeds: a walker that leaves through an edge is flagged while out of
+    """Over leave and exit scenes of three seeds each: a walker that leaves through an edge is flagged while out of
     view. With exit_share=0 (the former default) fresh corners were clipped onto the border, followed the still
     background, and the flag stayed down on whole scenes (docs/points.md, "Targets that leave the view")."""
-    from pftrack.synth import leave_scene
+    from pftrack.eval.metrics import lost_detection
+    from pftrack.synth import Scene, hidden_frames, leave_scene
     from pftrack.synth.varied import exit_scene
 
-    from .conftest import lost_flag_run
+    def flag(frames, gt, hid, **params):
+        t = pftrack.create_tracker("lk-rls", **params)
+        t.init(frames[0], tuple(gt[0]))
+        states = [t.update(f) for f in frames[1:]]
+        return lost_detection(np.array([s.lost for s in states]), np.array([s.box for s in states]), gt[1:], hid[1:])
 
-    scenes = [make(seed) for make in (leave_scene, exit_scene) for seed in range(300, 304)]
-    now = [lost_flag_run(spec, "lk-rls") for spec in scenes]
-    before = [lost_flag_run(spec, "lk-rls", exit_share=0.0) for spec in scenes]
+    now, before = [], []
+    for spec in (make(seed) for make in (leave_scene, exit_scene) for seed in range(300, 303)):
+        scene = Scene(spec)
+        frames, gt, hid = scene.frames(), scene.groundtruth(0), hidden_frames(spec)
+        now.append(flag(frames, gt, hid))
+        before.append(flag(frames, gt, hid, exit_share=0.0))
     assert all(r.recall >= 0.9 for r in now if r.absent_frames)
     assert all(not r.false_rate > 0.02 for r in now)   # NaN when no frame is covered
     assert sum(r.recall < 0.1 for r in before if r.absent_frames) >= 2
