@@ -135,6 +135,17 @@ def column_labels(names: list[str], width: int = 24) -> list[str]:
     return [chr(ord("A") + i) if i < 26 else f"T{i}" for i in range(len(names))]
 
 
+def kind_table_head(title: str, trackers: list[str]) -> None:
+    """Print a by-kind table's title, the letters' key when the names are lettered (:func:`column_labels`), and its
+    header row."""
+    print(title)
+    labels = column_labels(trackers)
+    for label, t in zip(labels, trackers):
+        if label != t:
+            print(f"  {label}: {t}")
+    print(f"{'kind':16s} " + " ".join(f"{t:>24s}" for t in labels))
+
+
 def by_kind(rows: list[dict], runs: Path, scenes: list[str] | None) -> None:
     """Mean AUC per tracker and scene kind; with ``scenes``, the boxes' size against the truth's (:func:`size_ratio`,
     the median over the runs of a kind)."""
@@ -161,12 +172,8 @@ def by_kind(rows: list[dict], runs: Path, scenes: list[str] | None) -> None:
                 sizes[(rec["tracker"], kind_of(seq))].append(v)
     trackers = sorted({t for t, _ in auc})
     kinds = sorted({k for _, k in auc})
-    print("\nmean AUC by kind" + (" (box size against the truth's, sqrt of the areas, second half)" if sizes else ""))
-    labels = column_labels(trackers)
-    for label, t in zip(labels, trackers):
-        if label != t:
-            print(f"  {label}: {t}")
-    print(f"{'kind':16s} " + " ".join(f"{t:>24s}" for t in labels))
+    kind_table_head("\nmean AUC by kind" + (" (box size against the truth's, sqrt of the areas, second half)"
+                                             if sizes else ""), trackers)
     for k in kinds:
         cells = []
         for t in trackers:
@@ -197,12 +204,7 @@ def flags_by_kind(rows: list[dict]) -> None:
         v, n = sums.get((t, k, name), (0.0, 0.0))
         return f"{v / n:.2f}" if n else "-"
 
-    print("\nlost recall / false-lost by kind, pooled over the frames")
-    labels = column_labels(trackers)
-    for label, t in zip(labels, trackers):
-        if label != t:
-            print(f"  {label}: {t}")
-    print(f"{'kind':16s} " + " ".join(f"{t:>24s}" for t in labels))
+    kind_table_head("\nlost recall / false-lost by kind, pooled over the frames", trackers)
     for k in kinds:
         print(f"{k:16s} " + " ".join(f"{rate(t, k, 'lost_recall') + ' / ' + rate(t, k, 'false_lost'):>24s}"
                                      for t in trackers))
