@@ -28,13 +28,13 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..cues.lk import gray_of
-from ..geometry import Box
+from ..cues.lk import gray_of, ncc
+from ..geometry import Box, in_frame_fraction
 from ..params import param
 from .base import Tracker, TrackState
 from .point_gate import FLOW, LOST, PointParams, PointTracker
 
-__all__ = ["LKRLS", "LKRLSFuzzy", "LKRLSParams", "box_points", "share_in_view"]
+__all__ = ["LKRLS", "LKRLSFuzzy", "LKRLSParams", "box_ncc", "box_patch", "box_points"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -102,21 +102,7 @@ def box_patch(gray: np.ndarray, box) -> np.ndarray:
 def box_ncc(gray: np.ndarray, box, template: np.ndarray) -> float:
     """Normalised cross-correlation of ``box``'s patch (:func:`box_patch`) with ``template`` (0 when either is
     flat)."""
-    a = box_patch(gray, box).ravel()
-    b = np.asarray(template, dtype=np.float64).ravel()
-    a, b = a - a.mean(), b - b.mean()
-    den = float(np.sqrt((a @ a) * (b @ b)))
-    return float(a @ b / den) if den > 1e-9 else 0.0
-
-
-def share_in_view(box, width: int, height: int) -> float:
-    """The share of ``box``'s area ``(x, y, w, h)`` that lies inside a ``width`` x ``height`` frame."""
-    x, y, w, h = (float(v) for v in box)
-    if w <= 0 or h <= 0:
-        return 0.0
-    iw = max(0.0, min(x + w, width) - max(x, 0.0))
-    ih = max(0.0, min(y + h, height) - max(y, 0.0))
-    return iw * ih / (w * h)
+    return float(ncc(box_patch(gray, box)[None], np.asarray(template)[None])[0])
 
 
 class LKRLS(Tracker):
@@ -139,7 +125,7 @@ class LKRLS(Tracker):
         self.points.init(gray, pts)
         self.history: deque[np.ndarray] = deque(maxlen=max(p.n_init, 8))
         self.bad_run = 0
-        self.template = box_patch(gray, self.box)
+        self.template = box_patch(gray, self.box) if p.reseed_lost > 0 else None
         self.last_ncc = float("nan")
         return self._state(np.full(len(pts), FLOW), lost=False)
 
@@ -167,7 +153,7 @@ class LKRLS(Tracker):
         frac_pred = 1.0 - flow.mean() if len(flow) else 1.0
         self.bad_run = self.bad_run + 1 if frac_pred > p.min_fraction else 0
         lost = self.bad_run > p.lost_after or not live.any()
-        out_of_view = p.exit_share > 0 and share_in_view(self.box, gray.shape[1], gray.shape[0]) < p.exit_share
+        out_of_view = p.exit_share > 0 and in_frame_fraction(self.box, gray.shape[1], gray.shape[0]) < p.exit_share
         lost = lost or out_of_view    # the target left the view
         if p.reseed and not lost:
             self._reseed(gray)
