@@ -234,7 +234,11 @@ def _synth_run(args):
     return _run(sc.frames(), sc.groundtruth(0), resampler, run_seed)
 
 
-def seir_synth_experiment(scenes=range(100, 132), run_seeds=(0, 1)) -> dict:
+#: seir-synth's varied scenes: the report seeds unless ``--seeds`` draws fresh ones.
+SEIR_SCENES = tuple(range(100, 132))
+
+
+def seir_synth_experiment(scenes=SEIR_SCENES, run_seeds=(0, 1)) -> dict:
     from concurrent.futures import ProcessPoolExecutor
 
     jobs = [(s, r, rs) for s in scenes for r in run_seeds for rs in ("seir", "multinomial")]
@@ -302,7 +306,7 @@ def main() -> None:
                           f"{np.mean([r['centre_error'] for r in sel]):.1f} | {np.mean([r['ess'] for r in sel]):.2f} | "
                           f"{np.mean([r['spread'] for r in sel]):.3f} |")
     if "seir-synth" in parts:
-        scenes = parse_seeds(a.seeds) if a.seeds else range(100, 132)
+        scenes = parse_seeds(a.seeds) if a.seeds else SEIR_SCENES
         out["seir_synth"] = r = seir_synth_experiment(scenes)
         print(f"\n## SEIR against multinomial on {len(scenes)} unseen varied scenes (seeds {min(scenes)}-{max(scenes)}) "
               "x 2 run seeds (cotrain-pf)\n")
