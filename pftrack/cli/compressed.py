@@ -18,7 +18,7 @@ def add_activity(sub) -> None:
                                    "Weighting: 'far' weighs small square partitions up (a far camera sees small "
                                    "objects), 'near' also damps repeated partitions of one class (a large, slow "
                                    "object), 'auto' picks by the share of moving blocks. Writes frame,activity,sigma.")
-    p.add_argument("source", help="H.264 or MPEG-4 Part 2 video file")
+    p.add_argument("source", help="H.264 or MPEG-4 Part 2 video file or stream URL (rtsp://, http://, ...)")
     p.add_argument("--weighting", choices=["none", "far", "near", "auto"], default="none")
     p.add_argument("--kappa", type=float, default=4.0, help="penalty strength of Eq. (15) (default 4)")
     p.add_argument("--out", default="activity.csv", help="CSV output (default activity.csv)")

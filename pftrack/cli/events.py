@@ -27,9 +27,10 @@ def add_tripwire(sub) -> None:
                     "--from-tracks runs the conventional tripwire on MOTChallenge tracks instead. Writes "
                     "frame,direction,... per crossing, flushed; the last column, line, numbers the --line options "
                     "from 1 (several lines are counted in one pass over the video).")
-    p.add_argument("source", nargs="?", help="video file, frame folder, MOTChallenge folder or camera index (not "
-                                             "needed with --from-tracks; from a camera, --radius auto reads its first "
-                                             "10 s, which are then counted)")
+    p.add_argument("source", nargs="?", help="video file, frame folder, MOTChallenge folder, camera index or "
+                                             "stream URL (rtsp://, http://, ...; not needed with --from-tracks; from a "
+                                             "camera or live stream, --radius auto reads its first 10 s, which are "
+                                             "then counted)")
     p.add_argument("--line", required=True, action="append",
                    help='polyline "X1,Y1;X2,Y2[;...]" (at least two points); repeat to count several lines, each with '
                         "its own patches and radius")
@@ -112,10 +113,9 @@ CAMERA_CALIBRATION_BYTES = 512 * 2 ** 20
 
 def _calibration(args, source, fps: float) -> tuple[list, list, object]:
     """``(calib, kept, rest)``: the processed frames of the first 10 s of ``source`` (``--radius auto``, ``--v-max
-    auto``); for a camera those frames numbered, to be counted first, and its stream from there (else None)."""
-    from ..io.sources import VideoSource
-
-    camera = isinstance(source, VideoSource) and isinstance(source.target, int)
+    auto``); for a camera or live stream those frames numbered, to be counted first, and its stream from there
+    (else None)."""
+    camera = source.live
     calib, kept, size = [], [], 0
     stream = source.numbered()
     for number, frame in stream:

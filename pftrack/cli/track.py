@@ -15,7 +15,7 @@ def add_track(sub) -> None:
     p = sub.add_parser("track", help="track one object through a video, frame folder or sequence",
                        description="Track one object. Writes CSV rows frame,x,y,w,h,score,lost, flushed per frame.")
     p.add_argument("source", help="video file, frame folder, OTB/VOT/MOTChallenge folder, a folder holding a video "
-                   "and its ground truth, or camera index")
+                   "and its ground truth, camera index or stream URL (rtsp://, http://, ...)")
     p.add_argument("--box", help="initial box X,Y,W,H (default: the sequence's first ground-truth box)")
     p.add_argument("--target", type=target_id, metavar="ID", help=(
         "the ground truth to start from (instead of --box): a track id of a MOTChallenge folder's gt/gt.txt, or "

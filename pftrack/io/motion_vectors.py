@@ -24,6 +24,7 @@ import numpy as np
 
 from .._numba import njit, numba_enabled
 from ..errors import ParameterError, SourceError
+from . import streams
 from .prefetch import default_depth, prefetch
 
 BLOCK = 4
@@ -71,21 +72,22 @@ def _pict_type(pt) -> str:
 def iter_mv_frames(path, *, bgr: bool = False, threads: bool = False) -> Iterator[MVFrame]:
     """Decode ``path`` and yield every frame's motion vectors and luma (and BGR pixels if asked)."""
     av = require_av()
-    p = Path(str(path))
-    if not p.is_file():
+    url = streams.is_url(str(path))
+    if not url and not Path(str(path)).is_file():
         raise SourceError(f"{path}: no such file")
+    where = streams.redact(str(path)) if url else path
     try:
-        container = av.open(str(p))
+        container = av.open(str(path), timeout=streams.TIMEOUT_S) if url else av.open(str(path))
     except Exception as exc:  # noqa: BLE001 - PyAV raises many FFmpeg error classes
-        raise SourceError(f"{path}: cannot open as a video ({str(exc).splitlines()[0][:120]})") from None
+        raise SourceError(f"{where}: cannot open as a video ({str(exc).splitlines()[0][:120]})") from None
     try:
         if not container.streams.video:
-            raise SourceError(f"{path}: has no video stream")
+            raise SourceError(f"{where}: has no video stream")
         stream = container.streams.video[0]
         stream.codec_context.options = {"flags2": "+export_mvs"}
         if threads:
             stream.thread_type = "AUTO"
-        for n, frame in enumerate(container.decode(stream), start=1):
+        for n, frame in enumerate(_frames_of(container, stream, url, av), start=1):
             sd = frame.side_data.get("MOTION_VECTORS") if hasattr(frame.side_data, "get") else None
             mvs = sd.to_ndarray() if sd is not None else None
             if bgr and frame.format.name == "yuv420p" and frame.width % 2 == 0 and frame.height % 2 == 0:
@@ -97,6 +99,26 @@ def iter_mv_frames(path, *, bgr: bool = False, threads: bool = False) -> Iterato
         container.close()
 
 
+def _frames_of(container, stream, url: bool, av):
+    """The decoded frames of ``stream``; a stream URL's feed that breaks off (a server that closes the connection,
+    a camera that stops) ends them, as OpenCV's reader ends, where a file's read error is raised."""
+    frames = container.decode(stream)
+    while True:
+        try:
+            frame = next(frames)
+        except StopIteration:
+            return
+        except (OSError, av.error.FFmpegError):
+            if not url:
+                raise
+            try:  # the frames the decoder still holds
+                yield from stream.decode(None)
+            except (OSError, av.error.FFmpegError):
+                pass
+            return
+        yield frame
+
+
 class MVSource:
     """A frame source over a compressed video that also keeps each frame's motion vectors in ``current``
     (for the ``mv`` detector); the same interface as :class:`pftrack.io.sources.FrameSource`."""
@@ -106,13 +128,15 @@ class MVSource:
     def __init__(self, path):
         av = require_av()
         self.name = str(path)
-        if not Path(self.name).is_file():
+        url = streams.is_url(self.name)
+        if not url and not Path(self.name).is_file():
             what = "is a folder" if Path(self.name).is_dir() else "no such file"
             raise SourceError(f"{path}: {what} (motion vectors need a compressed video file)")
+        where = streams.redact(self.name) if url else path
         try:
-            with av.open(self.name) as c:
+            with (av.open(self.name, timeout=streams.TIMEOUT_S) if url else av.open(self.name)) as c:
                 if not c.streams.video:
-                    raise SourceError(f"{path}: has no video stream")
+                    raise SourceError(f"{where}: has no video stream")
                 st = c.streams.video[0]
                 self.fps = float(st.average_rate) if st.average_rate else None
                 self._len = st.frames or None
@@ -120,9 +144,14 @@ class MVSource:
         except SourceError:
             raise
         except Exception as exc:  # noqa: BLE001
-            raise SourceError(f"{path}: cannot open as a video ({str(exc).splitlines()[0][:120]})") from None
+            raise SourceError(f"{where}: cannot open as a video ({str(exc).splitlines()[0][:120]})") from None
         if codec not in ("h264", "mpeg4", "h263", "mpeg2video", "mpeg1video", "hevc"):
-            raise SourceError(f"{path}: codec {codec} exports no motion vectors (use H.264 or MPEG-4 Part 2)")
+            raise SourceError(f"{where}: codec {codec} exports no motion vectors (use H.264 or MPEG-4 Part 2)")
+        # a live stream (rtsp://, ...; or a URL without a frame count) is opened again to be decoded: its first
+        # frames pass meanwhile
+        self.live = url and (streams.is_live(self.name) or self._len is None)
+        if self.live:
+            self._len = None
         self.current: MVFrame | None = None
         self.prefetch = default_depth()  # frames decoded ahead on a second thread (0, the default on one CPU:
         # decode in the caller's thread)

@@ -1,4 +1,4 @@
-"""Frame sources: video files, image folders, OTB/VOT/MOTChallenge sequences and cameras.
+"""Frame sources: video files, image folders, OTB/VOT/MOTChallenge sequences, cameras and network streams.
 
 >>> for frame in pftrack.open_source("clip.mp4"):     # doctest: +SKIP
 ...     state = tracker.update(frame)
@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 
 from ..errors import FrameError, SourceError
+from . import streams
 from ..frames import as_bgr_uint8
 from .datasets import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, mot_target, otb_targets, read_otb,
                        read_sequence)
@@ -45,6 +46,8 @@ class FrameSource:
     """Base class of all sources; iterate it for frames or call :meth:`numbered`."""
 
     kind = "source"
+    #: a camera or live stream: no length, not read ahead, not readable twice from the start
+    live = False
 
     def __init__(self, name: str, *, skip_bad_frames: bool = False):
         self.name = name
@@ -161,18 +164,27 @@ class ImageFolderSource(FrameSource):
 
 
 class VideoSource(FrameSource):
-    """Frames decoded from a video file or a camera by OpenCV."""
+    """Frames decoded from a video file, a camera or a network stream (``rtsp://``, ``http://``, ...) by OpenCV.
+
+    ``live`` is true for a camera, a live-stream protocol (:data:`pftrack.io.streams.LIVE_SCHEMES`) and a URL whose
+    frame count is not known: its frames are read in the caller's thread (frames read ahead would be stale), it has
+    no length, and it cannot be read twice from the start."""
 
     kind = "video"
 
     def __init__(self, target: str | int, name: str, *, skip_bad_frames: bool = False):
         super().__init__(name, skip_bad_frames=skip_bad_frames)
         self.target = target
+        url = isinstance(target, str) and streams.is_url(target)
         with quiet_opencv():  # OpenCV's own warnings on a failed open would precede our one-line error
-            self.cap = cv2.VideoCapture(target)
-        where = target if isinstance(target, str) else name  # a folder's video is named by its own file
+            self.cap = streams.open_capture(target) if url else cv2.VideoCapture(target)
+        where = streams.redact(target) if url else (target if isinstance(target, str) else name)
+        # (a folder's video is named by its own file; a URL's password is not printed)
         if not self.cap.isOpened():
             self.cap.release()
+            if url:
+                raise SourceError(f"{where}: cannot open the stream (unreachable, refused, or an unsupported protocol "
+                                  "or codec)")
             what = "camera" if isinstance(target, int) else "video"
             raise SourceError(f"{where}: cannot open as a {what} (not a video, unsupported codec or device missing)")
         ok, first = self.cap.read()
@@ -183,13 +195,14 @@ class VideoSource(FrameSource):
         fps = self.cap.get(cv2.CAP_PROP_FPS)
         self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else None
         count = int(self.cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
-        self._count = count if count > 0 and not isinstance(target, int) else None
-        if isinstance(target, int):
-            self.prefetch = 0  # a live camera: frames read ahead would be stale
+        self.live = isinstance(target, int) or (url and (streams.is_live(target) or count <= 0))
+        self._count = count if count > 0 and not self.live else None
+        if self.live:
+            self.prefetch = 0  # frames read ahead would be stale
 
     def __len__(self) -> int:
         if self._count is None:
-            raise TypeError("camera source has no known length")
+            raise TypeError("a live source (camera or stream) has no known length")
         return self._count
 
     def _raw(self, start: int = 1):
@@ -216,7 +229,9 @@ class VideoSource(FrameSource):
 
 
 def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False, target: int | None = None) -> FrameSource:
-    """Open a video file, image folder, OTB/VOT/MOTChallenge folder or camera index.
+    """Open a video file, image folder, OTB/VOT/MOTChallenge folder, camera index or network stream URL
+    (``rtsp://``, ``rtmp://``, ``http(s)://``, ``udp://``, ... : whatever OpenCV's FFmpeg reads; see
+    :mod:`pftrack.io.streams`).
 
     ``target`` picks the ground truth of one of several targets: the ``N`` of an OTB folder's
     ``groundtruth_rect.N.txt``, or a track id of a MOTChallenge folder's ``gt/gt.txt``
@@ -226,6 +241,11 @@ def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False, target
     missing path, empty folder, unreadable video, unknown format, a target the source does not have.
     """
     camera = isinstance(spec, int) or (isinstance(spec, str) and spec.strip().isdigit())
+    if isinstance(spec, str) and streams.is_url(spec):
+        if target is not None:
+            raise SourceError(f"{streams.redact(spec)}: a target (--target) picks one of an OTB folder's annotated "
+                              "targets or a track of a MOTChallenge folder's ground truth; a stream has neither")
+        return VideoSource(spec, streams.redact(spec), skip_bad_frames=skip_bad_frames)
     path = None if camera else Path(spec)
     if path is not None and not path.exists():
         raise SourceError(f"{path}: no such file or folder")
