@@ -15,7 +15,8 @@ def add_densitometry(sub) -> None:
                        description="Track the segment in --box with template matching, translate --line with it and "
                                    "write per frame the line, A(t) of eq. (1), the vessel edges and the profile's "
                                    "statistics (CSV, one row per frame, flushed).")
-    p.add_argument("source", help="video file, frame folder, OTB/VOT folder camera index or stream URL (rtsp://, http://, ...)")
+    p.add_argument("source", help="video file, frame folder, OTB/VOT folder, camera index or stream "
+                   "URL (rtsp://, http://, ...)")
     p.add_argument("--box", required=True, help="template window X,Y,W,H (around the artery segment)")
     p.add_argument("--line", required=True,
                    help="cross-sectional line X1,Y1,X2,Y2 in the first frame (or X1,Y1;X2,Y2, as tripwire takes it)")

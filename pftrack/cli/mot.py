@@ -12,7 +12,8 @@ def add_mot(sub) -> None:
     p = sub.add_parser("mot", help="track all the people/objects in a video, frame folder or MOTChallenge folder",
                        description="Multi-object tracking (detection + per-target colour particle filters). Writes "
                                    "MOTChallenge text rows frame,id,x,y,w,h,score,-1,-1,-1, flushed per frame.")
-    p.add_argument("source", help="video file, frame folder, MOTChallenge folder camera index or stream URL (rtsp://, http://, ...)")
+    p.add_argument("source", help="video file, frame folder, MOTChallenge folder, camera index or stream "
+                   "URL (rtsp://, http://, ...)")
     p.add_argument("--detector", choices=["motion", "mog2", "hog", "mv"], default="mog2",
                    help="detector (default mog2); mv: groups of moving 4x4 blocks from the stream's motion vectors "
                         "(book ch. 8), each drawn as the silhouettes of a background learnt away from the moving "

@@ -22,7 +22,8 @@ def add_points(sub) -> None:
                                    "is used only while it agrees with an RLS AR(2) prediction, so points are "
                                    "carried through occlusions. Writes frame,point,x,y,source (flow, prediction "
                                    "or lost) per point and frame, from frame 1, flushed per frame.")
-    p.add_argument("source", help="video file, frame folder, OTB/VOT folder camera index or stream URL (rtsp://, http://, ...)")
+    p.add_argument("source", help="video file, frame folder, OTB/VOT folder, camera index or stream "
+                   "URL (rtsp://, http://, ...)")
     p.add_argument("--points", required=True, help='points in frame 1: "X1,Y1;X2,Y2;..."')
     p.add_argument("--method", choices=["lk", "rls", "fuzzy"], default="fuzzy",
                    help="lk: plain Lucas-Kanade; rls: the gate with k = 0.75; fuzzy: k tuned by the fuzzy "

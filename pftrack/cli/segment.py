@@ -16,7 +16,8 @@ def add_segment(sub) -> None:
                        description="Every frame, a graph cut of colour-histogram and contrast terms on a region "
                                    "around the previous mask, seeded by its distance transform. Writes one 0/255 "
                                    "PNG mask per frame (000001.png, ... by frame number from 1), as it goes.")
-    p.add_argument("source", help="video file, frame folder, OTB/VOT folder camera index or stream URL (rtsp://, http://, ...)")
+    p.add_argument("source", help="video file, frame folder, OTB/VOT folder, camera index or stream "
+                   "URL (rtsp://, http://, ...)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--box", help="X,Y,W,H of the object in the first frame (GrabCut finds the first mask)")
     g.add_argument("--mask", help="first-frame mask (PNG, non-zero = object), the same size as the frames")

@@ -17,7 +17,8 @@ def add_surface(sub) -> None:
                                    "finds the mesh's vertex positions (and a multiplicative shading on a coarser "
                                    "mesh) that map it onto the frame. Writes frame,x0,y0,x1,y1,... (vertices "
                                    "row-major, top row first) from frame 1, flushed per frame.")
-    p.add_argument("source", help="video file, frame folder, OTB/VOT folder camera index or stream URL (rtsp://, http://, ...)")
+    p.add_argument("source", help="video file, frame folder, OTB/VOT folder, camera index or stream "
+                   "URL (rtsp://, http://, ...)")
     p.add_argument("--box", help="X,Y,W,H of the surface in the first frame (default: a sequence folder's "
                                  "first ground-truth box)")
     p.add_argument("--mesh", default="7x7", help="vertices COLSxROWS spanning the box (default 7x7; at least 2x2)")

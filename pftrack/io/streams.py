@@ -62,4 +62,5 @@ def open_capture(spec: str):
     import cv2
 
     ms = int(TIMEOUT_S * 1000)
-    return cv2.VideoCapture(spec, cv2.CAP_FFMPEG, [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, ms])
+    timeouts = [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, ms]
+    return cv2.VideoCapture(spec, cv2.CAP_FFMPEG, timeouts)
