@@ -77,7 +77,7 @@ def iter_mv_frames(path, *, bgr: bool = False, threads: bool = False) -> Iterato
         raise SourceError(f"{path}: no such file")
     where = streams.redact(str(path)) if url else path
     try:
-        container = av.open(str(path), timeout=streams.TIMEOUT_S) if url else av.open(str(path))
+        container = streams.av_open(str(path)) if url else av.open(str(path))
     except Exception as exc:  # noqa: BLE001 - PyAV raises many FFmpeg error classes
         raise SourceError(f"{where}: cannot open as a video ({str(exc).splitlines()[0][:120]})") from None
     try:
@@ -134,7 +134,7 @@ class MVSource:
             raise SourceError(f"{path}: {what} (motion vectors need a compressed video file)")
         where = streams.redact(self.name) if url else path
         try:
-            with (av.open(self.name, timeout=streams.TIMEOUT_S) if url else av.open(self.name)) as c:
+            with (streams.av_open(self.name) if url else av.open(self.name)) as c:
                 if not c.streams.video:
                     raise SourceError(f"{where}: has no video stream")
                 st = c.streams.video[0]

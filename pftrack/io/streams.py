@@ -57,6 +57,14 @@ def redact(spec: str) -> str:
     return _USERINFO.sub(lambda m: f"{m.group('head')}{m.group('user')}:***@", spec.strip(), count=1)
 
 
+def av_open(spec: str):
+    """``av.open`` of the stream URL ``spec`` with :data:`TIMEOUT_S`, RTSP over TCP as OpenCV's reader asks for it."""
+    import av
+
+    options = {"rtsp_transport": "tcp"} if scheme(spec) in ("rtsp", "rtsps") else {}
+    return av.open(spec, timeout=TIMEOUT_S, options=options)
+
+
 def open_capture(spec: str):
     """``cv2.VideoCapture`` of the stream URL ``spec`` through FFmpeg, with :data:`TIMEOUT_S` to open and to read."""
     import cv2
