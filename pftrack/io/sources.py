@@ -20,8 +20,8 @@ import cv2
 import numpy as np
 
 from ..errors import FrameError, SourceError
-from . import streams
 from ..frames import as_bgr_uint8
+from . import streams
 from .datasets import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, Sequence, detect_layout, mot_target, otb_targets, read_otb,
                        read_sequence)
 from .prefetch import default_depth, prefetch
@@ -242,6 +242,7 @@ def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False, target
     """
     camera = isinstance(spec, int) or (isinstance(spec, str) and spec.strip().isdigit())
     if isinstance(spec, str) and streams.is_url(spec):
+        spec = spec.strip()
         if target is not None:
             raise SourceError(f"{streams.redact(spec)}: a target (--target) picks one of an OTB folder's annotated "
                               "targets or a track of a MOTChallenge folder's ground truth; a stream has neither")
