@@ -25,8 +25,8 @@ class _Server:
     """Serves ``files`` (name -> bytes) at ``http://127.0.0.1:PORT/NAME``: with byte ranges and a length (a file
     over HTTP), or, for names ending in ``.ts``, as an endless-looking feed (no length, no ranges: a live stream)."""
 
-    def __init__(self, files: dict[str, bytes]):
-        served = files
+    def __init__(self, files: dict[str, bytes | list[bytes]]):
+        served = {k: list(v) if isinstance(v, list) else v for k, v in files.items()}
 
         class Handler(http.server.BaseHTTPRequestHandler):
             protocol_version = "HTTP/1.1"
@@ -36,6 +36,8 @@ class _Server:
 
             def do_GET(self):
                 data = served.get(self.path.lstrip("/"))
+                if isinstance(data, list):  # one payload a connection, in turn, then nothing
+                    data = data.pop(0) if data else None
                 if data is None:
                     self.send_error(404)
                     return
@@ -80,6 +82,24 @@ def live_clip(tmp_path_factory):
         f[30:60, 10 + 2 * i:40 + 2 * i] = (40, 180, 220)
         frames.append(f)
     return encode_h264(frames, tmp_path_factory.mktemp("live") / "clip.ts", fps=25)
+
+
+@pytest.fixture(scope="module")
+def two_feeds(tmp_path_factory):
+    """Two 20-frame MPEG-TS clips of the same size (each starting with a key frame): a feed and its second
+    connection."""
+    from pftrack.io.motion_vectors import encode_h264
+
+    folder = tmp_path_factory.mktemp("feeds")
+    out = []
+    for part in range(2):
+        frames = []
+        for i in range(20):
+            f = np.full((96, 128, 3), 60 + 40 * part, np.uint8)
+            f[30:60, 10 + 3 * i:40 + 3 * i] = (40, 180, 220)
+            frames.append(f)
+        out.append(encode_h264(frames, folder / f"part{part}.ts", fps=25).read_bytes())
+    return out
 
 
 @pytest.fixture
@@ -189,3 +209,43 @@ def test_an_unreachable_stream_is_one_line_and_exit_2(argv, tmp_path, capsys, mo
     assert len(err) == 1 and err[0].startswith("pftrack: error: ") and "cannot open" in err[0]
     assert "pw123" not in err[0]
     assert not list(tmp_path.iterdir())  # no output file was started
+
+
+def test_a_broken_off_feed_is_opened_again_with_reconnect(two_feeds, monkeypatch):
+    monkeypatch.setattr(streams, "RECONNECT_WAIT_S", 0.0)
+    srv = _Server({"feed.ts": two_feeds})
+    try:
+        src = open_source(srv.url("feed.ts"), reconnect=2)
+        numbers = [n for n, _ in src.numbered()]
+        # the second connection's frames are numbered on; the third connection finds nothing and, after two tries,
+        # the source ends
+        assert numbers == list(range(1, 41)) and src.reconnected == [21]
+    finally:
+        srv.close()
+    srv = _Server({"feed.ts": two_feeds})
+    try:
+        src = open_source(srv.url("feed.ts"))  # without reconnect the feed's end is the source's
+        assert [n for n, _ in src.numbered()] == list(range(1, 21)) and src.reconnected == []
+    finally:
+        srv.close()
+
+
+def test_the_commands_reconnect_and_say_so(two_feeds, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(streams, "RECONNECT_WAIT_S", 0.0)
+    srv = _Server({"feed.ts": two_feeds})
+    try:
+        out = tmp_path / "t.csv"
+        assert main(["track", srv.url("feed.ts"), "--box", "10,30,30,30", "--tracker", "color-pf", "--reconnect", "1",
+                     "--quiet", "--out", str(out)]) == 0
+        assert len(out.read_text().splitlines()) == 41
+        assert "(the stream was opened again 1 time)" in capsys.readouterr().err
+    finally:
+        srv.close()
+    # the motion-vector paths read with PyAV and do not reconnect: said before any work, exit 2
+    assert main(["mot", "rtsp://127.0.0.1:1/s", "--detector", "mv", "--reconnect", "1", "--out",
+                 str(tmp_path / "m.txt")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--reconnect" in err[0] and not (tmp_path / "m.txt").exists()
+    with pytest.raises(SystemExit) as e:
+        main(["track", "x.mp4", "--reconnect", "-1"])
+    assert e.value.code == 2 and "--reconnect is an integer >= 0" in capsys.readouterr().err

@@ -59,6 +59,24 @@ def target_id(text: str) -> int:
     return _non_negative(text, "a target id")
 
 
+def reconnect_count(text: str) -> int:
+    """An argparse type for ``--reconnect``: an integer >= 0."""
+    return _non_negative(text, "--reconnect")
+
+
+def add_reconnect(p) -> None:
+    """``--reconnect N`` for the commands that read live streams."""
+    p.add_argument("--reconnect", type=reconnect_count, default=0, metavar="N", help=(
+        "a live stream URL (rtsp://, ...) whose feed breaks off is opened again, up to N times in a row, waiting "
+        "1, 2, 4, then 8 s between tries; its frames are numbered on (default 0: the run ends with the feed)"))
+
+
+def reconnected_note(source) -> str:
+    """`` (the stream was opened again N times)`` for the closing message, or nothing."""
+    n = len(getattr(source, "reconnected", ()))
+    return f" (the stream was opened again {counted(n, 'time')})" if n else ""
+
+
 def progress(total: int | None, desc: str, quiet: bool):
     from tqdm import tqdm
 

@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from ..errors import Interrupted
-from .common import close_all, counted, progress
+from .common import add_reconnect, close_all, counted, progress, reconnected_note
 
 EVENTS_HEADER = "frame,direction,time_s,to_patch,from_patch,tau_frame,score,s_color,s_motion,x,y,vx,vy,line"
 TRACK_EVENTS_HEADER = "frame,direction,track,x,y,line"
@@ -55,6 +55,7 @@ def add_tripwire(sub) -> None:
     p.add_argument("--video-out", help="overlay video: patches by state, events")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                    help="tripwire parameter (repeatable; see pftrack.events.tripwire.TripwireParams)")
+    add_reconnect(p)
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_tripwire)
 
@@ -194,7 +195,7 @@ def cmd_tripwire(args) -> int:
     prepare_output(args.out)
     if args.video_out:
         prepare_video_output(args.video_out)
-    source = open_source(args.source)
+    source = open_source(args.source, reconnect=args.reconnect)
     stated = source.fps if source.fps is not None and np.isfinite(source.fps) and source.fps > 0 else None
     fps = float(args.fps or stated or 25.0)
     calib, kept, rest = [], [], None
@@ -202,7 +203,7 @@ def cmd_tripwire(args) -> int:
         calib, kept, rest = _calibration(args, source, fps)
         if rest is None:  # a file or folder: read again from the start
             source.close()
-            source = open_source(args.source)
+            source = open_source(args.source, reconnect=args.reconnect)
     params = _line_params(args, calib, fps, lines, extra, v_auto)
     del calib  # not held for the whole run (a camera's kept frames are let go as they are counted)
     sinks: list = []
@@ -272,10 +273,10 @@ def cmd_tripwire(args) -> int:
         return f"{c[1]} positive and {c[-1]} negative {noun} ({what})"
 
     if len(lines) == 1:
-        print(f"{said(counts[0], params[0], rate)} -> {args.out}", file=sys.stderr)
+        print(f"{said(counts[0], params[0], rate)} -> {args.out}{reconnected_note(source)}", file=sys.stderr)
     else:
         for k, (c, par) in enumerate(zip(counts, params), 1):
             print(f"line {k}: {said(c, par)}", file=sys.stderr)
         print(f"{total[1]} positive and {total[-1]} negative on {len(lines)} lines" + (f" ({rate})" if rate else "")
-              + f" -> {args.out}", file=sys.stderr)
+              + f" -> {args.out}{reconnected_note(source)}", file=sys.stderr)
     return 0

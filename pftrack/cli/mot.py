@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import sys
 
-from ..errors import Interrupted
-from .common import close_all, counted, progress, seed_value
+from ..errors import Interrupted, ParameterError
+from .common import add_reconnect, close_all, counted, progress, reconnected_note, seed_value
 
 
 def add_mot(sub) -> None:
@@ -33,18 +33,20 @@ def add_mot(sub) -> None:
                    help="book ch. 1 identification: give a returning person their old identity (colour and spatial "
                         "features of the upper and lower body)")
     p.add_argument("--skip-bad-frames", action="store_true", help="skip unreadable frames instead of stopping")
+    add_reconnect(p)
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_mot)
 
 
 def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params=None, skip_bad_frames=False,
-            quiet=False, tracker_name: str = "multi-pf", mpeg7: str | None = None) -> dict:
+            quiet=False, tracker_name: str = "multi-pf", mpeg7: str | None = None, reconnect: int = 0) -> dict:
     """The work behind ``pftrack mot``."""
+    if reconnect and (tracker_name == "cd" or detector == "mv"):
+        raise ParameterError("--reconnect reopens streams read by OpenCV; the motion-vector paths (--detector mv, "
+                             "--tracker cd) read theirs with PyAV and end with the feed")
     if tracker_name == "cd":
         return run_cd(source_spec, out=out, video_out=video_out, params=params, quiet=quiet, mpeg7=mpeg7)
     if mpeg7:
-        from ..errors import ParameterError
-
         raise ParameterError("--mpeg7 needs --tracker cd")
     import time as _time
 
@@ -75,7 +77,7 @@ def run_mot(source_spec, *, out, detector="mog2", video_out=None, seed=0, params
         cv2.setNumThreads(1)
     else:
         tracker = create_multi_tracker("multi-pf", seed=seed, **{"detector": detector, **(params or {})})
-        source = open_source(source_spec, skip_bad_frames=skip_bad_frames)
+        source = open_source(source_spec, skip_bad_frames=skip_bad_frames, reconnect=reconnect)
     frames = rows = 0
     ids: set[int] = set()
     upd = 0.0
@@ -216,9 +218,9 @@ def cmd_mot(args) -> int:
         params["identify"] = True
     res = run_mot(args.source, out=args.out, detector=args.detector, video_out=args.video_out, seed=args.seed,
                   params=params, skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, tracker_name=args.tracker,
-                  mpeg7=args.mpeg7)
+                  mpeg7=args.mpeg7, reconnect=args.reconnect)
     n, ids, rows = res["frames"], res["identities"], res["rows"]
     counts = f"{counted(n, 'frame')}, {counted(ids, 'identity', 'identities')}, {counted(rows, 'box', 'boxes')}"
     print(f"{counts}: {res['update_fps']:.0f} fps (detection + tracking), {res['end_to_end_fps']:.0f} fps end to end "
-          f"-> {args.out}", file=sys.stderr)
+          f"-> {args.out}{reconnected_note(res.get('source'))}", file=sys.stderr)
     return 0

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import Interrupted
-from .common import DEFAULT_TRACKER, close_all, counted, progress, seed_value, target_id
+from .common import (DEFAULT_TRACKER, add_reconnect, close_all, counted, progress, reconnected_note, seed_value,
+                     target_id)
 
 
 def add_track(sub) -> None:
@@ -31,6 +32,7 @@ def add_track(sub) -> None:
     p.add_argument("--seed", type=seed_value, default=0, help="random seed (default 0)")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="tracker parameter (repeatable)")
     p.add_argument("--skip-bad-frames", action="store_true", help="skip unreadable frames instead of stopping")
+    add_reconnect(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_track)
 
@@ -54,7 +56,8 @@ def scalar_info(info: dict) -> dict:
 
 
 def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=None, seed=0, params=None,
-              skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False, target=None) -> dict:
+              skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False, target=None,
+              reconnect: int = 0) -> dict:
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
     from ..errors import BoxError, ParameterError
     from ..geometry import parse_box
@@ -81,7 +84,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
         prepare_video_output(video_out)
     if json_out:
         prepare_output(json_out)
-    source = open_source(source_spec, skip_bad_frames=skip_bad_frames, target=target)
+    source = open_source(source_spec, skip_bad_frames=skip_bad_frames, target=target, reconnect=reconnect)
     if init_box is None and source.init_box is None:  # said before any output file is created
         source.close()
         raise BoxError(missing_box_message(source))
@@ -141,7 +144,7 @@ def cmd_track(args) -> int:
     res = run_track(args.source, box=args.box, tracker_name=args.tracker, out=args.out, video_out=args.video_out,
                     json_out=args.json_out, seed=args.seed, params=parse_param_assignments(args.param),
                     skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, show_map=args.show_map,
-                    target=args.target)
+                    target=args.target, reconnect=args.reconnect)
     n = res["frames"]
     speed = (f"{res['update_fps']:.0f} update fps, {res['end_to_end_fps']:.0f} fps end to end" if n > 1
              else "no update to time")  # one frame is the initialisation only
@@ -149,7 +152,7 @@ def cmd_track(args) -> int:
            f"{counted(res['lost_frames'], 'frame')} -> {args.out}")
     if res["skipped"]:
         msg += f" ({counted(len(res['skipped']), 'unreadable frame')} skipped)"
-    print(msg, file=sys.stderr)
+    print(msg + reconnected_note(res["source"]), file=sys.stderr)
     return 0
 
 

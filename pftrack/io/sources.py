@@ -168,13 +168,20 @@ class VideoSource(FrameSource):
 
     ``live`` is true for a camera, a live-stream protocol (:data:`pftrack.io.streams.LIVE_SCHEMES`) and a URL whose
     frame count is not known: its frames are read in the caller's thread (frames read ahead would be stale), it has
-    no length, and it cannot be read twice from the start."""
+    no length, and it cannot be read twice from the start.
+
+    ``reconnect``: a live stream URL whose feed breaks off is opened again, up to this many times in a row (waits
+    of :data:`pftrack.io.streams.RECONNECT_WAIT_S`, doubling up to 8 of them; a frame read resets the count); its
+    frames keep being numbered on, and the numbers of the first frames after each new connection are kept in
+    ``reconnected``. 0 (the default): the feed's end is the source's end."""
 
     kind = "video"
 
-    def __init__(self, target: str | int, name: str, *, skip_bad_frames: bool = False):
+    def __init__(self, target: str | int, name: str, *, skip_bad_frames: bool = False, reconnect: int = 0):
         super().__init__(name, skip_bad_frames=skip_bad_frames)
         self.target = target
+        self.reconnect = int(reconnect)
+        self.reconnected: list[int] = []
         url = isinstance(target, str) and streams.is_url(target)
         with quiet_opencv():  # OpenCV's own warnings on a failed open would precede our one-line error
             self.cap = streams.open_capture(target) if url else cv2.VideoCapture(target)
@@ -196,6 +203,7 @@ class VideoSource(FrameSource):
         self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else None
         count = int(self.cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         self.live = isinstance(target, int) or (url and (streams.is_live(target) or count <= 0))
+        self._url = url
         self._count = count if count > 0 and not self.live else None
         if self.live:
             self.prefetch = 0  # frames read ahead would be stale
@@ -216,19 +224,36 @@ class VideoSource(FrameSource):
             if not self.cap.grab():
                 return
             number += 1
+        tries = 0  # tries to open the stream again since the last frame read
         while True:
             ok, img = self.cap.read()
             if not ok:
-                return
+                if not (self.live and self._url) or tries >= self.reconnect:
+                    return
+                self._reopen(tries)
+                tries += 1
+                continue
+            if tries:
+                self.reconnected.append(number + 1)
+                tries = 0
             number += 1
             yield number, img, "video frame"
+
+    def _reopen(self, attempt: int) -> None:
+        """A live stream URL's feed broke off: wait, then open it again (a failed open leaves a closed capture,
+        whose next read fails)."""
+        self.cap.release()
+        streams.wait_before_reconnect(attempt)
+        with quiet_opencv():
+            self.cap = streams.open_capture(self.target)
 
     def close(self) -> None:
         super().close()
         self.cap.release()
 
 
-def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False, target: int | None = None) -> FrameSource:
+def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False, target: int | None = None,
+                reconnect: int = 0) -> FrameSource:
     """Open a video file, image folder, OTB/VOT/MOTChallenge folder, camera index or network stream URL
     (``rtsp://``, ``rtmp://``, ``http(s)://``, ``udp://``, ... : whatever OpenCV's FFmpeg reads; see
     :mod:`pftrack.io.streams`).
@@ -239,6 +264,8 @@ def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False, target
 
     Raises :class:`~pftrack.errors.SourceError` with one line naming the problem:
     missing path, empty folder, unreadable video, unknown format, a target the source does not have.
+    ``reconnect``: how many times in a row a live stream URL whose feed breaks off is opened again
+    (:class:`VideoSource`; other sources ignore it).
     """
     camera = isinstance(spec, int) or (isinstance(spec, str) and spec.strip().isdigit())
     if isinstance(spec, str) and streams.is_url(spec):
@@ -246,7 +273,7 @@ def open_source(spec: str | int | Path, *, skip_bad_frames: bool = False, target
         if target is not None:
             raise SourceError(f"{streams.redact(spec)}: a target (--target) picks one of an OTB folder's annotated "
                               "targets or a track of a MOTChallenge folder's ground truth; a stream has neither")
-        return VideoSource(spec, streams.redact(spec), skip_bad_frames=skip_bad_frames)
+        return VideoSource(spec, streams.redact(spec), skip_bad_frames=skip_bad_frames, reconnect=reconnect)
     path = None if camera else Path(spec)
     if path is not None and not path.exists():
         raise SourceError(f"{path}: no such file or folder")

@@ -21,6 +21,9 @@ LIVE_SCHEMES = frozenset({"rtsp", "rtsps", "rtmp", "rtmps", "rtp", "srt", "udp",
 #: protocols whose URL may name a file (read as a file when FFmpeg reports its frame count)
 FILE_SCHEMES = frozenset({"http", "https", "ftp", "file"})
 
+#: the first wait before a broken-off live stream is opened again (``reconnect``); each further try waits twice as
+#: long, up to 8 times this
+RECONNECT_WAIT_S = 1.0
 #: seconds a stream may take to open, and to deliver a frame, before it counts as unreachable or ended
 TIMEOUT_S = 15.0
 
@@ -72,3 +75,10 @@ def open_capture(spec: str):
     ms = int(TIMEOUT_S * 1000)
     timeouts = [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, ms]
     return cv2.VideoCapture(spec, cv2.CAP_FFMPEG, timeouts)
+
+
+def wait_before_reconnect(attempt: int) -> None:
+    """Sleep before the ``attempt``-th (from 0) try to open a broken-off stream again."""
+    import time
+
+    time.sleep(RECONNECT_WAIT_S * min(2 ** attempt, 8))
