@@ -123,7 +123,8 @@ def test_stream_urls_are_told_from_paths():
         assert not streams.is_url(spec), spec
     assert streams.is_live("rtsp://cam/1") and streams.is_live("udp://@:1234")
     assert not streams.is_live("https://x/a.mp4") and not streams.is_live("file:/a.mp4")
-    assert streams.redact("rtsp://admin:s3cr@t@10.0.0.7/s") == "rtsp://admin:***@t@10.0.0.7/s"
+    assert streams.redact("rtsp://admin:s3cr@t@10.0.0.7/s") == "rtsp://admin:***@10.0.0.7/s"  # FFmpeg: the last @
+    assert streams.redact("rtsp://u:p@[::1]:554/a?x=1&y=u:v@w") == "rtsp://u:***@[::1]:554/a?x=1&y=u:v@w"
     assert streams.redact("rtsp://admin@10.0.0.7/s") == "rtsp://admin@10.0.0.7/s"
     assert streams.redact("rtsp://10.0.0.7/user:pw@x") == "rtsp://10.0.0.7/user:pw@x"  # not the userinfo part
 

@@ -28,7 +28,6 @@ RECONNECT_WAIT_S = 1.0
 TIMEOUT_S = 15.0
 
 _URL = re.compile(r"^(?P<scheme>[A-Za-z][A-Za-z0-9+.-]*):(?P<rest>.*)$", re.S)
-_USERINFO = re.compile(r"^(?P<head>[A-Za-z][A-Za-z0-9+.-]*://)(?P<user>[^:@/]*):(?P<password>[^@/]*)@")
 
 
 def scheme(spec: str) -> str | None:
@@ -56,8 +55,17 @@ def is_live(spec: str) -> bool:
 
 
 def redact(spec: str) -> str:
-    """``spec`` with the password of its ``user:password@`` part replaced by ``***`` (for messages and names)."""
-    return _USERINFO.sub(lambda m: f"{m.group('head')}{m.group('user')}:***@", spec.strip(), count=1)
+    """``spec`` with the password of its ``user:password@`` part replaced by ``***`` (for messages and names). The
+    user information runs to the authority's last ``@``, as FFmpeg reads it, so a password with an ``@`` of its own
+    is hidden whole."""
+    spec = spec.strip()
+    m = re.match(r"^([A-Za-z][A-Za-z0-9+.-]*://)([^/?#]*)(.*)$", spec, re.S)
+    if m is None or "@" not in m.group(2):
+        return spec
+    userinfo, host = m.group(2).rsplit("@", 1)
+    if ":" not in userinfo:
+        return spec
+    return f"{m.group(1)}{userinfo.split(':', 1)[0]}:***@{host}{m.group(3)}"
 
 
 def av_open(spec: str):
