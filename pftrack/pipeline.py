@@ -44,17 +44,21 @@ class TrackRun:
 
 
 def track_source(source: FrameSource, tracker: Tracker, box=None, *, run: TrackRun | None = None,
-                 keep_times: bool = False) -> Iterator[tuple[int, np.ndarray, TrackState]]:
+                 keep_times: bool = False, detect: bool = False) -> Iterator[tuple[int, np.ndarray, TrackState]]:
     """Initialise ``tracker`` on the first frame with ``box`` and track through the rest.
 
     ``box`` defaults to the source's first ground-truth box (OTB/VOT folders, a MOTChallenge folder's track picked
     with ``open_source(..., target=ID)``); tracking then starts on that box's frame, as the benchmarks' one-pass
     protocol does, and the frames before it are passed over (not decoded from an image folder).
+    With ``detect`` the tracker starts from its detector instead (``tracker.init_detect``: the first frame's best
+    detection, or, without one, lost states until a detection appears).
     Yields ``(frame_number, frame, state)`` for every frame from the first tracked one on.
     """
     run = run if run is not None else TrackRun()
     start = 1
-    if box is None:
+    if detect:
+        box = None
+    elif box is None:
         box = source.init_box
         if box is None:
             raise BoxError(missing_box_message(source))
@@ -63,7 +67,10 @@ def track_source(source: FrameSource, tracker: Tracker, box=None, *, run: TrackR
     first = True
     for number, frame in source.numbered(start):
         t0 = time.perf_counter()
-        state = tracker.init(frame, box) if first else tracker.update(frame)
+        if first:
+            state = tracker.init_detect(frame) if detect else tracker.init(frame, box)
+        else:
+            state = tracker.update(frame)
         dt = time.perf_counter() - t0
         if not first:
             run.update_seconds += dt

@@ -21,6 +21,10 @@ def add_track(sub) -> None:
     p.add_argument("--target", type=target_id, metavar="ID", help=(
         "the ground truth to start from (instead of --box): a track id of a MOTChallenge folder's gt/gt.txt, or "
         "the N of an OTB folder's groundtruth_rect.N.txt; tracking starts on that target's first annotated frame"))
+    p.add_argument("--detect", choices=["hog", "mog2", "motion"], help=(
+        "instead of --box: start on the first detection (hog: OpenCV's people detector; mog2 or motion: a moving "
+        "object), the rows lost until one appears, e.g. on a camera or stream (trackers with a detector hand-off: "
+        "color-pf, fusion-pf, local-motion-pf)"))
     p.add_argument("--tracker", default=DEFAULT_TRACKER,
                    help=f"tracker name (default {DEFAULT_TRACKER}; see 'pftrack list')")
     p.add_argument("--out", default="track.csv", help="CSV output (default track.csv)")
@@ -57,7 +61,7 @@ def scalar_info(info: dict) -> dict:
 
 def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=None, seed=0, params=None,
               skip_bad_frames=False, quiet=False, gt_overlay=False, show_map=False, target=None,
-              reconnect: int = 0) -> dict:
+              reconnect: int = 0, detect: str | None = None) -> dict:
     """The work behind ``pftrack track`` (also used by ``pftrack demo``)."""
     from ..errors import BoxError, ParameterError
     from ..geometry import parse_box
@@ -70,7 +74,18 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
 
     if box is not None and target is not None:
         raise ParameterError("--box and --target both give the initial box; give one of them")
-    tracker = create_tracker(tracker_name, seed=seed, params=params or {})
+    extras = {}
+    if detect is not None:
+        from ..multi.detectors import create_detector
+        from ..trackers.registry import get_spec
+
+        if box is not None or target is not None:
+            raise ParameterError("--detect starts from a detection; give it without --box or --target")
+        if "detector" not in get_spec(tracker_name).extra_kwargs:
+            raise ParameterError(f"--detect: tracker '{tracker_name}' cannot start from a detector (color-pf, "
+                                 "fusion-pf and local-motion-pf can)")
+        extras["detector"] = create_detector(detect)
+    tracker = create_tracker(tracker_name, seed=seed, params=params or {}, **extras)
     if show_map and not hasattr(tracker, "confidence_map"):
         raise ParameterError(f"--show-map: tracker '{tracker_name}' has no confidence map (try cotrain-pf)")
     if show_map and not video_out:
@@ -85,7 +100,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
     if json_out:
         prepare_output(json_out)
     source = open_source(source_spec, skip_bad_frames=skip_bad_frames, target=target, reconnect=reconnect)
-    if init_box is None and source.init_box is None:  # said before any output file is created
+    if detect is None and init_box is None and source.init_box is None:  # said before any output file is created
         source.close()
         raise BoxError(missing_box_message(source))
     run = TrackRun()
@@ -106,7 +121,7 @@ def run_track(source_spec, *, box, tracker_name, out, video_out=None, json_out=N
         bar = progress(source.length, f"{tracker_name}", quiet)
         gt = source.groundtruth if gt_overlay else None
         with interrupt_on_sigterm() as stop:
-            for number, frame, state in track_source(source, tracker, init_box, run=run):
+            for number, frame, state in track_source(source, tracker, init_box, run=run, detect=detect is not None):
                 size = (frame.shape[1], frame.shape[0])
                 csv.write_state(number, state)
                 lost += int(state.lost)
@@ -144,7 +159,7 @@ def cmd_track(args) -> int:
     res = run_track(args.source, box=args.box, tracker_name=args.tracker, out=args.out, video_out=args.video_out,
                     json_out=args.json_out, seed=args.seed, params=parse_param_assignments(args.param),
                     skip_bad_frames=args.skip_bad_frames, quiet=args.quiet, show_map=args.show_map,
-                    target=args.target, reconnect=args.reconnect)
+                    target=args.target, reconnect=args.reconnect, detect=args.detect)
     n = res["frames"]
     speed = (f"{res['update_fps']:.0f} update fps, {res['end_to_end_fps']:.0f} fps end to end" if n > 1
              else "no update to time")  # one frame is the initialisation only
