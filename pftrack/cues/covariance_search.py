@@ -181,7 +181,7 @@ def search(frame: np.ndarray, model: SPDModel, size: tuple[float, float], *, kin
            refine_pitch: int = 1, region: tuple[int, int, int, int] | None = None,
            weights: np.ndarray | None = None, scale_factors: tuple[float, ...] = (1 / 1.1, 1.0, 1.1),
            coarse_side: int = 8, coarse_stride: int = 2, refine_top: int = 6, eps: float = EPS,
-           refine_level: Level | None = None, seeds=()) -> SearchResult:
+           refine_level: Level | None = None, seeds=(), coarse_budget: int = 0) -> SearchResult:
     """Coarse-to-fine covariance search for the window nearest to ``model``.
 
     ``region`` (frame integers ``x0, y0, x1, y1``; default the whole frame) bounds the search;
@@ -190,13 +190,17 @@ def search(frame: np.ndarray, model: SPDModel, size: tuple[float, float], *, kin
     ``refine_level`` of that pitch may be passed) around the best coarse windows and around every frame box
     ``(x, y, w, h)`` of ``seeds`` (the last box, say: the coarse level's covariances are not the model's, and on
     grey input, with one intensity channel, their ranking can miss the target altogether).  Boxes are returned in
-    frame pixels.
+    frame pixels. ``coarse_budget`` (> 0) bounds the coarse level's pixels: the region is decimated at least so far
+    that it holds no more than that many (a small or thin target in a large frame would otherwise give a coarse level
+    of full resolution and tens of thousands of windows a scale); 0 sets no bound.
     """
     fh, fw = frame.shape[:2]
     rx0, ry0, rx1, ry1 = region if region is not None else (0, 0, fw, fh)
     rx0, ry0, rx1, ry1 = max(0, rx0), max(0, ry0), min(fw, rx1), min(fh, ry1)
     w, h = size
     f = max(pitch_for(size, coarse_side), refine_pitch)
+    if coarse_budget > 0:
+        f = max(f, int(math.ceil(math.sqrt((rx1 - rx0) * (ry1 - ry0) / coarse_budget))))
     none = SearchResult((float(rx0), float(ry0), float(w), float(h)), math.inf, 0, np.empty((0, 5)))
     if rx1 - rx0 < 2 * f or ry1 - ry0 < 2 * f:
         return none

@@ -46,6 +46,9 @@ class CovarianceParams(Params):
     refine_side: int = param(32, ge=8, le=1024, doc=(
         "The model and the refinement use a frame decimated so the target's smaller side spans at least this many "
         "pixels (full resolution for small targets): the cost stays flat for large targets."))
+    coarse_budget: int = param(0, ge=0, doc=(
+        "> 0: the coarse level holds at most this many pixels of the searched region (it is decimated further where "
+        "a small or thin target would leave it near full resolution); 0: no bound."))
     search_region: float = param(0.0, ge=0, le=20, doc=(
         "0: the whole frame (the chapter's exhaustive search). > 0: a region of this many box sizes around the last "
         "box."))
@@ -104,7 +107,7 @@ class CovarianceTracker(Tracker):
         res = cs.search(frame, self.model, (w, h), kind=p.features, gray=self.gray, refine_pitch=self.pitch,
                         refine_level=lv, region=self._region(fw, fh), scale_factors=tuple(p.scales),
                         coarse_side=p.coarse_side, coarse_stride=p.coarse_stride, refine_top=p.refine_top,
-                        seeds=[self.box] if p.refine_last else ())
+                        seeds=[self.box] if p.refine_last else (), coarse_budget=p.coarse_budget)
         bad = self.thresh.exceeds(res.distance)
         self.miss = self.miss + 1 if bad else 0
         self.lost = self.miss >= p.lost_frames
