@@ -185,6 +185,33 @@ def test_global_search_finds_a_pasted_target(scale):
     assert w == pytest.approx(sw, abs=1) and h == pytest.approx(sh, abs=1)
 
 
+def test_a_coarse_budget_bounds_the_windows_of_a_small_target_and_still_finds_it():
+    """A small target leaves the coarse level at full resolution: ``coarse_budget`` decimates it further, with a
+    fraction of the windows, and the refinement still lands on the target; 0 is the unbounded search."""
+    rng = np.random.default_rng(11)
+    frame0 = _textured_frame(rng, 240, 320)
+    tw, th = 8, 24   # a thin target: its smaller side is the coarse level's 8 pixels at full resolution
+    yy, xx = np.mgrid[0:th, 0:tw]
+    target = np.zeros((th, tw, 3), np.uint8)
+    target[..., 2] = (40 + 200 * xx / tw).astype(np.uint8)
+    target[..., 1] = (40 + 200 * yy / th).astype(np.uint8)
+    target[..., 0] = (60 + 60 * np.sin(yy / 2.0)).astype(np.uint8)
+    frame0[60:60 + th, 100:100 + tw] = target
+    lv0 = cs.Level.build(frame0, 1, kind="porikli9", gray=False)
+    L = cv.SPDModel(cs.window_covariance(lv0, (100, 60, tw, th), kind="porikli9", gray=False))
+    frame1 = _textured_frame(rng, 240, 320)
+    frame1[150:150 + th, 220:220 + tw] = target
+    full = cs.search(frame1, L, (tw, th), kind="porikli9", gray=False)
+    fh, fw = frame1.shape[:2]
+    bounded = cs.search(frame1, L, (tw, th), kind="porikli9", gray=False, coarse_budget=fw * fh // 4)  # halved
+    for res in (full, bounded):
+        x, y, _, _ = res.box
+        assert abs(x - 220) <= 2 and abs(y - 150) <= 2, res.box
+    assert bounded.n_windows < full.n_windows / 3
+    same = cs.search(frame1, L, (tw, th), kind="porikli9", gray=False, coarse_budget=0)
+    assert same.box == full.box and same.n_windows == full.n_windows
+
+
 def test_particle_distances_rank_the_true_box_first():
     rng = np.random.default_rng(8)
     frame = _textured_frame(rng, 200, 200)
