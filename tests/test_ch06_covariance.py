@@ -159,20 +159,25 @@ def test_derivative_scales_match_the_feature_image():
                                cv.feature_scales(z), rtol=1e-5)
 
 
+def _ramp_target(tw: int, th: int, period: float) -> np.ndarray:
+    """A target of colour ramps across its width and height (a sub- or super-window has a different
+    colour-coordinate covariance, so the scale is observable) and stripes of ``period`` rows the background lacks."""
+    yy, xx = np.mgrid[0:th, 0:tw]
+    target = np.zeros((th, tw, 3), np.uint8)
+    target[..., 2] = (40 + 200 * xx / tw).astype(np.uint8)
+    target[..., 1] = (40 + 200 * yy / th).astype(np.uint8)
+    target[..., 0] = (60 + 60 * np.sin(yy / period)).astype(np.uint8)
+    return target
+
+
 @pytest.mark.parametrize("scale", [1.0, 1.1])
 def test_global_search_finds_a_pasted_target(scale):
     import cv2
 
     rng = np.random.default_rng(7)
     frame0 = _textured_frame(rng)
-    # the target: colour ramps across its width and height (a sub- or super-window has a different
-    # colour-coordinate covariance, so the scale is observable) and stripes the background lacks
     tw, th = 48, 96
-    yy, xx = np.mgrid[0:th, 0:tw]
-    target = np.zeros((th, tw, 3), np.uint8)
-    target[..., 2] = (40 + 200 * xx / tw).astype(np.uint8)
-    target[..., 1] = (40 + 200 * yy / th).astype(np.uint8)
-    target[..., 0] = (60 + 60 * np.sin(yy / 3.0)).astype(np.uint8)
+    target = _ramp_target(tw, th, 3.0)
     frame0[100:100 + th, 200:200 + tw] = target
     lv0 = cs.Level.build(frame0, 1, kind="porikli9", gray=False)
     L = cv.SPDModel(cs.window_covariance(lv0, (200, 100, tw, th), kind="porikli9", gray=False))
@@ -191,11 +196,7 @@ def test_a_coarse_budget_bounds_the_windows_of_a_small_target_and_still_finds_it
     rng = np.random.default_rng(11)
     frame0 = _textured_frame(rng, 240, 320)
     tw, th = 8, 24   # a thin target: its smaller side is the coarse level's 8 pixels at full resolution
-    yy, xx = np.mgrid[0:th, 0:tw]
-    target = np.zeros((th, tw, 3), np.uint8)
-    target[..., 2] = (40 + 200 * xx / tw).astype(np.uint8)
-    target[..., 1] = (40 + 200 * yy / th).astype(np.uint8)
-    target[..., 0] = (60 + 60 * np.sin(yy / 2.0)).astype(np.uint8)
+    target = _ramp_target(tw, th, 2.0)
     frame0[60:60 + th, 100:100 + tw] = target
     lv0 = cs.Level.build(frame0, 1, kind="porikli9", gray=False)
     L = cv.SPDModel(cs.window_covariance(lv0, (100, 60, tw, th), kind="porikli9", gray=False))
