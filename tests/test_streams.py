@@ -116,7 +116,7 @@ def _closed_port() -> int:
 
 
 def test_stream_urls_are_told_from_paths():
-    assert [streams.scheme(s) for s in ("rtsp://cam/1", "HTTP://x/a.mp4", "file:/tmp/a.mp4", "srt://h:9000",
+    assert [streams.scheme(s) for s in ("rtsp://cam/1", "HTTP://x/a.mp4", "file:/videos/a.mp4", "srt://h:9000",
                                         "udp://@:1234")] == ["rtsp", "http", "file", "srt", "udp"]
     # paths, Windows drives and unknown or malformed schemes are not URLs
     for spec in ("clip.mp4", "C:/clips/a.mp4", "c:\\clips\\a.mp4", "rtsp:cam", "foo://x", "0", "data/http://x"):
