@@ -203,7 +203,6 @@ class VideoSource(FrameSource):
         self.fps = float(fps) if fps and np.isfinite(fps) and fps > 0 else None
         count = int(self.cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
         self.live = isinstance(target, int) or (url and (streams.is_live(target) or count <= 0))
-        self._url = url
         self._count = count if count > 0 and not self.live else None
         if self.live:
             self.prefetch = 0  # frames read ahead would be stale
@@ -228,7 +227,7 @@ class VideoSource(FrameSource):
         while True:
             ok, img = self.cap.read()
             if not ok:
-                if not (self.live and self._url) or tries >= self.reconnect:
+                if not (self.live and isinstance(self.target, str)) or tries >= self.reconnect:  # a live URL
                     return
                 self._reopen(tries)
                 tries += 1
