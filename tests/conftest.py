@@ -77,10 +77,9 @@ def bundled_clip() -> tuple[list[np.ndarray], np.ndarray]:
 @functools.lru_cache(maxsize=32)
 def _render(spec):
     scene = Scene(spec)
-    frames = tuple(scene.frames())
+    frames, truths = zip(*(scene.render(t) for t in range(len(scene))))
     for f in frames:
         f.setflags(write=False)
-    truths = tuple(scene.render(t)[1] for t in range(len(scene)))
     return scene, frames, truths
 
 
@@ -108,14 +107,14 @@ def lost_flag_run(spec, tracker: str = "color-pf", seed: int = 0, **params):
     from pftrack.eval.metrics import lost_detection
     from pftrack.synth import hidden_frames
 
-    scene = Scene(spec)
+    scene, frames, _ = render_scene(spec)
     gt = scene.groundtruth(0)
     hid = hidden_frames(spec)
     t = pftrack.create_tracker(tracker, seed=seed, **params)
-    t.init(scene.render(0)[0], tuple(gt[0]))
+    t.init(frames[0], tuple(gt[0]))
     boxes, lost = [gt[0]], [False]
     for k in range(1, spec.n_frames):
-        st = t.update(scene.render(k)[0])
+        st = t.update(frames[k])
         boxes.append(st.box)
         lost.append(st.lost)
     return lost_detection(np.array(lost[1:]), np.array(boxes[1:]), gt[1:], hid[1:])

@@ -35,8 +35,27 @@ def test_vanish_scenes_hide_the_target_and_show_it_again():
 def test_leave_scene_target_leaves_the_frame():
     spec = leave_scene(4)
     scene = Scene(spec)
-    present = [scene.render(t)[1].present[0] for t in range(spec.n_frames)]
+    present = [scene.truth(t).present[0] for t in range(spec.n_frames)]
     assert present[0] and present[-1] and not all(present)
+
+
+def test_a_scenes_truth_without_its_frame_is_the_rendered_truth():
+    """Scene.truth (what hidden_frames reads) gives the very numbers render gives with the frame: several targets
+    hiding one another, occluders, a target leaving the view, the light on the target only."""
+    from pftrack.synth import crossing_scene, illumination_scene
+
+    specs = [vanish_scene(203), leave_scene(4), exit_scene(1), crossing_scene(2), illumination_scene(0)]
+    assert any(len(s.targets) > 2 for s in specs) and any(s.illumination_target_only for s in specs)
+    partly = 0
+    for spec in specs:
+        scene = Scene(spec)
+        for t in range(spec.n_frames):
+            a, b = scene.truth(t), scene.render(t)[1]
+            np.testing.assert_array_equal(a.boxes, b.boxes)
+            np.testing.assert_array_equal(a.visible, b.visible)
+            np.testing.assert_array_equal(a.present, b.present)
+            partly += int(np.any((b.visible > 0) & (b.visible < 1)))
+    assert partly > 20  # the occlusions are exercised, not only whole targets
 
 
 def test_exit_scene_look_alikes_head_for_the_edge_the_target_leaves_by():

@@ -16,6 +16,7 @@ and drift, grey or colour, sensor noise.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -64,15 +65,27 @@ class PointScene:
 
 
 def paste_sprite(canvas: np.ndarray, sprite: np.ndarray, x0: float, y0: float) -> None:
-    """Draw ``sprite`` with its top-left corner at sub-pixel ``(x0, y0)`` (bilinear, anti-aliased edges)."""
+    """Draw ``sprite`` with its top-left corner at sub-pixel ``(x0, y0)`` (bilinear, anti-aliased edges).
+
+    Only the window of the canvas the sprite can touch is warped and blended (outside it the warped sprite and its
+    mask are 0, which leaves the canvas as it is). The shift is the float32 one of a warp of the whole canvas, less
+    the window's integer corner, so every pixel is the one that warp gives (OpenCV's warp is fixed-point with integer
+    steps per pixel)."""
     h, w = canvas.shape[:2]
     sh, sw = sprite.shape[:2]
-    m = np.float32([[1, 0, x0], [0, 1, y0]])
-    img = cv2.warpAffine(sprite, m, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
-    mask = cv2.warpAffine(np.ones((sh, sw), np.float32), m, (w, h), flags=cv2.INTER_LINEAR,
+    fx, fy = float(np.float32(x0)), float(np.float32(y0))
+    wx0, wy0 = max(math.floor(fx) - 1, 0), max(math.floor(fy) - 1, 0)
+    wx1, wy1 = min(math.floor(fx) + sw + 2, w), min(math.floor(fy) + sh + 2, h)
+    if wx1 <= wx0 or wy1 <= wy0:  # wholly outside the canvas
+        return
+    m = np.array([[1.0, 0.0, fx - wx0], [0.0, 1.0, fy - wy0]])
+    size = (wx1 - wx0, wy1 - wy0)
+    img = cv2.warpAffine(sprite, m, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
+    mask = cv2.warpAffine(np.ones((sh, sw), np.float32), m, size, flags=cv2.INTER_LINEAR,
                           borderMode=cv2.BORDER_CONSTANT)[:, :, None]
-    canvas *= 1.0 - mask
-    canvas += img * mask
+    win = canvas[wy0:wy1, wx0:wx1]
+    win *= 1.0 - mask
+    win += img * mask
 
 
 def _finish(rng, img: np.ndarray, gain: float, gray: bool, noise: float) -> np.ndarray:

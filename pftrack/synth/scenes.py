@@ -180,28 +180,85 @@ class Scene:
     def __len__(self) -> int:
         return self.spec.n_frames
 
-    def _place(self, canvas: np.ndarray, sprite, mask, box) -> np.ndarray:
-        """Warp a sprite into ``box`` with sub-pixel accuracy; return its full-frame coverage mask."""
+    def _alpha(self, k: int, box) -> tuple[np.ndarray, tuple[slice, slice], np.ndarray | None]:
+        """Target ``k``'s coverage of the frame with its sprite warped into ``box`` (sub-pixel): the full-frame mask,
+        the window of the frame outside which it is 0, and the warp into that window (its affine map and size;
+        None when the window is empty)."""
         x, y, w, h = box
+        mask = self._sprites[k][1]
         sh, sw = mask.shape
-        H, W = canvas.shape[:2]
+        H, W = self.spec.height, self.spec.width
         alpha_full = np.zeros((H, W), np.float32)
         x0, y0 = max(0, int(math.floor(x)) - 1), max(0, int(math.floor(y)) - 1)
         x1, y1 = min(W, int(math.ceil(x + w)) + 1), min(H, int(math.ceil(y + h)) + 1)
         if x1 <= x0 or y1 <= y0:
-            return alpha_full
+            return alpha_full, (slice(0, 0), slice(0, 0)), None
         M = np.array([[w / sw, 0.0, x - x0], [0.0, h / sh, y - y0]], dtype=np.float64)
-        size = (x1 - x0, y1 - y0)
+        alpha_full[y0:y1, x0:x1] = cv2.warpAffine(mask, M, (x1 - x0, y1 - y0), flags=cv2.INTER_LINEAR,
+                                                  borderMode=cv2.BORDER_CONSTANT)
+        return alpha_full, (slice(y0, y1), slice(x0, x1)), M
+
+    def _place(self, canvas: np.ndarray, k: int, alpha_full: np.ndarray, win: tuple[slice, slice], M) -> None:
+        """Blend target ``k``'s sprite into ``canvas`` through its coverage (:meth:`_alpha`)."""
+        if M is None:
+            return
+        region = canvas[win]
+        size = (region.shape[1], region.shape[0])
         # the sprite's colours are replicated past its edge (the mask does the blending), so interpolation
         # does not draw a dark outline around the target
-        warped = cv2.warpAffine(sprite, M, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        alpha = cv2.warpAffine(mask, M, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT)
-        a3 = alpha[..., None]
-        region = canvas[y0:y1, x0:x1]
+        warped = cv2.warpAffine(self._sprites[k][0], M, size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        a3 = alpha_full[win][..., None]
         region *= 1.0 - a3
         region += warped * a3
-        alpha_full[y0:y1, x0:x1] = alpha
-        return alpha_full
+
+    def _coverage(self, t: int) -> tuple[list, Truth]:
+        """Each target's coverage on frame ``t`` (:meth:`_alpha`; None when absent) and the frame's truth: targets
+        drawn later hide earlier ones, and the occluders, drawn last, hide them all."""
+        spec = self.spec
+        n = len(spec.targets)
+        boxes = np.full((n, 4), np.nan)
+        present = np.zeros(n, bool)
+        areas = np.zeros(n)
+        placed: list = [None] * n
+        covers = [np.ones((spec.height, spec.width), np.float32) for _ in range(n)]
+        for k, tgt in enumerate(spec.targets):
+            if not tgt.present(t):
+                continue
+            box = tgt.box(t)
+            placed[k] = alpha, win, _ = self._alpha(k, box)
+            for j in range(k):  # only in the window: 1 - alpha is 1 outside it
+                if placed[j] is not None:
+                    covers[j][win] *= 1.0 - alpha[win]
+            covers[k] = alpha.copy()
+            areas[k] = float(alpha.sum())
+            if areas[k] > 0:
+                boxes[k] = box
+                present[k] = True
+        for _, _, (x0, y0, x1, y1) in self._occluder_windows():
+            for c in covers:  # the occluder hides whatever lies under it
+                c[y0:y1, x0:x1] *= 0.0
+        visible = np.zeros(n)
+        for k in range(n):
+            if present[k] and areas[k] > 0:
+                visible[k] = float(covers[k].sum()) / areas[k]
+        return placed, Truth(boxes=boxes, visible=np.clip(visible, 0.0, 1.0), present=present)
+
+    def _occluder_windows(self):
+        """Per occluder that reaches into the frame: its patch, the patch's corner ``(x, y)`` on the frame and the
+        window ``(x0, y0, x1, y1)`` of the frame it covers."""
+        spec = self.spec
+        for occ, patch in zip(spec.occluders, self._occ):
+            x, y = int(round(occ.box[0])), int(round(occ.box[1]))
+            x1, y1 = min(spec.width, x + patch.shape[1]), min(spec.height, y + patch.shape[0])
+            x0, y0 = max(0, x), max(0, y)
+            if x1 > x0 and y1 > y0:
+                yield patch, (x, y), (x0, y0, x1, y1)
+
+    def truth(self, t: int) -> Truth:
+        """Frame ``t``'s ground truth alone (as :meth:`render` gives it, without drawing the frame)."""
+        if not 0 <= t < self.spec.n_frames:
+            raise IndexError(f"frame {t} outside 0..{self.spec.n_frames - 1}")
+        return self._coverage(t)[1]
 
     def render(self, t: int) -> tuple[np.ndarray, Truth]:
         """Frame ``t`` (BGR uint8) and its ground truth."""
@@ -221,62 +278,29 @@ class Scene:
         if spec.illumination is not None and spec.n_frames > 1:
             f = t / (spec.n_frames - 1)
             gain = (1.0 - f) + f * np.asarray(spec.illumination, np.float32)
-        n = len(spec.targets)
-        boxes = np.full((n, 4), np.nan)
-        present = np.zeros(n, bool)
-        areas = np.zeros(n)
-        alphas: list[np.ndarray | None] = [None] * n
-        covers = [np.ones((spec.height, spec.width), np.float32) for _ in range(n)]
+        placed, truth = self._coverage(t)
         tgt_layer = canvas.copy() if spec.illumination_target_only else None
-        for k, tgt in enumerate(spec.targets):
-            if not tgt.present(t):
-                continue
-            box = tgt.box(t)
-            sprite, mask = self._sprites[k]
-            dest = tgt_layer if tgt_layer is not None else canvas
-            alpha = self._place(dest, sprite, mask, box)
-            for j in range(k):  # targets drawn later hide earlier ones
-                if alphas[j] is not None:
-                    covers[j] *= 1.0 - alpha
-            alphas[k] = alpha
-            covers[k] = alpha.copy()
-            areas[k] = float(alpha.sum())
-            inside = areas[k] > 0
-            if inside:
-                boxes[k] = box
-                present[k] = True
+        for k, pl in enumerate(placed):
+            if pl is not None:
+                self._place(tgt_layer if tgt_layer is not None else canvas, k, *pl)
         if tgt_layer is not None:
             tmask = np.zeros((spec.height, spec.width), np.float32)
-            for a in alphas:
-                if a is not None:
-                    tmask = np.maximum(tmask, a)
+            for pl in placed:
+                if pl is not None:
+                    tmask = np.maximum(tmask, pl[0])
             lit = tgt_layer * gain
             canvas = canvas * (1.0 - tmask[..., None]) + lit * tmask[..., None]
         else:
             canvas *= gain
-        for occ, patch in zip(spec.occluders, self._occ):
-            x, y, w, h = occ.box
-            occ_mask = np.zeros((spec.height, spec.width), np.float32)
-            x0, y0 = int(round(x)), int(round(y))
-            x1, y1 = min(spec.width, x0 + patch.shape[1]), min(spec.height, y0 + patch.shape[0])
-            cx0, cy0 = max(0, x0), max(0, y0)
-            if x1 <= cx0 or y1 <= cy0:
-                continue
-            canvas[cy0:y1, cx0:x1] = patch[cy0 - y0: y1 - y0, cx0 - x0: x1 - x0] * gain
-            occ_mask[cy0:y1, cx0:x1] = 1.0
-            for c in covers:
-                c *= 1.0 - occ_mask
-        visible = np.zeros(n)
-        for k in range(n):
-            if present[k] and areas[k] > 0:
-                visible[k] = float(covers[k].sum()) / areas[k]
+        for patch, (x, y), (x0, y0, x1, y1) in self._occluder_windows():
+            canvas[y0:y1, x0:x1] = patch[y0 - y: y1 - y, x0 - x: x1 - x] * gain
         if spec.noise > 0:
             nrng = np.random.default_rng([spec.seed, 3, t])
             canvas += nrng.standard_normal(canvas.shape, dtype=np.float32) * np.float32(spec.noise)
         frame = np.clip(canvas + 0.5, 0, 255).astype(np.uint8)
         if spec.gray:
             frame = cv2.cvtColor(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
-        return frame, Truth(boxes=boxes, visible=np.clip(visible, 0.0, 1.0), present=present)
+        return frame, truth
 
     def __iter__(self):
         for t in range(self.spec.n_frames):

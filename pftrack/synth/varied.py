@@ -330,7 +330,7 @@ def hidden_frames(spec: SceneSpec, target: int = 0, below: float | None = None) 
     scene = Scene(spec)
     out = np.zeros(spec.n_frames, dtype=bool)
     for t in range(spec.n_frames):
-        _, truth = scene.render(t)
+        truth = scene.truth(t)
         out[t] = (not truth.present[target]) or truth.visible[target] < thr
     return out
 
