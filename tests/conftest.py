@@ -88,6 +88,31 @@ def render_scene(spec):
     return _render(spec)
 
 
+class cached_scene:  # noqa: N801 - used in place of the Scene class
+    """A :class:`pftrack.synth.Scene` whose frames and truth come from :func:`render_scene`'s cache: the same
+    values (read-only frames), for tests that run several trackers or settings on one scene."""
+
+    def __init__(self, spec):
+        self._scene, self._frames, self._truths = _render(spec)
+
+    def render(self, t: int):
+        if not 0 <= t < len(self._frames):
+            raise IndexError(t)
+        return self._frames[t], self._truths[t]
+
+    def frames(self) -> list:
+        return list(self._frames)
+
+    def __len__(self) -> int:
+        return len(self._frames)
+
+    def __iter__(self):
+        return iter(zip(self._frames, self._truths))
+
+    def __getattr__(self, name):  # spec, groundtruth, truth, ...
+        return getattr(self._scene, name)
+
+
 def grey_frames(frames):
     """BGR frames as a grey camera gives them: three equal channels (OpenCV's grey levels)."""
     import cv2

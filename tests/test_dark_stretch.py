@@ -10,8 +10,9 @@ import pftrack
 from pftrack.cues.histogram_cue import ColorCue
 from pftrack.cues.quantize import level_gain, make_lut, quantize, stretched_lut
 from pftrack.eval.metrics import per_frame_iou
-from pftrack.synth.scenes import Scene
 from pftrack.synth.varied import varied_scene
+
+from .conftest import cached_scene
 
 
 def test_level_gain_brings_the_bright_end_to_255_within_its_bounds():
@@ -64,7 +65,7 @@ def test_cue_stretches_only_a_dark_frame_and_quantises_it_as_the_brightened_fram
 def _dim_run(seed: int, name: str, **params) -> float:
     """Mean IoU of tracker ``name`` on a varied colour scene seen by a dark, noisy camera (gain 0.25, noise 3)."""
     spec = varied_scene(seed, n_frames=60, gray=0.0, illumination=0.0, distractors=(2, 3))
-    scene = Scene(spec)
+    scene = cached_scene(spec)
     rng = np.random.default_rng(100 + seed)
     frames, truth = [], []
     for t in range(spec.n_frames):

@@ -11,8 +11,9 @@ import pytest
 import pftrack
 from pftrack.filtering.loss import FusedLoss, LossDetector, toward_background
 from pftrack.geometry import displacement_rate, iou
-from pftrack.synth import Scene
 from pftrack.synth.scenes import SceneSpec, Target
+
+from .conftest import cached_scene
 
 
 def test_displacement_rate():
@@ -35,7 +36,7 @@ def test_a_target_that_left_the_view_is_not_replaced_by_its_twin_inside(seed):
     the target's speed, about 5 px per frame here, from the start of the search, as the target leaves: it reaches the
     twin after about 35 frames), so the twin is not taken for the target in the 20 frames after the exit (it is
     without the rule)."""
-    scene = Scene(_exit_scene(seed))
+    scene = cached_scene(_exit_scene(seed))
     frames = scene.frames()
     gt = scene.groundtruth()
     runs = {}
@@ -132,7 +133,7 @@ def test_a_look_alike_heading_out_through_the_exit_edge_is_not_acquired(seed):
     """reenter_outward: the exit strip widens until it covers the twin walking the target's way (about 12 frames
     after the exit); a candidate moving out through the edge the target left by is not the target coming back.
     Without the rule the twin is acquired there."""
-    scene = Scene(_flow_scene(seed))
+    scene = cached_scene(_flow_scene(seed))
     frames = scene.frames()
     gt = scene.groundtruth()
     twin_box = scene.groundtruth(target=1)
@@ -189,7 +190,7 @@ def test_edge_share_raises_the_flag_as_the_target_slides_out_not_on_its_last_sli
     up within a frame of the target being gone (measured: frames 24-25 for fusion-pf, 22 for color-pf); without it,
     one to three frames later (25-26), on the sliver alone."""
     for seed in range(3):
-        scene = Scene(_exit_scene(seed))
+        scene = cached_scene(_exit_scene(seed))
         frames = scene.frames()
         gt = scene.groundtruth()
         first = {}
@@ -218,7 +219,7 @@ def test_acquire_in_frame_waits_until_half_of_the_candidate_is_in(seed):
     which takes a sliver on a ratio at the cap, is off here: tests/test_sliver.py covers it.)"""
     from pftrack.geometry import in_frame_fraction
 
-    scene = Scene(_return_scene(seed))
+    scene = cached_scene(_return_scene(seed))
     frames = scene.frames()
     gt = scene.groundtruth()
     h, w = frames[0].shape[:2]
@@ -249,7 +250,7 @@ def test_a_look_alike_that_stayed_in_view_is_not_the_target_coming_back(tracker,
     """reenter_resident: the twin walking in the exit strip was in view the whole time the target was out, so it
     is not acquired (it is, on the first search frame, without the rule); the target returning through the edge
     is still acquired within a few frames of being half in (frames 52-54, test above)."""
-    scene = Scene(_resident_scene(seed))
+    scene = cached_scene(_resident_scene(seed))
     frames = scene.frames()
     gt, twin = scene.groundtruth(), scene.groundtruth(target=1)
     taken = {}
@@ -261,7 +262,7 @@ def test_a_look_alike_that_stayed_in_view_is_not_the_target_coming_back(tracker,
         if k:
             assert all(s.lost for s in states[29:])  # frames 30-74: the target is out of view
     assert taken[0] and min(taken[0]) <= 32 and not taken[30], taken
-    back = Scene(_return_scene(seed))
+    back = cached_scene(_return_scene(seed))
     frames, gt = back.frames(), back.groundtruth()
     t = pftrack.create_tracker(tracker, seed=seed, reenter_resident=30)
     t.init(frames[0], tuple(gt[0]))
@@ -345,7 +346,7 @@ def test_reenter_min_llr_keeps_a_strong_return_and_can_refuse_it(seed):
     """The target coming back through the edge it left by scores the fused ratio's ceiling (20, two cues clipped
     at 10): taken at reenter_min_llr 12 on the same frame as without it; a bound above the ceiling refuses it while
     the search stays in the strip."""
-    scene = Scene(_return_scene(seed))
+    scene = cached_scene(_return_scene(seed))
     frames, gt = scene.frames(), scene.groundtruth()
     first = {}
     for k in (0.0, 12.0, 25.0):

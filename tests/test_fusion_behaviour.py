@@ -8,9 +8,9 @@ import pytest
 
 import pftrack
 from pftrack.geometry import center_error
-from pftrack.synth import Scene, camouflage_scene, leave_scene, vanish_scene
+from pftrack.synth import camouflage_scene, leave_scene, vanish_scene
 
-from .conftest import bundled_clip
+from .conftest import bundled_clip, cached_scene
 from .test_structure_fusion import _texture
 
 
@@ -29,7 +29,7 @@ def _searching_after(name, frames, box, **params):
 def test_refined_search_layer_samples_the_best_mode_and_is_reproducible():
     """search_refine: the second layer is drawn from the first layer's posterior and moved by a quarter of the
     half-axes, so its samples gather around the best first-layer sample; the search stays seeded."""
-    scene = Scene(vanish_scene(3))
+    scene = cached_scene(vanish_scene(3))
     frames, gt = scene.frames(), scene.groundtruth(0)
 
     def run(refine):
@@ -64,7 +64,7 @@ def test_color_pf_refines_its_search_on_grey_input_only():
     """grey_search_refine: color-pf's search gets the refined layer on grey input (0.5 of the first layer) and
     none on colour input (search_refine 0); None leaves search_refine in charge whatever the input."""
     def search_sizes(gray, **kw):
-        scene = Scene(vanish_scene(3, gray=1.0 if gray else 0.0))
+        scene = cached_scene(vanish_scene(3, gray=1.0 if gray else 0.0))
         frames, gt = scene.frames(), scene.groundtruth(0)
         t = _searching_after("color-pf", frames, tuple(gt[0]), search_particles=200, **kw)
         return t.cue.color_space, len(t._search_candidates(frames[6]).states)
@@ -77,7 +77,7 @@ def test_color_pf_refines_its_search_on_grey_input_only():
 
 
 def _track(spec, seed, **kw):
-    scene = Scene(spec)
+    scene = cached_scene(spec)
     frames, gt = scene.frames(), scene.groundtruth(0)
     t = pftrack.create_tracker("fusion-pf", seed=seed, **kw)
     t.init(frames[0], tuple(gt[0]))

@@ -6,7 +6,9 @@ import numpy as np
 
 from pftrack.multi import create_multi_tracker
 from pftrack.multi.identify import IdentityMemory, person_features, similarity
-from pftrack.synth import Scene, SceneSpec, Target
+from pftrack.synth import SceneSpec, Target
+
+from .conftest import cached_scene
 
 
 def _person_frame(colours, boxes, size=(240, 320)):
@@ -45,7 +47,7 @@ def _exit_and_return_scene():
 
 
 def _run(identify: bool):
-    scene = Scene(_exit_and_return_scene())
+    scene = cached_scene(_exit_and_return_scene())
     state = {"t": 0}
 
     def detector(frame):  # a perfect detector of the visible people

@@ -14,9 +14,9 @@ from pftrack.cues.intensity import equalization_lut, is_gray, quantize_gray
 from pftrack.eval.metrics import lost_detection
 from pftrack.filtering.loss import (LossDetector, absent_distribution, confidence, score_llr)
 from pftrack.geometry import iou
-from pftrack.synth import Scene, hidden_frames, leave_scene, vanish_scene, varied_scene
+from pftrack.synth import hidden_frames, leave_scene, vanish_scene, varied_scene
 
-from .conftest import lost_flag_run
+from .conftest import cached_scene, lost_flag_run
 
 # ------------------------------------------------------------------------------ pure functions
 
@@ -171,7 +171,7 @@ def test_grey_input_tracking_on_varied_scenes(tracker):
     ious, lost = [], []
     for seed in range(5):
         spec = varied_scene(seed, n_frames=60, gray=1.0)
-        scene = Scene(spec)
+        scene = cached_scene(spec)
         gt = scene.groundtruth(0)
         t = pftrack.create_tracker(tracker, seed=seed)
         frame, _ = scene.render(0)
@@ -260,7 +260,7 @@ def test_out_of_view_is_reported_absent_without_searching():
     from pftrack.geometry import in_frame_fraction
 
     spec = leave_scene(201)
-    scene = Scene(spec)
+    scene = cached_scene(spec)
     gt = scene.groundtruth(0)
     h, w = scene.render(0)[0].shape[:2]
     runs = {}

@@ -7,8 +7,9 @@ import pytest
 
 import pftrack
 from pftrack.geometry import iou
-from pftrack.synth import Scene
 from pftrack.synth.scenes import SceneSpec, Target
+
+from .conftest import cached_scene
 
 
 def _sliver_scene(seed: int) -> SceneSpec:
@@ -22,7 +23,7 @@ def _sliver_scene(seed: int) -> SceneSpec:
 def _covered_after_return(seed: int, **params) -> tuple[list[int], bool]:
     """One run of fusion-pf (``params``) on the sliver scene: the frames from 45 on where its box covers the target
     (IoU > 0.3) with the flag down, and whether the flag was up on every frame the target was out of view."""
-    scene = Scene(_sliver_scene(seed))
+    scene = cached_scene(_sliver_scene(seed))
     frames = scene.frames()
     gt = scene.groundtruth()
     t = pftrack.create_tracker("fusion-pf", seed=seed, **params)

@@ -10,7 +10,9 @@ import pftrack
 from pftrack.cues import ssim as S
 from pftrack.cues import ssim_ascent as A
 from pftrack.geometry import center_error
-from pftrack.synth import Scene, camouflage_scene
+from pftrack.synth import camouflage_scene
+
+from .conftest import cached_scene
 
 
 def _pairs(seed=0, n=60, shape=(41, 31)):
@@ -133,7 +135,7 @@ def test_dssim_ascent_converges_to_the_template_position():
 
 
 def _track(name, spec, seed, **kw):
-    scene = Scene(spec)
+    scene = cached_scene(spec)
     frames, gt = scene.frames(), scene.groundtruth(0)
     t = pftrack.create_tracker(name, seed=seed, **kw)
     t.init(frames[0], tuple(gt[0]))
@@ -171,7 +173,7 @@ def test_hybrid_without_dssim_is_ssim_pf():
 
 def test_ssim_pf_rotation_state_and_grey_input():
     spec = camouflage_scene(4, n_frames=30)
-    scene = Scene(spec)
+    scene = cached_scene(spec)
     frames, gt = scene.frames(), scene.groundtruth(0)
     t = pftrack.create_tracker("ssim-pf", seed=0, rotation=True, n_particles=60)
     grey = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]

@@ -10,8 +10,9 @@ import pftrack
 from pftrack.cues.histogram_cue import ColorCue
 from pftrack.cues.still_gain import HIGH, HIST_BINS, LOW, SPAN, CastUndo, pair_bins, reference_lattice, still_gain
 from pftrack.eval.metrics import per_frame_iou
-from pftrack.synth.scenes import Scene
 from pftrack.synth.varied import varied_scene
+
+from .conftest import cached_scene
 
 
 def _scene(seed=0, shape=(240, 320)):
@@ -101,7 +102,7 @@ def _ramp_run(seed: int, normalize: str) -> float:
     """Mean IoU of color-pf on a varied colour scene whose exposure rises from 0.5 to 1 over 25 frames."""
     spec = varied_scene(seed, n_frames=50, gray=0.0, illumination=0.0, distractors=(1, 2))
     frames, truth = [], []
-    for t, (img, tr) in enumerate(Scene(spec)):
+    for t, (img, tr) in enumerate(cached_scene(spec)):
         frames.append(_u8(img.astype(np.float32) * (0.5 + 0.5 * min(1.0, t / 25))))
         truth.append(tr.boxes[0])
     tracker = pftrack.create_tracker("color-pf", seed=0, color_normalize=normalize)
