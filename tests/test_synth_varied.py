@@ -66,7 +66,7 @@ def test_exit_scene_look_alikes_head_for_the_edge_the_target_leaves_by():
         nz = dict(spec.nuisances)
         backs.add(nz["comes_back"])
         scene = Scene(spec)
-        truths = [scene.render(t)[1] for t in range(spec.n_frames)]
+        truths = [scene.truth(t) for t in range(spec.n_frames)]
         present = np.array([tr.present[0] for tr in truths])
         gone = int(np.argmin(present))  # the first frame out
         assert present[:gone].all() and gone > 5
