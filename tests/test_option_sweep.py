@@ -1,8 +1,9 @@
 """Every switch of the trackers runs: each boolean option flipped and each choice of an option with a fixed set of
 values, on a short scene whose target hides and comes back (so the loss test, the search and the re-acquisition run
 too). The defaults run on its colour and its grey copy; each switched option on one of the two, alternately, and on
-the grey copy when the option's name says it acts on grey input (so the sweep costs a run per option, not two). The slowest trackers (covariance, switching, graph cuts, the mesh) are left out.  An
-option that crashed only when switched on (local-motion-pf's ``search``) went unnoticed until such a sweep."""
+the grey copy when the option's name says it acts on grey input (so the sweep costs a run per option, not two).
+The slowest trackers (covariance, switching, graph cuts, the mesh) are left out. An option that crashed only when
+switched on (local-motion-pf's ``search``) went unnoticed until such a sweep."""
 
 from __future__ import annotations
 
