@@ -52,9 +52,11 @@ def test_visible_score_sees_the_part_of_a_target_inside_the_frame(make):
 @pytest.mark.experiment
 def test_fusion_pf_takes_a_target_that_stays_at_the_edge():
     """Grey leave scene 1703: the target comes back through the left edge and stands with a quarter of its box
-    outside to the end. Without the option the search never takes it (the box covers it on 11 frames, before it
-    left); with its structural score over the visible part the target is covered on 76-92 frames (run seed 0
-    re-acquires it within 15 frames, seed 1 later), and the flag is still raised on every hidden frame."""
+    outside to the end. When the option came, the default's search never took it (the box covered it on 11 frames,
+    before it left). Since a cue whose scores never reach its prior starts its loss history from them (round 133,
+    pftrack.filtering.loss), the structural score at the edge no longer vetoes it, and the default covers it on 76-92
+    frames. The option adds a little: 91-93 frames, and on run seed 0 the re-acquisition within 15 frames. The flag
+    is raised on every hidden frame either way."""
     from pftrack.synth import leave_scene
 
     from .conftest import lost_flag_run
@@ -64,46 +66,8 @@ def test_fusion_pf_takes_a_target_that_stays_at_the_edge():
         off = lost_flag_run(spec, "fusion-pf", seed=seed)
         on = lost_flag_run(spec, "fusion-pf", seed=seed, visible_structure=True)
         assert off.reappearances == on.reappearances == 1
-        assert on.covered_frames > off.covered_frames + 40
-        assert on.recall == 1.0 and on.false_rate < 0.05
-    assert lost_flag_run(spec, "fusion-pf", seed=0, visible_structure=True).reacquired == 1
-
-
-def test_the_estimate_at_the_edge_is_scored_by_its_visible_part_while_tracking():
-    """With ``visible_structure`` the tracking loss test of an estimate partly outside the frame takes the structural
-    score of its visible part too (docs/rules/visible_tracking_rule.txt); an estimate inside the frame is scored as
-    without it."""
-    import pftrack
-
-    frame = _textured(2)
-    box = (60.0, 40.0, 40.0, 50.0)
-    trackers = [pftrack.create_tracker("fusion-pf", seed=0, visible_structure=v) for v in (False, True)]
-    for t in trackers:
-        t.init(frame, box)
-        t.mode = "tracking"
-    moved = np.roll(frame, -70, axis=1)  # the target's box now spans x = -10..30: a quarter beyond the left edge
-    moved[:, -70:] = _textured(3)[:, -70:]
-    at_edge = np.array([[10.0, 65.0, 20.0, 25.0]])
-    inside = np.array([[80.0, 65.0, 20.0, 25.0]])
-    rho = np.array([0.9])
-    off, on = (t._loss_scores(moved, at_edge, rho, (0, 0, 160, 120))[0, 1] for t in trackers)
-    assert on > off + 0.05, (off, on)
-    a, b = (t._loss_scores(frame, inside, rho, (0, 0, 160, 120))[0, 1] for t in trackers)
-    assert a == b
-
-
-@pytest.mark.experiment
-def test_fusion_pf_keeps_its_flag_down_on_a_target_that_stays_at_the_edge():
-    """Grey leave scene 3606 (the fourth fresh draw): the target comes back through the left edge at frame 68 and
-    stops with 23 of its 33 columns in view. Without the option the flag stays up on the box that covers it to the
-    end (68-69 false-lost frames); with it the target is acquired within 15 frames and held (12-31)."""
-    from pftrack.synth import leave_scene
-
-    from .conftest import lost_flag_run
-
-    spec = leave_scene(3606)
-    for seed in (0, 1):
-        off = lost_flag_run(spec, "fusion-pf", seed=seed)
-        on = lost_flag_run(spec, "fusion-pf", seed=seed, visible_structure=True)
-        assert off.reacquired == 0 and on.reacquired == 1
-        assert on.false_rate < off.false_rate - 0.3 and on.recall == off.recall == 1.0
+        assert off.covered_frames >= 70 and on.covered_frames >= off.covered_frames, (off, on)
+        for r in (off, on):
+            assert r.recall == 1.0 and r.false_rate < 0.05
+        if seed == 0:
+            assert on.reacquired == 1
