@@ -88,9 +88,8 @@ def render_scene(spec):
     return _render(spec)
 
 
-class cached_scene:  # noqa: N801 - used in place of the Scene class
-    """A :class:`pftrack.synth.Scene` whose frames and truth come from :func:`render_scene`'s cache: the same
-    values (read-only frames), for tests that run several trackers or settings on one scene."""
+class _CachedScene:
+    """A :class:`pftrack.synth.Scene` whose frames and truth come from :func:`render_scene`'s cache."""
 
     def __init__(self, spec):
         self._scene, self._frames, self._truths = _render(spec)
@@ -111,6 +110,13 @@ class cached_scene:  # noqa: N801 - used in place of the Scene class
 
     def __getattr__(self, name):  # spec, groundtruth, truth, ...
         return getattr(self._scene, name)
+
+
+def cached_scene(spec) -> _CachedScene:
+    """The scene of ``spec`` as :class:`pftrack.synth.Scene` gives it, its frames and truth from the cache of
+    :func:`render_scene` (the same values; the frames read-only): for tests that run several trackers or settings on
+    one scene."""
+    return _CachedScene(spec)
 
 
 def grey_frames(frames):

@@ -182,8 +182,8 @@ class Scene:
 
     def _alpha(self, k: int, box) -> tuple[np.ndarray, tuple[slice, slice], np.ndarray | None]:
         """Target ``k``'s coverage of the frame with its sprite warped into ``box`` (sub-pixel): the full-frame mask,
-        the window of the frame outside which it is 0, and the warp into that window (its affine map and size;
-        None when the window is empty)."""
+        the window of the frame outside which it is 0, and the affine map of the warp into that window (None when
+        the window is empty)."""
         x, y, w, h = box
         mask = self._sprites[k][1]
         sh, sw = mask.shape
