@@ -71,3 +71,43 @@ def test_fusion_pf_takes_a_target_that_stays_at_the_edge():
             assert r.recall == 1.0 and r.false_rate < 0.05
         if seed == 0:
             assert on.reacquired == 1
+
+
+def test_the_estimate_at_the_edge_is_scored_by_its_visible_part_while_tracking():
+    """With ``visible_structure`` the tracking loss test of an estimate partly outside the frame takes the structural
+    score of its visible part too (docs/rules/visible_tracking_rule.txt); an estimate inside the frame is scored as
+    without it."""
+    import pftrack
+
+    frame = _textured(2)
+    box = (60.0, 40.0, 40.0, 50.0)
+    trackers = [pftrack.create_tracker("fusion-pf", seed=0, visible_structure=v) for v in (False, True)]
+    for t in trackers:
+        t.init(frame, box)
+        t.mode = "tracking"
+    moved = np.roll(frame, -70, axis=1)  # the target's box now spans x = -10..30: a quarter beyond the left edge
+    moved[:, -70:] = _textured(3)[:, -70:]
+    at_edge = np.array([[10.0, 65.0, 20.0, 25.0]])
+    inside = np.array([[80.0, 65.0, 20.0, 25.0]])
+    rho = np.array([0.9])
+    off, on = (t._loss_scores(moved, at_edge, rho, (0, 0, 160, 120))[0, 1] for t in trackers)
+    assert on > off + 0.05, (off, on)
+    a, b = (t._loss_scores(frame, inside, rho, (0, 0, 160, 120))[0, 1] for t in trackers)
+    assert a == b
+
+
+@pytest.mark.experiment
+def test_fusion_pf_keeps_its_flag_down_on_a_target_that_stays_at_the_edge():
+    """Grey leave scene 3606 (the fourth fresh draw): the target comes back through the left edge at frame 68 and
+    stops with 23 of its 33 columns in view. Without the option the flag stays up on the box that covers it to the
+    end (68-69 false-lost frames); with it the target is acquired within 15 frames and held (12-31)."""
+    from pftrack.synth import leave_scene
+
+    from .conftest import lost_flag_run
+
+    spec = leave_scene(3606)
+    for seed in (0, 1):
+        off = lost_flag_run(spec, "fusion-pf", seed=seed)
+        on = lost_flag_run(spec, "fusion-pf", seed=seed, visible_structure=True)
+        assert off.reacquired == 0 and on.reacquired == 1
+        assert on.false_rate < off.false_rate - 0.3 and on.recall == off.recall == 1.0
