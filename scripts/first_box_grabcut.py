@@ -24,9 +24,10 @@ KINDS = (("truth", (0,)), ("shift", tuple(range(1, 9))), ("scale 0.8", (9,)), ("
 
 
 def box_iou(a, b) -> float:
+    """IoU of two ``(x, y, w, h)`` boxes (:func:`pftrack.geometry.iou`)."""
     from pftrack.geometry import iou
 
-    return float(iou(np.asarray(a, np.float64).reshape(1, 4), np.asarray(b, np.float64).reshape(1, 4))[0])
+    return float(iou(a, b))
 
 
 def snap_box(image: np.ndarray, box, *, grow: float = 1.4, iterations: int = 3, accept: float = 0.5,

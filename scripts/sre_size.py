@@ -16,13 +16,7 @@ import argparse
 
 import numpy as np
 
-
-def iou(a, b) -> float:
-    x0, y0 = max(a[0], b[0]), max(a[1], b[1])
-    x1, y1 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
-    inter = max(0.0, x1 - x0) * max(0.0, y1 - y0)
-    union = a[2] * a[3] + b[2] * b[3] - inter
-    return inter / union if union > 0 else 0.0
+from pftrack.geometry import iou
 
 
 def size_run(frames, gt: np.ndarray, tracker: str, start: int) -> tuple[np.ndarray, float]:
@@ -40,7 +34,7 @@ def size_run(frames, gt: np.ndarray, tracker: str, start: int) -> tuple[np.ndarr
         st = t.update(frame)
         if np.all(np.isfinite(g)) and g[2] > 0 and g[3] > 0:
             ratios.append(np.sqrt(st.box[2] * st.box[3] / (g[2] * g[3])))
-            ious.append(iou(st.box, g))
+            ious.append(float(iou(st.box, g)))
     return np.asarray(ratios), float(np.mean(ious)) if ious else float("nan")
 
 

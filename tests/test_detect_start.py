@@ -10,6 +10,7 @@ import pytest
 
 import pftrack
 from pftrack.cli import main
+from pftrack.geometry import iou
 from pftrack.io import open_source
 from pftrack.pipeline import track_source
 from pftrack.synth import simple_scene
@@ -21,13 +22,6 @@ def scene_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("detect") / "simple"
     export_otb(simple_scene(0, n_frames=50), out)
     return out
-
-
-def _iou(a, b) -> float:
-    x0, y0 = max(a[0], b[0]), max(a[1], b[1])
-    x1, y1 = min(a[0] + a[2], b[0] + b[2]), min(a[1] + a[3], b[1] + b[3])
-    inter = max(0.0, x1 - x0) * max(0.0, y1 - y0)
-    return inter / (a[2] * a[3] + b[2] * b[3] - inter)
 
 
 def test_track_source_waits_for_the_first_detection_and_starts_on_it(scene_dir):
@@ -45,7 +39,7 @@ def test_track_source_waits_for_the_first_detection_and_starts_on_it(scene_dir):
     assert len(states) == 50
     assert all(st.lost for st in states[:4]) and not states[4].lost
     assert np.allclose(states[4].box, gt[4])
-    assert np.mean([_iou(st.box, g) for st, g in zip(states[5:], gt[5:])]) > 0.7
+    assert np.mean([iou(st.box, g) for st, g in zip(states[5:], gt[5:])]) > 0.7
 
 
 def test_track_detect_starts_on_a_moving_object(scene_dir, tmp_path, capsys):
@@ -59,7 +53,7 @@ def test_track_detect_starts_on_a_moving_object(scene_dir, tmp_path, capsys):
     found = [r for r in rows if r["lost"] == "0"]
     assert found and int(found[0]["frame"]) < 40  # MOG2 learns the background for a few frames first
     first = int(found[0]["frame"])
-    ious = [_iou([float(r[k]) for k in "xywh"], gt[int(r["frame"]) - 1]) for r in rows[first - 1:]]
+    ious = [iou([float(r[k]) for k in "xywh"], gt[int(r["frame"]) - 1]) for r in rows[first - 1:]]
     assert np.mean(ious) > 0.4 and min(ious) > 0.2   # on the target from the detection on
 
 

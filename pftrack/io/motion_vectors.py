@@ -77,7 +77,7 @@ def iter_mv_frames(path, *, bgr: bool = False, threads: bool = False) -> Iterato
         raise SourceError(f"{path}: no such file")
     where = streams.redact(str(path)) if url else path
     try:
-        container = streams.av_open(str(path)) if url else av.open(str(path))
+        container = _open(av, str(path), url)
     except Exception as exc:  # noqa: BLE001 - PyAV raises many FFmpeg error classes
         raise SourceError(f"{where}: cannot open as a video ({str(exc).splitlines()[0][:120]})") from None
     try:
@@ -97,6 +97,11 @@ def iter_mv_frames(path, *, bgr: bool = False, threads: bool = False) -> Iterato
             yield MVFrame(n, _pict_type(frame.pict_type), mvs, y, pix)
     finally:
         container.close()
+
+
+def _open(av, name: str, url: bool):
+    """PyAV's container of a video file, or of a stream URL with :func:`pftrack.io.streams.av_open`'s options."""
+    return streams.av_open(name) if url else av.open(name)
 
 
 def _frames_of(container, stream, url: bool, av):
@@ -134,7 +139,7 @@ class MVSource:
             raise SourceError(f"{path}: {what} (motion vectors need a compressed video file)")
         where = streams.redact(self.name) if url else path
         try:
-            with (streams.av_open(self.name) if url else av.open(self.name)) as c:
+            with _open(av, self.name, url) as c:
                 if not c.streams.video:
                     raise SourceError(f"{where}: has no video stream")
                 st = c.streams.video[0]
